@@ -1,0 +1,154 @@
+"""The component description: one object that feeds the ONNX metadata, the FMU model description, the C and the Python FMU.
+
+An nnfmu ONNX file is a *step function*: it maps the inputs at sample k (physical units) and the state at sample k
+to the outputs at sample k (physical units) and the state at sample k+1. `Component` says which graph tensors are
+ports, their units and training envelope, which tensor pairs are states, and the sample period the graph was trained
+at. It is stored as JSON under the ONNX metadata key `nnfmu.component`; a graph without that key (another tool's ONNX)
+gets a generic description read off its inputs and outputs.
+
+This module needs only `onnx` (no torch), because building and running FMUs must not import torch.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import onnx
+
+METADATA_KEY = "nnfmu.component"
+FORMAT_VERSION = 1
+
+
+@dataclass(frozen=True)
+class Port:
+    """One scalar input or output of the component, carried by one element of one graph tensor."""
+
+    name: str
+    unit: str = ""
+    description: str = ""
+    tensor: str = ""
+    index: int = 0
+    min: float | None = None
+    max: float | None = None
+
+    def __post_init__(self) -> None:
+        if not self.tensor:
+            object.__setattr__(self, "tensor", self.name)
+
+    def in_envelope(self, value: float) -> bool:
+        """True when `value` lies inside the training envelope (or no envelope is known)."""
+        lo = -math.inf if self.min is None else self.min
+        hi = math.inf if self.max is None else self.max
+        return lo <= value <= hi
+
+
+@dataclass(frozen=True)
+class StatePort:
+    """A graph input/output tensor pair that carries the model's state from sample k to sample k+1."""
+
+    input: str
+    output: str
+    initial: tuple[float, ...]
+    description: str = ""
+
+    @property
+    def size(self) -> int:
+        return len(self.initial)
+
+
+@dataclass
+class Component:
+    """Everything a consumer of a step graph needs besides the graph itself.
+
+    `sample_period` [s] is the period the model was trained at; `None` marks a stateless graph from another tool,
+    which an FMU evaluates once per communication step. `metadata` holds provenance: nnfmu version, training data
+    hash, feature spec, training settings and metrics.
+    """
+
+    name: str
+    inputs: list[Port]
+    outputs: list[Port]
+    states: list[StatePort] = field(default_factory=list)
+    sample_period: float | None = None
+    description: str = ""
+    metadata: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def state_size(self) -> int:
+        return sum(s.size for s in self.states)
+
+    def to_dict(self) -> dict[str, Any]:
+        d = asdict(self)
+        d["format_version"] = FORMAT_VERSION
+        return d
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), sort_keys=True, allow_nan=False)
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "Component":
+        version = d.get("format_version", FORMAT_VERSION)
+        if version > FORMAT_VERSION:
+            raise ValueError(f"component description format {version} is newer than this nnfmu ({FORMAT_VERSION})")
+        return cls(
+            name=d["name"],
+            inputs=[Port(**p) for p in d["inputs"]],
+            outputs=[Port(**p) for p in d["outputs"]],
+            states=[StatePort(s["input"], s["output"], tuple(s["initial"]), s.get("description", "")) for s in d.get("states", [])],
+            sample_period=d.get("sample_period"),
+            description=d.get("description", ""),
+            metadata=d.get("metadata", {}),
+        )
+
+    def attach_to(self, model: onnx.ModelProto) -> None:
+        """Store this description in the ONNX model's metadata (replacing an earlier one)."""
+        kept = [p for p in model.metadata_props if p.key != METADATA_KEY]
+        del model.metadata_props[:]
+        model.metadata_props.extend(kept)
+        model.metadata_props.add(key=METADATA_KEY, value=self.to_json())
+
+    @classmethod
+    def from_onnx(cls, model: onnx.ModelProto, name: str | None = None) -> "Component":
+        """Read the description of an ONNX model: nnfmu's metadata if present, else a generic one from the graph."""
+        for prop in model.metadata_props:
+            if prop.key == METADATA_KEY:
+                component = cls.from_dict(json.loads(prop.value))
+                if name:
+                    component.name = name
+                return component
+        return generic_component(model, name or model.graph.name or "model")
+
+
+def _static_size(value_info: onnx.ValueInfoProto) -> int:
+    """Number of elements of a tensor; symbolic or unknown dimensions (batch) count as 1."""
+    size = 1
+    for dim in value_info.type.tensor_type.shape.dim:
+        size *= dim.dim_value if dim.HasField("dim_value") and dim.dim_value > 0 else 1
+    return size
+
+
+def _ports_of(value_infos: list[onnx.ValueInfoProto]) -> list[Port]:
+    ports: list[Port] = []
+    for vi in value_infos:
+        size = _static_size(vi)
+        if size == 1:
+            ports.append(Port(name=vi.name, tensor=vi.name, index=0))
+        else:
+            ports.extend(Port(name=f"{vi.name}[{i}]", tensor=vi.name, index=i) for i in range(size))
+    return ports
+
+
+def generic_component(model: onnx.ModelProto, name: str) -> Component:
+    """Describe a graph from another tool: one port per tensor element, evaluated once per communication step."""
+    initializers = {init.name for init in model.graph.initializer}
+    graph_inputs = [vi for vi in model.graph.input if vi.name not in initializers]
+    return Component(
+        name=name,
+        inputs=_ports_of(graph_inputs),
+        outputs=_ports_of(list(model.graph.output)),
+        description=model.doc_string or f"ONNX graph {model.graph.name!r}",
+        metadata={"producer": f"{model.producer_name} {model.producer_version}".strip()},
+    )
