@@ -1,0 +1,293 @@
+"""Loading CSV/MDF rig files: conversion to SI, exact round trips, and an error naming the file for each fault."""
+
+import numpy as np
+import pytest
+from asammdf import MDF, Signal
+
+from nnfmu.data import DataError, Measurement, check_measurement, load_measurement, save_measurement
+from nnfmu.data import save as save_module
+
+RATE = 1000.0
+N = 64
+
+
+def _write_csv(path, header, rows):
+    path.write_text(header + "\n" + "".join(",".join(str(v) for v in row) + "\n" for row in rows), encoding="utf-8")
+    return path
+
+
+def _rows(n=N, columns=2):
+    t = np.arange(n) / RATE
+    return [[t[i], *(np.sin(2 * np.pi * 5 * t[i] + c) for c in range(columns))] for i in range(n)]
+
+
+def _measurement(n=N):
+    rng = np.random.default_rng(7)
+    t = np.arange(n) / RATE
+    return Measurement(
+        time=t,
+        channels={
+            "displacement": rng.normal(0.0, 0.01, n),
+            "velocity": rng.normal(0.0, 0.3, n) * 10.0 ** rng.integers(-12, 12, n),
+            "force": rng.normal(0.0, 1e3, n),
+            "temperature": 293.15 + rng.random(n),
+        },
+        units={"displacement": "m", "velocity": "m/s", "force": "N", "temperature": "K"},
+        source="test",
+    )
+
+
+def test_csv_in_inches_and_pounds_is_converted_to_si(tmp_path):
+    rows = [[i / RATE, 0.5 * i, 2.0 * i] for i in range(N)]
+    path = _write_csv(tmp_path / "imperial.csv", "time [s],displacement [in],force [lbf]", rows)
+    m = load_measurement(path)
+    np.testing.assert_allclose(m["displacement"], 0.5 * 0.0254 * np.arange(N), rtol=1e-13)
+    np.testing.assert_allclose(m["force"], 2.0 * 0.45359237 * 9.80665 * np.arange(N), rtol=1e-13)
+    assert m.units["displacement"] == "m" and m.units["force"] == "N"
+    np.testing.assert_allclose(m["velocity"], 0.5 * 0.0254 * RATE, rtol=1e-9)  # derived, in m/s
+    assert m.units["velocity"] == "m/s"
+    assert m.source == str(path)
+
+
+def test_header_spellings_and_millisecond_time(tmp_path):
+    rows = [[float(i), 1.0, 2.0] for i in range(N)]
+    path = _write_csv(tmp_path / "loose.csv", " time[ms] ,  axial_displacement (mm),axial_force [ kN ]", rows)
+    m = load_measurement(path)
+    np.testing.assert_allclose(m.time, np.arange(N) * 1e-3)
+    assert m.names == ["axial_displacement", "axial_force", "axial_velocity", "axial_acceleration"]
+    np.testing.assert_allclose(m["axial_force"], 2000.0)
+
+
+def test_excel_csv_with_byte_order_mark_and_crlf(tmp_path):
+    path = tmp_path / "excel.csv"
+    text = "time [s],torque [N-m]\r\n" + "".join(f"{i / RATE},{i}\r\n" for i in range(N))
+    path.write_bytes(b"\xef\xbb\xbf" + text.encode("utf-8"))
+    m = load_measurement(path)
+    assert m.names == ["torque"]
+    np.testing.assert_array_equal(m["torque"], np.arange(N))
+
+
+def test_semicolon_delimited_csv(tmp_path):
+    path = tmp_path / "semi.csv"
+    path.write_text("time [s];force [N]\n" + "".join(f"{i / RATE};{i}\n" for i in range(N)), encoding="utf-8")
+    np.testing.assert_array_equal(load_measurement(path)["force"], np.arange(N))
+
+
+def test_csv_round_trip_is_exact(tmp_path):
+    m = _measurement()
+    path = save_measurement(m, tmp_path / "out" / "rig.csv")
+    assert path.read_text().splitlines()[0] == "time [s],displacement [m],velocity [m/s],force [N],temperature [K]"
+    back = load_measurement(path)
+    assert np.array_equal(back.time, m.time)
+    for name in m.channels:
+        assert np.array_equal(back[name], m[name]), name
+        assert back.units[name] == m.units[name]
+    assert set(back.channels) == set(m.channels) | {"acceleration"}  # acceleration derived from velocity
+
+
+def test_mdf4_round_trip_keeps_values_and_units(tmp_path):
+    m = _measurement()
+    path = save_measurement(m, tmp_path / "rig.mf4")
+    with MDF(str(path)) as mdf:
+        assert mdf.get("force").unit == "N"
+        assert mdf.get("velocity").unit == "m/s"
+    back = load_measurement(path)
+    assert np.array_equal(back.time, m.time)
+    for name in m.channels:
+        assert np.array_equal(back[name], m[name]), name
+        assert back.units[name] == m.units[name]
+
+
+def _write_mdf(path, groups):
+    mdf = MDF(version="4.10")
+    for time, signals in groups:
+        mdf.append([Signal(values, time, name=name, unit=unit) for name, unit, values in signals])
+    mdf.save(str(path), overwrite=True)
+    mdf.close()
+    return path
+
+
+def test_mdf_channel_units_are_converted_and_equal_groups_merge(tmp_path):
+    t = np.arange(N) / RATE
+    path = _write_mdf(
+        tmp_path / "rig.mf4",
+        [(t, [("conical_rotation", "deg", np.full(N, 90.0))]), (t.copy(), [("conical_torque", "kN.m", np.ones(N))])],
+    )
+    m = load_measurement(path, required=("conical_angular_velocity",))
+    np.testing.assert_allclose(m["conical_rotation"], np.pi / 2)
+    np.testing.assert_allclose(m["conical_torque"], 1000.0)
+    assert m.units == {"conical_rotation": "rad", "conical_torque": "N.m", "conical_angular_velocity": "rad/s"}
+
+
+def test_mdf_with_two_time_bases_is_refused(tmp_path):
+    t = np.arange(N) / RATE
+    path = _write_mdf(
+        tmp_path / "mixed.mf4",
+        [(t, [("displacement", "m", np.zeros(N))]), (t[::2], [("force", "N", np.zeros(N // 2))])],
+    )
+    with pytest.raises(DataError, match=r"mixed\.mf4: channel 'force' \(group 1, 32 samples\) has another time base"):
+        load_measurement(path)
+
+
+def test_mdf_invalid_file_is_named(tmp_path):
+    path = tmp_path / "broken.mf4"
+    path.write_bytes(b"not an mdf file at all")
+    with pytest.raises(DataError, match=r"broken\.mf4: not a readable MDF file"):
+        load_measurement(path)
+
+
+@pytest.mark.parametrize(
+    ("header", "message"),
+    [
+        ("time [s],displacement [m],force", r"header column 3 'force' has no unit"),
+        ("time [s],displacement [],force [N]", r"header column 2 'displacement \[\]' has an empty unit"),
+        ("time [s]", r"no channels besides time"),
+        ("time [s],[m],force [N]", r"header column 2 '\[m\]' has no channel name"),
+        ("t [s],displacement [m],force [N]", r"the first column must be 'time \[s\]', found 't \[s\]'"),
+        ("time [s],force [N],force [N]", r"column\(s\) 'force' appear more than once"),
+        ("time [s],displacement [m],force [lbs]", r"channel 'force': unknown force unit 'lbs'; force units are N, kN"),
+        ("time [s],displacement [m],force [m]", r"channel 'force' is a force but its unit 'm' is a length"),
+        ("time [m],displacement [m],force [N]", r"channel 'time' is a time but its unit 'm' is a length"),
+        ("time [s],displacement [m],gizmo [zorks]", r"channel 'gizmo': unknown unit 'zorks'; known units are"),
+    ],
+)
+def test_bad_header_names_file_and_column(tmp_path, header, message):
+    path = _write_csv(tmp_path / "bad.csv", header, _rows())
+    with pytest.raises(DataError, match=r"bad\.csv: " + message):
+        load_measurement(path)
+
+
+def test_missing_required_channel_lists_what_exists(tmp_path):
+    path = _write_csv(tmp_path / "rig.csv", "time [s],displacement [m],force [N]", _rows())
+    with pytest.raises(
+        DataError,
+        match=r"rig\.csv: missing required channel\(s\) 'temperature'; "
+        r"it has: displacement, force, velocity, acceleration",
+    ):
+        load_measurement(path, required=("force", "velocity", "temperature"))
+
+
+def test_time_that_does_not_increase_names_the_sample(tmp_path):
+    rows = _rows()
+    rows[10][0] = rows[9][0]
+    path = _write_csv(tmp_path / "stuck.csv", "time [s],displacement [m],force [N]", rows)
+    with pytest.raises(DataError, match=r"stuck\.csv: time does not increase at sample 10: t = 0\.009 s then 0\.009 s"):
+        load_measurement(path)
+
+
+def test_non_uniform_time_names_the_sample(tmp_path):
+    rows = _rows()
+    rows[20][0] += 0.01 / RATE  # 1 % of the period, ten times the tolerance
+    path = _write_csv(tmp_path / "jitter.csv", "time [s],displacement [m],force [N]", rows)
+    with pytest.raises(DataError, match=r"jitter\.csv: time is not uniformly sampled at sample 20 \(t = 0\.02001 s\)"):
+        load_measurement(path)
+
+
+def test_jitter_within_tolerance_is_accepted(tmp_path):
+    rows = _rows()
+    rows[20][0] += 0.0002 / RATE  # 0.02 % of the period
+    path = _write_csv(tmp_path / "fine.csv", "time [s],displacement [m],force [N]", rows)
+    assert len(load_measurement(path)) == N
+
+
+def test_nan_names_channel_sample_and_time(tmp_path):
+    rows = _rows()
+    rows[5][2] = float("nan")
+    rows[7][2] = float("inf")
+    path = _write_csv(tmp_path / "nan.csv", "time [s],displacement [m],force [N]", rows)
+    with pytest.raises(
+        DataError,
+        match=r"nan\.csv: channel 'force' has 2 non-finite value\(s\), the first nan at sample 5 \(t = 0\.005 s\)",
+    ):
+        load_measurement(path)
+
+
+def test_text_in_a_number_cell_names_line_and_column(tmp_path):
+    rows = _rows()
+    rows[3][1] = "oops"
+    path = _write_csv(tmp_path / "text.csv", "time [s],displacement [m],force [N]", rows)
+    with pytest.raises(DataError, match=r"text\.csv: line 5, column 'displacement \[m\]': 'oops' is not a number"):
+        load_measurement(path)
+
+
+def test_short_row_names_the_line(tmp_path):
+    rows = _rows()
+    rows[6] = rows[6][:2]
+    path = _write_csv(tmp_path / "short.csv", "time [s],displacement [m],force [N]", rows)
+    with pytest.raises(DataError, match=r"short\.csv: line 8 has 2 cells, the header 3"):
+        load_measurement(path)
+
+
+def test_too_few_samples(tmp_path):
+    path = _write_csv(tmp_path / "tiny.csv", "time [s],displacement [m],force [N]", _rows(n=10))
+    with pytest.raises(DataError, match=r"tiny\.csv: 10 samples, at least 16 needed"):
+        load_measurement(path)
+
+
+def test_header_only_file_has_no_samples(tmp_path):
+    path = _write_csv(tmp_path / "empty.csv", "time [s],force [N]", [])
+    with pytest.raises(DataError, match=r"empty\.csv: 0 samples, at least 16 needed"):
+        load_measurement(path)
+
+
+def test_implausibly_low_temperature_is_refused(tmp_path):
+    rows = [[i / RATE, 20.0] for i in range(N)]
+    path = _write_csv(tmp_path / "celsius.csv", "time [s],damper_temperature [K]", rows)
+    with pytest.raises(
+        DataError,
+        match=r"celsius\.csv: channel 'damper_temperature' reaches 20 K at sample 0 \(t = 0 s\), "
+        r"below the plausible 150 K",
+    ):
+        load_measurement(path)
+
+
+def test_unknown_suffix_and_missing_file(tmp_path):
+    with pytest.raises(DataError, match=r"rig\.xlsx: unknown file type '\.xlsx'; nnfmu reads \.csv, \.mf4, \.mdf"):
+        load_measurement(tmp_path / "rig.xlsx")
+    with pytest.raises(DataError, match=r"absent\.csv: no such file"):
+        load_measurement(tmp_path / "absent.csv")
+
+
+def test_save_refuses_invalid_measurement_without_writing(tmp_path):
+    m = _measurement()
+    m.channels["force"][3] = np.nan
+    with pytest.raises(DataError, match=r"test: channel 'force' has 1 non-finite"):
+        save_measurement(m, tmp_path / "rig.csv")
+    m = _measurement()
+    m.units["force"] = "kN"
+    with pytest.raises(DataError, match=r"channel 'force' is a force in 'kN'; it must be in 'N'"):
+        save_measurement(m, tmp_path / "rig.mf4")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_save_into_a_path_under_a_file_fails_and_writes_nothing(tmp_path):
+    blocker = tmp_path / "blocker"
+    blocker.write_text("a file, not a directory")
+    with pytest.raises(OSError):
+        save_measurement(_measurement(), blocker / "rig.csv")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["blocker"]
+    assert blocker.read_text() == "a file, not a directory"
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".mf4"])
+def test_failure_mid_write_keeps_the_old_file_and_leaves_no_temp(tmp_path, monkeypatch, suffix):
+    target = save_measurement(_measurement(), tmp_path / f"rig{suffix}")
+    before = target.read_bytes()
+
+    def fail_half_way(m, path):
+        path.write_bytes(before[: len(before) // 2])
+        raise RuntimeError("disk full")
+
+    monkeypatch.setitem(save_module.WRITERS, suffix, fail_half_way)
+    with pytest.raises(RuntimeError, match="disk full"):
+        save_measurement(_measurement(n=N + 10), target)
+    assert target.read_bytes() == before
+    assert [p.name for p in tmp_path.iterdir()] == [target.name]
+
+
+def test_check_names_the_given_source_and_missing_unit():
+    m = _measurement()
+    del m.units["force"]
+    with pytest.raises(DataError, match=r"^damper rig simulator: channel 'force' has no unit$"):
+        check_measurement(m, source="damper rig simulator")
+    check_measurement(_measurement(), required=("force", "temperature"))

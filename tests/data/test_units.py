@@ -1,0 +1,102 @@
+"""Unit conversion to SI against hand-derivable values, and the errors for wrong or unknown units."""
+
+import math
+
+import numpy as np
+import pytest
+
+from nnfmu.data import DataError, to_si
+from nnfmu.data.units import QUANTITIES, base_name, normalise_unit
+
+LBF = 0.45359237 * 9.80665  # N: one pound mass under standard gravity, both exact by definition
+
+
+@pytest.mark.parametrize(
+    ("channel", "unit", "values", "expected", "si"),
+    [
+        ("displacement", "in", [1.0, 2.5, -4.0], [0.0254, 0.0635, -0.1016], "m"),
+        ("axial_displacement", "mm", [1.0, -250.0], [1e-3, -0.25], "m"),
+        ("displacement", "ft", [1.0], [0.3048], "m"),
+        ("displacement", "µm", [1.0], [1e-6], "m"),
+        ("velocity", "in/s", [10.0], [0.254], "m/s"),
+        ("acceleration", "g", [1.0, -2.0], [9.80665, -19.6133], "m/s^2"),
+        ("acceleration", "m/s²", [3.0], [3.0], "m/s^2"),
+        ("acceleration", "m/s2", [3.0], [3.0], "m/s^2"),
+        ("force", "lbf", [1.0, 100.0], [LBF, 100 * LBF], "N"),
+        ("force", "kip", [1.0], [1000 * LBF], "N"),
+        ("radial_force", "kN", [1.5], [1500.0], "N"),
+        ("force", "daN", [2.0], [20.0], "N"),
+        ("torque", "N m", [2.0], [2.0], "N.m"),
+        ("torque", "N*m", [2.0], [2.0], "N.m"),
+        ("torque", "Nm", [2.0], [2.0], "N.m"),
+        ("axial_torque", "lbf.ft", [1.0], [LBF * 0.3048], "N.m"),
+        ("conical_torque", "lbf.in", [1.0], [LBF * 0.0254], "N.m"),
+        ("conical_rotation", "deg", [180.0, 90.0, -45.0], [math.pi, math.pi / 2, -math.pi / 4], "rad"),
+        ("rotation", "mrad", [5.0], [5e-3], "rad"),
+        ("axial_angular_velocity", "rpm", [60.0], [2 * math.pi], "rad/s"),
+        ("angular_velocity", "deg/s", [360.0], [2 * math.pi], "rad/s"),
+        ("temperature", "degC", [0.0, 100.0, -40.0], [273.15, 373.15, 233.15], "K"),
+        ("temperature", "°C", [20.0], [293.15], "K"),
+        ("temperature", "degF", [32.0, 212.0, -40.0], [273.15, 373.15, 233.15], "K"),
+        ("time", "ms", [1.0, 2.0], [1e-3, 2e-3], "s"),
+        ("gas_pressure", "bar", [2.0], [2e5], "Pa"),
+        ("supply", "psi", [1.0], [LBF / 0.0254**2], "Pa"),
+        ("stroke", "mm", [3.0], [3e-3], "m"),
+    ],
+)
+def test_to_si_matches_hand_values(channel, unit, values, expected, si):
+    converted, si_unit = to_si(np.array(values), unit, channel)
+    assert si_unit == si
+    np.testing.assert_allclose(converted, expected, rtol=1e-12, atol=0)
+
+
+def test_si_values_pass_unchanged_bit_for_bit():
+    values = np.array([0.1, -1e-300, 7.123456789012345e5])
+    converted, _ = to_si(values, "m", "displacement")
+    assert np.array_equal(converted, values)
+    assert converted is not values
+
+
+def test_every_unit_spelling_belongs_to_one_quantity():
+    spellings = [s for q in QUANTITIES.values() for s in q.units]
+    assert len(spellings) == len(set(spellings))
+
+
+@pytest.mark.parametrize(
+    ("name", "base"),
+    [
+        ("displacement", "displacement"),
+        ("axial_displacement", "displacement"),
+        ("conical_angular_velocity", "angular_velocity"),
+        ("Axial_Force", "force"),
+        ("front_left_damper_velocity", "velocity"),
+        ("pressure_gain", None),
+    ],
+)
+def test_base_name(name, base):
+    assert base_name(name) == base
+
+
+def test_normalise_unit_spellings():
+    assert normalise_unit(" kN · m ") == "kN.m"
+    assert normalise_unit("m / s²") == "m/s^2"
+
+
+def test_unit_of_another_quantity_names_channel_and_both_quantities():
+    with pytest.raises(DataError, match=r"rig\.csv: channel 'force' is a force but its unit 'm' is a length"):
+        to_si(np.ones(3), "m", "force", source="rig.csv")
+
+
+def test_unknown_unit_of_known_channel_lists_its_units():
+    with pytest.raises(DataError, match=r"channel 'axial_displacement': unknown length unit 'furlong'.*mm.*in"):
+        to_si(np.ones(3), "furlong", "axial_displacement")
+
+
+def test_unknown_unit_of_unknown_channel_lists_all_units():
+    with pytest.raises(DataError, match=r"channel 'mystery': unknown unit 'zorks'; known units are length: m"):
+        to_si(np.ones(3), "zorks", "mystery")
+
+
+def test_units_are_case_sensitive():
+    with pytest.raises(DataError, match="unknown force unit 'kn'"):
+        to_si(np.ones(1), "kn", "force")
