@@ -1,0 +1,341 @@
+"""Feature specs: which input channels a component model sees, at which sample delays, plus derived channels.
+
+A `FeatureSpec` is the single definition of a model's inputs. It computes the feature matrix for training
+(`features`, numpy) and emits the same computation as ONNX nodes for the step graph (`emit`), side by side, so the
+exported graph reproduces training exactly: sample by sample from the initial state (a component at rest, every
+delayed value and filter state 0).
+
+Adding a derived feature is a checklist: a frozen dataclass subclass of `Derived` (numpy `compute` and ONNX `emit`),
+an entry in `DERIVED_KINDS`, and a test in tests/models/test_features.py comparing it with the step graph.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, fields
+from typing import Any, ClassVar, Protocol
+
+import numpy as np
+from scipy.signal import lfilter
+
+
+class NodeSink(Protocol):
+    """What `emit` needs from a graph builder (the exporter's `nnfmu.export.graph.GraphBuilder` provides it)."""
+
+    def constant(self, name: str, value: np.ndarray) -> str:
+        """Add an initializer (float64 or int64 array); return its (unique) tensor name."""
+        ...
+
+    def node(self, op_type: str, inputs: list[str], name: str, **attributes: Any) -> str:
+        """Add one single-output node; return the name of its output tensor."""
+        ...
+
+
+@dataclass(frozen=True)
+class StateSlot:
+    """One element of the step graph's state vector: what it holds, the channel whose unit it has, its value at rest."""
+
+    name: str
+    channel: str
+    initial: float = 0.0
+    description: str = ""
+
+
+def _check_channel_name(channel: object, what: str) -> str:
+    if not isinstance(channel, str) or not channel.strip():
+        raise ValueError(f"{what}: channel name must be a non-empty string, got {channel!r}")
+    return channel
+
+
+def _check_positive(value: object, what: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+        raise ValueError(f"{what} must be a finite number > 0, got {value!r}")
+    return float(value)
+
+
+@dataclass(frozen=True)
+class Tap:
+    """One input channel at several sample delays; delay 0 is the current sample, d is the sample k-d."""
+
+    channel: str
+    delays: tuple[int, ...] = (0,)
+
+    def __post_init__(self) -> None:
+        _check_channel_name(self.channel, "tap")
+        delays = tuple(self.delays)
+        if not delays:
+            raise ValueError(f"tap {self.channel!r}: no delays given")
+        for d in delays:
+            if isinstance(d, bool) or not isinstance(d, (int, np.integer)) or d < 0:
+                raise ValueError(f"tap {self.channel!r}: delay {d!r} is not an integer >= 0")
+        if len(set(delays)) != len(delays):
+            raise ValueError(f"tap {self.channel!r}: duplicate delay in {delays}")
+        object.__setattr__(self, "delays", tuple(int(d) for d in delays))
+
+    @property
+    def depth(self) -> int:
+        """Number of past samples the tap's delay line keeps (its state slots)."""
+        return max(self.delays)
+
+    def feature_name(self, delay: int) -> str:
+        return f"{self.channel}[k]" if delay == 0 else f"{self.channel}[k-{delay}]"
+
+
+@dataclass(frozen=True)
+class Derived(ABC):
+    """A feature computed from one input channel at the current sample (possibly with internal state)."""
+
+    kind: ClassVar[str]
+    channel: str
+
+    def __post_init__(self) -> None:
+        _check_channel_name(self.channel, self.kind)
+
+    @property
+    def name(self) -> str:
+        params = ", ".join(f"{f.name}={float(getattr(self, f.name))!r}" for f in fields(self) if f.name != "channel")
+        return f"{self.kind}({self.channel}, {params})" if params else f"{self.kind}({self.channel})"
+
+    def state_slots(self) -> tuple[StateSlot, ...]:
+        """State the feature carries from one sample to the next (none by default)."""
+        return ()
+
+    @abstractmethod
+    def compute(self, x: np.ndarray, initial: np.ndarray, sample_period: float) -> np.ndarray:
+        """x: (n,) channel from sample 0; initial: (len(state_slots),) -> feature (n,)."""
+
+    @abstractmethod
+    def emit(self, g: NodeSink, x: str, state: str | None, sample_period: float) -> tuple[str, str | None]:
+        """Nodes for one sample: x [1], state [len(state_slots)] or None -> (feature [1], state_next or None)."""
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"kind": self.kind, **{f.name: getattr(self, f.name) for f in fields(self)}}
+
+
+@dataclass(frozen=True)
+class SmoothSign(Derived):
+    """tanh(x / scale): the Coulomb friction sign of a velocity, smoothed over |x| ~ scale."""
+
+    kind: ClassVar[str] = "smooth_sign"
+    scale: float = 0.01
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        object.__setattr__(self, "scale", _check_positive(self.scale, f"smooth_sign({self.channel}) scale"))
+
+    def compute(self, x: np.ndarray, initial: np.ndarray, sample_period: float) -> np.ndarray:
+        return np.tanh(x / self.scale)
+
+    def emit(self, g: NodeSink, x: str, state: str | None, sample_period: float) -> tuple[str, str | None]:
+        scale = g.constant("smooth_sign_scale", np.array([self.scale]))
+        return g.node("Tanh", [g.node("Div", [x, scale], "smooth_sign_div")], "smooth_sign"), None
+
+
+@dataclass(frozen=True)
+class Lowpass(Derived):
+    """First-order low-pass of a channel, time constant tau [s]: y_k = y_{k-1} + a (x_k - y_{k-1}).
+
+    a = 1 - exp(-T/tau) is the exact discretisation of tau dy/dt = x - y with x held at x_k over the sample
+    interval ending at sample k; the state slot holds y_{k-1}, 0 at rest.
+    """
+
+    kind: ClassVar[str] = "lowpass"
+    tau: float = 0.01
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        object.__setattr__(self, "tau", _check_positive(self.tau, f"lowpass({self.channel}) tau"))
+
+    def coefficient(self, sample_period: float) -> float:
+        return -math.expm1(-sample_period / self.tau)
+
+    def state_slots(self) -> tuple[StateSlot, ...]:
+        return (StateSlot(name=f"{self.name}[k-1]", channel=self.channel, description=f"previous output of {self.name}"),)
+
+    def compute(self, x: np.ndarray, initial: np.ndarray, sample_period: float) -> np.ndarray:
+        a = self.coefficient(sample_period)
+        y, _ = lfilter([a], [1.0, -(1.0 - a)], x, zi=[(1.0 - a) * float(initial[0])])
+        return y
+
+    def emit(self, g: NodeSink, x: str, state: str | None, sample_period: float) -> tuple[str, str | None]:
+        assert state is not None, "lowpass has a state slot"
+        a = g.constant("lowpass_coefficient", np.array([self.coefficient(sample_period)]))
+        step = g.node("Mul", [g.node("Sub", [x, state], "lowpass_error"), a], "lowpass_step")
+        y = g.node("Add", [state, step], "lowpass")
+        return y, y
+
+
+DERIVED_KINDS: dict[str, type[Derived]] = {cls.kind: cls for cls in (SmoothSign, Lowpass)}
+
+
+def derived_from_dict(d: dict[str, Any]) -> Derived:
+    """Rebuild a derived feature from its `to_dict` form; unknown kinds or parameters raise ValueError."""
+    params = dict(d)
+    kind = params.pop("kind", None)
+    if kind not in DERIVED_KINDS:
+        raise ValueError(f"unknown derived feature kind {kind!r} (known: {sorted(DERIVED_KINDS)})")
+    try:
+        return DERIVED_KINDS[kind](**params)
+    except TypeError as exc:
+        raise ValueError(f"derived feature {kind!r}: bad parameters {params!r}: {exc}") from exc
+
+
+@dataclass(frozen=True)
+class FeatureSpec:
+    """The model's inputs: delayed input channels (`taps`) then derived features, predicting one `output` channel.
+
+    Feature order: every tap's delays in the order given, then the derived features. State order: every tap's
+    delay line (channel[k-1] .. channel[k-depth]) in tap order, then the derived features' slots.
+    """
+
+    taps: tuple[Tap, ...]
+    output: str
+    derived: tuple[Derived, ...] = ()
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "taps", tuple(self.taps))
+        object.__setattr__(self, "derived", tuple(self.derived))
+        _check_channel_name(self.output, "output")
+        if not self.taps and not self.derived:
+            raise ValueError("feature spec has no features: give at least one tap or derived feature")
+        seen: set[str] = set()
+        for tap in self.taps:
+            if not isinstance(tap, Tap):
+                raise ValueError(f"tap must be a Tap, got {tap!r}")
+            if tap.channel in seen:
+                raise ValueError(f"channel {tap.channel!r} is tapped twice; list all its delays in one Tap")
+            seen.add(tap.channel)
+        for d in self.derived:
+            if not isinstance(d, Derived):
+                raise ValueError(f"derived feature must be a Derived, got {d!r}")
+        names = self.feature_names
+        duplicates = sorted({n for n in names if names.count(n) > 1})
+        if duplicates:
+            raise ValueError(f"duplicate feature names {duplicates}")
+        if self.output in self.channels:
+            raise ValueError(f"output channel {self.output!r} is also an input channel")
+
+    @property
+    def channels(self) -> list[str]:
+        """Input channels the step graph needs, in first-use order (taps, then derived)."""
+        ordered = [t.channel for t in self.taps] + [d.channel for d in self.derived]
+        return list(dict.fromkeys(ordered))
+
+    @property
+    def feature_names(self) -> list[str]:
+        return [t.feature_name(d) for t in self.taps for d in t.delays] + [d.name for d in self.derived]
+
+    @property
+    def n_features(self) -> int:
+        return len(self.feature_names)
+
+    def state_layout(self) -> list[StateSlot]:
+        """What the feature part of the state vector holds, in order, with its value at rest."""
+        slots = [
+            StateSlot(name=t.feature_name(j), channel=t.channel, description=f"{t.channel} delayed by {j} samples")
+            for t in self.taps
+            for j in range(1, t.depth + 1)
+        ]
+        for d in self.derived:
+            slots.extend(d.state_slots())
+        return slots
+
+    @property
+    def state_size(self) -> int:
+        return len(self.state_layout())
+
+    def _check_channels(self, channels: dict[str, np.ndarray]) -> tuple[dict[str, np.ndarray], int]:
+        arrays: dict[str, np.ndarray] = {}
+        for name in self.channels:
+            if name not in channels:
+                raise ValueError(f"input channel {name!r} missing (have {sorted(channels)})")
+            x = np.asarray(channels[name], dtype=np.float64)
+            if x.ndim != 1:
+                raise ValueError(f"channel {name!r} must be 1-D, got shape {x.shape}")
+            arrays[name] = x
+        lengths = {name: len(x) for name, x in arrays.items()}
+        if len(set(lengths.values())) > 1:
+            raise ValueError(f"channels have different lengths: {lengths}")
+        return arrays, next(iter(lengths.values()))
+
+    def features(self, channels: dict[str, np.ndarray], sample_period: float) -> np.ndarray:
+        """Feature matrix (n, n_features) of the step graph run sample by sample from rest over `channels`."""
+        sample_period = _check_positive(sample_period, "sample period")
+        arrays, n = self._check_channels(channels)
+        initial = np.array([s.initial for s in self.state_layout()], dtype=np.float64)
+        columns: list[np.ndarray] = []
+        offset = 0
+        for tap in self.taps:
+            x = arrays[tap.channel]
+            line = initial[offset : offset + tap.depth]  # values at k-1, k-2, ... before sample 0
+            history = np.concatenate([line[::-1], x])  # history[tap.depth + k] = x_k
+            columns.extend(history[tap.depth - d : tap.depth - d + n] for d in tap.delays)
+            offset += tap.depth
+        for d in self.derived:
+            k = len(d.state_slots())
+            columns.append(d.compute(arrays[d.channel], initial[offset : offset + k], sample_period))
+            offset += k
+        return np.stack(columns, axis=1)
+
+    def emit(self, g: NodeSink, inputs: dict[str, str], state: str | None, sample_period: float) -> tuple[str, str | None]:
+        """Nodes of one sample: input tensors [1] per channel, state [state_size] or None
+        -> (features [n_features], state_next [state_size] or None)."""
+        sample_period = _check_positive(sample_period, "sample period")
+        # Pool every available value in one vector, then pick features and next state from it with Gather.
+        parts = [inputs[c] for c in self.channels]
+        position = {c: i for i, c in enumerate(self.channels)}
+        size = len(parts)
+        state_base = size
+        if self.state_size:
+            assert state is not None, "spec has state slots"
+            parts.append(state)
+            size += self.state_size
+        feature_index: list[int] = []
+        next_index: list[int] = []
+        offset = 0
+        for tap in self.taps:
+            for delay in tap.delays:
+                feature_index.append(position[tap.channel] if delay == 0 else state_base + offset + delay - 1)
+            if tap.depth:
+                next_index.extend([position[tap.channel]] + [state_base + offset + j for j in range(tap.depth - 1)])
+            offset += tap.depth
+        for d in self.derived:
+            k = len(d.state_slots())
+            slot = None
+            if k:
+                starts = g.constant("state_slot_start", np.array([offset], dtype=np.int64))
+                ends = g.constant("state_slot_end", np.array([offset + k], dtype=np.int64))
+                slot = g.node("Slice", [state, starts, ends], "state_slot")
+            value, value_next = d.emit(g, inputs[d.channel], slot, sample_period)
+            parts.append(value)
+            feature_index.append(size)
+            size += 1
+            if k:
+                parts.append(value_next)
+                next_index.extend(range(size, size + k))
+                size += k
+            offset += k
+        pool = g.node("Concat", parts, "feature_pool", axis=0) if len(parts) > 1 else parts[0]
+        indices = g.constant("feature_index", np.array(feature_index, dtype=np.int64))
+        features = g.node("Gather", [pool, indices], "features", axis=0)
+        if not next_index:
+            return features, None
+        next_indices = g.constant("state_next_index", np.array(next_index, dtype=np.int64))
+        return features, g.node("Gather", [pool, next_indices], "feature_state_next", axis=0)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "taps": [{"channel": t.channel, "delays": list(t.delays)} for t in self.taps],
+            "output": self.output,
+            "derived": [d.to_dict() for d in self.derived],
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "FeatureSpec":
+        try:
+            taps = tuple(Tap(t["channel"], tuple(t.get("delays", (0,)))) for t in d["taps"])
+            output = d["output"]
+        except (KeyError, TypeError) as exc:
+            raise ValueError(f"feature spec dict is malformed: {exc!r} in {d!r}") from exc
+        return cls(taps=taps, output=output, derived=tuple(derived_from_dict(x) for x in d.get("derived", [])))

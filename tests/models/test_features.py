@@ -1,0 +1,129 @@
+"""Feature specs: validation, analytic values, and equality with the emitted ONNX nodes run sample by sample."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import onnxruntime as ort
+import pytest
+
+from nnfmu.export.graph import GraphBuilder
+from nnfmu.models.features import FeatureSpec, Lowpass, SmoothSign, Tap, derived_from_dict
+
+T = 0.001
+
+
+def spec_with_everything() -> FeatureSpec:
+    return FeatureSpec(
+        taps=(Tap("velocity", (0, 1, 3)), Tap("displacement", (2,)), Tap("temperature")),
+        output="force",
+        derived=(SmoothSign("velocity", scale=0.05), Lowpass("velocity", tau=0.004), Lowpass("acceleration", tau=0.01)),
+    )
+
+
+def run_feature_nodes(spec: FeatureSpec, channels: dict[str, np.ndarray]) -> np.ndarray:
+    """The emitted feature nodes as a graph of their own, run in onnxruntime one sample at a time from rest."""
+    g = GraphBuilder(reserved=[*spec.channels, "state", "features_out", "state_next"])
+    state = "state" if spec.state_size else None
+    features, state_next = spec.emit(g, {c: c for c in spec.channels}, state, T)
+    outputs = [("features_out", spec.n_features)]
+    g.output(features, "features_out")
+    if state_next is not None:
+        g.output(state_next, "state_next")
+        outputs.append(("state_next", spec.state_size))
+    inputs = [(c, 1) for c in spec.channels] + ([("state", spec.state_size)] if state else [])
+    session = ort.InferenceSession(g.model("features", "test", inputs, outputs).SerializeToString())
+    s = np.array([slot.initial for slot in spec.state_layout()])
+    rows = []
+    for k in range(len(next(iter(channels.values())))):
+        feed = {c: channels[c][k : k + 1] for c in spec.channels}
+        if state:
+            feed["state"] = s
+        result = session.run(None, feed)
+        rows.append(result[0])
+        if state:
+            s = result[1]
+    return np.array(rows)
+
+
+def test_names_channels_and_state_layout():
+    spec = spec_with_everything()
+    assert spec.channels == ["velocity", "displacement", "temperature", "acceleration"]
+    assert spec.feature_names == [
+        "velocity[k]", "velocity[k-1]", "velocity[k-3]", "displacement[k-2]", "temperature[k]",
+        "smooth_sign(velocity, scale=0.05)", "lowpass(velocity, tau=0.004)", "lowpass(acceleration, tau=0.01)",
+    ]
+    assert spec.n_features == 8
+    layout = spec.state_layout()
+    assert [s.name for s in layout] == [
+        "velocity[k-1]", "velocity[k-2]", "velocity[k-3]", "displacement[k-1]", "displacement[k-2]",
+        "lowpass(velocity, tau=0.004)[k-1]", "lowpass(acceleration, tau=0.01)[k-1]",
+    ]
+    assert [s.channel for s in layout] == ["velocity"] * 3 + ["displacement"] * 2 + ["velocity", "acceleration"]
+    assert all(s.initial == 0.0 for s in layout) and spec.state_size == 7
+
+
+def test_delays_start_from_rest_and_shift():
+    spec = FeatureSpec(taps=(Tap("velocity", (0, 2)),), output="force")
+    x = np.array([1.0, 2.0, 3.0, 4.0])
+    np.testing.assert_array_equal(spec.features({"velocity": x}, T), [[1, 0], [2, 0], [3, 1], [4, 2]])
+
+
+def test_lowpass_step_response_is_exact_exponential():
+    tau = 0.003
+    spec = FeatureSpec(taps=(), output="force", derived=(Lowpass("velocity", tau=tau),))
+    k = np.arange(50)
+    y = spec.features({"velocity": np.ones(50)}, T)[:, 0]
+    np.testing.assert_allclose(y, 1.0 - np.exp(-(k + 1) * T / tau), rtol=1e-13)
+
+
+def test_smooth_sign_is_tanh_of_scaled_channel():
+    spec = FeatureSpec(taps=(), output="force", derived=(SmoothSign("velocity", scale=0.2),))
+    v = np.linspace(-1, 1, 11)
+    np.testing.assert_array_equal(spec.features({"velocity": v}, T)[:, 0], np.tanh(v / 0.2))
+
+
+@pytest.mark.parametrize("make", [spec_with_everything, lambda: FeatureSpec((Tap("velocity"),), "force")])
+def test_features_equal_emitted_step_nodes(make):
+    spec = make()
+    rng = np.random.default_rng(1)
+    channels = {c: rng.normal(size=60) for c in spec.channels}
+    np.testing.assert_allclose(run_feature_nodes(spec, channels), spec.features(channels, T), rtol=1e-13, atol=1e-15)
+
+
+def test_dict_round_trip_through_json():
+    spec = spec_with_everything()
+    again = FeatureSpec.from_dict(json.loads(json.dumps(spec.to_dict())))
+    assert again == spec
+
+
+@pytest.mark.parametrize(
+    "build, fragment",
+    [
+        (lambda: Tap("velocity", (0, -1)), "-1"),
+        (lambda: Tap("velocity", (1, 1)), "duplicate delay"),
+        (lambda: Tap("", (0,)), "''"),
+        (lambda: FeatureSpec((Tap("velocity"), Tap("velocity", (1,))), "force"), "'velocity' is tapped twice"),
+        (lambda: FeatureSpec((Tap("velocity"),), "force", (SmoothSign("velocity"), SmoothSign("velocity"))), "duplicate feature names"),
+        (lambda: FeatureSpec((Tap("force"),), "force"), "'force' is also an input"),
+        (lambda: FeatureSpec((), "force"), "no features"),
+        (lambda: Lowpass("velocity", tau=0.0), "tau"),
+        (lambda: SmoothSign("velocity", scale=float("nan")), "nan"),
+        (lambda: derived_from_dict({"kind": "energy", "channel": "velocity"}), "'energy'"),
+        (lambda: derived_from_dict({"kind": "lowpass", "channel": "velocity", "cutoff": 3}), "cutoff"),
+    ],
+)
+def test_invalid_specs_raise_value_error_naming_the_value(build, fragment):
+    with pytest.raises(ValueError, match=fragment.replace("(", r"\(").replace("[", r"\[")):
+        build()
+
+
+def test_missing_or_mismatched_channels_raise():
+    spec = FeatureSpec((Tap("velocity"), Tap("displacement", (1,))), "force")
+    with pytest.raises(ValueError, match="'displacement' missing"):
+        spec.features({"velocity": np.zeros(3)}, T)
+    with pytest.raises(ValueError, match="different lengths"):
+        spec.features({"velocity": np.zeros(3), "displacement": np.zeros(4)}, T)
+    with pytest.raises(ValueError, match="sample period"):
+        spec.features({"velocity": np.zeros(3), "displacement": np.zeros(3)}, 0.0)
