@@ -1,0 +1,103 @@
+"""PNG plots of one compared channel: time history around the global peak, PSD overlay, rainflow range exceedance.
+
+Figures are drawn on matplotlib's Agg canvas directly (no pyplot, no screen, no global state). Channel names go into
+labels with math parsing off, so a name holding `$` or `\\` is printed as it is.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from nnfmu.validate.compare import ChannelComparison
+from nnfmu.validate.damage import rainflow_cycles
+
+RESULT_STYLE = {"color": "tab:red", "label": "result", "linewidth": 1.0}
+REFERENCE_STYLE = {"color": "black", "label": "reference", "linewidth": 1.0}
+
+
+def axis_label(name: str, unit: str) -> str:
+    """`name [unit]`, with `[1]` for a dimensionless quantity."""
+    return f"{name} [{unit or '1'}]"
+
+
+def psd_unit(unit: str) -> str:
+    """Unit of a PSD of a signal in `unit`: `N` -> `N^2/Hz`, `m/s` -> `(m/s)^2/Hz`, `` -> `1/Hz`."""
+    if not unit:
+        return "1/Hz"
+    base = unit if unit.replace("_", "").isalnum() else f"({unit})"
+    return f"{base}^2/Hz"
+
+
+def _new_axes(title: str):
+    figure = Figure(figsize=(8.0, 4.0), dpi=100, layout="constrained")
+    FigureCanvasAgg(figure)
+    axes = figure.add_subplot()
+    axes.set_title(title, parse_math=False)
+    axes.grid(True, alpha=0.3)
+    return figure, axes
+
+
+def _save(figure: Figure, path: Path) -> Path:
+    figure.savefig(path, format="png")
+    return path
+
+
+def plot_time_window(c: ChannelComparison, path: Path) -> Path:
+    """Result over reference inside the comparison's window (the span around the global peak)."""
+    figure, axes = _new_axes(f"{c.name}: {c.window[0]:g} to {c.window[1]:g} s")
+    inside = (c.time >= c.window[0]) & (c.time <= c.window[1])
+    axes.plot(c.time[inside], c.reference[inside], **REFERENCE_STYLE)
+    axes.plot(c.time[inside], c.result[inside], **RESULT_STYLE)
+    axes.set_xlabel("time [s]")
+    axes.set_ylabel(axis_label(c.name, c.unit), parse_math=False)
+    axes.legend()
+    return _save(figure, path)
+
+
+def plot_psd(c: ChannelComparison, path: Path) -> Path:
+    """Welch PSDs of result and reference, log density axis where any density is positive."""
+    figure, axes = _new_axes(f"{c.name}: power spectral density")
+    axes.plot(c.psd_reference.frequency, c.psd_reference.density, **REFERENCE_STYLE)
+    axes.plot(c.psd_result.frequency, c.psd_result.density, **RESULT_STYLE)
+    if np.any(c.psd_reference.density > 0) or np.any(c.psd_result.density > 0):
+        axes.set_yscale("log")  # a constant channel has an all-zero PSD and keeps a linear axis
+    axes.set_xlabel("frequency [Hz]")
+    axes.set_ylabel(f"PSD [{psd_unit(c.unit)}]", parse_math=False)
+    axes.legend()
+    return _save(figure, path)
+
+
+def _exceedance(signal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    ranges, counts = rainflow_cycles(signal)
+    order = np.argsort(ranges)[::-1]
+    return ranges[order], np.cumsum(counts[order])
+
+
+def plot_rainflow(c: ChannelComparison, path: Path) -> Path:
+    """Cumulative rainflow cycle count exceeding each range (log-log), the load spectrum behind the damage ratio."""
+    figure, axes = _new_axes(f"{c.name}: rainflow range exceedance (pseudo-damage ratio "
+                             f"{c.metrics.pseudo_damage_ratio:.3g}, m = {c.basquin_slope:g})")
+    any_cycles = False
+    for signal, style in ((c.reference, REFERENCE_STYLE), (c.result, RESULT_STYLE)):
+        ranges, cumulative = _exceedance(signal)
+        axes.step(cumulative, ranges, where="post", **style)
+        any_cycles = any_cycles or ranges.size > 0
+    if any_cycles:
+        axes.set_xscale("log")  # a constant channel has no cycles and keeps a linear axis
+    axes.set_xlabel("cycles exceeding range [1]")
+    axes.set_ylabel(axis_label(f"{c.name} range", c.unit), parse_math=False)
+    axes.legend()
+    return _save(figure, path)
+
+
+def plot_channel(c: ChannelComparison, out_dir: Path, stem: str) -> dict[str, Path]:
+    """All plots of one channel as `<stem>_time.png`, `<stem>_psd.png`, `<stem>_rainflow.png` in `out_dir`."""
+    return {
+        "time": plot_time_window(c, out_dir / f"{stem}_time.png"),
+        "psd": plot_psd(c, out_dir / f"{stem}_psd.png"),
+        "rainflow": plot_rainflow(c, out_dir / f"{stem}_rainflow.png"),
+    }

@@ -1,0 +1,100 @@
+"""Write a validation report folder: PNG plots per channel, `summary.json` and an `index.html` linking them.
+
+Everything is first written into a hidden staging folder inside `out_dir`, then moved into place file by file with
+`index.html` last, so a failure while plotting leaves an earlier report untouched. Files of other names in `out_dir`
+are left alone.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import tempfile
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import jinja2
+
+import nnfmu
+from nnfmu.validate.compare import ChannelComparison
+from nnfmu.validate.metrics import DEFINITIONS
+from nnfmu.validate.plots import plot_channel
+from nnfmu.validate.summary import json_float
+
+TEMPLATE = "report.html.j2"
+SUMMARY_FILE = "summary.json"
+INDEX_FILE = "index.html"
+
+
+def file_stem(index: int, channel: str) -> str:
+    """A file-system-safe, unique stem for channel number `index`: `03_axial_force`."""
+    slug = re.sub(r"[^A-Za-z0-9_-]+", "_", channel).strip("_")[:60] or "channel"
+    return f"{index:02d}_{slug}"
+
+
+def channel_summary(c: ChannelComparison, plots: Mapping[str, str]) -> dict[str, Any]:
+    """One channel's entry in `summary.json` (JSON-safe floats)."""
+    return {
+        "name": c.name,
+        "unit": c.unit,
+        "quantity": c.quantity,
+        "basquin_slope": c.basquin_slope,
+        "samples": int(len(c.time)),
+        "time_span": [json_float(c.time[0]), json_float(c.time[-1])],
+        "window": [json_float(c.window[0]), json_float(c.window[1])],
+        "metrics": c.metrics.to_dict(),
+        "plots": dict(plots),
+    }
+
+
+def summary_document(comparisons: Sequence[ChannelComparison], title: str, context: Mapping[str, str],
+                     plots: Sequence[Mapping[str, str]]) -> dict[str, Any]:
+    """The whole `summary.json` content: title, context, metric definitions and every channel."""
+    return {
+        "title": title,
+        "nnfmu_version": nnfmu.__version__,
+        "context": dict(context),
+        "definitions": dict(DEFINITIONS),
+        "channels": [channel_summary(c, p) for c, p in zip(comparisons, plots)],
+    }
+
+
+def _format_number(value: float | None) -> str:
+    return "n/a" if value is None else f"{value:.4g}"
+
+
+def render_html(summary: Mapping[str, Any]) -> str:
+    """`index.html` from the summary document, every value escaped by jinja2's autoescape."""
+    environment = jinja2.Environment(
+        loader=jinja2.FileSystemLoader(Path(__file__).resolve().parent),
+        autoescape=True,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        undefined=jinja2.StrictUndefined,
+    )
+    environment.filters["number"] = _format_number
+    return environment.get_template(TEMPLATE).render(summary=summary)
+
+
+def write_report(comparisons: Sequence[ChannelComparison], out_dir: str | os.PathLike[str], title: str,
+                 context: Mapping[str, str] | None = None) -> Path:
+    """Write plots, `summary.json` and `index.html` for `comparisons` into `out_dir`; returns the index.html path."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    stage = Path(tempfile.mkdtemp(prefix=".report.", dir=out_dir))
+    try:
+        plots = []
+        for index, c in enumerate(comparisons):
+            paths = plot_channel(c, stage, file_stem(index, c.name))
+            plots.append({kind: path.name for kind, path in paths.items()})
+        summary = summary_document(comparisons, title, context or {}, plots)
+        (stage / SUMMARY_FILE).write_text(json.dumps(summary, indent=2, allow_nan=False), encoding="utf-8")
+        (stage / INDEX_FILE).write_text(render_html(summary), encoding="utf-8")
+        for name in [p for channel in plots for p in channel.values()] + [SUMMARY_FILE, INDEX_FILE]:
+            os.replace(stage / name, out_dir / name)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+    return out_dir / INDEX_FILE
