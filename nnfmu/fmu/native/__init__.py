@@ -1,0 +1,1 @@
+"""Native FMU backend: C code generated from the ONNX step graph, compiled with the generic FMI glue."""

@@ -1,0 +1,1 @@
+"""One C emitter per ONNX operator family."""
