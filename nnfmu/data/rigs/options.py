@@ -1,0 +1,89 @@
+"""What a rig run is asked for: kind, effects, excitation, sampling, noise and seed, checked once here."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+KINDS = ("damper", "bushing")
+EXCITATIONS = ("lab", "random", "sine")
+
+DAMPER_EFFECTS = ("hysteresis", "gas_force", "seal_friction", "temperature", "inertia")
+BUSHING_EFFECTS = ("viscoelastic", "friction")
+EFFECTS: dict[str, tuple[str, ...]] = {"damper": DAMPER_EFFECTS, "bushing": BUSHING_EFFECTS}
+
+# The damper default holds what a velocity-history network can represent; gas force and temperature fade are the
+# undeclared effects a later stage must discover.
+DEFAULT_EFFECTS: dict[str, tuple[str, ...]] = {
+    "damper": ("hysteresis", "seal_friction", "inertia"),
+    "bushing": ("viscoelastic", "friction"),
+}
+DEFAULT_DURATION: dict[str, float] = {"damper": 70.0, "bushing": 60.0}  # s
+MIN_SAMPLE_RATE = 100.0  # Hz: the drives reach 40 Hz, and the recorder has no anti-alias filter
+
+
+@dataclass(frozen=True)
+class RigOptions:
+    """Settings of one simulated rig run.
+
+    `sample_rate` [Hz]; `duration` [s] (None: 70 s damper, 60 s bushing); `seed` makes runs reproducible; `noise`
+    multiplies the realistic sensor noise (0: exact truth values, no noise and no quantisation); `effects` (None: the
+    kind's defaults, (): only the base characteristic); `excitation`: "lab" (damper: sine series at standard peak
+    velocities, then band-limited random; bushing: target-spectrum random beyond the vehicle range), "random" (only
+    band-limited random, for held-out test data) or "sine" (only the sine series).
+    """
+
+    sample_rate: float = 1000.0
+    duration: float | None = None
+    seed: int = 0
+    noise: float = 1.0
+    effects: tuple[str, ...] | None = None
+    excitation: str = "lab"
+
+
+def check_kind(kind: str) -> str:
+    """Return `kind` if it is a known rig kind, else raise ValueError naming the valid ones."""
+    if kind not in KINDS:
+        raise ValueError(f"unknown rig kind {kind!r}; valid kinds: {', '.join(KINDS)}")
+    return kind
+
+
+def resolve_effects(kind: str, effects: tuple[str, ...] | None) -> tuple[str, ...]:
+    """The effects switched on for `kind`, in canonical order; unknown names raise ValueError naming the valid ones."""
+    valid = EFFECTS[check_kind(kind)]
+    if effects is None:
+        return DEFAULT_EFFECTS[kind]
+    if isinstance(effects, str):
+        raise ValueError(f"effects must be a tuple of names, not the string {effects!r}")
+    unknown = [name for name in effects if name not in valid]
+    if unknown:
+        raise ValueError(
+            f"unknown {kind} effect(s) {', '.join(map(repr, unknown))}; valid {kind} effects: {', '.join(valid)}"
+        )
+    return tuple(name for name in valid if name in effects)
+
+
+def resolve_duration(kind: str, options: RigOptions) -> float:
+    """The run's duration [s]: the option, or the kind's default."""
+    return DEFAULT_DURATION[check_kind(kind)] if options.duration is None else float(options.duration)
+
+
+def check_options(kind: str, options: RigOptions) -> None:
+    """Raise ValueError naming the bad option value, else return None."""
+    check_kind(kind)
+    resolve_effects(kind, options.effects)
+    if options.excitation not in EXCITATIONS:
+        raise ValueError(f"unknown excitation {options.excitation!r}; valid excitations: {', '.join(EXCITATIONS)}")
+    if not (math.isfinite(options.sample_rate) and options.sample_rate >= MIN_SAMPLE_RATE):
+        raise ValueError(
+            f"sample_rate must be at least {MIN_SAMPLE_RATE:g} Hz (the drives reach 40 Hz), got {options.sample_rate!r}"
+        )
+    duration = resolve_duration(kind, options)
+    if not (math.isfinite(duration) and duration * options.sample_rate >= 16):
+        raise ValueError(
+            f"duration {duration!r} s gives fewer than 16 samples at {options.sample_rate:g} Hz; choose a longer one"
+        )
+    if not (math.isfinite(options.noise) and options.noise >= 0):
+        raise ValueError(f"noise must be a non-negative multiplier of realistic sensor noise, got {options.noise!r}")
+    if not isinstance(options.seed, int) or options.seed < 0:
+        raise ValueError(f"seed must be a non-negative integer, got {options.seed!r}")
