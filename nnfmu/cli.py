@@ -54,6 +54,26 @@ def rig(
     typer.echo(f"data: {data_path}\ntruth (for evaluation only, never for training): {truth_path}")
 
 
+@app.command()
+def build(
+    model: Path = typer.Argument(..., help="ONNX file: an nnfmu step graph, or any graph the backends support."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="FMU path (default: exported/NAME.fmu)."),
+    backend: str = typer.Option("native", help="native (generated C, no Python at run time) or pythonfmu (onnxruntime)."),
+    fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
+    name: Optional[str] = typer.Option(None, help="Model name (default: from the ONNX metadata)."),
+) -> None:
+    """Build a standalone FMI co-simulation FMU from an ONNX model."""
+    from nnfmu.fmu.build import build_fmu
+    from nnfmu.fmu.errors import FmuBuildError
+    from nnfmu.fmu.options import BuildOptions
+
+    try:
+        path = build_fmu(model, BuildOptions(out=out, backend=backend, fmi_version=fmi, name=name))
+    except FmuBuildError as error:
+        _fail(error)
+    typer.echo(f"FMU: {path}")
+
+
 @data_app.command("check")
 def data_check(
     path: Path = typer.Argument(..., help="CSV (`name [unit]` headers, `time [s]` first) or MDF4 file."),

@@ -1,0 +1,214 @@
+"""Render modelDescription.xml (FMI 2.0 or 3.0 co-simulation) from a component's FMU variables.
+
+The XML comes from jinja2 templates in `templates/` with autoescaping on, so any name or description from an ONNX
+file is escaped; control characters XML cannot carry are dropped. Units are de-duplicated into `UnitDefinitions`
+with SI base-unit exponents for the units nnfmu uses. The `ModelStructure` follows docs/architecture.md: at a
+communication point no output depends on an input (outputs change only in doStep), and at initialisation every
+output depends on the inputs its graph tensor is computed from and on `output_gain`.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import uuid
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+import jinja2
+import onnx
+
+import nnfmu
+from nnfmu.component import Component
+from nnfmu.fmu.names import xml_text
+from nnfmu.fmu.variables import FmuVariable, FmuVariables
+from nnfmu.resources import templates_dir
+
+GENERATION_TOOL = f"nnfmu {nnfmu.__version__}"
+
+# SI base-unit exponents (FMI BaseUnit attributes) of the units nnfmu writes.
+SI_EXPONENTS: dict[str, tuple[tuple[str, int], ...]] = {
+    "1": (),
+    "m": (("m", 1),),
+    "m/s": (("m", 1), ("s", -1)),
+    "m/s^2": (("m", 1), ("s", -2)),
+    "N": (("kg", 1), ("m", 1), ("s", -2)),
+    "N.m": (("kg", 1), ("m", 2), ("s", -2)),
+    "Pa": (("kg", 1), ("m", -1), ("s", -2)),
+    "rad": (("rad", 1),),
+    "rad/s": (("rad", 1), ("s", -1)),
+    "rad/s^2": (("rad", 1), ("s", -2)),
+    "K": (("K", 1),),
+    "s": (("s", 1),),
+    "Hz": (("s", -1),),
+    "kg": (("kg", 1),),
+}
+
+
+@dataclass(frozen=True)
+class UnitDefinition:
+    """One `<Unit>`: its name and SI exponents, or `None` for a unit nnfmu does not know (listed without BaseUnit)."""
+
+    name: str
+    exponents: tuple[tuple[str, int], ...] | None
+
+
+@dataclass(frozen=True)
+class FmuIdentity:
+    """What names an FMU: model name, C model identifier (names the binary), instantiation token, FMI version."""
+
+    model_name: str
+    identifier: str
+    token: str
+    fmi_version: int
+
+
+def instantiation_token(onnx_bytes: bytes, component: Component, fmi_version: int) -> str:
+    """A GUID-shaped token derived from the graph, its description and the FMI version (same input, same token)."""
+    digest = hashlib.sha256()
+    for part in (onnx_bytes, component.to_json().encode(), f"{GENERATION_TOOL} fmi{fmi_version}".encode()):
+        digest.update(hashlib.sha256(part).digest())
+    return "{" + str(uuid.UUID(bytes=digest.digest()[:16], version=4)) + "}"
+
+
+def unit_definitions(variables: Iterable[FmuVariable]) -> list[UnitDefinition]:
+    """The distinct units of `variables`, in order of first use."""
+    seen: dict[str, UnitDefinition] = {}
+    for v in variables:
+        if v.unit and v.unit not in seen:
+            seen[v.unit] = UnitDefinition(v.unit, SI_EXPONENTS.get(v.unit))
+    return list(seen.values())
+
+
+def tensor_dependencies(model: onnx.ModelProto) -> dict[str, set[str]]:
+    """For every graph output tensor, the graph input tensors it is computed from (walking nodes backwards)."""
+    producers = {out: node for node in model.graph.node for out in node.output}
+    graph_inputs = {vi.name for vi in model.graph.input}
+
+    def reach(tensor: str, seen: set[str]) -> set[str]:
+        if tensor in seen:
+            return set()
+        seen.add(tensor)
+        if tensor in graph_inputs:
+            return {tensor}
+        node = producers.get(tensor)
+        if node is None:
+            return set()
+        found: set[str] = set()
+        for name in node.input:
+            if name:
+                found |= reach(name, seen)
+        for attribute in node.attribute:  # subgraphs (If/Loop/Scan) may read outer tensors: be conservative
+            if attribute.g.node or attribute.graphs:
+                return set(graph_inputs)
+        return found
+
+    return {vi.name: reach(vi.name, set()) for vi in model.graph.output}
+
+
+@dataclass
+class ModelDescriptionView:
+    """Everything the modelDescription templates read, with small helpers for the attributes that need rules."""
+
+    identity: FmuIdentity
+    component: Component
+    fmu_variables: FmuVariables
+    dependencies: dict[str, set[str]]
+    source_files: list[str] = field(default_factory=list)
+
+    @property
+    def model_name(self) -> str:
+        return xml_text(self.identity.model_name)
+
+    @property
+    def identifier(self) -> str:
+        return self.identity.identifier
+
+    @property
+    def token(self) -> str:
+        return self.identity.token
+
+    @property
+    def description(self) -> str:
+        return xml_text(self.component.description)
+
+    @property
+    def generation_tool(self) -> str:
+        return GENERATION_TOOL
+
+    @property
+    def sample_period(self) -> float | None:
+        return self.component.sample_period
+
+    @property
+    def variables(self) -> list[FmuVariable]:
+        return [self._clean(v) for v in self.fmu_variables.listed(self.identity.fmi_version)]
+
+    @property
+    def outputs(self) -> list[FmuVariable]:
+        return [self._clean(v) for v in (*self.fmu_variables.outputs, self.fmu_variables.extrapolating)]
+
+    @property
+    def units(self) -> list[UnitDefinition]:
+        return unit_definitions(self.fmu_variables.listed(self.identity.fmi_version))
+
+    @staticmethod
+    def _clean(v: FmuVariable) -> FmuVariable:
+        return FmuVariable(v.name, v.value_reference, v.causality, v.type, xml_text(v.unit), xml_text(v.description),
+                           v.start, v.port_index)
+
+    @staticmethod
+    def variability(v: FmuVariable) -> str:
+        return {"input": "continuous", "output": "discrete", "parameter": "fixed", "independent": "continuous"}[
+            v.causality]
+
+    @staticmethod
+    def initial(v: FmuVariable) -> str | None:
+        return {"output": "calculated", "parameter": "exact"}.get(v.causality)
+
+    @staticmethod
+    def number(value: float | bool) -> str:
+        return repr(float(value))
+
+    def index(self, v: FmuVariable) -> int:
+        """FMI 2 `index`: 1-based position in ModelVariables."""
+        return 1 + [x.value_reference for x in self.variables].index(v.value_reference)
+
+    def initial_dependencies(self, v: FmuVariable) -> str:
+        """Knowns an output depends on at initialisation: FMI 2 indices or FMI 3 value references, ascending."""
+        fv = self.fmu_variables
+        if v.value_reference == fv.extrapolating.value_reference:
+            knowns = [x for x in fv.inputs if self._has_envelope(x)]
+        else:
+            tensor = self.component.outputs[v.port_index].tensor
+            sources = self.dependencies.get(tensor, set())
+            knowns = [x for x in fv.inputs if self.component.inputs[x.port_index].tensor in sources]
+            knowns.append(fv.output_gain)
+        keys = sorted(self.index(x) if self.identity.fmi_version == 2 else x.value_reference for x in knowns)
+        return " ".join(str(k) for k in keys)
+
+    def _has_envelope(self, v: FmuVariable) -> bool:
+        port = self.component.inputs[v.port_index]
+        return port.min is not None or port.max is not None
+
+
+def _environment() -> jinja2.Environment:
+    return jinja2.Environment(
+        loader=jinja2.FileSystemLoader(str(templates_dir())),
+        autoescape=True,
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        keep_trailing_newline=True,
+    )
+
+
+def render_model_description(view: ModelDescriptionView) -> str:
+    """modelDescription.xml for the FMI version of `view.identity`."""
+    template = f"modelDescription{view.identity.fmi_version}.xml.j2"
+    return _environment().get_template(template).render(md=view)
+
+
+def render_build_description(identifier: str, source_files: list[str]) -> str:
+    """sources/buildDescription.xml: how another platform compiles the FMU from its sources."""
+    return _environment().get_template("buildDescription.xml.j2").render(
+        identifier=identifier, source_files=source_files)

@@ -1,0 +1,420 @@
+/* nn_fmu.c: instance life cycle, logging, variable access, fixed-rate sampling and FMU state of an nnfmu FMU.
+ *
+ * Time: sample k falls at t_start + k*T (k counted with an integer). doStep(t, h) evaluates, in order, every sample
+ * with t < t_k <= t + h (within 1e-9*T), with the inputs set before the call; outputs hold the latest sample.
+ * Sample 0 is evaluated when initialisation ends. A graph without a sample period (NN_HAS_SAMPLE_PERIOD 0) is
+ * evaluated once at the end of every step. The network is never evaluated when a variable is read.
+ */
+#define NN_CONFIG_TABLES
+#include "nn_fmu.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define NN_PI 3.14159265358979323846
+#define NN_STATE_MAGIC "NNFMUST1"
+#define NN_MAGIC_SIZE 8
+#define NN_TOKEN_FIELD 64
+#define NN_SAMPLE_TOLERANCE 1e-9   /* a sample time within this fraction of T of the step end counts as reached */
+#define NN_TIME_TOLERANCE 1e-9     /* relative mismatch allowed between doStep's time and the FMU's time */
+
+/* The token must fit the fixed field of the serialised state's header. */
+typedef char nn_token_fits_header[(sizeof(NN_INSTANTIATION_TOKEN) <= NN_TOKEN_FIELD) ? 1 : -1];
+
+/* Serialised FMU state: this header followed by the bytes of NNModelData. */
+typedef struct {
+    char magic[NN_MAGIC_SIZE];
+    uint64_t size;
+    char token[NN_TOKEN_FIELD];
+} NNStateHeader;
+
+static const char *const category_names[NN_N_CATEGORIES] = {"logEvents", "logStatusWarning", "logStatusError"};
+
+const char *nn_category_name(NNCategory category) { return category_names[category]; }
+
+static const char *mode_name(NNMode mode) {
+    switch (mode) {
+    case NN_INSTANTIATED: return "Instantiated";
+    case NN_INITIALIZATION: return "Initialization Mode";
+    case NN_STEPPING: return "Step Mode";
+    case NN_TERMINATED: return "Terminated";
+    case NN_FAILED: return "Error (after a failed call)";
+    }
+    return "unknown";
+}
+
+void nn_log(const NNInstance *instance, NNStatus status, NNCategory category, const char *format, ...) {
+    char message[1024];
+    va_list args;
+    if (!instance->log || !instance->logger) return;
+    /* Errors always reach the logger; warnings and events only when logging and their category are on. */
+    if (status < NN_ERROR && !(instance->logging_on && instance->category_on[category])) return;
+    va_start(args, format);
+    vsnprintf(message, sizeof message, format, args);
+    va_end(args);
+    instance->log(instance, status, category_names[category], message);
+}
+
+NNStatus nn_set_debug_logging(NNInstance *instance, int logging_on, size_t n_categories,
+                              const char *const categories[]) {
+    size_t i;
+    int c;
+    if (!nn_check_array(instance, "SetDebugLogging", categories, n_categories, "categories")) return NN_ERROR;
+    instance->logging_on = logging_on;
+    for (c = 0; c < NN_N_CATEGORIES; c++) instance->category_on[c] = (n_categories == 0);
+    for (i = 0; i < n_categories; i++) {
+        int known = 0;
+        for (c = 0; c < NN_N_CATEGORIES; c++) {
+            if (categories[i] && strcmp(categories[i], category_names[c]) == 0) {
+                instance->category_on[c] = 1;
+                known = 1;
+            }
+        }
+        if (!known) {
+            nn_log(instance, NN_ERROR, NN_LOG_ERROR, "SetDebugLogging: unknown log category '%s' (known: %s, %s, %s)",
+                   categories[i] ? categories[i] : "(null)", category_names[0], category_names[1], category_names[2]);
+            return NN_ERROR;
+        }
+    }
+    return NN_OK;
+}
+
+int nn_allowed(NNInstance *instance, const char *function, unsigned allowed) {
+    if (instance->mode & allowed) return 1;
+    nn_log(instance, NN_ERROR, NN_LOG_ERROR, "%s must not be called in state %s", function, mode_name(instance->mode));
+    return 0;
+}
+
+int nn_check_array(const NNInstance *instance, const char *function, const void *array, size_t n, const char *what) {
+    if (n == 0 || array) return 1;
+    nn_log(instance, NN_ERROR, NN_LOG_ERROR, "%s: %s is NULL but %lu values were requested", function, what,
+           (unsigned long)n);
+    return 0;
+}
+
+void nn_reset(NNInstance *instance) {
+    NNModelData *d = &instance->data;
+    int i;
+    memset(d, 0, sizeof *d);
+    for (i = 0; i < NN_N_STATE; i++) d->state[i] = nn_state_initial[i];
+    d->filter_cutoff = NN_DEFAULT_FILTER_CUTOFF;
+    d->output_gain = NN_DEFAULT_OUTPUT_GAIN;
+    instance->mode = NN_INSTANTIATED;
+    instance->preview_stale = 1;
+}
+
+NNInstance *nn_instantiate(const char *name, const char *token, NNLogFunction *log, NNCallback logger,
+                           void *environment, int logging_on) {
+    NNInstance *instance = (NNInstance *)calloc(1, sizeof(NNInstance));
+    size_t length;
+    int c;
+    if (!instance) return NULL;
+    if (!name) name = "";
+    length = strlen(name);
+    instance->name = (char *)malloc(length + 1);
+    if (!instance->name) {
+        free(instance);
+        return NULL;
+    }
+    memcpy(instance->name, name, length + 1);
+    instance->log = log;
+    instance->logger = logger;
+    instance->environment = environment;
+    instance->logging_on = logging_on;
+    for (c = 0; c < NN_N_CATEGORIES; c++) instance->category_on[c] = 1;
+    if (!token || strcmp(token, NN_INSTANTIATION_TOKEN) != 0) {
+        nn_log(instance, NN_ERROR, NN_LOG_ERROR, "instantiation token '%s' does not match this FMU's '%s'",
+               token ? token : "(null)", NN_INSTANTIATION_TOKEN);
+        nn_free(instance);
+        return NULL;
+    }
+    nn_reset(instance);
+    nn_log(instance, NN_OK, NN_LOG_EVENTS, "instantiated %s (%d inputs, %d outputs, %d state values)",
+           NN_MODEL_IDENTIFIER, NN_N_INPUTS, NN_N_OUTPUTS, NN_N_STATE);
+    return instance;
+}
+
+void nn_free(NNInstance *instance) {
+    if (!instance) return;
+    free(instance->name);
+    free(instance);
+}
+
+/* 1 if `vr` lies in [first, first + count); a function so that empty ranges raise no compiler warnings. */
+static int in_range(unsigned vr, unsigned first, unsigned count) { return vr >= first && vr - first < count; }
+
+/* Time of sample k [s]; only meaningful for a graph with a sample period. */
+static double sample_time(const NNModelData *d, uint64_t k) {
+    return d->start_time + (double)k * NN_SAMPLE_PERIOD;
+}
+
+/* a in y_k = y_{k-1} + a (g u_k - y_{k-1}); a cut-off of 0 turns the filter off (a = 1). */
+static double filter_coefficient(double cutoff, double period) {
+    if (cutoff <= 0.0) return 1.0;
+    return 1.0 - exp(-2.0 * NN_PI * cutoff * period);
+}
+
+/* Evaluate the next sample from the current inputs and state. With `commit` the state, the sample counter and the
+ * envelope flags advance (a real sample); without it only outputs are refreshed (preview in Initialization Mode). */
+static NNStatus evaluate(NNInstance *instance, double period, int commit) {
+    NNModelData *d = &instance->data;
+    const unsigned long long k = (unsigned long long)d->samples_done;
+    double a;
+    int i;
+    int extrapolating = 0;
+
+    memset(instance->graph_in, 0, sizeof instance->graph_in);
+    for (i = 0; i < NN_N_INPUTS; i++) instance->graph_in[nn_input_graph_index[i]] = d->input[i];
+    for (i = 0; i < NN_N_STATE; i++) instance->graph_in[nn_state_graph_input[i]] = d->state[i];
+    if (nn_graph_run(instance->graph_in, instance->graph_out) != 0) {
+        nn_log(instance, NN_ERROR, NN_LOG_ERROR, "the network failed to evaluate sample %llu", k);
+        return NN_ERROR;
+    }
+    for (i = 0; i < NN_N_OUTPUTS; i++) {
+        double value = instance->graph_out[nn_output_graph_index[i]];
+        if (!isfinite(value)) {
+            nn_log(instance, NN_ERROR, NN_LOG_ERROR, "output '%s' of sample %llu is %g; the sample is discarded",
+                   nn_output_names[i], k, value);
+            return NN_ERROR;
+        }
+    }
+    for (i = 0; i < NN_N_STATE; i++) {
+        double value = instance->graph_out[nn_state_graph_output[i]];
+        if (!isfinite(value)) {
+            nn_log(instance, NN_ERROR, NN_LOG_ERROR, "state value %d of sample %llu is %g; the sample is discarded",
+                   i, k, value);
+            return NN_ERROR;
+        }
+    }
+
+    for (i = 0; i < NN_N_INPUTS; i++) {
+        int outside = d->input[i] < nn_input_min[i] || d->input[i] > nn_input_max[i];
+        if (commit && outside && !d->outside[i]) {
+            nn_log(instance, NN_WARNING, NN_LOG_WARNING,
+                   "sample %llu: input '%s' = %g %s lies outside the training envelope [%g, %g]; "
+                   "the output is extrapolated", k, nn_input_names[i], d->input[i], nn_input_units[i],
+                   nn_input_min[i], nn_input_max[i]);
+        }
+        if (commit) d->outside[i] = outside;
+        extrapolating |= outside;
+    }
+    d->extrapolating = extrapolating;
+
+    a = filter_coefficient(d->filter_cutoff, period);
+    for (i = 0; i < NN_N_OUTPUTS; i++) {
+        double target = d->output_gain * instance->graph_out[nn_output_graph_index[i]];
+        d->output[i] = (d->samples_done == 0) ? target : d->output[i] + a * (target - d->output[i]);
+    }
+    if (commit) {
+        for (i = 0; i < NN_N_STATE; i++) d->state[i] = instance->graph_out[nn_state_graph_output[i]];
+        d->samples_done++;
+    }
+    return NN_OK;
+}
+
+/* In Initialization Mode outputs are a function of the inputs set so far: evaluate sample 0 without committing. */
+static NNStatus refresh_preview(NNInstance *instance) {
+    NNStatus status;
+    if (instance->mode != NN_INITIALIZATION || !instance->preview_stale) return NN_OK;
+    status = evaluate(instance, NN_SAMPLE_PERIOD, 0);
+    if (status == NN_OK) instance->preview_stale = 0;
+    return status;
+}
+
+NNStatus nn_get_real(NNInstance *instance, unsigned vr, double *value) {
+    const NNModelData *d = &instance->data;
+    if (in_range(vr, NN_VR_FIRST_INPUT, NN_N_INPUTS)) {
+        *value = d->input[vr - NN_VR_FIRST_INPUT];
+        return NN_OK;
+    }
+    if (in_range(vr, NN_VR_FIRST_OUTPUT, NN_N_OUTPUTS)) {
+        NNStatus status = refresh_preview(instance);
+        *value = d->output[vr - NN_VR_FIRST_OUTPUT];
+        return status;
+    }
+    switch (vr) {
+    case NN_VR_FILTER_CUTOFF: *value = d->filter_cutoff; return NN_OK;
+    case NN_VR_OUTPUT_GAIN: *value = d->output_gain; return NN_OK;
+    case NN_VR_TIME: *value = d->time; return NN_OK;
+    default: break;
+    }
+    return nn_refuse_type(instance, "GetReal", "Real", vr);
+}
+
+static NNStatus set_parameter(NNInstance *instance, double *target, const char *name, double value, double min) {
+    if (!(instance->mode & (NN_INSTANTIATED | NN_INITIALIZATION))) {
+        nn_log(instance, NN_ERROR, NN_LOG_ERROR,
+               "parameter '%s' is fixed: it can only be set before initialisation ends", name);
+        return NN_ERROR;
+    }
+    if (value < min) {
+        nn_log(instance, NN_ERROR, NN_LOG_ERROR, "parameter '%s' = %g refused: it must be >= %g", name, value, min);
+        return NN_ERROR;
+    }
+    *target = value;
+    instance->preview_stale = 1;
+    return NN_OK;
+}
+
+NNStatus nn_set_real(NNInstance *instance, unsigned vr, double value) {
+    NNModelData *d = &instance->data;
+    if (in_range(vr, NN_VR_FIRST_INPUT, NN_N_INPUTS)) {
+        unsigned i = vr - NN_VR_FIRST_INPUT;
+        if (!isfinite(value)) {
+            nn_log(instance, NN_ERROR, NN_LOG_ERROR,
+                   "input '%s' set to %g: refused, inputs must be finite (kept %g %s)", nn_input_names[i], value,
+                   d->input[i], nn_input_units[i]);
+            return NN_ERROR;
+        }
+        d->input[i] = value;
+        instance->preview_stale = 1;
+        return NN_OK;
+    }
+    if (!isfinite(value) && (vr == NN_VR_FILTER_CUTOFF || vr == NN_VR_OUTPUT_GAIN)) {
+        nn_log(instance, NN_ERROR, NN_LOG_ERROR, "parameter with value reference %u set to %g: refused, must be finite",
+               vr, value);
+        return NN_ERROR;
+    }
+    if (vr == NN_VR_FILTER_CUTOFF) return set_parameter(instance, &d->filter_cutoff, "filter_cutoff", value, 0.0);
+    if (vr == NN_VR_OUTPUT_GAIN) return set_parameter(instance, &d->output_gain, "output_gain", value, -HUGE_VAL);
+    if (in_range(vr, NN_VR_FIRST_OUTPUT, NN_N_OUTPUTS)) {
+        nn_log(instance, NN_ERROR, NN_LOG_ERROR, "'%s' (value reference %u) is an output and cannot be set",
+               nn_output_names[vr - NN_VR_FIRST_OUTPUT], vr);
+        return NN_ERROR;
+    }
+    return nn_refuse_type(instance, "SetReal", "settable Real", vr);
+}
+
+NNStatus nn_get_boolean(NNInstance *instance, unsigned vr, int *value) {
+    if (vr == NN_VR_EXTRAPOLATING) {
+        NNStatus status = refresh_preview(instance);
+        *value = instance->data.extrapolating;
+        return status;
+    }
+    return nn_refuse_type(instance, "GetBoolean", "Boolean", vr);
+}
+
+NNStatus nn_refuse_type(const NNInstance *instance, const char *function, const char *type, unsigned vr) {
+    nn_log(instance, NN_ERROR, NN_LOG_ERROR, "%s: value reference %u is not a %s variable of %s", function, vr, type,
+           NN_MODEL_IDENTIFIER);
+    return NN_ERROR;
+}
+
+NNStatus nn_enter_initialization(NNInstance *instance, double start_time) {
+    if (!isfinite(start_time)) {
+        nn_log(instance, NN_ERROR, NN_LOG_ERROR, "start time %g is not finite", start_time);
+        return NN_ERROR;
+    }
+    instance->data.start_time = start_time;
+    instance->data.time = start_time;
+    instance->mode = NN_INITIALIZATION;
+    instance->preview_stale = 1;
+    return NN_OK;
+}
+
+NNStatus nn_exit_initialization(NNInstance *instance) {
+    NNStatus status = evaluate(instance, NN_SAMPLE_PERIOD, 1);
+    if (status != NN_OK) {
+        instance->mode = NN_FAILED;
+        return status;
+    }
+    instance->mode = NN_STEPPING;
+    nn_log(instance, NN_OK, NN_LOG_EVENTS, "initialised at t = %.17g s; sample 0 evaluated", instance->data.time);
+    return NN_OK;
+}
+
+NNStatus nn_do_step(NNInstance *instance, double current_time, double step_size) {
+    NNModelData *d = &instance->data;
+    double end_time;
+    NNStatus status = NN_OK;
+    if (!isfinite(current_time) || !isfinite(step_size) || step_size < 0.0) {
+        nn_log(instance, NN_ERROR, NN_LOG_ERROR, "DoStep(t = %g s, h = %g s) refused: t must be finite and h >= 0",
+               current_time, step_size);
+        return NN_ERROR;
+    }
+    if (fabs(current_time - d->time) > NN_TIME_TOLERANCE * fmax(1.0, fabs(current_time))) {
+        nn_log(instance, NN_ERROR, NN_LOG_ERROR, "DoStep: communication point %.17g s does not continue from the "
+               "FMU's time %.17g s", current_time, d->time);
+        return NN_ERROR;
+    }
+    end_time = current_time + step_size;
+    if (NN_HAS_SAMPLE_PERIOD) {
+        while (status == NN_OK &&
+               sample_time(d, d->samples_done) <= end_time + NN_SAMPLE_TOLERANCE * NN_SAMPLE_PERIOD) {
+            status = evaluate(instance, NN_SAMPLE_PERIOD, 1);
+        }
+    } else {
+        status = evaluate(instance, step_size, 1);
+    }
+    if (status != NN_OK) {
+        instance->mode = NN_FAILED;
+        return status;
+    }
+    d->time = end_time;
+    return NN_OK;
+}
+
+NNModelData *nn_state_copy(NNInstance *instance) {
+    NNModelData *state = (NNModelData *)malloc(sizeof(NNModelData));
+    if (!state) {
+        nn_log(instance, NN_ERROR, NN_LOG_ERROR, "out of memory while saving the FMU state");
+        return NULL;
+    }
+    memcpy(state, &instance->data, sizeof *state);
+    return state;
+}
+
+NNStatus nn_state_restore(NNInstance *instance, const NNModelData *state) {
+    memcpy(&instance->data, state, sizeof *state);
+    instance->preview_stale = 1;
+    nn_log(instance, NN_OK, NN_LOG_EVENTS, "FMU state restored to t = %.17g s (%llu samples done)",
+           instance->data.time, (unsigned long long)instance->data.samples_done);
+    return NN_OK;
+}
+
+size_t nn_serialized_size(void) { return sizeof(NNStateHeader) + sizeof(NNModelData); }
+
+NNStatus nn_serialize(const NNInstance *instance, const NNModelData *state, unsigned char *buffer, size_t size) {
+    NNStateHeader header;
+    if (size != nn_serialized_size()) {
+        nn_log(instance, NN_ERROR, NN_LOG_ERROR, "SerializeFMUstate: buffer has %lu bytes, expected %lu",
+               (unsigned long)size, (unsigned long)nn_serialized_size());
+        return NN_ERROR;
+    }
+    memset(&header, 0, sizeof header);
+    memcpy(header.magic, NN_STATE_MAGIC, NN_MAGIC_SIZE);
+    header.size = (uint64_t)nn_serialized_size();
+    memcpy(header.token, NN_INSTANTIATION_TOKEN, sizeof(NN_INSTANTIATION_TOKEN));
+    memcpy(buffer, &header, sizeof header);
+    memcpy(buffer + sizeof header, state, sizeof *state);
+    return NN_OK;
+}
+
+NNStatus nn_deserialize(const NNInstance *instance, const unsigned char *buffer, size_t size, NNModelData **state) {
+    NNStateHeader header;
+    if (size != nn_serialized_size()) {
+        nn_log(instance, NN_ERROR, NN_LOG_ERROR, "DeserializeFMUstate: %lu bytes given, an FMU state of %s has %lu",
+               (unsigned long)size, NN_MODEL_IDENTIFIER, (unsigned long)nn_serialized_size());
+        return NN_ERROR;
+    }
+    memcpy(&header, buffer, sizeof header);
+    if (memcmp(header.magic, NN_STATE_MAGIC, NN_MAGIC_SIZE) != 0 || header.size != (uint64_t)size) {
+        nn_log(instance, NN_ERROR, NN_LOG_ERROR, "DeserializeFMUstate: the bytes are not a serialised nnfmu FMU state");
+        return NN_ERROR;
+    }
+    if (memcmp(header.token, NN_INSTANTIATION_TOKEN, sizeof(NN_INSTANTIATION_TOKEN)) != 0) {
+        nn_log(instance, NN_ERROR, NN_LOG_ERROR, "DeserializeFMUstate: the state was saved by another FMU "
+               "(token '%.*s', expected '%s')", NN_TOKEN_FIELD - 1, header.token, NN_INSTANTIATION_TOKEN);
+        return NN_ERROR;
+    }
+    *state = (NNModelData *)malloc(sizeof(NNModelData));
+    if (!*state) {
+        nn_log(instance, NN_ERROR, NN_LOG_ERROR, "out of memory while deserialising the FMU state");
+        return NN_ERROR;
+    }
+    memcpy(*state, buffer + sizeof header, sizeof **state);
+    return NN_OK;
+}

@@ -1,0 +1,100 @@
+/* nn_fmu.h: the FMI-version-independent core of every nnfmu FMU.
+ *
+ * Written once for nnfmu and identical in every FMU: the FMI 2 and FMI 3 entry points (fmi2Functions.c,
+ * fmi3Functions.c) check their arguments and translate to these functions. What differs between FMUs lives in the
+ * generated config.h (counts, value references, port-to-graph maps, sample period, envelope, initial state) and in
+ * graph.c/graph.h (the network's step function `nn_graph_run`).
+ */
+#ifndef NN_FMU_H
+#define NN_FMU_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "config.h"
+#include "graph.h"
+
+/* Same order and values as fmi2Status and fmi3Status, so the glue can cast. */
+typedef enum { NN_OK = 0, NN_WARNING = 1, NN_DISCARD = 2, NN_ERROR = 3, NN_FATAL = 4 } NNStatus;
+
+/* Modes of the FMI state machine, as bits so that a call can name every mode it is allowed in. */
+typedef enum {
+    NN_INSTANTIATED = 1u << 0,
+    NN_INITIALIZATION = 1u << 1,
+    NN_STEPPING = 1u << 2,
+    NN_TERMINATED = 1u << 3,
+    NN_FAILED = 1u << 4
+} NNMode;
+
+#define NN_ANY_MODE (NN_INSTANTIATED | NN_INITIALIZATION | NN_STEPPING | NN_TERMINATED | NN_FAILED)
+
+/* Log categories; their names (nn_category_name) are listed in modelDescription.xml. */
+typedef enum { NN_LOG_EVENTS = 0, NN_LOG_WARNING = 1, NN_LOG_ERROR = 2, NN_N_CATEGORIES = 3 } NNCategory;
+
+/* Everything that evolves during a simulation; an FMU state is a copy of this struct. */
+typedef struct {
+    double input[NN_INPUT_CAPACITY];
+    double output[NN_OUTPUT_CAPACITY];   /* filtered, gained outputs of the latest sample */
+    double state[NN_STATE_CAPACITY];     /* graph state (delay line, recurrent state) before the next sample */
+    int outside[NN_INPUT_CAPACITY];      /* per input: the latest sample lay outside the training envelope */
+    int extrapolating;                   /* any input of the latest sample outside the training envelope */
+    double filter_cutoff;                /* [Hz], 0 = filter off */
+    double output_gain;                  /* [1] */
+    double start_time;                   /* [s] t_start: sample k falls at t_start + k*T */
+    double time;                         /* [s] current communication point */
+    uint64_t samples_done;               /* samples evaluated so far; the next one has index samples_done */
+} NNModelData;
+
+/* Hands a formatted message to the FMI-version-specific logger callback kept by the glue. */
+typedef void NNLogFunction(const void *instance, NNStatus status, const char *category, const char *message);
+
+/* The master's logger, stored as a generic function pointer; the glue casts it back to its own type. */
+typedef void (*NNCallback)(void);
+
+typedef struct {
+    NNModelData data;
+    char *name;
+    NNMode mode;
+    NNLogFunction *log;      /* the glue's adapter that calls `logger` */
+    NNCallback logger;       /* the master's logger callback (may be NULL) */
+    void *environment;       /* the master's environment pointer, passed back to its logger */
+    int logging_on;
+    int category_on[NN_N_CATEGORIES];
+    int preview_stale;       /* inputs or parameters changed since the Initialization Mode preview */
+    double graph_in[NN_N_IN];
+    double graph_out[NN_N_OUT];
+} NNInstance;
+
+NNInstance *nn_instantiate(const char *name, const char *token, NNLogFunction *log, NNCallback logger,
+                           void *environment, int logging_on);
+void nn_free(NNInstance *instance);
+void nn_reset(NNInstance *instance);
+
+const char *nn_category_name(NNCategory category);
+NNStatus nn_set_debug_logging(NNInstance *instance, int logging_on, size_t n_categories,
+                              const char *const categories[]);
+#if defined(__GNUC__)
+__attribute__((format(printf, 4, 5)))
+#endif
+void nn_log(const NNInstance *instance, NNStatus status, NNCategory category, const char *format, ...);
+
+/* 1 if `instance` may be used in one of the `allowed` modes, else logs why not (naming `function`) and returns 0. */
+int nn_allowed(NNInstance *instance, const char *function, unsigned allowed);
+int nn_check_array(const NNInstance *instance, const char *function, const void *array, size_t n, const char *what);
+
+NNStatus nn_get_real(NNInstance *instance, unsigned vr, double *value);
+NNStatus nn_set_real(NNInstance *instance, unsigned vr, double value);
+NNStatus nn_get_boolean(NNInstance *instance, unsigned vr, int *value);
+NNStatus nn_refuse_type(const NNInstance *instance, const char *function, const char *type, unsigned vr);
+
+NNStatus nn_enter_initialization(NNInstance *instance, double start_time);
+NNStatus nn_exit_initialization(NNInstance *instance);
+NNStatus nn_do_step(NNInstance *instance, double current_time, double step_size);
+
+NNModelData *nn_state_copy(NNInstance *instance);
+NNStatus nn_state_restore(NNInstance *instance, const NNModelData *state);
+size_t nn_serialized_size(void);
+NNStatus nn_serialize(const NNInstance *instance, const NNModelData *state, unsigned char *buffer, size_t size);
+NNStatus nn_deserialize(const NNInstance *instance, const unsigned char *buffer, size_t size, NNModelData **state);
+
+#endif /* NN_FMU_H */

@@ -1,0 +1,51 @@
+"""Fixtures of the native FMU tests: the test graphs saved to ONNX files and built FMUs (once per session)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import onnx
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))  # the test modules import native_fmu_helpers beside this file
+from native_fmu_helpers import Slave, delay_step_graph, generic_graph  # noqa: E402
+
+
+@pytest.fixture(scope="session")
+def delay_onnx(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("graphs") / "damper.onnx"
+    onnx.save(delay_step_graph(), str(path))
+    return path
+
+
+@pytest.fixture(scope="session")
+def generic_onnx(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("graphs") / "other.onnx"
+    onnx.save(generic_graph(), str(path))
+    return path
+
+
+@pytest.fixture(scope="session")
+def delay_fmus(tmp_path_factory: pytest.TempPathFactory, delay_onnx: Path) -> dict[int, Path]:
+    """The damper graph built as a native FMU for FMI 2 and FMI 3 (built once per session)."""
+    from nnfmu.fmu.build import build_fmu
+    from nnfmu.fmu.options import BuildOptions
+
+    out = tmp_path_factory.mktemp("fmus")
+    return {v: build_fmu(delay_onnx, BuildOptions(out=out / f"damper{v}.fmu", fmi_version=v)) for v in (2, 3)}
+
+
+@pytest.fixture
+def open_fmu(tmp_path: Path):
+    """Factory: open_fmu(path, name=...) -> Slave; instances are freed after the test."""
+    opened: list[Slave] = []
+
+    def factory(path: Path, name: str = "instance", logging_on: bool = True) -> Slave:
+        slave = Slave(path, tmp_path / f"unzip{len(opened)}", name, logging_on)
+        opened.append(slave)
+        return slave
+
+    yield factory
+    for slave in opened:
+        slave.close()

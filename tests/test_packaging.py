@@ -1,0 +1,20 @@
+"""The wheel must carry what an installed nnfmu needs at run time: FMI templates, report template, slave sources."""
+
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_wheel_ships_templates_and_package_data(tmp_path: Path) -> None:
+    subprocess.run([sys.executable, "-m", "pip", "wheel", str(ROOT), "--no-deps", "--no-build-isolation", "-q",
+                    "-w", str(tmp_path)], check=True)
+    (wheel,) = tmp_path.glob("nnfmu-*.whl")
+    names = set(zipfile.ZipFile(wheel).namelist())
+    for template in (ROOT / "templates").rglob("*"):
+        if template.is_file():
+            assert f"nnfmu/templates/{template.relative_to(ROOT / 'templates').as_posix()}" in names
+    assert "nnfmu/validate/report.html.j2" in names
+    assert not any(n.startswith(("tests/", "bench/", "exported/")) for n in names)
