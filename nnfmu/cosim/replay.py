@@ -1,0 +1,66 @@
+"""Replay measured inputs through a component FMU, sample by sample, to compare its outputs with the measurement.
+
+Because the inputs of a measurement are known in advance, the replay sets the input of sample k before the step that
+ends at t_k, so the FMU output at t_k is the network's response to the inputs at t_k (no communication delay), as in
+the network's training. Sample 0 is evaluated when initialisation ends.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from nnfmu.cosim.slave import FmuSlave
+from nnfmu.data.measurement import Measurement
+
+PERIOD_TOLERANCE = 1e-6  # relative mismatch allowed between the FMU's sample period and the measurement's
+
+
+class ReplayError(ValueError):
+    """The measurement cannot drive the FMU (missing input channel, other sample rate, ...)."""
+
+
+@dataclass(frozen=True)
+class ReplaySettings:
+    """filter_cutoff [Hz]: the FMU's output low-pass (0: the raw network); output_gain [1]."""
+
+    filter_cutoff: float = 0.0
+    output_gain: float = 1.0
+
+
+def replay_fmu(fmu_path: str | Path, measurement: Measurement, settings: ReplaySettings = ReplaySettings()) -> Measurement:
+    """Drive the FMU with the measured channels named like its inputs; return its outputs on the measurement's time."""
+    with FmuSlave(fmu_path, instance_name=Path(fmu_path).stem) as slave:
+        inputs = slave.names("input")
+        missing = [name for name in inputs if name not in measurement]
+        if missing:
+            raise ReplayError(f"{measurement.source}: no channel {', '.join(map(repr, missing))} for the inputs of "
+                              f"{fmu_path} (the measurement has: {', '.join(measurement.names)})")
+        dt = measurement.sample_period
+        experiment = slave.description.defaultExperiment
+        period = float(experiment.stepSize) if experiment is not None and experiment.stepSize else None
+        if period is not None and abs(period - dt) > PERIOD_TOLERANCE * period:
+            raise ReplayError(f"{measurement.source}: sample period {dt:.9g} s differs from the period {period:.9g} s "
+                              f"{fmu_path} was trained at; resample the data first")
+        outputs = [name for name in slave.names("output") if slave.variables[name].type in ("Real", "Float64")]
+        values = np.column_stack([measurement[name] for name in inputs])
+        result = np.empty((len(measurement), len(outputs)))
+        t0 = float(measurement.time[0])
+        slave.enter_initialization(t0)
+        slave.set_real(["filter_cutoff", "output_gain"], [settings.filter_cutoff, settings.output_gain])
+        slave.set_real(inputs, values[0])
+        slave.exit_initialization()
+        result[0] = slave.get_real(outputs)
+        for k in range(1, len(measurement)):
+            slave.set_real(inputs, values[k])
+            slave.do_step(t0 + (k - 1) * dt, dt)
+            result[k] = slave.get_real(outputs)
+        units = {name: slave.unit(name) for name in outputs}
+    return Measurement(
+        time=measurement.time.copy(),
+        channels={name: result[:, i] for i, name in enumerate(outputs)},
+        units=units,
+        source=f"{fmu_path} replayed on {measurement.source}",
+    )

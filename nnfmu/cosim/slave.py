@@ -1,0 +1,131 @@
+"""One FMU instance in fmpy behind a small interface that hides whether it is FMI 2 or FMI 3.
+
+The co-simulation master and the replay of measured data both drive FMUs through this class, by variable name.
+"""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+from ctypes import byref
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+LogSink = Callable[[str, int, str, str], None]  # (instance name, status, category, message)
+
+
+class FmuSlave:
+    """An instantiated co-simulation FMU: set inputs and parameters by name, step, read outputs by name.
+
+    The FMU is extracted to a private temporary folder that `close()` removes; `messages` collects what the FMU
+    logged as (status, category, message).
+    """
+
+    def __init__(self, path: str | Path, instance_name: str = "instance", logging_on: bool = False) -> None:
+        from fmpy import extract, read_model_description
+
+        self.path = Path(path)
+        self.instance_name = instance_name
+        self.description = read_model_description(str(self.path))
+        self.fmi_version = 3 if self.description.fmiVersion.startswith("3") else 2
+        self.variables = {v.name: v for v in self.description.modelVariables}
+        self.messages: list[tuple[int, str, str]] = []
+        self._unzip_dir = tempfile.mkdtemp(prefix="nnfmu-fmu-")
+        directory = extract(str(self.path), unzipdir=self._unzip_dir)
+        kwargs = dict(guid=self.description.guid, unzipDirectory=directory, instanceName=instance_name,
+                      modelIdentifier=self.description.coSimulation.modelIdentifier)
+        if self.fmi_version == 2:
+            from fmpy.fmi2 import FMU2Slave, defaultCallbacks, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+            from fmpy.logging import addLoggerProxy
+
+            self.fmu = FMU2Slave(**kwargs)
+            callbacks = fmi2CallbackFunctions()
+            callbacks.logger = fmi2CallbackLoggerTYPE(self._log2)
+            callbacks.allocateMemory = defaultCallbacks.allocateMemory
+            callbacks.freeMemory = defaultCallbacks.freeMemory
+            addLoggerProxy(byref(callbacks))
+            self._callbacks = callbacks  # keep the ctypes callbacks alive as long as the instance
+            self.fmu.instantiate(callbacks=callbacks, loggingOn=logging_on)
+        else:
+            from fmpy.fmi3 import FMU3Slave
+
+            self.fmu = FMU3Slave(**kwargs)
+            self.fmu.instantiate(loggingOn=logging_on, logMessage=self._log3)
+        self._open = True
+
+    def _log2(self, env, instance_name, status, category, message) -> None:  # noqa: ANN001 (ctypes callback)
+        self.messages.append((status, category.decode(errors="replace"), message.decode(errors="replace")))
+
+    def _log3(self, env, status, category, message) -> None:  # noqa: ANN001 (ctypes callback)
+        self.messages.append((status, category.decode(errors="replace"), message.decode(errors="replace")))
+
+    def names(self, causality: str) -> list[str]:
+        """Names of the variables with the given causality ("input", "output", "parameter", ...)."""
+        return [v.name for v in self.description.modelVariables if v.causality == causality]
+
+    def unit(self, name: str) -> str:
+        variable = self.variables[name]
+        return variable.unit or (variable.declaredType.unit if variable.declaredType else "") or ""
+
+    def value_references(self, names: Sequence[str]) -> list[int]:
+        try:
+            return [self.variables[n].valueReference for n in names]
+        except KeyError as error:
+            raise KeyError(f"{self.path}: no variable {error.args[0]!r} (has: {', '.join(self.variables)})") from None
+
+    def set_real(self, names: Sequence[str], values: Sequence[float]) -> None:
+        vrs = self.value_references(names)
+        values = [float(v) for v in values]
+        (self.fmu.setReal if self.fmi_version == 2 else self.fmu.setFloat64)(vrs, values)
+
+    def get_real(self, names: Sequence[str]) -> np.ndarray:
+        vrs = self.value_references(names)
+        return np.array((self.fmu.getReal if self.fmi_version == 2 else self.fmu.getFloat64)(vrs))
+
+    def get_boolean(self, names: Sequence[str]) -> list[bool]:
+        return [bool(b) for b in self.fmu.getBoolean(self.value_references(names))]
+
+    def enter_initialization(self, start_time: float) -> None:
+        if self.fmi_version == 2:
+            self.fmu.setupExperiment(startTime=start_time)
+            self.fmu.enterInitializationMode()
+        else:
+            self.fmu.enterInitializationMode(startTime=start_time)
+
+    def exit_initialization(self) -> None:
+        self.fmu.exitInitializationMode()
+
+    def do_step(self, time: float, step: float) -> None:
+        self.fmu.doStep(time, step)
+
+    def get_state(self) -> object:
+        return self.fmu.getFMUState()
+
+    def set_state(self, state: object) -> None:
+        self.fmu.setFMUState(state)
+
+    def free_state(self, state: object) -> None:
+        self.fmu.freeFMUState(state)
+
+    def close(self) -> None:
+        """Terminate and free the instance and remove its extracted files (once)."""
+        if not self._open:
+            return
+        self._open = False
+        from fmpy.fmi1 import FMICallException
+
+        try:
+            self.fmu.terminate()
+        except FMICallException:
+            pass  # an instance that failed earlier may refuse to terminate; it is freed all the same
+        finally:
+            self.fmu.freeInstance()
+            shutil.rmtree(self._unzip_dir, ignore_errors=True)
+
+    def __enter__(self) -> "FmuSlave":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
