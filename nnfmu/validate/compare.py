@@ -9,12 +9,10 @@ import numpy as np
 
 from nnfmu.data.errors import DataError
 from nnfmu.data.measurement import Measurement
+from nnfmu.data.units import base_name
 from nnfmu.validate.spectra import Spectrum, welch_psd
 from nnfmu.validate.summary import ChannelMetrics, channel_metrics
 
-# Physical quantities a channel's base name may end with (architecture.md); the longest match wins.
-QUANTITIES = ("angular_velocity", "displacement", "acceleration", "temperature", "velocity", "rotation", "torque",
-              "force")
 
 
 class ValidationError(DataError):
@@ -75,10 +73,7 @@ class ChannelComparison:
 
 def quantity_of(channel: str) -> str:
     """Physical quantity from a channel's base name (`axial_force` -> `force`); the name itself if none is known."""
-    for quantity in QUANTITIES:
-        if channel == quantity or channel.endswith("_" + quantity):
-            return quantity
-    return channel
+    return base_name(channel) or channel
 
 
 def compare(result: Measurement, reference: Measurement, channels: Sequence[str],

@@ -178,7 +178,8 @@ def test_quantity_from_base_name():
     assert quantity_of("axial_force") == "force"
     assert quantity_of("axial_angular_velocity") == "angular_velocity"
     assert quantity_of("conical_velocity") == "velocity"
-    assert quantity_of("lca_angle") == "lca_angle"
+    assert quantity_of("lca_angle") == "angle"
+    assert quantity_of("stroke_ratio") == "stroke_ratio"
 
 
 def test_basquin_slope_per_channel_over_quantity_over_default():
