@@ -1,0 +1,263 @@
+"""The FMU semantics both pythonfmu slaves share: sample clock, graph evaluation, output filter, envelope, refusals.
+
+`SampledComponent` runs `resources/model.onnx` with onnxruntime as docs/architecture.md specifies, reading the ports,
+states, sample period and envelope from the ONNX metadata and the FMU variables from `resources/variables.json`.
+The FMI 2 slave (`fmi2_slave.py`, pythonfmu) and the FMI 3 slave (`fmi3_slave.py`, pythonfmu3) only translate FMI
+calls to it. This file is shipped unchanged beside them in every pythonfmu FMU and runs in the importing tool's
+Python: it needs numpy and onnxruntime there and must not import nnfmu or pythonfmu. It never raises after
+construction (both runtimes turn an exception into a fatal error): a bad call is reported and refused instead.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+import onnxruntime as ort
+
+COMPONENT_KEY = "nnfmu.component"
+MODEL_FILE = "model.onnx"
+VARIABLES_FILE = "variables.json"
+REACHED = 1e-9  # a sample time within REACHED * period of the step end counts as reached
+_ORT_DTYPES = {"tensor(double)": np.float64, "tensor(float)": np.float32}  # graph input types the slave feeds
+
+LOG_CATEGORIES = {  # the FMI log categories of the messages reported here, for the slaves' model descriptions
+    "logStatusWarning": "an input left the training envelope, once per excursion",
+    "logStatusError": "refused calls and values",
+}
+
+Severity = Literal["warning", "error"]
+Report = Callable[[str, Severity], None]  # how a slave passes a message to its FMI logger
+
+
+def _session(model: Path) -> ort.InferenceSession:
+    """A single-threaded onnxruntime session (the graphs are tiny; threads would only add latency)."""
+    options = ort.SessionOptions()
+    options.intra_op_num_threads = 1
+    options.inter_op_num_threads = 1
+    return ort.InferenceSession(str(model), options, providers=["CPUExecutionProvider"])
+
+
+def _static_shape(node_arg: Any) -> tuple[int, ...]:
+    """Shape of a graph tensor with symbolic or unknown dimensions (a batch) taken as 1."""
+    return tuple(d if isinstance(d, int) and d > 0 else 1 for d in node_arg.shape)
+
+
+class _Tensor:
+    """A graph input buffer: its name, dtype and shape; filled element-wise from ports or a state vector."""
+
+    def __init__(self, node_arg: Any) -> None:
+        self.name = node_arg.name
+        self.dtype = _ORT_DTYPES.get(node_arg.type)
+        self.shape = _static_shape(node_arg)
+
+    def zeros(self) -> np.ndarray:
+        return np.zeros(self.shape, dtype=self.dtype)
+
+
+class SampledComponent:
+    """One FMU instance's model data and behaviour: zero-order-hold outputs at the sample period, output low-pass
+    and gain, envelope flag, refused non-finite values, and a JSON-serialisable state."""
+
+    def __init__(self, resources: Path, report: Report) -> None:
+        """Load the graph and the variable table from `resources`; ValueError when they do not fit each other."""
+        self._report = report
+        self._session = _session(resources / MODEL_FILE)
+        component = json.loads(self._session.get_modelmeta().custom_metadata_map[COMPONENT_KEY])
+        table = json.loads((resources / VARIABLES_FILE).read_text(encoding="utf-8"))
+        self.description: str | None = component.get("description") or None
+        self.variables: list[dict[str, Any]] = sorted(table["variables"], key=lambda v: v["value_reference"])
+        self._by_vr = {v["value_reference"]: v for v in self.variables}
+
+        self._in_ports = component["inputs"]
+        self._out_ports = component["outputs"]
+        self._states = component.get("states", [])
+        self._period: float | None = component.get("sample_period")
+        self._tensors = {a.name: _Tensor(a) for a in self._session.get_inputs()}
+        self._output_names = [o.name for o in self._session.get_outputs()]
+        self._check_tensors()
+
+        self._inputs = [0.0] * len(self._in_ports)
+        self._raw = [0.0] * len(self._out_ports)  # graph outputs of the latest sample
+        self._outputs = [0.0] * len(self._out_ports)  # after gain and filter: what the FMU reports
+        self._parameters = {v["name"]: float(v["start"]) for v in self.variables if v["causality"] == "parameter"}
+        self._graph_state = {s["input"]: [float(v) for v in s["initial"]] for s in self._states}
+        self._outside = [False] * len(self._in_ports)
+        self._refused: dict[str, str] = {}  # variable name -> why its last value was refused
+        self._extrapolating = False
+        self._t_start: float | None = None  # set by `start`, else by the first step
+        self._time = 0.0
+        self._sample = -1  # index of the latest evaluated sample; -1 before initialisation ends
+
+    def _check_tensors(self) -> None:
+        """Every port and state must name a floating-point graph tensor and an element inside it."""
+        outputs = {o.name: _static_shape(o) for o in self._session.get_outputs()}
+        inputs = {name: t.shape for name, t in self._tensors.items()}
+        for kind, ports, shapes in (("input", self._in_ports, inputs), ("output", self._out_ports, outputs)):
+            for port in ports:
+                shape = shapes.get(port["tensor"])
+                if shape is None or not 0 <= port["index"] < math.prod(shape):
+                    raise ValueError(f"{kind} port {port['name']!r} names element {port['index']} of tensor "
+                                     f"{port['tensor']!r}, which the graph's {kind}s {sorted(shapes)} do not hold")
+        for state in self._states:
+            for name, shapes in ((state["input"], inputs), (state["output"], outputs)):
+                if name not in shapes or math.prod(shapes[name]) != len(state["initial"]):
+                    raise ValueError(f"state tensor {name!r} of {len(state['initial'])} elements is not in the "
+                                     f"graph (tensors: {sorted(shapes)})")
+        for tensor in self._session.get_inputs():
+            if tensor.type not in _ORT_DTYPES:
+                raise ValueError(f"graph input {tensor.name!r} is {tensor.type}; only float and double are supported")
+
+    # ----- variables -------------------------------------------------------------------------------------------------
+    def read(self, vr: int, var_type: str, function: str) -> float | bool:
+        """The value of variable `vr` of table type `var_type` ("Real" or "Boolean"); a mismatch is reported."""
+        var = self._by_vr.get(vr)
+        if var is None or var["type"] != var_type:
+            self._report(f"{function}: value reference {vr} is not a {var_type} variable", "error")
+            return False if var_type == "Boolean" else 0.0
+        causality = var["causality"]
+        if causality == "input":
+            return self._inputs[var["port_index"]]
+        if causality == "parameter":
+            return self._parameters[var["name"]]
+        if causality == "independent":
+            return self._time
+        return self._outputs[var["port_index"]] if var_type == "Real" else self._extrapolating
+
+    def write(self, vr: int, value: Any, var_type: str, function: str) -> None:
+        """Set an input or parameter. A NaN/Inf (or negative cut-off) is refused: the old value is kept, the message
+        reported, and steps are refused until a valid value is set. Parameters are fixed once initialisation ends."""
+        var = self._by_vr.get(vr)
+        if var is None or var["type"] != var_type or var["causality"] not in ("input", "parameter"):
+            self._report(f"{function}: value reference {vr} is not a settable {var_type} variable", "error")
+            return
+        name = var["name"]
+        if var["causality"] == "parameter" and self._sample >= 0:
+            self._report(f"{function}: parameter {name!r} is fixed: it can only be set before initialisation ends; "
+                         f"it keeps {self._parameters[name]!r}", "error")
+            return
+        value = float(value)
+        if not math.isfinite(value) or (name == "filter_cutoff" and value < 0.0):
+            self._refused[name] = f"{name!r} was set to {value!r}"
+            self._report(f"{function}: refused {value!r} for {name!r} (value reference {vr}) at t = {self._time!r} s; "
+                         f"it keeps {self.read(vr, var_type, function)!r} and doStep is refused until a valid value "
+                         f"is set", "error")
+            return
+        self._refused.pop(name, None)
+        if var["causality"] == "input":
+            self._inputs[var["port_index"]] = value
+        else:
+            self._parameters[name] = value
+
+    # ----- time ------------------------------------------------------------------------------------------------------
+    def start(self, start_time: float) -> None:
+        """Count samples from `start_time` (the FMI 2 start time; pythonfmu3 does not pass FMI 3's to the slave)."""
+        self._t_start = float(start_time)
+        self._time = float(start_time)
+
+    def initialise(self) -> bool:
+        """Evaluate sample 0 with the inputs set during initialisation; False (reported) while a value is refused."""
+        if self._refused:
+            self._report(f"initialisation ends with refused values: {'; '.join(self._refused.values())}", "error")
+            return False
+        self._evaluate(self._period or 0.0, self._t_start or 0.0)
+        return True
+
+    def step(self, current_time: float, step_size: float) -> bool:
+        """Evaluate every sample t_k with current_time < t_k <= current_time + step_size; False refuses the step.
+        Without a start time (FMI 3), the first step's communication point is the start time."""
+        if self._refused:
+            self._report(f"doStep at t = {current_time!r} s refused: {'; '.join(self._refused.values())}", "error")
+            return False
+        if self._t_start is None and math.isfinite(current_time):
+            self.start(current_time)
+        scale = max(self._period or 0.0, step_size, abs(current_time), 1e-300)
+        if not step_size > 0.0 or not abs(current_time - self._time) <= REACHED * scale:
+            self._report(f"doStep({current_time!r}, {step_size!r}): expected a positive step from the last "
+                         f"communication point {self._time!r} s", "error")
+            return False
+        end = current_time + step_size
+        if self._period is None:
+            self._evaluate(step_size, end)
+        else:
+            t_start = self._t_start if self._t_start is not None else 0.0
+            while t_start + (self._sample + 1) * self._period <= end + REACHED * self._period:
+                self._evaluate(self._period, t_start + (self._sample + 1) * self._period)
+        self._time = end
+        return True
+
+    # ----- one sample ------------------------------------------------------------------------------------------------
+    def _evaluate(self, period: float, t_sample: float) -> None:
+        """Run the graph for the next sample, advance its state, filter the outputs and check the envelope."""
+        feeds = {name: t.zeros() for name, t in self._tensors.items()}
+        for port, value in zip(self._in_ports, self._inputs):
+            feeds[port["tensor"]].reshape(-1)[port["index"]] = value
+        for state in self._states:
+            feeds[state["input"]].reshape(-1)[:] = self._graph_state[state["input"]]
+        results = dict(zip(self._output_names, self._session.run(self._output_names, feeds)))
+        for state in self._states:
+            self._graph_state[state["input"]] = [float(v) for v in np.ravel(results[state["output"]])]
+        self._raw = [float(np.ravel(results[p["tensor"]])[p["index"]]) for p in self._out_ports]
+        self._sample += 1
+        self._filter(period)
+        self._check_envelope(t_sample)
+
+    def _filter(self, period: float) -> None:
+        """First-order low-pass of the gained outputs: y_k = y_{k-1} + a (g u_k - y_{k-1}), y_0 = g u_0."""
+        gain, cutoff = self._parameters["output_gain"], self._parameters["filter_cutoff"]
+        gained = [gain * u for u in self._raw]
+        if self._sample == 0 or cutoff == 0.0:
+            self._outputs[:] = gained
+            return
+        a = 1.0 - math.exp(-2.0 * math.pi * cutoff * period)
+        self._outputs[:] = [y + a * (u - y) for y, u in zip(self._outputs, gained)]
+
+    def _check_envelope(self, t_sample: float) -> None:
+        """Flag inputs outside the training envelope; report one warning when an input leaves it."""
+        for i, (port, value) in enumerate(zip(self._in_ports, self._inputs)):
+            lo = -math.inf if port.get("min") is None else port["min"]
+            hi = math.inf if port.get("max") is None else port["max"]
+            outside = not lo <= value <= hi
+            if outside and not self._outside[i]:
+                unit = port.get("unit", "")
+                self._report(f"input {port['name']!r} = {value!r} {unit} left the training envelope [{lo!r}, {hi!r}] "
+                             f"{unit} at sample {self._sample} (t = {t_sample!r} s); outputs are extrapolated",
+                             "warning")
+            self._outside[i] = outside
+        self._extrapolating = any(self._outside)
+
+    # ----- FMU state -------------------------------------------------------------------------------------------------
+    def save(self) -> dict[str, Any]:
+        """A JSON-serialisable copy of everything that evolves: inputs, parameters, graph and filter state, clock."""
+        return {
+            "inputs": list(self._inputs), "raw": list(self._raw), "outputs": list(self._outputs),
+            "parameters": dict(self._parameters), "graph_state": {k: list(v) for k, v in self._graph_state.items()},
+            "outside": list(self._outside), "refused": dict(self._refused), "extrapolating": self._extrapolating,
+            "t_start": self._t_start, "time": self._time, "sample": self._sample,
+        }
+
+    def restore(self, state: dict[str, Any]) -> None:
+        """Continue from a state `save` returned (in this or another instance of the same FMU)."""
+        self._inputs[:] = state["inputs"]
+        self._raw[:] = state["raw"]
+        self._outputs[:] = state["outputs"]
+        self._parameters = {k: float(v) for k, v in state["parameters"].items()}
+        self._graph_state = {k: list(v) for k, v in state["graph_state"].items()}
+        self._outside[:] = state["outside"]
+        self._refused = dict(state["refused"])
+        self._extrapolating = bool(state["extrapolating"])
+        self._t_start = None if state["t_start"] is None else float(state["t_start"])
+        self._time = float(state["time"])
+        self._sample = int(state["sample"])
+
+    @staticmethod
+    def to_bytes(state: dict[str, Any]) -> bytes:
+        return json.dumps(state, allow_nan=False).encode("utf-8")
+
+    @staticmethod
+    def from_bytes(data: bytes) -> dict[str, Any]:
+        return json.loads(data.decode("utf-8"))
