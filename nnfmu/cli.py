@@ -54,6 +54,98 @@ def rig(
     typer.echo(f"data: {data_path}\ntruth (for evaluation only, never for training): {truth_path}")
 
 
+def _int_list(items: Optional[list[str]], option: str) -> tuple[int, ...]:
+    try:
+        return tuple(int(v) for v in _split(items))
+    except ValueError:
+        raise typer.BadParameter(f"{option}: give whole numbers, e.g. 0,1,2") from None
+
+
+@app.command()
+def train(
+    data: Path = typer.Argument(..., help="Rig data (CSV with `name [unit]` headers, or MDF4)."),
+    preset: str = typer.Option(..., help="damper-spline, damper-hysteresis, bushing-axial-force, bushing-radial-force, bushing-axial-torque or bushing-conical-torque."),
+    out: Path = typer.Option(..., "--out", "-o", help="ONNX step graph to write."),
+    output: Optional[str] = typer.Option(None, help="Output channel (default: the preset's, e.g. force)."),
+    inputs: Optional[list[str]] = typer.Option(None, help="Input channels replacing the preset's (comma-separated or repeated)."),
+    delays: Optional[list[str]] = typer.Option(None, help="Sample delays for every input, e.g. 0,1,2."),
+    hidden: Optional[list[str]] = typer.Option(None, help="Hidden size, or several to choose among by validation error."),
+    recurrent: bool = typer.Option(False, help="GRU network instead of the time-delay perceptron."),
+    select_inputs: bool = typer.Option(False, help="Choose inputs by sensitivity analysis over the candidate taps; prints the ranking."),
+    optimizer: Optional[str] = typer.Option(None, help="auto, lm (Levenberg-Marquardt), adam or lbfgs."),
+    restarts: Optional[int] = typer.Option(None, help="Training restarts per hidden size; the best validation error is kept."),
+    max_epochs: Optional[int] = typer.Option(None, help="Epoch limit (early stopping usually ends sooner)."),
+    seed: int = typer.Option(0, help="Seed: the same seed gives the same network."),
+    name: str = typer.Option("", help="Model name stored in the ONNX metadata (default: from the preset)."),
+) -> None:
+    """Train a component network on rig data and export it as a verified ONNX step graph."""
+    from rich.console import Console
+    from rich.progress import Progress
+    from rich.table import Table
+
+    from nnfmu.data import DataError
+    from nnfmu.export import ExportError
+    from nnfmu.models.workflow import TrainRequest, train_from_file
+
+    request = TrainRequest(preset=preset, output=output, inputs=tuple(_split(inputs)),
+                           delays=_int_list(delays, "--delays"), hidden=_int_list(hidden, "--hidden"),
+                           recurrent=recurrent, restarts=restarts, seed=seed, max_epochs=max_epochs,
+                           select_inputs=select_inputs, optimizer=optimizer, name=name)
+    console = Console()
+    try:
+        with Progress(console=console, transient=True) as bar:
+            task = bar.add_task("training", total=1.0)
+            outcome = train_from_file(data, request, out,
+                                      lambda what, done: bar.update(task, description=what, completed=done))
+    except (DataError, ExportError, ValueError) as error:
+        _fail(error)
+    if outcome.selection is not None:
+        ranking = Table(title="input sensitivity ranking (validation MSE increase when shuffled)")
+        ranking.add_column("feature")
+        ranking.add_column("increase", justify="right")
+        for feature, increase in outcome.selection.ranking:
+            ranking.add_row(feature, f"{increase:.4g}")
+        console.print(ranking)
+        console.print(f"chosen inputs: {', '.join(outcome.selection.chosen)}")
+    table = Table(title=f"{preset}: {', '.join(outcome.model.spec.feature_names)} -> {outcome.model.spec.output}")
+    columns = ("mse_scaled", "nrmse", "r2", "slope", "intercept", "peak_error", "max_abs_weight", "samples")
+    table.add_column("split")
+    for column in columns:
+        table.add_column(column, justify="right")
+    for split, metrics in outcome.metrics.items():
+        values = metrics.as_dict()
+        table.add_row(split, *(f"{values[c]:.4g}" for c in columns))
+    console.print(table)
+    for warning in outcome.warnings:
+        console.print(f"[yellow]warning:[/yellow] {warning}")
+    console.print(f"ONNX: {outcome.path} (onnxruntime vs torch max relative error "
+                  f"{outcome.export.max_relative_error:.2g}); {outcome.seconds:.1f} s")
+
+
+@app.command()
+def demo(
+    out: Path = typer.Option(Path("demo-out"), "--out", "-o", help="Folder for everything the demo writes."),
+    seed: int = typer.Option(0, help="Seed of the rig records and the training."),
+    quick: bool = typer.Option(False, help="Short records and training: checks every stage runs, not results to quote."),
+) -> None:
+    """Run the pipeline end to end on built-in data: rig data, networks, ONNX, FMUs, replay, validation report."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from nnfmu.demo import DemoSettings, run_demo
+
+    console = Console()
+    summary = run_demo(out, DemoSettings(seed=seed, quick=quick), log=console.print)
+    table = Table(title="component FMUs replayed on held-out random rig records")
+    for column in ("preset", "train [s]", "test-split NRMSE", "FMU NRMSE", "R²", "peak error", "pseudo-damage ratio"):
+        table.add_column(column, justify="left" if column == "preset" else "right")
+    for m in summary.models:
+        table.add_row(m.preset, f"{m.train_seconds:.1f}", f"{m.test_split_nrmse:.4f}", f"{m.replay_nrmse:.4f}",
+                      f"{m.replay_r2:.4f}", f"{m.replay_peak_error:+.3f}", f"{m.replay_pseudo_damage_ratio:.3f}")
+    console.print(table)
+    console.print(f"report: {summary.report}\nsummary: {summary.out / 'summary.json'} ({summary.seconds:.0f} s)")
+
+
 @app.command()
 def build(
     model: Path = typer.Argument(..., help="ONNX file: an nnfmu step graph, or any graph the backends support."),
