@@ -1,7 +1,7 @@
 /* nn_fmu.c: instance life cycle, logging, variable access, fixed-rate sampling and FMU state of an nnfmu FMU.
  *
  * Time: sample k falls at t_start + k*T (k counted with an integer). doStep(t, h) evaluates, in order, every sample
- * with t < t_k <= t + h (within 1e-9*T), with the inputs set before the call; outputs hold the latest sample.
+ * with t < t_k <= t + h (within 1e-6*T), with the inputs set before the call; outputs hold the latest sample.
  * Sample 0 is evaluated when initialisation ends. A graph without a sample period (NN_HAS_SAMPLE_PERIOD 0) is
  * evaluated once at the end of every step. The network is never evaluated when a variable is read.
  */
@@ -18,7 +18,7 @@
 #define NN_STATE_MAGIC "NNFMUST1"
 #define NN_MAGIC_SIZE 8
 #define NN_TOKEN_FIELD 64
-#define NN_SAMPLE_TOLERANCE 1e-9   /* a sample time within this fraction of T of the step end counts as reached */
+#define NN_SAMPLE_TOLERANCE 1e-6   /* a sample time within this fraction of T of the step end counts as reached */
 #define NN_TIME_TOLERANCE 1e-9     /* relative mismatch allowed between doStep's time and the FMU's time */
 
 /* The token must fit the fixed field of the serialised state's header. */

@@ -168,8 +168,8 @@ class Reference:
                 y = y + a * (gain * raw - y)
             else:
                 a = 1.0 if cutoff <= 0 else 1.0 - np.exp(-2 * np.pi * cutoff * period)
-                while k * period <= end + 1e-9 * period:
-                    assert k * period > t - 1e-9 * period
+                while k * period <= end + 1e-6 * period:
+                    assert k * period > t - 1e-6 * period
                     raw, state = self.step(inputs[n], state)
                     y = y + a * (gain * raw - y)
                     k += 1

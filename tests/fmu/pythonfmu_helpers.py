@@ -91,7 +91,7 @@ class Reference:
 
     def step(self, t: float, h: float, velocity: float) -> float:
         """Advance to t + h, with t counted from the start time."""
-        while (self.k + 1) * T <= t + h + 1e-9 * T:
+        while (self.k + 1) * T <= t + h + 1e-6 * T:
             self.k += 1
             u = self.gain * self._sample(velocity)
             a = 1.0 - math.exp(-2.0 * math.pi * self.cutoff * T) if self.cutoff > 0 else 1.0

@@ -22,7 +22,7 @@ import onnxruntime as ort
 COMPONENT_KEY = "nnfmu.component"
 MODEL_FILE = "model.onnx"
 VARIABLES_FILE = "variables.json"
-REACHED = 1e-9  # a sample time within REACHED * period of the step end counts as reached
+REACHED = 1e-6  # a sample time within REACHED * period of the step end counts as reached
 _ORT_DTYPES = {"tensor(double)": np.float64, "tensor(float)": np.float32}  # graph input types the slave feeds
 
 LOG_CATEGORIES = {  # the FMI log categories of the messages reported here, for the slaves' model descriptions
