@@ -1,0 +1,125 @@
+"""Force laws that close a vehicle's component ports in the monolithic reference: linear, or the rigs' truth physics.
+
+A law maps one deflection x and its rate v (plus its own states) to the force or torque the component carries; its
+states follow `derivatives`. The rig simulators' truth models (`nnfmu.data.rigs`) fit this shape, so the vehicle can
+be solved with the very physics the component networks were trained on.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from ...data.rigs import BushingChannelTruth, BushingParams, DamperParams, DamperTruth, DEFAULT_EFFECTS
+from .errors import VehicleModelError
+from .ports import component_channels
+
+
+class ComponentLaw(Protocol):
+    """Force from one deflection and its rate, with internal states (hysteresis, temperature, friction)."""
+
+    @property
+    def n_states(self) -> int: ...
+
+    def initial_state(self) -> np.ndarray: ...
+
+    def derivatives(self, t: float, state: np.ndarray, x: float, v: float) -> np.ndarray: ...
+
+    def force(self, state: np.ndarray, x: float, v: float) -> float: ...
+
+
+@dataclass(frozen=True)
+class LinearLaw:
+    """force = stiffness * x + damping * v, no states (the linear reference element)."""
+
+    stiffness: float
+    damping: float
+    n_states: int = 0
+
+    def initial_state(self) -> np.ndarray:
+        return np.zeros(0)
+
+    def derivatives(self, t: float, state: np.ndarray, x: float, v: float) -> np.ndarray:
+        return np.zeros(0)
+
+    def force(self, state: np.ndarray, x: float, v: float) -> float:
+        return self.stiffness * x + self.damping * v
+
+
+@dataclass(frozen=True)
+class DamperTruthLaw:
+    """The damper dyno's truth physics (tension positive). Its moving-mass effect is refused: in the vehicle that mass
+    is part of the unsprung mass already."""
+
+    truth: DamperTruth
+
+    def __post_init__(self) -> None:
+        if "inertia" in self.truth.effects:
+            raise VehicleModelError(
+                "damper truth law: drop the 'inertia' effect; the vehicle's unsprung mass carries it"
+            )
+
+    @property
+    def n_states(self) -> int:
+        return self.truth.n_states
+
+    def initial_state(self) -> np.ndarray:
+        return self.truth.initial_state()
+
+    def derivatives(self, t: float, state: np.ndarray, x: float, v: float) -> np.ndarray:
+        return self.truth.derivatives(t, state, x, v)
+
+    def force(self, state: np.ndarray, x: float, v: float) -> float:
+        return float(self.truth.force(state, x, v, 0.0))
+
+
+@dataclass(frozen=True)
+class BushingTruthLaw:
+    """One channel of the bushing rig's truth physics (N or N.m)."""
+
+    truth: BushingChannelTruth
+
+    @property
+    def n_states(self) -> int:
+        return self.truth.n_states
+
+    def initial_state(self) -> np.ndarray:
+        return self.truth.initial_state()
+
+    def derivatives(self, t: float, state: np.ndarray, x: float, v: float) -> np.ndarray:
+        return self.truth.derivatives(t, state, x, v)
+
+    def force(self, state: np.ndarray, x: float, v: float) -> float:
+        return float(self.truth.force(state, x))
+
+
+def truth_laws(force_inputs: list[str]) -> dict[str, ComponentLaw]:
+    """Default truth physics for every damper and bushing force input in `force_inputs` (rig defaults, no inertia)."""
+    damper_effects = tuple(e for e in DEFAULT_EFFECTS["damper"] if e != "inertia")
+    bushing = BushingParams()
+    channel_params = {
+        "axial_force": bushing.axial,
+        "radial_force": bushing.radial,
+        "axial_torque": bushing.axial_rotation,
+        "conical_torque": bushing.conical_rotation,
+    }
+    laws: dict[str, ComponentLaw] = {}
+    for name in force_inputs:
+        if name.startswith("damper"):
+            laws[name] = DamperTruthLaw(DamperTruth(DamperParams(), damper_effects))
+            continue
+        suffix = next((s for s in channel_params if name.endswith(s)), None)
+        if not name.startswith("bushing") or suffix is None:
+            raise VehicleModelError(f"no truth physics for port {name!r}")
+        laws[name] = BushingTruthLaw(BushingChannelTruth(channel_params[suffix]))
+    return laws
+
+
+def linear_laws(component: str, stiffness: tuple[float, ...], damping: tuple[float, ...]) -> dict[str, ComponentLaw]:
+    """LinearLaw per channel of `component` (one value per channel, in port order)."""
+    channels = component_channels(component)
+    if not (len(stiffness) == len(damping) == len(channels)):
+        raise VehicleModelError(f"{component}: needs {len(channels)} stiffness and damping values")
+    return {force: LinearLaw(k, c) for (force, _, _), k, c in zip(channels, stiffness, damping)}

@@ -1,0 +1,140 @@
+"""Monolithic reference: the vehicle and its components' force laws in one fixed-step RK4 solver at a fine step.
+
+This is the "ground truth" a co-simulation of the same vehicle with component FMUs must approach: no communication
+step, no force held over a step. Each external force port of the vehicle is closed by a `ComponentLaw` driven by the
+port's displacement and rate outputs. Inputs (actuator displacements and velocities) are sampled at the drive's
+sample period and interpolated linearly between samples; built-in spline dampers are evaluated at every stage.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import VehicleModelError
+from .laws import ComponentLaw
+from .linear import LinearVehicle, input_samples
+from .ports import component_channels
+
+
+@dataclass(frozen=True)
+class MonolithicSettings:
+    """`sample_period` [s] of the inputs and outputs; `step` [s], the RK4 step (rounded down to divide the period)."""
+
+    sample_period: float
+    step: float = 1e-4
+
+
+@dataclass(frozen=True)
+class _Wiring:
+    """Which input columns the laws set and which output rows give each law its deflection and rate."""
+
+    force_columns: np.ndarray
+    disp_rows: np.ndarray
+    rate_rows: np.ndarray
+
+
+def _wire(vehicle: LinearVehicle, laws: Mapping[str, ComponentLaw]) -> _Wiring:
+    ports = {force: (disp, rate) for name in _components(vehicle) for force, disp, rate in component_channels(name)}
+    unknown = sorted(set(laws) - set(ports))
+    missing = sorted(set(ports) - set(laws))
+    if unknown or missing:
+        raise VehicleModelError(f"{vehicle.name}: laws for unknown ports {unknown}, no law for ports {missing}")
+    names = list(laws)
+    force_columns = np.array([vehicle.input_index(n) for n in names], dtype=int)
+    return _Wiring(
+        force_columns=force_columns,
+        disp_rows=np.array([vehicle.output_index(ports[n][0]) for n in names], dtype=int),
+        rate_rows=np.array([vehicle.output_index(ports[n][1]) for n in names], dtype=int),
+    )
+
+
+def _components(vehicle: LinearVehicle) -> list[str]:
+    """Component names of the vehicle's force inputs ('damper_fl', 'bushing_fl_front', 'damper')."""
+    names = []
+    for port in vehicle.inputs:
+        if port.name.startswith("actuator"):
+            continue
+        stem = port.name.rsplit("_", 1)[0] if port.name.startswith("damper") else "_".join(port.name.split("_")[:3])
+        if stem not in names:
+            names.append(stem)
+    return names
+
+
+def simulate_monolithic(
+    vehicle: LinearVehicle,
+    laws: Mapping[str, ComponentLaw],
+    inputs: Mapping[str, np.ndarray],
+    settings: MonolithicSettings,
+    x0: np.ndarray | None = None,
+) -> dict[str, np.ndarray]:
+    """Solve vehicle + laws from x0 (default: the design position, laws at rest); outputs, port forces and 'time'.
+
+    `laws` maps every force input of the vehicle (e.g. 'damper_fl_force') to its law; `inputs` the actuator ports to
+    arrays sampled every `settings.sample_period` (ports not given are zero).
+    """
+    wiring = _wire(vehicle, laws)
+    law_list = list(laws.values())
+    period = settings.sample_period
+    substeps = max(1, math.ceil(period / settings.step - 1e-9))
+    h = period / substeps
+    if not inputs:
+        raise VehicleModelError(f"{vehicle.name}: the monolithic reference needs actuator input arrays")
+    closed = sorted(k for k in inputs if vehicle.input_index(k) in set(wiring.force_columns))
+    if closed:
+        raise VehicleModelError(f"{vehicle.name}: inputs {closed} are force ports that the laws close")
+    u_samples = input_samples(vehicle, inputs, period, None)
+    sizes = [law.n_states for law in law_list]
+    offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(int)
+    nx = len(vehicle.states)
+    x = np.zeros(nx) if x0 is None else np.asarray(x0, dtype=float)
+    z = np.concatenate([x] + [law.initial_state() for law in law_list])
+
+    def forces(z: np.ndarray, u: np.ndarray) -> np.ndarray:
+        y = vehicle.C @ z[:nx] + vehicle.D @ u
+        return np.array(
+            [
+                law.force(z[nx + a : nx + b], y[i], y[j])
+                for law, a, b, i, j in zip(law_list, offsets[:-1], offsets[1:], wiring.disp_rows, wiring.rate_rows)
+            ]
+        )
+
+    def rhs(t: float, z: np.ndarray, u: np.ndarray) -> np.ndarray:
+        u = u.copy()
+        u[wiring.force_columns] = forces(z, u)
+        y = vehicle.C @ z[:nx] + vehicle.D @ u
+        parts = [vehicle.derivative(z[:nx], u)]
+        for law, a, b, i, j in zip(law_list, offsets[:-1], offsets[1:], wiring.disp_rows, wiring.rate_rows):
+            parts.append(law.derivatives(t, z[nx + a : nx + b], y[i], y[j]))
+        return np.concatenate(parts)
+
+    n = u_samples.shape[0]
+    out = np.empty((n, len(vehicle.outputs)))
+    port_forces = np.empty((n, len(law_list)))
+    for k in range(n):
+        u = u_samples[k].copy()
+        u[wiring.force_columns] = forces(z, u)
+        out[k] = vehicle.output_vector(z[:nx], u)
+        port_forces[k] = u[wiring.force_columns]
+        if k + 1 == n:
+            break
+        du = (u_samples[k + 1] - u_samples[k]) / substeps
+        for j in range(substeps):
+            t = (k * substeps + j) * h
+            u0 = u_samples[k] + du * j
+            k1 = rhs(t, z, u0)
+            k2 = rhs(t + h / 2, z + h / 2 * k1, u0 + du / 2)
+            k3 = rhs(t + h / 2, z + h / 2 * k2, u0 + du / 2)
+            k4 = rhs(t + h, z + h * k3, u0 + du)
+            z = z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        if not np.all(np.isfinite(z)):
+            raise VehicleModelError(
+                f"{vehicle.name}: monolithic solution diverged at t = {(k + 1) * period:.6g} s; use a smaller step"
+            )
+    result = {name: out[:, i] for i, name in enumerate(vehicle.output_names)}
+    result |= {name: port_forces[:, i] for i, name in enumerate(laws)}
+    result["time"] = np.arange(n) * period
+    return result

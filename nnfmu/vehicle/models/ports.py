@@ -1,0 +1,95 @@
+"""Named, unit-carrying ports of a vehicle model, named like drive-file and rig channels."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+CORNERS = ("fl", "fr", "rl", "rr")
+# (force input, displacement output, rate output) suffixes of each channel of a component port
+DAMPER_CHANNELS = (("force", "displacement", "velocity"),)
+BUSHING_CHANNELS = (
+    ("axial_force", "axial_displacement", "axial_velocity"),
+    ("radial_force", "radial_displacement", "radial_velocity"),
+    ("axial_torque", "axial_rotation", "axial_angular_velocity"),
+    ("conical_torque", "conical_rotation", "conical_angular_velocity"),
+)
+
+
+@dataclass(frozen=True)
+class VehiclePort:
+    """One scalar input or output: channel-style name, SI unit and what it is (sign convention included)."""
+
+    name: str
+    unit: str
+    description: str
+
+
+def actuator_ports(tag: str) -> list[VehiclePort]:
+    """Displacement and velocity inputs of the actuator post under corner `tag` ('' for the quarter car)."""
+    prefix = f"actuator_{tag}_" if tag else "actuator_"
+    where = f"{tag} post" if tag else "post"
+    return [
+        VehiclePort(
+            f"{prefix}displacement", "m", f"vertical displacement of the {where} from its rest position, up positive"
+        ),
+        VehiclePort(
+            f"{prefix}velocity", "m/s", f"vertical velocity of the {where}, up positive (the rate of the displacement)"
+        ),
+    ]
+
+
+def damper_input(tag: str) -> VehiclePort:
+    name = f"damper_{tag}_force" if tag else "damper_force"
+    return VehiclePort(name, "N", "damper force along its axis, rebound (tension, resisting extension) positive")
+
+
+def damper_outputs(tag: str) -> list[VehiclePort]:
+    prefix = f"damper_{tag}_" if tag else "damper_"
+    return [
+        VehiclePort(
+            f"{prefix}displacement", "m", "damper stroke from the design position, rebound (extension) positive"
+        ),
+        VehiclePort(f"{prefix}velocity", "m/s", "damper stroke velocity, rebound (extension) positive"),
+    ]
+
+
+def bushing_inputs(name: str) -> list[VehiclePort]:
+    """Force/torque inputs of bushing `name` (e.g. 'bushing_fl_front'): what the bushing needs to hold its deflection."""
+    return [
+        VehiclePort(
+            f"{name}_axial_force", "N", "bushing force along its axis, same sign as the axial displacement for a spring"
+        ),
+        VehiclePort(
+            f"{name}_radial_force",
+            "N",
+            "bushing force along its radial direction, same sign as the radial displacement for a spring",
+        ),
+        VehiclePort(
+            f"{name}_axial_torque", "N.m", "bushing torque about its axis, same sign as the axial rotation for a spring"
+        ),
+        VehiclePort(
+            f"{name}_conical_torque",
+            "N.m",
+            "bushing torque tilting its axis, same sign as the conical rotation for a spring",
+        ),
+    ]
+
+
+def bushing_outputs(name: str) -> list[VehiclePort]:
+    """Deflection outputs of bushing `name`: the arm's inner sleeve relative to the body's outer sleeve."""
+    return [
+        VehiclePort(f"{name}_axial_displacement", "m", "inner relative to outer sleeve along the bushing axis"),
+        VehiclePort(f"{name}_axial_velocity", "m/s", "rate of the axial displacement"),
+        VehiclePort(f"{name}_radial_displacement", "m", "inner relative to outer sleeve along the radial direction"),
+        VehiclePort(f"{name}_radial_velocity", "m/s", "rate of the radial displacement"),
+        VehiclePort(f"{name}_axial_rotation", "rad", "inner relative to outer sleeve about the bushing axis (torsion)"),
+        VehiclePort(f"{name}_axial_angular_velocity", "rad/s", "rate of the axial rotation"),
+        VehiclePort(f"{name}_conical_rotation", "rad", "tilt of the inner sleeve's axis towards the radial direction"),
+        VehiclePort(f"{name}_conical_angular_velocity", "rad/s", "rate of the conical rotation"),
+    ]
+
+
+def component_channels(component: str) -> list[tuple[str, str, str]]:
+    """(force input, displacement output, rate output) port names of a component such as 'bushing_fl_front'."""
+    channels = BUSHING_CHANNELS if component.startswith("bushing") else DAMPER_CHANNELS
+    return [(f"{component}_{force}", f"{component}_{disp}", f"{component}_{rate}") for force, disp, rate in channels]
