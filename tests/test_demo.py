@@ -1,0 +1,23 @@
+"""`nnfmu demo --quick` runs every stage end to end and writes the report and summary it announces."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from nnfmu.demo import PRESETS_BY_RIG, DemoSettings, run_demo
+
+
+def test_quick_demo_runs_every_stage(tmp_path: Path) -> None:
+    summary = run_demo(tmp_path, DemoSettings(quick=True), log=lambda _: None)
+    presets = [p for group in PRESETS_BY_RIG.values() for p in group]
+    assert [m.preset for m in summary.models] == presets
+    for model in summary.models:
+        assert Path(model.onnx).exists() and Path(model.fmu).exists()
+        # even a smoke-trained network must beat predicting zero on held-out data
+        assert np.isfinite(model.replay_nrmse) and model.replay_nrmse < 0.5
+    assert summary.report.name == "index.html" and summary.report.exists()
+    written = json.loads((tmp_path / "summary.json").read_text())
+    assert [m["preset"] for m in written["models"]] == presets
