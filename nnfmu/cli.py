@@ -14,6 +14,8 @@ app = typer.Typer(no_args_is_help=True, add_completion=False,
                   help="Neural-network component models from rig data, shipped as FMI co-simulation FMUs.")
 data_app = typer.Typer(no_args_is_help=True, help="Inspect rig data files.")
 app.add_typer(data_app, name="data")
+vehicle_app = typer.Typer(no_args_is_help=True, help="Vehicle models for the virtual road test simulator.")
+app.add_typer(vehicle_app, name="vehicle")
 drive_app = typer.Typer(no_args_is_help=True, help="Drive files for a four-post road test simulator.")
 app.add_typer(drive_app, name="drive")
 
@@ -162,6 +164,31 @@ def build(
     try:
         path = build_fmu(model, BuildOptions(out=out, backend=backend, fmi_version=fmi, name=name))
     except FmuBuildError as error:
+        _fail(error)
+    typer.echo(f"FMU: {path}")
+
+
+@vehicle_app.command("build")
+def vehicle_build(
+    model: str = typer.Argument(..., help="quarter-car or full-vehicle."),
+    out: Path = typer.Option(..., "--out", "-o", help="FMU path to write."),
+    params: Optional[Path] = typer.Option(None, help="Vehicle parameter file (TOML, SI units); default: a mid-size car."),
+    reference: Optional[list[str]] = typer.Option(None, help="Components to model inside the vehicle (linear bushing, spline damper), e.g. damper_fl,bushing_fl_front; the rest are ports."),
+    sample_period: float = typer.Option(1e-4, help="Internal sample period [s] of the exact discrete model."),
+    fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
+    axle: str = typer.Option("front", help="Quarter car only: which corner's parameters, front or rear."),
+    backend: str = typer.Option("native", help="native or pythonfmu."),
+) -> None:
+    """Build a vehicle model into a co-simulation FMU with external component ports."""
+    from nnfmu.fmu.errors import FmuBuildError
+    from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
+    from nnfmu.vehicle.models.errors import VehicleModelError
+
+    try:
+        settings = VehicleBuildSettings(params_path=params, components={n: "reference" for n in _split(reference)},
+                                        sample_period=sample_period, fmi_version=fmi, axle=axle, backend=backend)
+        path = build_vehicle_fmu(model, out, settings)
+    except (VehicleModelError, FmuBuildError) as error:
         _fail(error)
     typer.echo(f"FMU: {path}")
 

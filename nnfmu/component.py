@@ -20,6 +20,7 @@ import onnx
 
 METADATA_KEY = "nnfmu.component"
 FORMAT_VERSION = 1
+DEFAULT_FILTER_CUTOFF_HZ = 100.0  # the thesis's output low-pass on a trained network
 
 
 @dataclass(frozen=True)
@@ -64,8 +65,9 @@ class Component:
     """Everything a consumer of a step graph needs besides the graph itself.
 
     `sample_period` [s] is the period the model was trained at; `None` marks a stateless graph from another tool,
-    which an FMU evaluates once per communication step. `metadata` holds provenance: nnfmu version, training data
-    hash, feature spec, training settings and metrics.
+    which an FMU evaluates once per communication step. `filter_cutoff` [Hz] is the start value of the FMU's output
+    low-pass (0: off, as for an exact model that must not be filtered). `metadata` holds provenance: nnfmu version,
+    training data hash, feature spec, training settings and metrics.
     """
 
     name: str
@@ -75,6 +77,13 @@ class Component:
     sample_period: float | None = None
     description: str = ""
     metadata: dict[str, Any] = field(default_factory=dict)
+    filter_cutoff: float = DEFAULT_FILTER_CUTOFF_HZ
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.filter_cutoff) and self.filter_cutoff >= 0.0):
+            raise ValueError(
+                f"component {self.name!r}: filter_cutoff {self.filter_cutoff!r} Hz must be a finite number >= 0"
+            )
 
     @property
     def state_size(self) -> int:
@@ -101,6 +110,7 @@ class Component:
             sample_period=d.get("sample_period"),
             description=d.get("description", ""),
             metadata=d.get("metadata", {}),
+            filter_cutoff=float(d.get("filter_cutoff", DEFAULT_FILTER_CUTOFF_HZ)),
         )
 
     def attach_to(self, model: onnx.ModelProto) -> None:

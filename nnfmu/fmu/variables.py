@@ -16,7 +16,6 @@ from nnfmu.fmu.names import unique_names
 Causality = Literal["input", "output", "parameter", "independent"]
 VarType = Literal["Real", "Boolean"]
 
-DEFAULT_FILTER_CUTOFF_HZ = 100.0
 DEFAULT_OUTPUT_GAIN = 1.0
 
 
@@ -86,7 +85,7 @@ def fmu_variables(component: Component) -> FmuVariables:
     )
     filter_cutoff = FmuVariable(
         "filter_cutoff", vr + 1, "parameter", "Real", "Hz",
-        "cut-off frequency of the first-order output low-pass filter (0 turns it off)", DEFAULT_FILTER_CUTOFF_HZ,
+        "cut-off frequency of the first-order output low-pass filter (0 turns it off)", component.filter_cutoff,
     )
     output_gain = FmuVariable(
         "output_gain", vr + 2, "parameter", "Real", "1", "gain applied to every output", DEFAULT_OUTPUT_GAIN,

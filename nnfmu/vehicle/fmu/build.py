@@ -1,0 +1,99 @@
+"""`nnfmu vehicle build`: a quarter car or full vehicle as a native FMI co-simulation FMU, via the component factory.
+
+The vehicle's exact discrete step becomes an ONNX step graph (`step_graph`) with a `Component` attached: input
+ports are the vehicle's inputs (actuator displacements and velocities, forces of external components), output ports
+its outputs, the state starts at the static equilibrium for zero actuator input, and the output filter is off (an
+exact model must not be low-passed). `nnfmu.fmu.build_fmu` turns it into an FMU like any trained component, so the
+FMU semantics (samples at t_start + k T, inputs held over a step, get/set FMU state) are those of docs/fmu.md: the
+inputs set before doStep(t, h) act over (t, t + h], the state at each sample in it is the exact zero-order-hold
+solution, and the outputs there see the inputs held over the step.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+import onnx
+
+import nnfmu
+from nnfmu.component import Component, Port, StatePort
+from nnfmu.fmu.build import build_fmu
+from nnfmu.fmu.options import BuildOptions
+
+from ..models import DEFAULT_FILE, LinearVehicle, VehicleModelError, VehicleParameters
+from ..models.full_vehicle import build_full_vehicle
+from ..models.linear import DiscreteVehicle
+from ..models.quarter_car import build_quarter_car
+from .errors import VehicleBuildError
+from .settings import MAX_SUBSTEP, MODELS, VehicleBuildSettings
+from .step_graph import FIRST_IN, FIRST_OUT, INPUTS, OUTPUTS, STATE_IN, STATE_OUT, discrete_step_graph
+
+
+def vehicle_model(model: str, settings: VehicleBuildSettings) -> LinearVehicle:
+    """The quarter car or full vehicle of `settings`' parameter file with its component choices."""
+    if model not in MODELS:
+        raise VehicleBuildError(f"unknown vehicle model {model!r}; choose one of {', '.join(MODELS)}")
+    params = VehicleParameters.load(settings.params_path or DEFAULT_FILE)
+    if model == "quarter-car":
+        return build_quarter_car(params, settings.components, settings.axle)
+    return build_full_vehicle(params, settings.components)
+
+
+def initial_state(vehicle: LinearVehicle) -> tuple[float, ...]:
+    """Static equilibrium for zero inputs; the design position (all zero) when external bushings carry the only
+    stiffness of some motion, since the rest position then depends on the components the master connects."""
+    try:
+        return tuple(float(v) for v in vehicle.equilibrium())
+    except VehicleModelError:
+        return (0.0,) * len(vehicle.states)
+
+
+def vehicle_component(discrete: DiscreteVehicle, model: str, settings: VehicleBuildSettings) -> Component:
+    """The component description of the step graph of `discrete`: ports with units, state, period, no filter."""
+    vehicle = discrete.vehicle
+    external = [p.name for p in vehicle.inputs if not p.name.startswith("actuator")]
+    return Component(
+        name=vehicle.name,
+        inputs=[Port(p.name, p.unit, p.description, INPUTS, i) for i, p in enumerate(vehicle.inputs)],
+        outputs=[Port(p.name, p.unit, p.description, OUTPUTS, i) for i, p in enumerate(vehicle.outputs)],
+        states=[
+            StatePort(STATE_IN, STATE_OUT, initial_state(vehicle), "vehicle state [q, q'] (names in the metadata)"),
+            StatePort(FIRST_IN, FIRST_OUT, (1.0,), "1 before sample 0 (which reports the initial state), then 0"),
+        ],
+        sample_period=discrete.dt,
+        description=vehicle.description,
+        filter_cutoff=0.0,
+        metadata={
+            "producer": f"nnfmu {nnfmu.__version__} vehicle build",
+            "model": model,
+            "parameters": str(settings.params_path or DEFAULT_FILE),
+            "components": settings.components,
+            "external_force_inputs": external,
+            "reference_dampers": vehicle.feedback_names,
+            "hold": discrete.hold,
+            "substeps": discrete.substeps,
+            "states": [f"{p.name} [{p.unit}]" for p in vehicle.states],
+        },
+    )
+
+
+def vehicle_step_graph(model: str, settings: VehicleBuildSettings) -> onnx.ModelProto:
+    """The ONNX step graph of `model` at `settings.sample_period`, its `Component` attached."""
+    vehicle = vehicle_model(model, settings)
+    discrete = vehicle.discretise(settings.sample_period, "zoh", MAX_SUBSTEP)
+    graph = discrete_step_graph(discrete)
+    vehicle_component(discrete, model, settings).attach_to(graph)
+    return graph
+
+
+def build_vehicle_fmu(model: str, out: Path, settings: VehicleBuildSettings | None = None) -> Path:
+    """Build the FMU of `model` ('quarter-car' or 'full-vehicle') at `out`; return its path. Raises FmuBuildError
+    (build), VehicleBuildError (settings) or ParameterError (parameter file); no partial `.fmu` is left."""
+    settings = settings or VehicleBuildSettings()
+    graph = vehicle_step_graph(model, settings)
+    with tempfile.TemporaryDirectory(prefix="nnfmu-vehicle-") as folder:
+        onnx_path = Path(folder) / f"{graph.graph.name}.onnx"
+        onnx_path.write_bytes(graph.SerializeToString())  # a private temporary folder: nothing to half-write
+        options = BuildOptions(out=Path(out), backend=settings.backend, fmi_version=settings.fmi_version)
+        return build_fmu(onnx_path, options)

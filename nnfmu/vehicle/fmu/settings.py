@@ -1,0 +1,45 @@
+"""What `nnfmu vehicle build` builds: model, parameter file, built-in components, sample period, FMI version."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal
+
+from nnfmu.fmu.options import BACKENDS, FMI_VERSIONS, Backend, FmiVersion
+
+from ..models.components import CHOICES
+from .errors import VehicleBuildError
+
+MODELS = ("quarter-car", "full-vehicle")
+# Internal sample period [s]: the linear part is exact at any period, the spline dampers are stepped explicitly and
+# need sub-steps of at most MAX_SUBSTEP (the sub-step of `nnfmu.vehicle.models.simulate`); 1e-4 s makes one sub-step
+# per sample, so the FMU answers every 0.1 ms and any communication step that is a multiple of it.
+DEFAULT_SAMPLE_PERIOD = 1e-4
+MAX_SUBSTEP = 1e-4
+
+
+@dataclass(frozen=True)
+class VehicleBuildSettings:
+    """`params_path` (None: the packaged mid-size sedan), `components` maps a component name ('damper',
+    'damper_fl', 'bushing_fl_front', ...) to 'external' (force input port, the default) or 'reference' (built-in
+    element), `sample_period` [s] of the FMU's samples, `axle` of the quarter car, FMI version and backend."""
+
+    params_path: Path | None = None
+    components: dict[str, str] = field(default_factory=dict)
+    sample_period: float = DEFAULT_SAMPLE_PERIOD
+    fmi_version: FmiVersion = 2
+    axle: Literal["front", "rear"] = "front"
+    backend: Backend = "native"
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.sample_period) and self.sample_period > 0.0):
+            raise VehicleBuildError(f"sample period {self.sample_period!r} s must be a positive finite number")
+        if self.fmi_version not in FMI_VERSIONS:
+            raise VehicleBuildError(f"FMI version {self.fmi_version!r}; choose 2 or 3")
+        if self.backend not in BACKENDS:
+            raise VehicleBuildError(f"backend {self.backend!r}; choose one of {', '.join(BACKENDS)}")
+        bad = {name: choice for name, choice in self.components.items() if choice not in CHOICES}
+        if bad:
+            raise VehicleBuildError(f"component choice(s) {bad}; expected one of {', '.join(CHOICES)}")
