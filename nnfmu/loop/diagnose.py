@@ -1,0 +1,133 @@
+"""Diagnose a model's residual on data not used to fit it: residual tests, then the effect library ranked by the
+variance each effect explains out of sample, and a verdict in words."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..data import DataError, Measurement, check_measurement
+from .effects import select_families
+from .errors import DiagnosisError
+from .evidence import Diagnosis, EffectEvidence, effect_evidence
+from .ranking import cross_fit_errors, fold_mask, rank_effects, recalibration
+from .residual_tests import ResidualTest, residual_tests
+from .settings import DiagnosisSettings
+from .signals import build_signals
+
+
+def _check_input(
+    m: Measurement, predicted: np.ndarray, output: str, inputs: tuple[str, ...], settings: DiagnosisSettings
+) -> None:
+    """Raise DiagnosisError naming the source and what is wrong with the channels, the length or the prediction."""
+    if output not in m.channels:
+        raise DiagnosisError(f"{m.source}: no output channel {output!r} (has: {', '.join(m.channels)})")
+    absent = [name for name in inputs if name not in m.channels]
+    if absent:
+        raise DiagnosisError(
+            f"{m.source}: model input(s) {', '.join(map(repr, absent))} not measured (has: {', '.join(m.channels)})"
+        )
+    if output in inputs:
+        raise DiagnosisError(f"{m.source}: the output {output!r} cannot also be a model input")
+    if len(m.time) < settings.min_samples:
+        raise DiagnosisError(
+            f"{m.source}: {len(m.time)} samples are too few to diagnose a residual; at least {settings.min_samples} "
+            f"needed (DiagnosisSettings.min_samples)"
+        )
+    try:
+        check_measurement(m, required=(output, *inputs), min_samples=settings.min_samples)
+    except DataError as err:
+        raise DiagnosisError(f"unusable measurement: {err}") from None
+    if predicted.shape != m.time.shape:
+        raise DiagnosisError(
+            f"{m.source}: predicted {output!r} has shape {predicted.shape}, the measurement {m.time.shape}"
+        )
+    bad = np.nonzero(~np.isfinite(predicted))[0]
+    if bad.size:
+        raise DiagnosisError(f"{m.source}: predicted {output!r} is not finite at sample {bad[0]} ({predicted[bad[0]]})")
+
+
+def _missing_measurements(ranking: list[EffectEvidence], consistent: bool, tests: list[ResidualTest]) -> list[str]:
+    """Which measurements would help: proxies behind significant effects, untestable effects, unexplained structure."""
+    notes = []
+    for e in ranking:
+        if e.significant and e.missing_channels:
+            notes.append(
+                f"{e.name} is significant through a proxy; measuring {', '.join(e.missing_channels)} would confirm "
+                f"and sharpen it"
+            )
+        elif not e.testable:
+            notes.append(f"{e.name} could not be tested: {', '.join(e.missing_channels)} not measured")
+    if not consistent and not any(e.significant for e in ranking):
+        failed = [t.name for t in tests if not t.passed]
+        notes.append(
+            "the residual has structure (" + ", ".join(failed) + ") that no effect computable from the measured "
+            "channels explains; it may need a measurement the data lack"
+        )
+    return notes
+
+
+def _summary(ranking: list[EffectEvidence], consistent: bool, tests: list[ResidualTest]) -> str:
+    """The verdict in one sentence."""
+    if consistent:
+        return (
+            "the residual is consistent with noise: no residual test rejects at the family-wise level and no effect "
+            "explains it significantly"
+        )
+    found = [e for e in ranking if e.significant]
+    if not found:
+        failed = ", ".join(t.name for t in tests if not t.passed)
+        return f"the residual is not noise ({failed} fail) but no effect in the library explains it significantly"
+    parts = [f"{e.name} ({e.additional_explained_variance:.1%} more of the residual variance)" for e in found]
+    return "missing effect(s), in order of evidence: " + "; ".join(parts)
+
+
+def diagnose(
+    measurement: Measurement,
+    predicted: np.ndarray,
+    output: str,
+    model_inputs: Sequence[str],
+    settings: DiagnosisSettings = DiagnosisSettings(),
+) -> Diagnosis:
+    """Diagnose residual = measurement[output] - predicted (shape (n,)) of a model driven by `model_inputs`.
+
+    `measurement` must be data the model was not fitted on. Returns the residual tests, the effect ranking and
+    whether the residual is consistent with noise (family-wise: every test passes at alpha/len(tests) and no effect
+    is significant). Raises DiagnosisError naming the source and the channel or value for unusable input.
+    """
+    inputs = tuple(model_inputs)
+    predicted = np.asarray(predicted, dtype=float)
+    _check_input(measurement, predicted, output, inputs, settings)
+    families = select_families(settings.effects)
+    signals = build_signals(measurement, predicted, output, inputs)
+    residual = signals.measured - predicted
+    if np.std(residual) <= 1e-12 * np.sqrt(np.mean(signals.measured**2)):
+        raise DiagnosisError(
+            f"{measurement.source}: the residual of {output!r} is constant ({np.mean(residual):g}): the prediction "
+            f"equals the measurement up to an offset, so there is nothing to diagnose (was the model fed the "
+            f"measured output?)"
+        )
+    others = [name for name in measurement.channels if name != output and name not in inputs]
+    tested = {name: np.asarray(measurement.channels[name], dtype=float) for name in (*inputs, *others)}
+    tests = residual_tests(residual, tested, settings)
+    base = recalibration(signals, {name: tested[name] for name in inputs})
+    recalibrated = cross_fit_errors(residual, base, fold_mask(len(residual), settings.blocks))
+    ranking = effect_evidence(rank_effects(signals, families, base, settings), settings.alpha)
+    tests_pass = all(t.p_value >= settings.alpha / len(tests) for t in tests)
+    consistent = tests_pass and not any(e.significant for e in ranking)
+    return Diagnosis(
+        source=measurement.source,
+        output=output,
+        model_inputs=inputs,
+        samples=len(measurement),
+        sample_period=measurement.sample_period,
+        residual_rms=float(np.sqrt(np.mean(residual**2))),
+        recalibration_explained=float(1 - np.sum(recalibrated**2) / np.sum(residual**2)),
+        tests=tuple(tests),
+        ranking=tuple(ranking),
+        consistent_with_noise=consistent,
+        unknown_to_model=signals.unknown_to_model,
+        missing_measurements=tuple(_missing_measurements(ranking, consistent, tests)),
+        summary=_summary(ranking, consistent, tests),
+    )

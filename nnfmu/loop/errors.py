@@ -1,0 +1,7 @@
+"""The exception raised when a residual cannot be diagnosed, so callers can tell bad input from programming errors."""
+
+from __future__ import annotations
+
+
+class DiagnosisError(ValueError):
+    """Unusable input to the diagnosis; the message names the source, channel or value and what was expected."""
