@@ -1,0 +1,70 @@
+"""Feed a vehicle's actuator inputs from a drive file: by channel name, rates derived, values at any master time.
+
+A vehicle input `actuator_fl_displacement` reads the drive channel of the same name. A quarter car's untagged
+input (`actuator_displacement`) reads the same-named channel, else the chosen corner's (`actuator_fl_displacement`).
+A rate the drive lacks (`..._velocity`) is differentiated from its displacement with the data package's
+Savitzky-Golay filter (`derive_rates`). Between drive samples the values are interpolated linearly, so the master's
+communication step need not equal the drive's sample period.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..data import Measurement
+from ..data.derive import derive_rates
+
+TIME_TOLERANCE = 1e-9  # relative to the drive's sample period: how far outside the drive a time may lie
+
+
+class DriveInputError(ValueError):
+    """The drive cannot feed the vehicle: a missing channel or a time outside the drive; names file and channel."""
+
+
+def _channel_for(name: str, drive: Measurement, corner: str) -> str | None:
+    if name in drive:
+        return name
+    if name.startswith("actuator_"):
+        tagged = f"actuator_{corner}_{name[len('actuator_'):]}"
+        if tagged in drive:
+            return tagged
+    return None
+
+
+class DriveInputs:
+    """Values of the vehicle inputs `names` from `drive` at master times; `at(t)` returns them in that order."""
+
+    def __init__(self, drive: Measurement, names: Sequence[str], corner: str = "fl") -> None:
+        needs_rates = any(_channel_for(n, drive, corner) is None for n in names)
+        source = derive_rates(drive) if needs_rates else drive
+        missing = [n for n in names if _channel_for(n, source, corner) is None]
+        if missing:
+            raise DriveInputError(
+                f"{drive.source}: no channel for the vehicle input(s) {', '.join(map(repr, missing))} "
+                f"(the drive has: {', '.join(drive.names)}; a quarter car also reads the {corner!r} corner's channel)"
+            )
+        self.names = list(names)
+        self.channels = [_channel_for(n, source, corner) for n in names]
+        self.time = np.asarray(source.time, dtype=float)
+        self.values = np.column_stack([np.asarray(source[c], dtype=float) for c in self.channels]) if names else \
+            np.zeros((len(self.time), 0))
+        self.source = drive.source
+        self._slack = TIME_TOLERANCE * drive.sample_period
+
+    @property
+    def start(self) -> float:
+        return float(self.time[0])
+
+    @property
+    def end(self) -> float:
+        return float(self.time[-1])
+
+    def at(self, t: float) -> np.ndarray:
+        """Input values at time `t` [s] (linear between samples); DriveInputError outside the drive."""
+        if t < self.start - self._slack or t > self.end + self._slack:
+            raise DriveInputError(f"{self.source}: time {t:.9g} s lies outside the drive ({self.start:.9g} s to "
+                                  f"{self.end:.9g} s)")
+        t = min(max(t, self.start), self.end)
+        return np.array([np.interp(t, self.time, self.values[:, i]) for i in range(self.values.shape[1])])

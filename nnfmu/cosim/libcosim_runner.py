@@ -1,0 +1,127 @@
+"""Run the same SSP system in libcosim (libcosimpy), a second, independent master, to cross-check fmpy's results.
+
+libcosim's fixed-step algorithm steps every FMU from t_n on the values transferred after the previous step, so it is
+a Jacobi scheme without extrapolation or iteration; the fmpy master with `scheme="jacobi"` and the plain settings is
+the same scheme, and only that combination is accepted here. libcosim counts time in integer nanoseconds, so the
+step must be a whole number of nanoseconds; it logs every call at its default level, so its output level is set to
+errors only. The drive inputs are set through an override manipulator before each step, as the fmpy master sets
+them, and the outputs are read from a last-value observer after each step (row n + 1 belongs to t_{n+1}); row 0 is
+the time-series observer's record of the initialised system.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ..data import Measurement
+from .drive_inputs import DriveInputs
+from .master import CosimError, CosimSettings, find_vehicle, step_count, whole_steps
+from .results import CosimResult
+from .ssp import SystemStructure, open_system
+
+NANOSECONDS = 1_000_000_000
+NANOSECOND_TOLERANCE = 1e-3  # [ns]: how far from a whole number of nanoseconds a time may lie (float rounding)
+
+
+def _nanoseconds(seconds: float, what: str) -> int:
+    ns = round(seconds * NANOSECONDS)
+    if ns < 1 or abs(ns - seconds * NANOSECONDS) > NANOSECOND_TOLERANCE:
+        raise CosimError(f"libcosim counts time in whole nanoseconds; the {what} {seconds!r} s is not one")
+    return ns
+
+
+def _check_settings(settings: CosimSettings) -> None:
+    if settings.scheme != "jacobi" or not settings.plain:
+        raise CosimError("libcosim's fixed-step algorithm is Jacobi without extrapolation or iteration; got "
+                         f"scheme {settings.scheme!r}, extrapolation {settings.extrapolation!r}, "
+                         f"iterations {settings.iterations}")
+    if settings.start_time != 0.0:
+        raise CosimError(f"libcosim's SSP executions start at t = 0, not {settings.start_time!r} s")
+
+
+def run_libcosim(ssd_path: str | os.PathLike[str], drive: Measurement, settings: CosimSettings) -> CosimResult:
+    """Co-simulate the system of `ssd_path` (.ssd, its folder or .ssp) in libcosim; channels named as fmpy names them."""
+    from libcosimpy.CosimEnums import CosimVariableCausality, CosimVariableType
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimManipulator import CosimManipulator
+    from libcosimpy.CosimObserver import CosimObserver
+
+    _check_settings(settings)
+    path = Path(ssd_path)
+    with open_system(path) as system:
+        h_ns = _nanoseconds(settings.step, "communication step")
+        stop = settings.stop_time if settings.stop_time is not None else system.stop_time
+        vehicle = find_vehicle(system)
+        driven = {(c.end_element, c.end_connector) for c in system.connections}
+        log_output_level(CosimLogLevel.ERROR)
+        execution = CosimExecution.from_ssp_file(str(path), step_size=h_ns)
+        if execution.num_slaves() != len(system.elements):
+            raise CosimError(f"{path}: libcosim could not load the system")
+        index = {e.name: execution.slave_index_from_instance_name(e.name) for e in system.elements}
+        refs = {name: {v.name.decode(): (v.reference, v.causality) for v in execution.slave_variables(i)}
+                for name, i in index.items()}
+        drive_names = [n for n, (_, causality) in refs[vehicle].items()
+                       if causality == CosimVariableCausality.INPUT.value and (vehicle, n) not in driven]
+        inputs = DriveInputs(drive, drive_names, settings.corner)
+        h = settings.step
+        n_steps = step_count(0.0, stop, h) if stop is not None else whole_steps(0.0, inputs.end, h)
+        channels = _channels(system, vehicle)
+        drive_refs = [refs[vehicle][n][0] for n in drive_names]
+        manipulator = CosimManipulator.create_override()
+        last = CosimObserver.create_last_value()
+        series = CosimObserver.create_time_series(buffer_size=n_steps + 1)  # keeps step 0
+        execution.add_manipulator(manipulator)
+        execution.add_observer(last)
+        execution.add_observer(series)
+        for element, output, _, _ in channels:
+            series.start_time_series(index[element], refs[element][output][0], CosimVariableType.REAL)
+        for ref, value in zip(drive_refs, inputs.at(0.0)):
+            execution.real_initial_value(index[vehicle], ref, float(value))
+        rows = np.empty((n_steps + 1, len(channels)))
+        for n in range(n_steps):
+            if drive_refs:
+                manipulator.slave_real_values(index[vehicle], drive_refs,
+                                              [float(x) for x in inputs.at(n * h)])
+            if not execution.step(1):
+                raise CosimError(f"{path}: libcosim failed at step {n} (t = {n * h_ns} ns)")
+            rows[n + 1] = _read(last, index, refs, channels)
+        for j, (element, output, _, _) in enumerate(channels):
+            _, steps, values = series.time_series_real_samples(index[element], refs[element][output][0], 0, 2)
+            if not steps or steps[0] != 0:
+                raise CosimError(f"{path}: libcosim recorded no initial value of {element}.{output}")
+            rows[0, j] = values[0]
+        del execution
+    measurement = Measurement(
+        time=np.arange(n_steps + 1) * h,
+        channels={name: rows[:, j] for j, (_, _, name, _) in enumerate(channels)},
+        units={name: unit for _, _, name, unit in channels},
+        source=f"libcosim co-simulation of {system.name} (h = {h_ns} ns) on {drive.source}",
+    )
+    return CosimResult(measurement, n_steps, n_steps, 0, master="libcosim")
+
+
+def _channels(system: SystemStructure, vehicle: str) -> list[tuple[str, str, str, str]]:
+    """(element, output, channel, unit) of every Real output, in the fmpy master's order and naming."""
+    from fmpy import read_model_description
+
+    result = []
+    for element in system.elements:
+        for v in read_model_description(str(system.fmu_path(element))).modelVariables:
+            if v.causality == "output" and v.type in ("Real", "Float64"):
+                channel = v.name if element.name == vehicle else f"{element.name}_{v.name}"
+                unit = v.unit or (v.declaredType.unit if v.declaredType else "") or "1"
+                result.append((element.name, v.name, channel, unit))
+    return result
+
+
+def _read(last, index: dict[str, int], refs: dict, channels: list[tuple[str, str, str, str]]) -> np.ndarray:
+    values = []
+    for element in index:
+        wanted = [refs[element][output][0] for owner, output, _, _ in channels if owner == element]
+        if wanted:
+            values.extend(last.last_real_values(index[element], wanted))
+    return np.array(values)

@@ -1,0 +1,104 @@
+"""SSP system structure files: write -> read round trip, hostile names, clear errors for connectors that do not fit."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+import zipfile
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from nnfmu.cosim.ssp import (
+    SSD, Connection, Connector, Element, SspError, SystemStructure, check_against_fmus, open_system, read_ssd,
+    write_ssd,
+)
+
+HOSTILE = 'a"b<c>&d\'e\nf\tg ü — ∂'
+
+
+def test_round_trip_of_a_written_system(systems: dict[float, Path]) -> None:
+    ssd = systems[1e-3]
+    with open_system(ssd) as system:
+        assert [e.name for e in system.elements] == ["vehicle", "damper"]
+        assert set(map(str, system.connections)) == {
+            "vehicle.damper_velocity -> damper.velocity", "damper.force -> vehicle.damper_force"}
+        assert system.element("damper").parameters == {"filter_cutoff": 0.0}
+        assert system.fmu_path("damper").resolve().is_file()
+        copy = write_ssd(replace(system, stop_time=2.5), ssd.parent / "copy.ssd")
+    again = read_ssd(copy)
+    assert again.elements == system.elements
+    assert again.connections == system.connections
+    assert (again.start_time, again.stop_time) == (0.0, 2.5)
+    assert ET.parse(copy).getroot().tag == f"{{{SSD}}}SystemStructureDescription"
+
+
+def test_hostile_names_are_escaped_and_come_back(tmp_path: Path) -> None:
+    system = SystemStructure(
+        name=HOSTILE,
+        elements=[Element(HOSTILE, f"{HOSTILE}.fmu", (Connector(HOSTILE, "output"),), {HOSTILE: -1.5e-300}),
+                  Element("b&", "b.fmu", (Connector("in<", "input"),))],
+        connections=[Connection(HOSTILE, HOSTILE, "b&", "in<")],
+        start_time=0.25, stop_time=1.0,
+    )
+    path = write_ssd(system, tmp_path / "SystemStructure.ssd")
+    text = path.read_text(encoding="utf-8")
+    assert "&lt;" in text and "&amp;" in text and "&quot;" in text  # escaped, so the file is well-formed XML
+    again = read_ssd(path)
+    assert again.name == HOSTILE
+    assert again.elements == system.elements
+    assert again.connections == system.connections
+    assert again.element(HOSTILE).parameters[HOSTILE] == -1.5e-300
+
+
+def _edited(ssd: Path, target: Path, old: str, new: str) -> Path:
+    text = ssd.read_text(encoding="utf-8")
+    assert old in text
+    target.write_text(text.replace(old, new), encoding="utf-8")
+    return target
+
+
+def test_connector_missing_in_the_fmu_names_element_and_connector(systems: dict[float, Path]) -> None:
+    ssd = systems[1e-3]
+    bad = _edited(ssd, ssd.parent / "bad_connector.ssd", 'name="velocity"', 'name="piston_speed"')
+    bad = _edited(bad, bad, 'endConnector="velocity"', 'endConnector="piston_speed"')
+    with pytest.raises(SspError, match=r"element 'damper': connector 'piston_speed' is not a variable of damper\.fmu"):
+        check_against_fmus(read_ssd(bad))
+
+
+def test_connection_to_an_undeclared_connector_names_it(systems: dict[float, Path]) -> None:
+    ssd = systems[1e-3]
+    bad = _edited(ssd, ssd.parent / "bad_connection.ssd", 'endConnector="velocity"', 'endConnector="speed"')
+    with pytest.raises(SspError, match=r"element 'damper' declares no connector 'speed' \(has: velocity, force"):
+        read_ssd(bad)
+
+
+def test_connector_of_the_wrong_kind_is_refused(systems: dict[float, Path]) -> None:
+    ssd = systems[1e-3]
+    bad = _edited(ssd, ssd.parent / "bad_kind.ssd", '<ssd:Connector name="force" kind="output">',
+                  '<ssd:Connector name="force" kind="input">')
+    with pytest.raises(SspError, match=r"connector damper\.force is an input, expected an output"):
+        read_ssd(bad)
+
+
+def test_missing_fmu_is_named(systems: dict[float, Path]) -> None:
+    ssd = systems[1e-3]
+    bad = _edited(ssd, ssd.parent / "bad_source.ssd", 'source="quarter_car.fmu"', 'source="nowhere.fmu"')
+    with pytest.raises(SspError, match=r"element 'vehicle': FMU .*nowhere\.fmu not found"):
+        check_against_fmus(read_ssd(bad))
+
+
+def test_ssp_archive_opens_with_fmus_inside(systems: dict[float, Path], tmp_path: Path) -> None:
+    with open_system(systems[1e-3]) as system:
+        archive = tmp_path / "system.ssp"
+        with zipfile.ZipFile(archive, "w") as zf:
+            inside = replace(system, elements=[replace(e, source=f"resources/{e.name}.fmu") for e in system.elements])
+            write_ssd(inside, tmp_path / "SystemStructure.ssd")
+            zf.write(tmp_path / "SystemStructure.ssd", "SystemStructure.ssd")
+            for element in system.elements:
+                zf.write(system.fmu_path(element), f"resources/{element.name}.fmu")
+    with open_system(archive) as opened:
+        assert [e.name for e in opened.elements] == ["vehicle", "damper"]
+        assert opened.fmu_path("vehicle").is_file()
+        folder = opened.base
+    assert not folder.exists()  # the extracted archive is removed afterwards
