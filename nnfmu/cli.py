@@ -193,6 +193,50 @@ def vehicle_build(
     typer.echo(f"FMU: {path}")
 
 
+@app.command()
+def cosim(
+    system: Path = typer.Argument(..., help="System: SystemStructure.ssd, its folder, or an .ssp archive."),
+    drive: Path = typer.Option(..., help="Drive file with the actuator channels (.csv, .mf4, .rsp, .drv, .tim)."),
+    out: Path = typer.Option(..., "--out", "-o", help="Result file (.csv or .mf4), units in every channel."),
+    step: float = typer.Option(1e-3, help="Communication step [s]."),
+    stop: Optional[float] = typer.Option(None, help="Stop time [s] (default: the end of the drive file)."),
+    scheme: str = typer.Option("gauss-seidel", help="gauss-seidel (components first) or jacobi."),
+    extrapolate: bool = typer.Option(False, help="Extrapolate coupling inputs linearly over the step."),
+    iterations: int = typer.Option(0, help="Iterate each step up to N times with get/set FMU state (strong coupling)."),
+    master: str = typer.Option("fmpy", help="fmpy (this package's master) or libcosim (cross-check; Jacobi only)."),
+) -> None:
+    """Co-simulate a vehicle FMU with component FMUs on a drive file."""
+    from rich.progress import Progress
+
+    from nnfmu.cosim.drive_inputs import DriveInputError
+    from nnfmu.cosim.master import CosimError, CosimSettings, run_cosim
+    from nnfmu.cosim.results import save_result
+    from nnfmu.cosim.ssp import SspError
+    from nnfmu.data import DataError
+    from nnfmu.vehicle.drive import read_drive
+
+    settings = CosimSettings(step=step, stop_time=stop, scheme=scheme,
+                             extrapolation="linear" if extrapolate else "none", iterations=iterations)
+    try:
+        if master == "libcosim":
+            from nnfmu.cosim.libcosim_runner import run_libcosim
+
+            result = run_libcosim(system, read_drive(drive), settings)
+            save_result(result, out)
+        elif master == "fmpy":
+            with Progress(transient=True) as bar:
+                task = bar.add_task("co-simulation", total=None)
+                result = run_cosim(system, drive, settings, out,
+                                   progress=lambda done, total: bar.update(task, completed=done, total=total))
+        else:
+            raise CosimError(f"unknown master {master!r}; use fmpy or libcosim")
+    except (CosimError, SspError, DriveInputError, DataError, ValueError) as error:
+        _fail(error)
+    typer.echo(f"{result.steps} steps of {step:g} s; result: {out}")
+    if iterations:
+        typer.echo(f"mean iterations per step {result.mean_iterations:.2f}, unconverged steps {result.unconverged_steps}")
+
+
 @data_app.command("check")
 def data_check(
     path: Path = typer.Argument(..., help="CSV (`name [unit]` headers, `time [s]` first) or MDF4 file."),
