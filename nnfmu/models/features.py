@@ -166,7 +166,49 @@ class Lowpass(Derived):
         return y, y
 
 
-DERIVED_KINDS: dict[str, type[Derived]] = {cls.kind: cls for cls in (SmoothSign, Lowpass)}
+@dataclass(frozen=True)
+class LowpassSquare(Derived):
+    """First-order low-pass of the squared channel, time constant tau [s]: y_k = y_{k-1} + a (x_k² - y_{k-1}).
+
+    A running mean square: of velocity, it follows the power a damper dissipates (F·v ~ c·v²) through the thermal
+    lag of oil and tube, so it stands in for the oil temperature when none is measured; of displacement, it is the
+    running amplitude² of the motion (amplitude dependence). Same discretisation as `Lowpass`; the state slot holds
+    y_{k-1} in the channel's unit squared, 0 at rest.
+    """
+
+    kind: ClassVar[str] = "lowpass_square"
+    tau: float = 1.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        object.__setattr__(self, "tau", _check_positive(self.tau, f"lowpass_square({self.channel}) tau"))
+
+    def coefficient(self, sample_period: float) -> float:
+        return -math.expm1(-sample_period / self.tau)
+
+    def state_slots(self) -> tuple[StateSlot, ...]:
+        return (
+            StateSlot(
+                name=f"{self.name}[k-1]", channel=self.channel,
+                description=f"previous output of {self.name}, in the square of {self.channel}'s unit",
+            ),
+        )
+
+    def compute(self, x: np.ndarray, initial: np.ndarray, sample_period: float) -> np.ndarray:
+        a = self.coefficient(sample_period)
+        y, _ = lfilter([a], [1.0, -(1.0 - a)], np.square(x), zi=[(1.0 - a) * float(initial[0])])
+        return y
+
+    def emit(self, g: NodeSink, x: str, state: str | None, sample_period: float) -> tuple[str, str | None]:
+        assert state is not None, "lowpass_square has a state slot"
+        a = g.constant("lowpass_square_coefficient", np.array([self.coefficient(sample_period)]))
+        square = g.node("Mul", [x, x], "lowpass_square_input")
+        step = g.node("Mul", [g.node("Sub", [square, state], "lowpass_square_error"), a], "lowpass_square_step")
+        y = g.node("Add", [state, step], "lowpass_square")
+        return y, y
+
+
+DERIVED_KINDS: dict[str, type[Derived]] = {cls.kind: cls for cls in (SmoothSign, Lowpass, LowpassSquare)}
 
 
 def derived_from_dict(d: dict[str, Any]) -> Derived:

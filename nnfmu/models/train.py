@@ -1,0 +1,408 @@
+"""Train a component network on one measurement: features from a spec, contiguous splits, several seeded restarts,
+early stopping on validation, hidden size fixed or chosen by validation error, metrics on every split."""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field, replace
+from typing import Literal
+
+import numpy as np
+import torch
+
+from nnfmu.data.measurement import Measurement
+from nnfmu.models.features import FeatureSpec
+from nnfmu.models.lm import FitHistory, LMSettings, fit_lm
+from nnfmu.models.metrics import SplitMetrics, max_abs_weight, split_metrics, weight_warning
+from nnfmu.models.networks import GRUNet, MLP
+from nnfmu.models.scaling import MinMaxScaler
+from nnfmu.models.splits import SplitFractions, Splits, contiguous_splits
+from nnfmu.models.stopping import EarlyStopping
+from nnfmu.models.trained import TrainedModel
+
+NetworkKind = Literal["mlp", "gru"]
+Optimizer = Literal["auto", "lm", "adam", "lbfgs"]
+# Progress callback: (what is running, fraction of the whole training done in [0, 1]).
+Progress = Callable[[str, float], None]
+
+# Levenberg–Marquardt solves a (weights x weights) system per epoch; above this many weights Adam is cheaper.
+LM_MAX_WEIGHTS = 400
+
+
+@dataclass(frozen=True)
+class Architecture:
+    """Network kind and hidden size; several sizes mean "choose by validation error" (the smallest within tolerance)."""
+
+    kind: NetworkKind = "mlp"
+    hidden: tuple[int, ...] = (3,)
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("mlp", "gru"):
+            raise ValueError(f"network kind must be 'mlp' or 'gru', got {self.kind!r}")
+        hidden = tuple(self.hidden)
+        if not hidden or any(isinstance(h, bool) or not isinstance(h, (int, np.integer)) or h < 1 for h in hidden):
+            raise ValueError(f"hidden sizes must be integers >= 1, got {self.hidden!r}")
+        object.__setattr__(self, "hidden", tuple(sorted(set(int(h) for h in hidden))))
+
+
+@dataclass(frozen=True)
+class TrainSettings:
+    """How to train. `optimizer` "auto" = Levenberg–Marquardt for MLPs up to LM_MAX_WEIGHTS weights, else Adam.
+
+    max_epochs/patience: epoch limit and early-stopping patience on the validation split; restarts: seeded random
+    initialisations per hidden size, the best validation error kept; hidden_tolerance: "auto" hidden size picks the
+    smallest size whose validation MSE is within (1 + tolerance) of the best; lm_max_samples: LM fits on at most this
+    many training samples (evenly strided); learning_rate/batch_size: Adam (batch_size samples per MLP step);
+    chunk_length/burn_in/sequences_per_batch: GRU training sequences, the samples at their start left out of the loss
+    while the hidden state settles, and sequences per Adam step.
+    """
+
+    optimizer: Optimizer = "auto"
+    max_epochs: int = 500
+    patience: int = 12
+    restarts: int = 3
+    seed: int = 0
+    splits: SplitFractions = SplitFractions()
+    hidden_tolerance: float = 0.10
+    lm_max_samples: int = 20000
+    learning_rate: float = 0.01
+    batch_size: int = 1024
+    chunk_length: int = 500
+    burn_in: int = 100
+    sequences_per_batch: int = 32
+
+    def __post_init__(self) -> None:
+        if self.optimizer not in ("auto", "lm", "adam", "lbfgs"):
+            raise ValueError(f"optimizer must be auto, lm, adam or lbfgs, got {self.optimizer!r}")
+        for name in ("max_epochs", "patience", "restarts", "lm_max_samples", "batch_size", "chunk_length", "sequences_per_batch"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"{name} must be >= 1, got {getattr(self, name)!r}")
+        if not 0 <= self.burn_in < self.chunk_length:
+            raise ValueError(f"burn_in must be in [0, chunk_length={self.chunk_length}), got {self.burn_in}")
+        if not (self.hidden_tolerance >= 0 and self.learning_rate > 0):
+            raise ValueError("hidden_tolerance must be >= 0 and learning_rate > 0")
+
+    def as_dict(self) -> dict[str, object]:
+        d = asdict(self)
+        d["splits"] = asdict(self.splits)
+        return d
+
+
+@dataclass
+class PreparedData:
+    """Feature matrix and target of the whole record (sequential from rest), their scalers (fitted on the training
+    split only) and the scaled tensors the optimisers use."""
+
+    features: np.ndarray
+    target: np.ndarray
+    feature_scaler: MinMaxScaler
+    target_scaler: MinMaxScaler
+    x: torch.Tensor
+    y: torch.Tensor
+    splits: Splits
+
+    def rows(self, split: str) -> tuple[torch.Tensor, torch.Tensor]:
+        index = torch.from_numpy(self.splits.index(split))
+        return self.x[index], self.y[index]
+
+
+@dataclass
+class SizeTrial:
+    """Best validation MSE (scaled) over the restarts of one hidden size."""
+
+    hidden: int
+    validation_mse: float
+    best_restart: int
+
+
+@dataclass
+class TrainResult:
+    """The trained model, its splits, each tried hidden size's validation error, the kept fit's history, warnings."""
+
+    model: TrainedModel
+    splits: Splits
+    trials: list[SizeTrial]
+    history: FitHistory
+    warnings: list[str] = field(default_factory=list)
+
+
+def data_hash(measurement: Measurement, names: list[str]) -> str:
+    """SHA-256 over the named channels' names and float64 values (the training data's fingerprint)."""
+    digest = hashlib.sha256()
+    for name in names:
+        digest.update(name.encode("utf-8") + b"\0")
+        digest.update(np.ascontiguousarray(measurement[name], dtype=np.float64).tobytes())
+    return digest.hexdigest()
+
+
+def prepare_data(measurement: Measurement, spec: FeatureSpec, fractions: SplitFractions) -> PreparedData:
+    """Features of `spec` over the record, split in time, scaled with the training split's extremes."""
+    missing = [c for c in (*spec.channels, spec.output) if c not in measurement]
+    if missing:
+        raise ValueError(f"{measurement.source}: channel(s) {missing} needed by the feature spec are missing (has {measurement.names})")
+    features = spec.features({c: measurement[c] for c in spec.channels}, measurement.sample_period)
+    target = np.asarray(measurement[spec.output], dtype=np.float64)
+    splits = contiguous_splits(len(target), fractions)
+    train = splits.index("train")
+    if np.ptp(target[train]) == 0:
+        raise ValueError(f"{measurement.source}: output channel {spec.output!r} is constant over the training split")
+    feature_scaler = MinMaxScaler.fit(features[train])
+    target_scaler = MinMaxScaler.fit(target[train])
+    return PreparedData(
+        features=features,
+        target=target,
+        feature_scaler=feature_scaler,
+        target_scaler=target_scaler,
+        x=torch.from_numpy(feature_scaler.scale(features)),
+        y=torch.from_numpy(target_scaler.scale(target)),
+        splits=splits,
+    )
+
+
+def restart_seed(seed: int, hidden: int, restart: int) -> int:
+    """Independent, reproducible seed for one (hidden size, restart) pair."""
+    return int(np.random.SeedSequence([seed, hidden, restart]).generate_state(1)[0])
+
+
+def _resolve_optimizer(kind: NetworkKind, n_in: int, hidden: int, optimizer: Optimizer) -> str:
+    if kind == "gru":
+        if optimizer in ("lm", "lbfgs"):
+            raise ValueError(f"optimizer {optimizer!r} is for MLPs; a GRU trains with Adam ('adam' or 'auto')")
+        return "adam"
+    if optimizer != "auto":
+        return optimizer
+    return "lm" if (n_in + 2) * hidden + 1 <= LM_MAX_WEIGHTS else "adam"
+
+
+def _strided(x: torch.Tensor, y: torch.Tensor, limit: int) -> tuple[torch.Tensor, torch.Tensor]:
+    step = max(1, math.ceil(len(y) / limit))
+    return x[::step], y[::step]
+
+
+def _fit_mlp_gradient(
+    network: MLP, data: PreparedData, settings: TrainSettings, method: str, on_epoch: Callable[[int, int], None]
+) -> FitHistory:
+    """Adam on shuffled mini-batches, or full-batch L-BFGS, one epoch = one pass / one L-BFGS iteration."""
+    x, y = data.rows("train")
+    x_val, y_val = data.rows("validation")
+    generator = torch.Generator().manual_seed(settings.seed)
+
+    def mse(xs: torch.Tensor, ys: torch.Tensor) -> torch.Tensor:
+        return torch.mean((network(xs)[:, 0] - ys) ** 2)
+
+    with torch.no_grad():
+        train_loss, validation_loss = [float(mse(x, y))], [float(mse(x_val, y_val))]
+    stopper = EarlyStopping(settings.patience)
+    stopper.update(0, validation_loss[0], network)
+    if method == "lbfgs":
+        optimiser: torch.optim.Optimizer = torch.optim.LBFGS(network.parameters(), max_iter=1, line_search_fn="strong_wolfe")
+    else:
+        optimiser = torch.optim.Adam(network.parameters(), lr=settings.learning_rate)
+    reason = "max_epochs"
+    for epoch in range(1, settings.max_epochs + 1):
+        if method == "lbfgs":
+
+            def closure() -> torch.Tensor:
+                optimiser.zero_grad()
+                loss = mse(x, y)
+                loss.backward()
+                return loss
+
+            optimiser.step(closure)
+        else:
+            order = torch.randperm(len(y), generator=generator)
+            for start in range(0, len(y), settings.batch_size):
+                batch = order[start : start + settings.batch_size]
+                optimiser.zero_grad()
+                mse(x[batch], y[batch]).backward()
+                optimiser.step()
+        with torch.no_grad():
+            train_loss.append(float(mse(x, y)))
+            validation_loss.append(float(mse(x_val, y_val)))
+        on_epoch(epoch, settings.max_epochs)
+        if stopper.update(epoch, validation_loss[-1], network):
+            reason = "validation"
+            break
+    stopper.restore(network)
+    return FitHistory(train_loss, validation_loss, stopper.best_epoch, reason)
+
+
+def _chunks(
+    x: torch.Tensor, y: torch.Tensor, parts: tuple[slice, ...], length: int, burn_in: int
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """Sequences covering the ranges `parts` for truncated back-propagation: x (B, length, f), y (B, length).
+
+    Each sequence starts burn_in samples before the samples it scores (inputs only) so its hidden state has run in;
+    y is NaN where a sample is not scored (burn-in, outside its range, end padding). Every sample is scored once.
+    """
+    scored = length - burn_in
+    xs, ys = [], []
+    for part, s in ((p, s) for p in parts for s in range(p.start, p.stop, scored)):
+        lo = max(0, s - burn_in)
+        hi = min(part.stop, lo + length)
+        index = torch.arange(lo, hi)
+        keep = (index >= s) & (index < s + scored)
+        xc = torch.zeros(length, x.shape[1], dtype=x.dtype)
+        yc = torch.full((length,), torch.nan, dtype=y.dtype)
+        xc[: hi - lo] = x[lo:hi]
+        yc[: hi - lo] = torch.where(keep, y[lo:hi], torch.nan)
+        xs.append(xc)
+        ys.append(yc)
+    return torch.stack(xs), torch.stack(ys)
+
+
+def _fit_gru(network: GRUNet, data: PreparedData, settings: TrainSettings, on_epoch: Callable[[int, int], None]) -> FitHistory:
+    """Adam on overlapping training sequences (truncated back-propagation through time), early stopping on validation
+    sequences; losses count only samples after each sequence's burn-in and inside its split."""
+    x_train, y_train = _chunks(data.x, data.y, data.splits.train, settings.chunk_length, settings.burn_in)
+    x_val, y_val = _chunks(data.x, data.y, data.splits.validation, settings.chunk_length, settings.burn_in)
+    generator = torch.Generator().manual_seed(settings.seed)
+
+    def mse(xs: torch.Tensor, ys: torch.Tensor) -> torch.Tensor:
+        scored = ~torch.isnan(ys)
+        return torch.mean((network(xs)[..., 0][scored] - ys[scored]) ** 2)
+
+    with torch.no_grad():
+        train_loss, validation_loss = [float(mse(x_train, y_train))], [float(mse(x_val, y_val))]
+    stopper = EarlyStopping(settings.patience)
+    stopper.update(0, validation_loss[0], network)
+    optimiser = torch.optim.Adam(network.parameters(), lr=settings.learning_rate)
+    batch = settings.sequences_per_batch
+    reason = "max_epochs"
+    for epoch in range(1, settings.max_epochs + 1):
+        order = torch.randperm(len(x_train), generator=generator)
+        total = 0.0
+        for start in range(0, len(order), batch):
+            pick = order[start : start + batch]
+            optimiser.zero_grad()
+            loss = mse(x_train[pick], y_train[pick])
+            loss.backward()
+            torch.nn.utils.clip_grad_norm_(network.parameters(), 1.0)
+            optimiser.step()
+            total += float(loss.detach()) * len(pick)
+        with torch.no_grad():
+            train_loss.append(total / len(order))
+            validation_loss.append(float(mse(x_val, y_val)))
+        on_epoch(epoch, settings.max_epochs)
+        if stopper.update(epoch, validation_loss[-1], network):
+            reason = "validation"
+            break
+    stopper.restore(network)
+    return FitHistory(train_loss, validation_loss, stopper.best_epoch, reason)
+
+
+def fit_network(
+    data: PreparedData,
+    kind: NetworkKind,
+    hidden: int,
+    settings: TrainSettings,
+    seed: int,
+    on_epoch: Callable[[int, int], None] = lambda epoch, total: None,
+) -> tuple[MLP | GRUNet, FitHistory]:
+    """One training run from a seeded random initialisation; the network returned holds its best validation epoch."""
+    torch.manual_seed(seed)
+    n_in = data.x.shape[1]
+    network: MLP | GRUNet = GRUNet(n_in, hidden) if kind == "gru" else MLP(n_in, hidden)
+    method = _resolve_optimizer(kind, n_in, hidden, settings.optimizer)
+    run_settings = replace(settings, seed=seed)
+    if isinstance(network, GRUNet):
+        return network, _fit_gru(network, data, run_settings, on_epoch)
+    if method == "lm":
+        lm = LMSettings(max_epochs=settings.max_epochs, patience=settings.patience)
+        train = _strided(*data.rows("train"), settings.lm_max_samples)
+        validation = _strided(*data.rows("validation"), settings.lm_max_samples)
+        return network, fit_lm(network, train, validation, lm, on_epoch)
+    return network, _fit_mlp_gradient(network, data, run_settings, method, on_epoch)
+
+
+def predict_scaled(network: MLP | GRUNet, x: torch.Tensor) -> np.ndarray:
+    """Scaled output (n,) of the network over the whole record, run sequentially from rest."""
+    network.eval()
+    with torch.no_grad():
+        if isinstance(network, GRUNet):
+            return network(x.unsqueeze(0))[0, :, 0].numpy()
+        return network(x)[:, 0].numpy()
+
+
+def evaluate(network: MLP | GRUNet, data: PreparedData) -> dict[str, SplitMetrics]:
+    """Metrics of every split, from one sequential run of the network over the whole record."""
+    output = data.target_scaler.unscale(predict_scaled(network, data.x))
+    largest = max_abs_weight(network)
+    index = {name: data.splits.index(name) for name, _ in data.splits.items()}
+    return {name: split_metrics(output[i], data.target[i], data.target_scaler, largest) for name, i in index.items()}
+
+
+def fit_best(
+    data: PreparedData, architecture: Architecture, settings: TrainSettings, progress: Progress | None = None
+) -> tuple[MLP | GRUNet, FitHistory, list[SizeTrial], int]:
+    """Every hidden size x every restart; returns the chosen network, its history, each size's trial and the size."""
+    runs = len(architecture.hidden) * settings.restarts
+    trials: list[SizeTrial] = []
+    kept: dict[int, tuple[MLP | GRUNet, FitHistory]] = {}
+    run = 0
+    for hidden in architecture.hidden:
+        best: tuple[float, int, MLP | GRUNet, FitHistory] | None = None
+        for restart in range(settings.restarts):
+            label = f"{architecture.kind} hidden {hidden}, restart {restart + 1}/{settings.restarts}"
+
+            def on_epoch(epoch: int, total: int, label: str = label, run: int = run) -> None:
+                if progress is not None:
+                    progress(label, (run + epoch / total) / runs)
+
+            network, history = fit_network(data, architecture.kind, hidden, settings, restart_seed(settings.seed, hidden, restart), on_epoch)
+            loss = history.best_validation_loss
+            if best is None or loss < best[0]:
+                best = (loss, restart, network, history)
+            run += 1
+            if progress is not None:
+                progress(label, run / runs)
+        assert best is not None
+        trials.append(SizeTrial(hidden=hidden, validation_mse=best[0], best_restart=best[1]))
+        kept[hidden] = (best[2], best[3])
+    lowest = min(t.validation_mse for t in trials)
+    chosen = next(t.hidden for t in trials if t.validation_mse <= lowest * (1.0 + settings.hidden_tolerance))
+    network, history = kept[chosen]
+    return network, history, trials, chosen
+
+
+def train_model(
+    measurement: Measurement,
+    spec: FeatureSpec,
+    architecture: Architecture = Architecture(),
+    settings: TrainSettings = TrainSettings(),
+    progress: Progress | None = None,
+) -> TrainResult:
+    """Train a network predicting `spec.output` from `spec`'s features of `measurement`; metrics on every split."""
+    data = prepare_data(measurement, spec, settings.splits)
+    network, history, trials, hidden = fit_best(data, architecture, settings, progress)
+    metrics = evaluate(network, data)
+    train_part = data.splits.index("train")
+    warnings = [w for w in [weight_warning(max_abs_weight(network))] if w]
+    n_in = data.x.shape[1]
+    model = TrainedModel(
+        spec=spec,
+        network=network,
+        feature_scaler=data.feature_scaler,
+        target_scaler=data.target_scaler,
+        sample_period=measurement.sample_period,
+        units={c: measurement.units[c] for c in (*spec.channels, spec.output)},
+        envelope={c: (float(np.min(measurement[c][train_part])), float(np.max(measurement[c][train_part]))) for c in spec.channels},
+        metrics={name: m.as_dict() for name, m in metrics.items()},
+        data_hash=data_hash(measurement, [*spec.channels, spec.output]),
+        settings={
+            **settings.as_dict(),
+            "kind": architecture.kind,
+            "hidden": hidden,
+            "hidden_candidates": list(architecture.hidden),
+            "optimizer_used": _resolve_optimizer(architecture.kind, n_in, hidden, settings.optimizer),
+            "validation_mse_by_hidden": {str(t.hidden): t.validation_mse for t in trials},
+            "best_epoch": history.best_epoch,
+            "epochs_run": len(history.train_loss) - 1,
+            "stop_reason": history.stop_reason,
+            "samples": {name: data.splits.size(name) for name, _ in data.splits.items()},
+            "source": measurement.source,
+        },
+    )
+    return TrainResult(model=model, splits=data.splits, trials=trials, history=history, warnings=warnings)

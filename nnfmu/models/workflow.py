@@ -1,0 +1,124 @@
+"""The `nnfmu train` workflow: load a rig file, train a preset (or custom) network, export and verify the ONNX step
+graph, and return everything the CLI prints. The CLI only formats; this module does the work."""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from nnfmu.data import load_measurement
+from nnfmu.export import ExportResult, export_onnx
+from nnfmu.models.metrics import SplitMetrics
+from nnfmu.models.presets import Preset, custom_spec, get_preset, recurrent
+from nnfmu.models.selection import SelectionResult, SelectionSettings, select_inputs
+from nnfmu.models.train import Architecture, Progress, SizeTrial, TrainSettings, train_model
+from nnfmu.models.trained import TrainedModel
+
+
+@dataclass(frozen=True)
+class TrainRequest:
+    """What the user asked for. Empty/None fields take the preset's defaults.
+
+    output: output channel; inputs/delays: replace the preset's input taps (delays apply to every input); hidden: one
+    size, or several to choose among by validation error; thesis: the thesis's inputs, delays and fixed hidden size
+    instead of nnfmu's default (low-pass memory bank, hidden size by validation); recurrent: GRU instead of the MLP; select_inputs: choose the
+    inputs by sensitivity analysis (overrides the preset's and `inputs`); optimizer: auto, lm, adam or lbfgs.
+    """
+
+    preset: str
+    output: str | None = None
+    inputs: tuple[str, ...] = ()
+    delays: tuple[int, ...] = ()
+    hidden: tuple[int, ...] = ()
+    thesis: bool = False
+    recurrent: bool = False
+    restarts: int | None = None
+    seed: int = 0
+    max_epochs: int | None = None
+    select_inputs: bool = False
+    optimizer: str | None = None
+    name: str = ""
+
+
+@dataclass
+class TrainOutcome:
+    """Result of one `train` run: the written model, its metrics per split, export check, input ranking, timing."""
+
+    path: Path
+    model: TrainedModel
+    metrics: dict[str, SplitMetrics]
+    export: ExportResult
+    trials: list[SizeTrial]
+    selection: SelectionResult | None
+    warnings: list[str]
+    seconds: float
+
+
+def resolve(request: TrainRequest) -> tuple[Preset, Architecture, TrainSettings]:
+    """The preset named by the request with the request's overrides applied to network and training settings."""
+    preset = get_preset(request.preset)
+    architecture = preset.thesis if request.thesis else preset.architecture
+    if request.recurrent:
+        architecture = recurrent(architecture, request.hidden)
+    elif request.hidden:
+        architecture = replace(architecture, hidden=tuple(request.hidden))
+    overrides: dict[str, object] = {"seed": request.seed}
+    if request.restarts is not None:
+        overrides["restarts"] = request.restarts
+    if request.max_epochs is not None:
+        overrides["max_epochs"] = request.max_epochs
+    if request.optimizer is not None:
+        overrides["optimizer"] = request.optimizer
+    return preset, architecture, replace(preset.settings, **overrides)
+
+
+def _stage(progress: Progress | None, start: float, end: float) -> Progress | None:
+    """A progress callback that maps a stage's own 0..1 onto [start, end] of the whole run."""
+    if progress is None:
+        return None
+    return lambda label, done: progress(label, start + (end - start) * done)
+
+
+def train_from_file(
+    data: str | os.PathLike[str], request: TrainRequest, out: str | os.PathLike[str], progress: Progress | None = None
+) -> TrainOutcome:
+    """Train on the rig file `data` as `request` says, export the verified step graph to `out`, return the outcome.
+
+    Raises nnfmu.data.DataError for bad data, ValueError for a bad request, ExportError if the graph does not
+    reproduce the torch model; nothing is written to `out` then.
+    """
+    started = time.perf_counter()
+    preset, architecture, settings = resolve(request)
+    spec = custom_spec(preset.thesis_spec if request.thesis else preset.spec, request.output, request.inputs, request.delays)
+    selection = None
+    if request.select_inputs:
+        measurement = load_measurement(data, required=[spec.output])
+        selection_settings = SelectionSettings(training=replace(settings, restarts=min(settings.restarts, 2)))
+        selection = select_inputs(measurement, spec.output, selection_settings, _stage(progress, 0.0, 0.5))
+        spec = selection.spec
+        progress = _stage(progress, 0.5, 1.0)
+    else:
+        measurement = load_measurement(data, required=[*spec.channels, spec.output])
+    result = train_model(measurement, spec, architecture, settings, progress)
+    block = max(result.splits.test, key=lambda part: part.stop - part.start)
+    test = measurement.slice(block.start, block.stop)
+    export = export_onnx(
+        result.model,
+        out,
+        name=request.name or preset.name.replace("-", "_"),
+        description=f"{preset.description}; trained by nnfmu on {Path(data).name}",
+        verify_on={c: test[c] for c in spec.channels},
+    )
+    metrics = {name: SplitMetrics(**values) for name, values in result.model.metrics.items()}
+    return TrainOutcome(
+        path=Path(out),
+        model=result.model,
+        metrics=metrics,
+        export=export,
+        trials=result.trials,
+        selection=selection,
+        warnings=result.warnings,
+        seconds=time.perf_counter() - started,
+    )

@@ -1,0 +1,79 @@
+"""Presets reproduce the thesis networks; request overrides map onto spec, network and settings."""
+
+from __future__ import annotations
+
+import pytest
+
+from nnfmu.models.features import Lowpass, Tap
+from nnfmu.models.presets import MEMORY_TAUS, PRESETS, custom_spec, get_preset
+from nnfmu.models.workflow import TrainRequest, resolve
+
+
+@pytest.mark.parametrize(
+    ("name", "output", "n_in", "hidden"),
+    [
+        ("damper-spline", "force", 1, 3),
+        ("bushing-axial-force", "axial_force", 2, 3),
+        ("bushing-radial-force", "radial_force", 2, 3),
+        ("bushing-axial-torque", "axial_torque", 4, 7),
+        ("bushing-conical-torque", "conical_torque", 4, 7),
+    ],
+)
+def test_thesis_network_sizes(name, output, n_in, hidden):
+    preset = get_preset(name)
+    assert preset.output == output and preset.thesis_spec.output == output
+    assert preset.thesis_spec.n_features == n_in and not preset.thesis_spec.derived
+    assert preset.thesis.kind == "mlp" and preset.thesis.hidden == (hidden,)
+    # the default search starts at the thesis size and only tries larger nets
+    assert preset.architecture.hidden[0] == hidden and len(preset.architecture.hidden) >= 2
+
+
+def test_input_channels_follow_the_rig_names():
+    assert get_preset("damper-spline").spec.taps == (Tap("velocity"),)
+    for name, channels in [
+        ("bushing-axial-force", ["axial_displacement", "axial_velocity"]),
+        ("bushing-radial-force", ["radial_displacement", "radial_velocity"]),
+        ("bushing-axial-torque", ["axial_rotation", "axial_angular_velocity"]),
+        ("bushing-conical-torque", ["conical_rotation", "conical_angular_velocity"]),
+    ]:
+        preset = get_preset(name)
+        assert preset.thesis_spec.channels == channels and preset.spec.channels == channels
+        # the default adds the low-pass memory bank of the position channel
+        assert preset.spec.derived == tuple(Lowpass(channels[0], tau=t) for t in MEMORY_TAUS)
+    assert get_preset("bushing-axial-torque").thesis_spec.taps == (
+        Tap("axial_rotation", (0, 1)), Tap("axial_angular_velocity", (0, 1))
+    )
+    hysteresis = get_preset("damper-hysteresis")
+    assert hysteresis.thesis_spec.taps == (Tap("velocity", (0, 1)),) and hysteresis.thesis.hidden == (5,)
+    assert hysteresis.spec.channels == ["velocity"] and hysteresis.output == "force"
+
+
+def test_every_preset_is_listed_and_unknown_names_are_refused():
+    assert set(PRESETS) == {
+        "damper-spline", "damper-hysteresis", "bushing-axial-force", "bushing-radial-force",
+        "bushing-axial-torque", "bushing-conical-torque",
+    }
+    with pytest.raises(ValueError, match="damper-spline"):
+        get_preset("damper")
+
+
+def test_custom_inputs_delays_and_output():
+    base = get_preset("damper-hysteresis").spec
+    spec = custom_spec(base, output="force_filtered", inputs=("velocity", "displacement"), delays=(0, 2))
+    assert spec.taps == (Tap("velocity", (0, 2)), Tap("displacement", (0, 2))) and spec.output == "force_filtered"
+    assert not spec.derived  # the bank belongs to the preset's own inputs
+    retapped = custom_spec(base, delays=(0, 1))
+    assert retapped.taps == (Tap("velocity", (0, 1)),) and retapped.derived == base.derived
+    assert custom_spec(base) == base
+
+
+def test_request_overrides_network_and_settings():
+    preset, architecture, settings = resolve(TrainRequest("damper-spline", hidden=(3, 5), restarts=1, seed=7, max_epochs=9))
+    assert architecture.hidden == (3, 5) and architecture.kind == "mlp"
+    assert (settings.restarts, settings.seed, settings.max_epochs) == (1, 7, 9)
+    _, thesis, _ = resolve(TrainRequest("bushing-axial-torque", thesis=True))
+    assert thesis.hidden == (7,)
+    _, gru, _ = resolve(TrainRequest("damper-hysteresis", recurrent=True))
+    assert gru.kind == "gru" and gru.hidden
+    with pytest.raises(ValueError, match="optimizer"):
+        resolve(TrainRequest("damper-spline", optimizer="sgd"))

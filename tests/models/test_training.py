@@ -1,0 +1,226 @@
+"""Training: the hand-written LM Jacobian, LM convergence, early stopping, determinism, splits, optimisers, and a
+workflow run that writes a verified ONNX file."""
+
+from __future__ import annotations
+
+import numpy as np
+import onnx
+import pytest
+import torch
+from torch.func import functional_call, jacrev
+
+from nnfmu.component import Component
+from nnfmu.data.measurement import Measurement
+from nnfmu.models.features import FeatureSpec, Tap
+from nnfmu.models.lm import LMSettings, fit_lm, mlp_jacobian
+from nnfmu.models.networks import MLP
+from nnfmu.models.splits import SplitFractions, contiguous_splits
+from nnfmu.models.stopping import EarlyStopping
+from nnfmu.models.train import Architecture, TrainSettings, data_hash, train_model
+
+T = 0.001
+
+
+def lagged_damper(n: int = 3000, seed: int = 0, lag: float = 0.004) -> Measurement:
+    """Digressive asymmetric damper force behind a first-order lag, under smooth random velocity."""
+    rng = np.random.default_rng(seed)
+    kernel = np.hanning(41)
+    v = np.convolve(rng.standard_normal(n + 40), kernel / kernel.sum(), mode="valid")
+    v *= 0.5 / np.max(np.abs(v))
+    static = np.where(v > 0, 2000 * np.tanh(v / 0.15), 900 * np.tanh(v / 0.2))
+    a = -np.expm1(-T / lag)
+    force = np.zeros(n)
+    state = 0.0
+    for k in range(n):
+        state += a * (static[k] - state)
+        force[k] = state
+    return Measurement(
+        time=np.arange(n) * T,
+        channels={"velocity": v, "displacement": np.cumsum(v) * T, "force": force},
+        units={"velocity": "m/s", "displacement": "m", "force": "N"},
+        source="synthetic lagged damper",
+    )
+
+
+def teacher_data(n: int, seed: int) -> tuple[torch.Tensor, torch.Tensor]:
+    """Samples of a 1-3-1 tanh net with known weights: an LM fit of a 1-3-1 net can reach it exactly."""
+    x = torch.linspace(-1, 1, n, dtype=torch.float64)[:, None]
+    torch.manual_seed(seed)
+    teacher = MLP(1, 3)
+    with torch.no_grad():
+        teacher.hidden.weight.copy_(torch.tensor([[2.0], [-1.5], [0.7]]))
+        teacher.hidden.bias.copy_(torch.tensor([0.3, -0.2, 0.1]))
+        teacher.out.weight.copy_(torch.tensor([[0.8, 0.5, -0.6]]))
+        teacher.out.bias.fill_(0.05)
+        y = teacher(x)[:, 0]
+    return x, y
+
+
+def test_hand_jacobian_equals_autograd():
+    torch.manual_seed(1)
+    net = MLP(3, 4)
+    x = torch.randn(7, 3, dtype=torch.float64)
+    y, jacobian = mlp_jacobian(net, x)
+    params = dict(net.named_parameters())
+    reference = jacrev(lambda p: functional_call(net, p, (x,))[:, 0])(params)
+    expected = torch.cat([reference[name].reshape(7, -1) for name in params], dim=1)
+    torch.testing.assert_close(y, net(x)[:, 0], rtol=0, atol=1e-14)
+    torch.testing.assert_close(jacobian, expected, rtol=1e-12, atol=1e-14)
+
+
+def test_lm_decreases_the_loss_and_fits_a_known_function():
+    x, y = teacher_data(200, seed=0)
+    torch.manual_seed(5)
+    net = MLP(1, 3)
+    history = fit_lm(net, (x[::2], y[::2]), (x[1::2], y[1::2]), LMSettings(max_epochs=200, patience=50))
+    assert all(b < a for a, b in zip(history.train_loss, history.train_loss[1:]))  # LM accepts only improving steps
+    assert history.train_loss[0] > 1e-3
+    with torch.no_grad():
+        assert float(torch.mean((net(x)[:, 0] - y) ** 2)) < 1e-8  # RMS error 1e-4 on a target of range ~0.2
+
+
+def test_early_stopping_keeps_the_best_epoch():
+    net = torch.nn.Linear(1, 1)
+    stopper = EarlyStopping(patience=2)
+    losses = [5.0, 3.0, 1.0, 2.0, 1.5, 0.5]  # 0.5 comes after patience ran out and is never seen
+    stops = []
+    for epoch, loss in enumerate(losses):
+        with torch.no_grad():
+            net.weight.fill_(float(epoch))
+        stops.append(stopper.update(epoch, loss, net))
+        if stops[-1]:
+            break
+    assert stops == [False, False, False, False, True]
+    assert stopper.best_epoch == 2 and stopper.best_loss == 1.0
+    stopper.restore(net)
+    assert float(net.weight.detach()) == 2.0
+
+
+def test_lm_run_ends_on_its_best_validation_epoch():
+    # Few noisy training samples and a large net over-fit; the kept weights are those of the best validation epoch.
+    rng = np.random.default_rng(0)
+    x = torch.linspace(-1, 1, 400, dtype=torch.float64)[:, None]
+    y = torch.sin(3 * x[:, 0]) + torch.from_numpy(0.3 * rng.standard_normal(400))
+    torch.manual_seed(0)
+    net = MLP(1, 12)
+    history = fit_lm(net, (x[::20], y[::20]), (x[1::2], y[1::2]), LMSettings(max_epochs=100, patience=5))
+    best = int(np.argmin(history.validation_loss))
+    assert history.best_epoch == best
+    with torch.no_grad():
+        kept = float(torch.mean((net(x[1::2])[:, 0] - y[1::2]) ** 2))
+    assert kept == pytest.approx(history.validation_loss[best], rel=1e-12)
+
+
+def test_contiguous_splits():
+    s = contiguous_splits(100, SplitFractions(0.7, 0.15, 0.15, blocks=1))
+    assert (s.train, s.validation, s.test) == ((slice(0, 70),), (slice(70, 85),), (slice(85, 100),))
+    s = contiguous_splits(200, SplitFractions(0.7, 0.15, 0.15, blocks=2))
+    assert s.train == (slice(0, 70), slice(100, 170)) and s.test == (slice(85, 100), slice(185, 200))
+    assert s.size("validation") == 30 and list(s.index("validation")[[0, -1]]) == [70, 184]
+    everything = np.sort(np.concatenate([s.index(name) for name, _ in s.items()]))
+    np.testing.assert_array_equal(everything, np.arange(200))
+    with pytest.raises(ValueError, match="add up to 1"):
+        SplitFractions(0.5, 0.2, 0.2)
+    with pytest.raises(ValueError, match="validation split only 1 samples"):
+        contiguous_splits(20, SplitFractions(0.9, 0.05, 0.05, blocks=1))
+
+
+def test_training_is_deterministic_for_a_seed():
+    m = lagged_damper(1500)
+    spec = FeatureSpec(taps=(Tap("velocity", (0, 4)),), output="force")
+    settings = TrainSettings(max_epochs=15, restarts=2, seed=3)
+    first = train_model(m, spec, Architecture("mlp", (3,)), settings)
+    second = train_model(m, spec, Architecture("mlp", (3,)), settings)
+    other = train_model(m, spec, Architecture("mlp", (3,)), TrainSettings(max_epochs=15, restarts=2, seed=4))
+    for a, b in zip(first.model.network.parameters(), second.model.network.parameters()):
+        assert torch.equal(a, b)
+    assert first.model.metrics == second.model.metrics
+    assert any(not torch.equal(a, b) for a, b in zip(first.model.network.parameters(), other.model.network.parameters()))
+
+
+def test_delays_capture_the_lag_a_static_map_cannot():
+    m = lagged_damper(4000)
+    settings = TrainSettings(max_epochs=60, restarts=2)
+    static = train_model(m, FeatureSpec((Tap("velocity"),), "force"), Architecture("mlp", (3,)), settings)
+    delayed = train_model(m, FeatureSpec((Tap("velocity", (0, 3, 6)),), "force"), Architecture("mlp", (5,)), settings)
+    assert delayed.model.metrics["test"]["nrmse"] < 0.5 * static.model.metrics["test"]["nrmse"]
+    assert static.model.metrics["test"]["nrmse"] > 0.02  # the lag is real: a static map misses it
+
+
+def test_trained_model_carries_context():
+    m = lagged_damper(1500)
+    spec = FeatureSpec((Tap("velocity"),), "force")
+    result = train_model(m, spec, Architecture("mlp", (2, 3)), TrainSettings(max_epochs=10, restarts=1))
+    model = result.model
+    train, test = result.splits.index("train"), result.splits.index("test")
+    assert model.envelope["velocity"] == (m["velocity"][train].min(), m["velocity"][train].max())
+    assert model.units == {"velocity": "m/s", "force": "N"}
+    assert model.sample_period == pytest.approx(T)
+    assert set(model.metrics) == {"train", "validation", "test"}
+    assert [t.hidden for t in result.trials] == [2, 3] and model.settings["hidden"] in (2, 3)
+    assert model.data_hash == data_hash(m, ["velocity", "force"])
+    changed = Measurement(m.time, {**m.channels, "force": m["force"] + 1e-9}, m.units)
+    assert data_hash(changed, ["velocity", "force"]) != model.data_hash
+    prediction = model.predict({"velocity": m["velocity"]})
+    assert model.metrics["test"]["nrmse"] == pytest.approx(
+        np.sqrt(np.mean((prediction[test] - m["force"][test]) ** 2)) / np.sqrt(np.mean(m["force"][test] ** 2)),
+        rel=1e-9,
+    )
+
+
+@pytest.mark.parametrize("optimizer", ["adam", "lbfgs"])
+def test_gradient_optimisers_reduce_validation_error(optimizer):
+    m = lagged_damper(1500)
+    result = train_model(
+        m, FeatureSpec((Tap("velocity"),), "force"), Architecture("mlp", (3,)),
+        TrainSettings(optimizer=optimizer, max_epochs=20, restarts=1),
+    )
+    assert result.model.settings["optimizer_used"] == optimizer
+    assert result.history.best_validation_loss < 0.5 * result.history.validation_loss[0]
+
+
+def test_gru_trains_and_predicts_sequentially():
+    m = lagged_damper(1500)
+    settings = TrainSettings(max_epochs=8, restarts=1, chunk_length=200, burn_in=40, learning_rate=0.02)
+    result = train_model(m, FeatureSpec((Tap("velocity"),), "force"), Architecture("gru", (4,)), settings)
+    assert result.model.settings["optimizer_used"] == "adam"
+    assert result.history.best_validation_loss < result.history.validation_loss[0]
+    with pytest.raises(ValueError, match="Adam"):
+        train_model(m, FeatureSpec((Tap("velocity"),), "force"), Architecture("gru", (4,)), TrainSettings(optimizer="lm"))
+
+
+def test_missing_channel_is_named():
+    with pytest.raises(ValueError, match="temperature"):
+        train_model(lagged_damper(500), FeatureSpec((Tap("temperature"),), "force"))
+
+
+def test_workflow_writes_a_verified_onnx_with_channel_ports(tmp_path):
+    from nnfmu.data import save_measurement
+    from nnfmu.models.workflow import TrainRequest, train_from_file
+
+    data = save_measurement(lagged_damper(2000), tmp_path / "dyno.csv")
+    progress: list[float] = []
+    outcome = train_from_file(
+        data, TrainRequest(preset="damper-spline", restarts=1, max_epochs=20), tmp_path / "model.onnx",
+        progress=lambda label, done: progress.append(done),
+    )
+    assert outcome.path.is_file() and outcome.export.max_relative_error <= 1e-6
+    component = Component.from_onnx(onnx.load(outcome.path))
+    assert [p.name for p in component.inputs] == ["velocity"] and [p.name for p in component.outputs] == ["force"]
+    assert component.metadata["metrics"]["test"]["nrmse"] == pytest.approx(outcome.metrics["test"].nrmse)
+    assert progress and progress[-1] == pytest.approx(1.0) and progress == sorted(progress)
+
+
+def test_workflow_with_input_selection_exports_the_chosen_channels(tmp_path):
+    from nnfmu.data import save_measurement
+    from nnfmu.models.workflow import TrainRequest, train_from_file
+
+    data = save_measurement(lagged_damper(2000), tmp_path / "dyno.csv")
+    outcome = train_from_file(
+        data, TrainRequest(preset="damper-hysteresis", select_inputs=True, hidden=(3,), restarts=1, max_epochs=15),
+        tmp_path / "selected.onnx",
+    )
+    assert outcome.selection is not None and len(outcome.selection.ranking) == 9  # x, v, a at delays 0, 1, 2
+    component = Component.from_onnx(onnx.load(outcome.path))
+    assert [p.name for p in component.inputs] == outcome.selection.spec.channels
+    assert outcome.model.spec == outcome.selection.spec
