@@ -73,6 +73,7 @@ def train(
     delays: Optional[list[str]] = typer.Option(None, help="Sample delays for every input, e.g. 0,1,2."),
     hidden: Optional[list[str]] = typer.Option(None, help="Hidden size, or several to choose among by validation error."),
     recurrent: bool = typer.Option(False, help="GRU network instead of the time-delay perceptron."),
+    thesis: bool = typer.Option(False, help="The thesis's network exactly: its inputs, delays and fixed hidden size."),
     select_inputs: bool = typer.Option(False, help="Choose inputs by sensitivity analysis over the candidate taps; prints the ranking."),
     optimizer: Optional[str] = typer.Option(None, help="auto, lm (Levenberg-Marquardt), adam or lbfgs."),
     restarts: Optional[int] = typer.Option(None, help="Training restarts per hidden size; the best validation error is kept."),
@@ -91,7 +92,7 @@ def train(
 
     request = TrainRequest(preset=preset, output=output, inputs=tuple(_split(inputs)),
                            delays=_int_list(delays, "--delays"), hidden=_int_list(hidden, "--hidden"),
-                           recurrent=recurrent, restarts=restarts, seed=seed, max_epochs=max_epochs,
+                           recurrent=recurrent, thesis=thesis, restarts=restarts, seed=seed, max_epochs=max_epochs,
                            select_inputs=select_inputs, optimizer=optimizer, name=name)
     console = Console()
     try:
@@ -118,6 +119,9 @@ def train(
         values = metrics.as_dict()
         table.add_row(split, *(f"{values[c]:.4g}" for c in columns))
     console.print(table)
+    if len(outcome.trials) > 1:
+        console.print("hidden size by validation MSE (scaled): " + ", ".join(
+            f"{trial.hidden}: {trial.validation_mse:.3g}" for trial in outcome.trials))
     for warning in outcome.warnings:
         console.print(f"[yellow]warning:[/yellow] {warning}")
     console.print(f"ONNX: {outcome.path} (onnxruntime vs torch max relative error "
