@@ -3,9 +3,6 @@
  * Each function checks its instance, the current mode and its array arguments, then calls the core; the worst
  * status met becomes the return value.
  */
-#include <stdlib.h>
-#include <string.h>
-
 #include "fmi2Functions.h"
 #include "nn_fmu.h"
 
@@ -27,10 +24,18 @@ static NNInstance *checked(fmi2Component c, const char *function, unsigned allow
     return instance;
 }
 
-static fmi2Status unsupported(fmi2Component c, const char *function) {
+/* Logs that `function` is not supported and returns fmi2Error. The refused call passes its own arguments after
+ * `function` only so that none of them is left unused; they are never read. */
+static fmi2Status unsupported(fmi2Component c, const char *function, ...) {
     NNInstance *instance = (NNInstance *)c;
     if (instance) nn_log(instance, NN_ERROR, NN_LOG_ERROR, "%s is not supported by this FMU", function);
     return fmi2Error;
+}
+
+/* For variable types the FMU does not have: a request for no variables succeeds, any other is refused (the
+ * arguments after `function` as in `unsupported`). */
+static fmi2Status unless_empty(fmi2Component c, size_t n, const char *function, ...) {
+    return n == 0 ? fmi2OK : unsupported(c, function);
 }
 
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
@@ -104,20 +109,13 @@ fmi2Status fmi2Reset(fmi2Component c) {
 
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
     NNInstance *instance = checked(c, "fmi2GetReal", READABLE);
-    size_t i;
     if (!instance || !nn_check_array(instance, "fmi2GetReal", vr, nvr, "vr") ||
         !nn_check_array(instance, "fmi2GetReal", value, nvr, "value")) return fmi2Error;
-    for (i = 0; i < nvr; i++) {
-        NNStatus status = nn_get_real(instance, vr[i], &value[i]);
-        if (status != NN_OK) return (fmi2Status)status;
-    }
-    return fmi2OK;
+    return (fmi2Status)nn_get_reals(instance, vr, nvr, value);
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[]) {
-    (void)vr;
-    (void)value;
-    return nvr == 0 ? fmi2OK : unsupported(c, "fmi2GetInteger (the FMU has no Integer variables)");
+    return unless_empty(c, nvr, "fmi2GetInteger (the FMU has no Integer variables)", vr, value);
 }
 
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[]) {
@@ -135,50 +133,32 @@ fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
 }
 
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
-    (void)vr;
-    (void)value;
-    return nvr == 0 ? fmi2OK : unsupported(c, "fmi2GetString (the FMU has no String variables)");
+    return unless_empty(c, nvr, "fmi2GetString (the FMU has no String variables)", vr, value);
 }
 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
     NNInstance *instance = checked(c, "fmi2SetReal", SETTABLE);
-    size_t i;
     if (!instance || !nn_check_array(instance, "fmi2SetReal", vr, nvr, "vr") ||
         !nn_check_array(instance, "fmi2SetReal", value, nvr, "value")) return fmi2Error;
-    for (i = 0; i < nvr; i++) {
-        NNStatus status = nn_set_real(instance, vr[i], value[i]);
-        if (status != NN_OK) return (fmi2Status)status;
-    }
-    return fmi2OK;
+    return (fmi2Status)nn_set_reals(instance, vr, nvr, value);
 }
 
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[]) {
-    (void)vr;
-    (void)value;
-    return nvr == 0 ? fmi2OK : unsupported(c, "fmi2SetInteger (the FMU has no Integer variables)");
+    return unless_empty(c, nvr, "fmi2SetInteger (the FMU has no Integer variables)", vr, value);
 }
 
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[]) {
-    (void)vr;
-    (void)value;
-    return nvr == 0 ? fmi2OK : unsupported(c, "fmi2SetBoolean (the FMU has no Boolean inputs or parameters)");
+    return unless_empty(c, nvr, "fmi2SetBoolean (the FMU has no Boolean inputs or parameters)", vr, value);
 }
 
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[]) {
-    (void)vr;
-    (void)value;
-    return nvr == 0 ? fmi2OK : unsupported(c, "fmi2SetString (the FMU has no String variables)");
+    return unless_empty(c, nvr, "fmi2SetString (the FMU has no String variables)", vr, value);
 }
 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     NNInstance *instance = checked(c, "fmi2GetFMUstate", STATEFUL);
     if (!instance || !nn_check_array(instance, "fmi2GetFMUstate", FMUstate, 1, "FMUstate")) return fmi2Error;
-    if (*FMUstate) { /* a state from an earlier call is overwritten in place */
-        memcpy(*FMUstate, &instance->data, sizeof(NNModelData));
-        return fmi2OK;
-    }
-    *FMUstate = nn_state_copy(instance);
-    return *FMUstate ? fmi2OK : fmi2Error;
+    return (fmi2Status)nn_state_save(instance, FMUstate);
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
@@ -190,10 +170,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     NNInstance *instance = checked(c, "fmi2FreeFMUstate", NN_ANY_MODE);
     if (!instance) return fmi2Error;
-    if (FMUstate) {
-        free(*FMUstate);
-        *FMUstate = NULL;
-    }
+    nn_state_free(FMUstate);
     return fmi2OK;
 }
 
@@ -215,45 +192,26 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
                                    fmi2FMUstate *FMUstate) {
     NNInstance *instance = checked(c, "fmi2DeSerializeFMUstate", NN_ANY_MODE);
-    NNModelData *state = NULL;
-    NNStatus status;
     if (!instance || !nn_check_array(instance, "fmi2DeSerializeFMUstate", serializedState, size, "serializedState") ||
         !nn_check_array(instance, "fmi2DeSerializeFMUstate", FMUstate, 1, "FMUstate")) return fmi2Error;
-    status = nn_deserialize(instance, (const unsigned char *)serializedState, size, &state);
-    if (status != NN_OK) return (fmi2Status)status;
-    free(*FMUstate);
-    *FMUstate = state;
-    return fmi2OK;
+    return (fmi2Status)nn_deserialize(instance, (const unsigned char *)serializedState, size, FMUstate);
 }
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
                                         const fmi2ValueReference vKnown_ref[], size_t nKnown,
                                         const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
-    (void)vUnknown_ref;
-    (void)nUnknown;
-    (void)vKnown_ref;
-    (void)nKnown;
-    (void)dvKnown;
-    (void)dvUnknown;
-    return unsupported(c, "fmi2GetDirectionalDerivative");
+    return unsupported(c, "fmi2GetDirectionalDerivative",
+                       vUnknown_ref, nUnknown, vKnown_ref, nKnown, dvKnown, dvUnknown);
 }
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                        const fmi2Integer order[], const fmi2Real value[]) {
-    (void)vr;
-    (void)nvr;
-    (void)order;
-    (void)value;
-    return unsupported(c, "fmi2SetRealInputDerivatives (canInterpolateInputs is false)");
+    return unsupported(c, "fmi2SetRealInputDerivatives (canInterpolateInputs is false)", vr, nvr, order, value);
 }
 
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                         const fmi2Integer order[], fmi2Real value[]) {
-    (void)vr;
-    (void)nvr;
-    (void)order;
-    (void)value;
-    return unsupported(c, "fmi2GetRealOutputDerivatives (maxOutputDerivativeOrder is 0)");
+    return unsupported(c, "fmi2GetRealOutputDerivatives (maxOutputDerivativeOrder is 0)", vr, nvr, order, value);
 }
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
@@ -269,9 +227,7 @@ fmi2Status fmi2CancelStep(fmi2Component c) {
 }
 
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
-    (void)s;
-    (void)value;
-    return unsupported(c, "fmi2GetStatus (doStep always completes synchronously)");
+    return unsupported(c, "fmi2GetStatus (doStep always completes synchronously)", s, value);
 }
 
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
@@ -283,9 +239,7 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *
 }
 
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
-    (void)s;
-    (void)value;
-    return unsupported(c, "fmi2GetIntegerStatus");
+    return unsupported(c, "fmi2GetIntegerStatus", s, value);
 }
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
@@ -297,7 +251,5 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boo
 }
 
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
-    (void)s;
-    (void)value;
-    return unsupported(c, "fmi2GetStringStatus");
+    return unsupported(c, "fmi2GetStringStatus", s, value);
 }

@@ -3,9 +3,6 @@
  * Each function checks its instance, the current mode and its array arguments, then calls the core. The FMU has
  * Float64 and Boolean variables only and no event mode; every other function logs why it is refused.
  */
-#include <stdlib.h>
-#include <string.h>
-
 #include "fmi3Functions.h"
 #include "nn_fmu.h"
 
@@ -26,10 +23,18 @@ static NNInstance *checked(fmi3Instance c, const char *function, unsigned allowe
     return instance;
 }
 
-static fmi3Status unsupported(fmi3Instance c, const char *function) {
+/* Logs that `function` is not supported and returns fmi3Error. The refused call passes its own arguments after
+ * `function` only so that none of them is left unused; they are never read. */
+static fmi3Status unsupported(fmi3Instance c, const char *function, ...) {
     NNInstance *instance = (NNInstance *)c;
     if (instance) nn_log(instance, NN_ERROR, NN_LOG_ERROR, "%s is not supported by this FMU", function);
     return fmi3Error;
+}
+
+/* For variable types the FMU does not have: a request for no variables succeeds, any other is refused (the
+ * arguments after `function` as in `unsupported`). */
+static fmi3Status unless_empty(fmi3Instance c, size_t n, const char *function, ...) {
+    return n == 0 ? fmi3OK : unsupported(c, function);
 }
 
 /* Scalar variables only: one value per value reference. */
@@ -46,6 +51,14 @@ static NNInstance *checked_access(fmi3Instance c, const char *function, unsigned
     return instance;
 }
 
+/* Instantiation for another interface type: logged as refused, no instance (the arguments after `logMessage` as in
+ * `unsupported`). */
+static fmi3Instance co_simulation_only(fmi3InstanceEnvironment instanceEnvironment, fmi3LogMessageCallback logMessage,
+                                       ...) {
+    if (logMessage) logMessage(instanceEnvironment, fmi3Error, "logStatusError", "co-simulation only");
+    return NULL;
+}
+
 const char *fmi3GetVersion(void) { return fmi3Version; }
 
 fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, size_t nCategories,
@@ -59,13 +72,8 @@ fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String in
                                           fmi3String resourcePath, fmi3Boolean visible, fmi3Boolean loggingOn,
                                           fmi3InstanceEnvironment instanceEnvironment,
                                           fmi3LogMessageCallback logMessage) {
-    (void)instanceName;
-    (void)instantiationToken;
-    (void)resourcePath;
-    (void)visible;
-    (void)loggingOn;
-    if (logMessage) logMessage(instanceEnvironment, fmi3Error, "logStatusError", "co-simulation only");
-    return NULL;
+    return co_simulation_only(instanceEnvironment, logMessage, instanceName, instantiationToken, resourcePath, visible,
+                              loggingOn);
 }
 
 fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String instantiationToken,
@@ -99,16 +107,8 @@ fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3Stri
                                                fmi3LogMessageCallback logMessage, fmi3ClockUpdateCallback clockUpdate,
                                                fmi3LockPreemptionCallback lockPreemption,
                                                fmi3UnlockPreemptionCallback unlockPreemption) {
-    (void)instanceName;
-    (void)instantiationToken;
-    (void)resourcePath;
-    (void)visible;
-    (void)loggingOn;
-    (void)clockUpdate;
-    (void)lockPreemption;
-    (void)unlockPreemption;
-    if (logMessage) logMessage(instanceEnvironment, fmi3Error, "logStatusError", "co-simulation only");
-    return NULL;
+    return co_simulation_only(instanceEnvironment, logMessage, instanceName, instantiationToken, resourcePath, visible,
+                              loggingOn, clockUpdate, lockPreemption, unlockPreemption);
 }
 
 void fmi3FreeInstance(fmi3Instance instance) { nn_free((NNInstance *)instance); }
@@ -152,26 +152,16 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
                           size_t nValueReferences, fmi3Float64 values[], size_t nValues) {
     NNInstance *self = checked_access(instance, "fmi3GetFloat64", READABLE, valueReferences,
                                       nValueReferences, values, nValues);
-    size_t i;
     if (!self) return fmi3Error;
-    for (i = 0; i < nValueReferences; i++) {
-        NNStatus status = nn_get_real(self, valueReferences[i], &values[i]);
-        if (status != NN_OK) return (fmi3Status)status;
-    }
-    return fmi3OK;
+    return (fmi3Status)nn_get_reals(self, valueReferences, nValueReferences, values);
 }
 
 fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                           size_t nValueReferences, const fmi3Float64 values[], size_t nValues) {
     NNInstance *self = checked_access(instance, "fmi3SetFloat64", SETTABLE, valueReferences, nValueReferences,
                                       values, nValues);
-    size_t i;
     if (!self) return fmi3Error;
-    for (i = 0; i < nValueReferences; i++) {
-        NNStatus status = nn_set_real(self, valueReferences[i], values[i]);
-        if (status != NN_OK) return (fmi3Status)status;
-    }
-    return fmi3OK;
+    return (fmi3Status)nn_set_reals(self, valueReferences, nValueReferences, values);
 }
 
 fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference valueReferences[],
@@ -191,20 +181,16 @@ fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference valueR
 
 fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                           size_t nValueReferences, const fmi3Boolean values[], size_t nValues) {
-    (void)valueReferences;
-    (void)values;
-    (void)nValues;
-    return nValueReferences == 0 ? fmi3OK : unsupported(instance, "fmi3SetBoolean (no Boolean inputs or parameters)");
+    return unless_empty(instance, nValueReferences, "fmi3SetBoolean (no Boolean inputs or parameters)",
+                        valueReferences, values, nValues);
 }
 
 /* Variable types this FMU does not have: an empty request succeeds, any other is refused. */
 #define NN_NO_VARIABLES_OF_TYPE(function, type, qualifier)                                                        \
     fmi3Status function(fmi3Instance instance, const fmi3ValueReference valueReferences[],                         \
                         size_t nValueReferences, qualifier type values[], size_t nValues) {                        \
-        (void)valueReferences;                                                                                     \
-        (void)values;                                                                                              \
-        (void)nValues;                                                                                             \
-        return nValueReferences == 0 ? fmi3OK : unsupported(instance, #function " (no variables of this type)"); \
+        return unless_empty(instance, nValueReferences, #function " (no variables of this type)", valueReferences, \
+                            values, nValues);                                                                      \
     }
 
 NN_NO_VARIABLES_OF_TYPE(fmi3GetFloat32, fmi3Float32, )
@@ -230,65 +216,44 @@ NN_NO_VARIABLES_OF_TYPE(fmi3SetString, fmi3String, const)
 
 fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
                          size_t valueSizes[], fmi3Binary values[], size_t nValues) {
-    (void)valueReferences;
-    (void)valueSizes;
-    (void)values;
-    (void)nValues;
-    return nValueReferences == 0 ? fmi3OK : unsupported(instance, "fmi3GetBinary (no Binary variables)");
+    return unless_empty(instance, nValueReferences, "fmi3GetBinary (no Binary variables)",
+                        valueReferences, valueSizes, values, nValues);
 }
 
 fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
                          const size_t valueSizes[], const fmi3Binary values[], size_t nValues) {
-    (void)valueReferences;
-    (void)valueSizes;
-    (void)values;
-    (void)nValues;
-    return nValueReferences == 0 ? fmi3OK : unsupported(instance, "fmi3SetBinary (no Binary variables)");
+    return unless_empty(instance, nValueReferences, "fmi3SetBinary (no Binary variables)",
+                        valueReferences, valueSizes, values, nValues);
 }
 
 fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
                         fmi3Clock values[]) {
-    (void)valueReferences;
-    (void)values;
-    return nValueReferences == 0 ? fmi3OK : unsupported(instance, "fmi3GetClock (no clocks)");
+    return unless_empty(instance, nValueReferences, "fmi3GetClock (no clocks)", valueReferences, values);
 }
 
 fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference valueReferences[], size_t nValueReferences,
                         const fmi3Clock values[]) {
-    (void)valueReferences;
-    (void)values;
-    return nValueReferences == 0 ? fmi3OK : unsupported(instance, "fmi3SetClock (no clocks)");
+    return unless_empty(instance, nValueReferences, "fmi3SetClock (no clocks)", valueReferences, values);
 }
 
 fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance, fmi3ValueReference valueReference,
                                                size_t *nDependencies) {
-    (void)valueReference;
-    (void)nDependencies;
-    return unsupported(instance, "fmi3GetNumberOfVariableDependencies (see ModelStructure in modelDescription.xml)");
+    return unsupported(instance, "fmi3GetNumberOfVariableDependencies (see ModelStructure in modelDescription.xml)",
+                       valueReference, nDependencies);
 }
 
 fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference dependent,
                                        size_t elementIndicesOfDependent[], fmi3ValueReference independents[],
                                        size_t elementIndicesOfIndependents[], fmi3DependencyKind dependencyKinds[],
                                        size_t nDependencies) {
-    (void)dependent;
-    (void)elementIndicesOfDependent;
-    (void)independents;
-    (void)elementIndicesOfIndependents;
-    (void)dependencyKinds;
-    (void)nDependencies;
-    return unsupported(instance, "fmi3GetVariableDependencies (see ModelStructure in modelDescription.xml)");
+    return unsupported(instance, "fmi3GetVariableDependencies (see ModelStructure in modelDescription.xml)",
+                       dependent, elementIndicesOfDependent, independents, elementIndicesOfIndependents, dependencyKinds, nDependencies);
 }
 
 fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
     NNInstance *self = checked(instance, "fmi3GetFMUState", STATEFUL);
     if (!self || !nn_check_array(self, "fmi3GetFMUState", FMUState, 1, "FMUState")) return fmi3Error;
-    if (*FMUState) { /* a state from an earlier call is overwritten in place */
-        memcpy(*FMUState, &self->data, sizeof(NNModelData));
-        return fmi3OK;
-    }
-    *FMUState = nn_state_copy(self);
-    return *FMUState ? fmi3OK : fmi3Error;
+    return (fmi3Status)nn_state_save(self, FMUState);
 }
 
 fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState) {
@@ -300,10 +265,7 @@ fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState) {
 fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
     NNInstance *self = checked(instance, "fmi3FreeFMUState", NN_ANY_MODE);
     if (!self) return fmi3Error;
-    if (FMUState) {
-        free(*FMUState);
-        *FMUState = NULL;
-    }
+    nn_state_free(FMUState);
     return fmi3OK;
 }
 
@@ -326,43 +288,23 @@ fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState, f
 fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[], size_t size,
                                    fmi3FMUState *FMUState) {
     NNInstance *self = checked(instance, "fmi3DeserializeFMUState", NN_ANY_MODE);
-    NNModelData *state = NULL;
-    NNStatus status;
     if (!self || !nn_check_array(self, "fmi3DeserializeFMUState", serializedState, size, "serializedState") ||
         !nn_check_array(self, "fmi3DeserializeFMUState", FMUState, 1, "FMUState")) return fmi3Error;
-    status = nn_deserialize(self, serializedState, size, &state);
-    if (status != NN_OK) return (fmi3Status)status;
-    free(*FMUState);
-    *FMUState = state;
-    return fmi3OK;
+    return (fmi3Status)nn_deserialize(self, serializedState, size, FMUState);
 }
 
 fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[], size_t nUnknowns,
                                         const fmi3ValueReference knowns[], size_t nKnowns, const fmi3Float64 seed[],
                                         size_t nSeed, fmi3Float64 sensitivity[], size_t nSensitivity) {
-    (void)unknowns;
-    (void)nUnknowns;
-    (void)knowns;
-    (void)nKnowns;
-    (void)seed;
-    (void)nSeed;
-    (void)sensitivity;
-    (void)nSensitivity;
-    return unsupported(instance, "fmi3GetDirectionalDerivative");
+    return unsupported(instance, "fmi3GetDirectionalDerivative",
+                       unknowns, nUnknowns, knowns, nKnowns, seed, nSeed, sensitivity, nSensitivity);
 }
 
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[], size_t nUnknowns,
                                     const fmi3ValueReference knowns[], size_t nKnowns, const fmi3Float64 seed[],
                                     size_t nSeed, fmi3Float64 sensitivity[], size_t nSensitivity) {
-    (void)unknowns;
-    (void)nUnknowns;
-    (void)knowns;
-    (void)nKnowns;
-    (void)seed;
-    (void)nSeed;
-    (void)sensitivity;
-    (void)nSensitivity;
-    return unsupported(instance, "fmi3GetAdjointDerivative");
+    return unsupported(instance, "fmi3GetAdjointDerivative",
+                       unknowns, nUnknowns, knowns, nKnowns, seed, nSeed, sensitivity, nSensitivity);
 }
 
 fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance) {
@@ -376,75 +318,50 @@ fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance) {
 fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                                   size_t nValueReferences, fmi3Float64 intervals[],
                                   fmi3IntervalQualifier qualifiers[]) {
-    (void)valueReferences;
-    (void)nValueReferences;
-    (void)intervals;
-    (void)qualifiers;
-    return unsupported(instance, "fmi3GetIntervalDecimal (no clocks)");
+    return unsupported(instance, "fmi3GetIntervalDecimal (no clocks)",
+                       valueReferences, nValueReferences, intervals, qualifiers);
 }
 
 fmi3Status fmi3GetIntervalFraction(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                                    size_t nValueReferences, fmi3UInt64 counters[], fmi3UInt64 resolutions[],
                                    fmi3IntervalQualifier qualifiers[]) {
-    (void)valueReferences;
-    (void)nValueReferences;
-    (void)counters;
-    (void)resolutions;
-    (void)qualifiers;
-    return unsupported(instance, "fmi3GetIntervalFraction (no clocks)");
+    return unsupported(instance, "fmi3GetIntervalFraction (no clocks)",
+                       valueReferences, nValueReferences, counters, resolutions, qualifiers);
 }
 
 fmi3Status fmi3GetShiftDecimal(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                                size_t nValueReferences, fmi3Float64 shifts[]) {
-    (void)valueReferences;
-    (void)nValueReferences;
-    (void)shifts;
-    return unsupported(instance, "fmi3GetShiftDecimal (no clocks)");
+    return unsupported(instance, "fmi3GetShiftDecimal (no clocks)", valueReferences, nValueReferences, shifts);
 }
 
 fmi3Status fmi3GetShiftFraction(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                                 size_t nValueReferences, fmi3UInt64 counters[], fmi3UInt64 resolutions[]) {
-    (void)valueReferences;
-    (void)nValueReferences;
-    (void)counters;
-    (void)resolutions;
-    return unsupported(instance, "fmi3GetShiftFraction (no clocks)");
+    return unsupported(instance, "fmi3GetShiftFraction (no clocks)",
+                       valueReferences, nValueReferences, counters, resolutions);
 }
 
 fmi3Status fmi3SetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                                   size_t nValueReferences, const fmi3Float64 intervals[]) {
-    (void)valueReferences;
-    (void)nValueReferences;
-    (void)intervals;
-    return unsupported(instance, "fmi3SetIntervalDecimal (no clocks)");
+    return unsupported(instance, "fmi3SetIntervalDecimal (no clocks)", valueReferences, nValueReferences, intervals);
 }
 
 fmi3Status fmi3SetIntervalFraction(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                                    size_t nValueReferences, const fmi3UInt64 counters[],
                                    const fmi3UInt64 resolutions[]) {
-    (void)valueReferences;
-    (void)nValueReferences;
-    (void)counters;
-    (void)resolutions;
-    return unsupported(instance, "fmi3SetIntervalFraction (no clocks)");
+    return unsupported(instance, "fmi3SetIntervalFraction (no clocks)",
+                       valueReferences, nValueReferences, counters, resolutions);
 }
 
 fmi3Status fmi3SetShiftDecimal(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                                size_t nValueReferences, const fmi3Float64 shifts[]) {
-    (void)valueReferences;
-    (void)nValueReferences;
-    (void)shifts;
-    return unsupported(instance, "fmi3SetShiftDecimal (no clocks)");
+    return unsupported(instance, "fmi3SetShiftDecimal (no clocks)", valueReferences, nValueReferences, shifts);
 }
 
 fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                                 size_t nValueReferences, const fmi3UInt64 counters[],
                                 const fmi3UInt64 resolutions[]) {
-    (void)valueReferences;
-    (void)nValueReferences;
-    (void)counters;
-    (void)resolutions;
-    return unsupported(instance, "fmi3SetShiftFraction (no clocks)");
+    return unsupported(instance, "fmi3SetShiftFraction (no clocks)",
+                       valueReferences, nValueReferences, counters, resolutions);
 }
 
 fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance) {
@@ -455,13 +372,8 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
                                     fmi3Boolean *terminateSimulation, fmi3Boolean *nominalsOfContinuousStatesChanged,
                                     fmi3Boolean *valuesOfContinuousStatesChanged, fmi3Boolean *nextEventTimeDefined,
                                     fmi3Float64 *nextEventTime) {
-    (void)discreteStatesNeedUpdate;
-    (void)terminateSimulation;
-    (void)nominalsOfContinuousStatesChanged;
-    (void)valuesOfContinuousStatesChanged;
-    (void)nextEventTimeDefined;
-    (void)nextEventTime;
-    return unsupported(instance, "fmi3UpdateDiscreteStates (hasEventMode is false)");
+    return unsupported(instance, "fmi3UpdateDiscreteStates (hasEventMode is false)",
+                       discreteStatesNeedUpdate, terminateSimulation, nominalsOfContinuousStatesChanged, valuesOfContinuousStatesChanged, nextEventTimeDefined, nextEventTime);
 }
 
 fmi3Status fmi3EnterStepMode(fmi3Instance instance) {
@@ -471,12 +383,8 @@ fmi3Status fmi3EnterStepMode(fmi3Instance instance) {
 fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                                     size_t nValueReferences, const fmi3Int32 orders[], fmi3Float64 values[],
                                     size_t nValues) {
-    (void)valueReferences;
-    (void)nValueReferences;
-    (void)orders;
-    (void)values;
-    (void)nValues;
-    return unsupported(instance, "fmi3GetOutputDerivatives (maxOutputDerivativeOrder is 0)");
+    return unsupported(instance, "fmi3GetOutputDerivatives (maxOutputDerivativeOrder is 0)",
+                       valueReferences, nValueReferences, orders, values, nValues);
 }
 
 fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint,
@@ -506,63 +414,48 @@ fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) {
 
 fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
                                        fmi3Boolean *enterEventMode, fmi3Boolean *terminateSimulation) {
-    (void)noSetFMUStatePriorToCurrentPoint;
-    (void)enterEventMode;
-    (void)terminateSimulation;
-    return unsupported(instance, "fmi3CompletedIntegratorStep (co-simulation only)");
+    return unsupported(instance, "fmi3CompletedIntegratorStep (co-simulation only)",
+                       noSetFMUStatePriorToCurrentPoint, enterEventMode, terminateSimulation);
 }
 
 fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time) {
-    (void)time;
-    return unsupported(instance, "fmi3SetTime (co-simulation only)");
+    return unsupported(instance, "fmi3SetTime (co-simulation only)", time);
 }
 
 fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 continuousStates[],
                                    size_t nContinuousStates) {
-    (void)continuousStates;
-    (void)nContinuousStates;
-    return unsupported(instance, "fmi3SetContinuousStates (co-simulation only)");
+    return unsupported(instance, "fmi3SetContinuousStates (co-simulation only)", continuousStates, nContinuousStates);
 }
 
 fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 derivatives[],
                                              size_t nContinuousStates) {
-    (void)derivatives;
-    (void)nContinuousStates;
-    return unsupported(instance, "fmi3GetContinuousStateDerivatives (co-simulation only)");
+    return unsupported(instance, "fmi3GetContinuousStateDerivatives (co-simulation only)",
+                       derivatives, nContinuousStates);
 }
 
 fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[], size_t nEventIndicators) {
-    (void)eventIndicators;
-    (void)nEventIndicators;
-    return unsupported(instance, "fmi3GetEventIndicators (co-simulation only)");
+    return unsupported(instance, "fmi3GetEventIndicators (co-simulation only)", eventIndicators, nEventIndicators);
 }
 
 fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 continuousStates[], size_t nContinuousStates) {
-    (void)continuousStates;
-    (void)nContinuousStates;
-    return unsupported(instance, "fmi3GetContinuousStates (co-simulation only)");
+    return unsupported(instance, "fmi3GetContinuousStates (co-simulation only)", continuousStates, nContinuousStates);
 }
 
 fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 nominals[],
                                              size_t nContinuousStates) {
-    (void)nominals;
-    (void)nContinuousStates;
-    return unsupported(instance, "fmi3GetNominalsOfContinuousStates (co-simulation only)");
+    return unsupported(instance, "fmi3GetNominalsOfContinuousStates (co-simulation only)",
+                       nominals, nContinuousStates);
 }
 
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *nEventIndicators) {
-    (void)nEventIndicators;
-    return unsupported(instance, "fmi3GetNumberOfEventIndicators (co-simulation only)");
+    return unsupported(instance, "fmi3GetNumberOfEventIndicators (co-simulation only)", nEventIndicators);
 }
 
 fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *nContinuousStates) {
-    (void)nContinuousStates;
-    return unsupported(instance, "fmi3GetNumberOfContinuousStates (co-simulation only)");
+    return unsupported(instance, "fmi3GetNumberOfContinuousStates (co-simulation only)", nContinuousStates);
 }
 
 fmi3Status fmi3ActivateModelPartition(fmi3Instance instance, fmi3ValueReference clockReference,
                                       fmi3Float64 activationTime) {
-    (void)clockReference;
-    (void)activationTime;
-    return unsupported(instance, "fmi3ActivateModelPartition (co-simulation only)");
+    return unsupported(instance, "fmi3ActivateModelPartition (co-simulation only)", clockReference, activationTime);
 }

@@ -244,6 +244,15 @@ NNStatus nn_get_real(NNInstance *instance, unsigned vr, double *value) {
     return nn_refuse_type(instance, "GetReal", "Real", vr);
 }
 
+NNStatus nn_get_reals(NNInstance *instance, const unsigned vr[], size_t n, double value[]) {
+    size_t i;
+    for (i = 0; i < n; i++) {
+        NNStatus status = nn_get_real(instance, vr[i], &value[i]);
+        if (status != NN_OK) return status;
+    }
+    return NN_OK;
+}
+
 static NNStatus set_parameter(NNInstance *instance, double *target, const char *name, double value, double min) {
     if (!(instance->mode & (NN_INSTANTIATED | NN_INITIALIZATION))) {
         nn_log(instance, NN_ERROR, NN_LOG_ERROR,
@@ -286,6 +295,15 @@ NNStatus nn_set_real(NNInstance *instance, unsigned vr, double value) {
         return NN_ERROR;
     }
     return nn_refuse_type(instance, "SetReal", "settable Real", vr);
+}
+
+NNStatus nn_set_reals(NNInstance *instance, const unsigned vr[], size_t n, const double value[]) {
+    size_t i;
+    for (i = 0; i < n; i++) {
+        NNStatus status = nn_set_real(instance, vr[i], value[i]);
+        if (status != NN_OK) return status;
+    }
+    return NN_OK;
 }
 
 NNStatus nn_get_boolean(NNInstance *instance, unsigned vr, int *value) {
@@ -357,14 +375,20 @@ NNStatus nn_do_step(NNInstance *instance, double current_time, double step_size)
     return NN_OK;
 }
 
-NNModelData *nn_state_copy(NNInstance *instance) {
-    NNModelData *state = (NNModelData *)malloc(sizeof(NNModelData));
-    if (!state) {
+NNStatus nn_state_save(NNInstance *instance, void **state) {
+    if (!*state) *state = malloc(sizeof(NNModelData)); /* a state from an earlier call is overwritten in place */
+    if (!*state) {
         nn_log(instance, NN_ERROR, NN_LOG_ERROR, "out of memory while saving the FMU state");
-        return NULL;
+        return NN_ERROR;
     }
-    memcpy(state, &instance->data, sizeof *state);
-    return state;
+    memcpy(*state, &instance->data, sizeof(NNModelData));
+    return NN_OK;
+}
+
+void nn_state_free(void **state) {
+    if (!state) return;
+    free(*state);
+    *state = NULL;
 }
 
 NNStatus nn_state_restore(NNInstance *instance, const NNModelData *state) {
@@ -393,8 +417,9 @@ NNStatus nn_serialize(const NNInstance *instance, const NNModelData *state, unsi
     return NN_OK;
 }
 
-NNStatus nn_deserialize(const NNInstance *instance, const unsigned char *buffer, size_t size, NNModelData **state) {
+NNStatus nn_deserialize(const NNInstance *instance, const unsigned char *buffer, size_t size, void **state) {
     NNStateHeader header;
+    NNModelData *copy;
     if (size != nn_serialized_size()) {
         nn_log(instance, NN_ERROR, NN_LOG_ERROR, "DeserializeFMUstate: %lu bytes given, an FMU state of %s has %lu",
                (unsigned long)size, NN_MODEL_IDENTIFIER, (unsigned long)nn_serialized_size());
@@ -410,11 +435,13 @@ NNStatus nn_deserialize(const NNInstance *instance, const unsigned char *buffer,
                "(token '%.*s', expected '%s')", NN_TOKEN_FIELD - 1, header.token, NN_INSTANTIATION_TOKEN);
         return NN_ERROR;
     }
-    *state = (NNModelData *)malloc(sizeof(NNModelData));
-    if (!*state) {
+    copy = (NNModelData *)malloc(sizeof(NNModelData));
+    if (!copy) {
         nn_log(instance, NN_ERROR, NN_LOG_ERROR, "out of memory while deserialising the FMU state");
         return NN_ERROR;
     }
-    memcpy(*state, buffer + sizeof header, sizeof **state);
+    memcpy(copy, buffer + sizeof header, sizeof *copy);
+    free(*state);
+    *state = copy;
     return NN_OK;
 }

@@ -84,6 +84,9 @@ int nn_check_array(const NNInstance *instance, const char *function, const void 
 
 NNStatus nn_get_real(NNInstance *instance, unsigned vr, double *value);
 NNStatus nn_set_real(NNInstance *instance, unsigned vr, double value);
+/* Get or set `n` Real variables in order; the first refused value reference ends the call with its status. */
+NNStatus nn_get_reals(NNInstance *instance, const unsigned vr[], size_t n, double value[]);
+NNStatus nn_set_reals(NNInstance *instance, const unsigned vr[], size_t n, const double value[]);
 NNStatus nn_get_boolean(NNInstance *instance, unsigned vr, int *value);
 NNStatus nn_refuse_type(const NNInstance *instance, const char *function, const char *type, unsigned vr);
 
@@ -91,10 +94,15 @@ NNStatus nn_enter_initialization(NNInstance *instance, double start_time);
 NNStatus nn_exit_initialization(NNInstance *instance);
 NNStatus nn_do_step(NNInstance *instance, double current_time, double step_size);
 
-NNModelData *nn_state_copy(NNInstance *instance);
+/* An FMU state is an NNModelData copy behind the FMI's opaque state pointer (`void *` in both versions).
+ * nn_state_save copies the instance's data into the state *state holds, or into a new one when *state is NULL;
+ * nn_state_free frees *state and sets it to NULL. */
+NNStatus nn_state_save(NNInstance *instance, void **state);
 NNStatus nn_state_restore(NNInstance *instance, const NNModelData *state);
+void nn_state_free(void **state);
 size_t nn_serialized_size(void);
 NNStatus nn_serialize(const NNInstance *instance, const NNModelData *state, unsigned char *buffer, size_t size);
-NNStatus nn_deserialize(const NNInstance *instance, const unsigned char *buffer, size_t size, NNModelData **state);
+/* Read a serialised state into a new copy that replaces (and frees) *state; *state is kept if the bytes are refused. */
+NNStatus nn_deserialize(const NNInstance *instance, const unsigned char *buffer, size_t size, void **state);
 
 #endif /* NN_FMU_H */

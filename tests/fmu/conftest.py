@@ -1,4 +1,4 @@
-"""Fixtures of the native FMU tests: the test graphs saved to ONNX files and built FMUs (once per session)."""
+"""Fixtures of the FMU tests: the test graphs saved to ONNX files and FMUs built from them (once per session)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,9 @@ from pathlib import Path
 import onnx
 import pytest
 
-sys.path.insert(0, str(Path(__file__).parent))  # the test modules import native_fmu_helpers beside this file
-from native_fmu_helpers import Slave, delay_step_graph, generic_graph  # noqa: E402
+sys.path.insert(0, str(Path(__file__).parent))  # the test modules import the helpers beside this file
+from native_fmu_helpers import ProbeSlave, delay_step_graph, generic_graph  # noqa: E402
+from pythonfmu_helpers import build, delay_damper_graph  # noqa: E402
 
 
 @pytest.fixture(scope="session")
@@ -36,13 +37,20 @@ def delay_fmus(tmp_path_factory: pytest.TempPathFactory, delay_onnx: Path) -> di
     return {v: build_fmu(delay_onnx, BuildOptions(out=out / f"damper{v}.fmu", fmi_version=v)) for v in (2, 3)}
 
 
-@pytest.fixture
-def open_fmu(tmp_path: Path):
-    """Factory: open_fmu(path, name=...) -> Slave; instances are freed after the test."""
-    opened: list[Slave] = []
+@pytest.fixture(scope="session")
+def pythonfmu_dampers(tmp_path_factory: pytest.TempPathFactory) -> dict[int, tuple[Path, Path]]:
+    """The pythonfmu damper graph (seed 0) built by the pythonfmu backend for FMI 2 and FMI 3: (onnx, fmu) each."""
+    return {v: build(tmp_path_factory.mktemp(f"damper{v}"), delay_damper_graph(seed=0), "damper", fmi_version=v)
+            for v in (2, 3)}
 
-    def factory(path: Path, name: str = "instance", logging_on: bool = True) -> Slave:
-        slave = Slave(path, tmp_path / f"unzip{len(opened)}", name, logging_on)
+
+@pytest.fixture
+def open_fmu():
+    """Factory: open_fmu(path, name=...) -> ProbeSlave; instances are freed after the test."""
+    opened: list[ProbeSlave] = []
+
+    def factory(path: Path, name: str = "instance", logging_on: bool = True) -> ProbeSlave:
+        slave = ProbeSlave(path, name, logging_on)
         opened.append(slave)
         return slave
 

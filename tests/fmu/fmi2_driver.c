@@ -5,15 +5,13 @@
  * sizes, outputs and flags read, FMU state get/set/serialise/deserialise/free, a refused NaN input, a refused call,
  * reset and re-initialisation, termination and freeing. Exits 0 only if every status is the one expected.
  */
-#include <dlfcn.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "driver_common.h"
 #include "fmi2Functions.h"
-
-static int failures = 0;
 
 static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
                    fmi2String message, ...) {
@@ -26,16 +24,7 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
     va_end(args);
 }
 
-#define EXPECT(call, expected)                                                                       \
-    do {                                                                                             \
-        fmi2Status got_ = (call);                                                                    \
-        if (got_ != (expected)) {                                                                    \
-            fprintf(stderr, "line %d: %s returned %d, expected %d\n", __LINE__, #call, got_, expected); \
-            failures++;                                                                              \
-        }                                                                                            \
-    } while (0)
-
-#define LOAD(name) name##TYPE *name = (name##TYPE *)dlsym(lib, #name)
+#define EXPECT(call, expected) EXPECT_STATUS(fmi2Status, call, expected)
 
 int main(int argc, char **argv) {
     void *lib;
@@ -47,17 +36,10 @@ int main(int argc, char **argv) {
     fmi2Byte *buffer;
     size_t size = 0;
     fmi2Boolean flag;
-    int n_in, n_out, i, k;
+    int n_in = 0, n_out = 0, code = 0, i, k;
 
-    if (argc != 5) return 2;
-    n_in = atoi(argv[3]);
-    n_out = atoi(argv[4]);
-    if (n_in > 16 || n_out > 16) return 2;
-    lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
-    if (!lib) {
-        fprintf(stderr, "%s\n", dlerror());
-        return 3;
-    }
+    lib = open_binary(argc, argv, &n_in, &n_out, &code);
+    if (!lib) return code;
     {
         LOAD(fmi2Instantiate);
         LOAD(fmi2FreeInstance);

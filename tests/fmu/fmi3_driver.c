@@ -5,30 +5,19 @@
  * outputs, flag and time read, FMU state get/set/serialise/deserialise/free, refused NaN input and refused calls,
  * unsupported functions, reset, termination and freeing. Exits 0 only if every status is the one expected.
  */
-#include <dlfcn.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "driver_common.h"
 #include "fmi3Functions.h"
-
-static int failures = 0;
 
 static void logger(fmi3InstanceEnvironment env, fmi3Status status, fmi3String category, fmi3String message) {
     (void)env;
     fprintf(stderr, "[%d %s] %s\n", (int)status, category, message);
 }
 
-#define EXPECT(call, expected)                                                                       \
-    do {                                                                                             \
-        fmi3Status got_ = (call);                                                                    \
-        if (got_ != (expected)) {                                                                    \
-            fprintf(stderr, "line %d: %s returned %d, expected %d\n", __LINE__, #call, got_, expected); \
-            failures++;                                                                              \
-        }                                                                                            \
-    } while (0)
-
-#define LOAD(name) name##TYPE *name = (name##TYPE *)dlsym(lib, #name)
+#define EXPECT(call, expected) EXPECT_STATUS(fmi3Status, call, expected)
 
 int main(int argc, char **argv) {
     void *lib;
@@ -39,17 +28,10 @@ int main(int argc, char **argv) {
     fmi3Byte *buffer;
     fmi3Boolean flag, event, terminate, early;
     size_t size = 0;
-    int n_in, n_out, i, k;
+    int n_in = 0, n_out = 0, code = 0, i, k;
 
-    if (argc != 5) return 2;
-    n_in = atoi(argv[3]);
-    n_out = atoi(argv[4]);
-    if (n_in > 16 || n_out > 16) return 2;
-    lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
-    if (!lib) {
-        fprintf(stderr, "%s\n", dlerror());
-        return 3;
-    }
+    lib = open_binary(argc, argv, &n_in, &n_out, &code);
+    if (!lib) return code;
     {
         LOAD(fmi3InstantiateCoSimulation);
         LOAD(fmi3FreeInstance);

@@ -1,9 +1,8 @@
 """Helpers for the native FMU tests: small ONNX step graphs (onnx.helper, no torch), their onnxruntime reference
-of the FMU semantics, and an fmpy wrapper that runs an FMI 2 or FMI 3 FMU through one interface."""
+of the FMU semantics, and the package's fmpy wrapper with the tests' conveniences."""
 
 from __future__ import annotations
 
-from ctypes import byref
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -13,6 +12,7 @@ import onnxruntime as ort
 from onnx import TensorProto, helper, numpy_helper
 
 from nnfmu.component import Component, Port, StatePort
+from nnfmu.cosim.slave import FmuSlave
 
 SAMPLE_PERIOD = 1e-3  # [s]
 OPSET = 17
@@ -177,73 +177,27 @@ class Reference:
         return np.array(rows)
 
 
-class Slave:
-    """One instance of an FMU in fmpy, FMI 2 or 3 behind the same small interface, collecting log messages."""
+class ProbeSlave(FmuSlave):
+    """The package's FmuSlave with the tests' conveniences: the port inputs and real outputs by name, initialising
+    with inputs and parameters, and whole runs as rows comparable with Reference.simulate."""
 
-    def __init__(self, path: Path, unzip_dir: Path, name: str = "instance", logging_on: bool = True) -> None:
-        from fmpy import extract, read_model_description
-
-        self.md = read_model_description(str(path))
-        self.fmi = 3 if self.md.fmiVersion.startswith("3") else 2
-        self.messages: list[tuple[int, str, str]] = []
-        self.closed = False
-        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
-        self.inputs = [v.valueReference for v in self.md.modelVariables if v.causality == "input"]
-        self.outputs = [v.valueReference for v in self.md.modelVariables
-                        if v.causality == "output" and v.type != "Boolean"]
-        directory = extract(str(path), unzipdir=str(unzip_dir))
-        kwargs = dict(guid=self.md.guid, unzipDirectory=directory, instanceName=name,
-                      modelIdentifier=self.md.coSimulation.modelIdentifier)
-        if self.fmi == 2:
-            from fmpy.fmi2 import FMU2Slave, defaultCallbacks, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
-            from fmpy.logging import addLoggerProxy
-
-            self.fmu = FMU2Slave(**kwargs)
-            callbacks = fmi2CallbackFunctions()
-            callbacks.logger = fmi2CallbackLoggerTYPE(self._log2)
-            callbacks.allocateMemory = defaultCallbacks.allocateMemory
-            callbacks.freeMemory = defaultCallbacks.freeMemory
-            addLoggerProxy(byref(callbacks))
-            self._callbacks = callbacks
-            self.fmu.instantiate(callbacks=callbacks, loggingOn=logging_on)
-        else:
-            from fmpy.fmi3 import FMU3Slave
-
-            self.fmu = FMU3Slave(**kwargs)
-            self.fmu.instantiate(loggingOn=logging_on, logMessage=self._log3)
-
-    def _log2(self, env, instance_name, status, category, message) -> None:
-        self.messages.append((status, category.decode(), message.decode()))
-
-    def _log3(self, env, status, category, message) -> None:
-        self.messages.append((status, category.decode(), message.decode()))
-
-    def set_real(self, vrs: list[int], values) -> None:
-        values = [float(v) for v in values]
-        (self.fmu.setReal if self.fmi == 2 else self.fmu.setFloat64)(vrs, values)
-
-    def get_real(self, vrs: list[int]) -> np.ndarray:
-        return np.array((self.fmu.getReal if self.fmi == 2 else self.fmu.getFloat64)(vrs))
+    def __init__(self, path: Path, name: str = "instance", logging_on: bool = True) -> None:
+        super().__init__(path, name, logging_on)
+        self.inputs = self.names("input")
+        self.outputs = [n for n in self.names("output") if self.variables[n].type != "Boolean"]
 
     def initialize(self, inputs, start: float = 0.0, parameters: dict[str, float] | None = None) -> None:
-        if self.fmi == 2:
-            self.fmu.setupExperiment(startTime=start)
-            self.fmu.enterInitializationMode()
-        else:
-            self.fmu.enterInitializationMode(startTime=start)
-        for name, value in (parameters or {}).items():
-            self.set_real([self.vr[name]], [value])
+        self.enter_initialization(start)
+        if parameters:
+            self.set_real(list(parameters), list(parameters.values()))
         self.set_real(self.inputs, inputs)
-        self.fmu.exitInitializationMode()
-
-    def step(self, t: float, h: float) -> None:
-        self.fmu.doStep(t, h)
+        self.exit_initialization()
 
     def outputs_now(self) -> np.ndarray:
         return self.get_real(self.outputs)
 
     def extrapolating(self) -> bool:
-        return bool(self.fmu.getBoolean([self.vr["extrapolating"]])[0])
+        return self.get_boolean(["extrapolating"])[0]
 
     def simulate(self, inputs: np.ndarray, h: float, start: float = 0.0, parameters=None) -> np.ndarray:
         """Rows like Reference.simulate: inputs[n] set before step n; row n read after it."""
@@ -251,12 +205,6 @@ class Slave:
         rows = [self.outputs_now()]
         for n in range(1, len(inputs)):
             self.set_real(self.inputs, inputs[n])
-            self.step(start + (n - 1) * h, h)
+            self.do_step(start + (n - 1) * h, h)
             rows.append(self.outputs_now())
         return np.array(rows)
-
-    def close(self) -> None:
-        """Free the instance (once)."""
-        if not self.closed:
-            self.closed = True
-            self.fmu.freeInstance()

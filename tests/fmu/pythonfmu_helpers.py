@@ -1,5 +1,6 @@
 """Shared by the pythonfmu backend's FMI 2 and FMI 3 tests: a delay-line damper graph, its onnxruntime reference
-with the FMU semantics of docs/architecture.md, and unzipping an FMU per instance."""
+with the FMU semantics of docs/architecture.md, an instance of its FMU in fmpy, the model description the native
+backend renders for the same graph, and unzipping an FMU per instance."""
 
 from __future__ import annotations
 
@@ -14,11 +15,16 @@ from fmpy import extract
 from onnx import TensorProto, helper, numpy_helper
 
 from nnfmu.component import Component, Port, StatePort
+from nnfmu.cosim.slave import FmuSlave
+from nnfmu.fmu.model_description import (FmuIdentity, ModelDescriptionView, render_model_description,
+                                         tensor_dependencies)
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.fmu.pythonfmu import build_pythonfmu
+from nnfmu.fmu.variables import fmu_variables
 
 T = 1e-3  # sample period of the test graphs [s]
 VMAX = 1.0  # training envelope of the velocity input: [-VMAX, VMAX] m/s
+WARNING, DISCARD, ERROR = 1, 2, 3  # the fmi2Status and fmi3Status values the tests look for (the same in both)
 
 
 def delay_damper_graph(seed: int) -> onnx.ModelProto:
@@ -75,6 +81,23 @@ def unzip(fmu: Path) -> str:
     return extract(str(fmu), unzipdir=tempfile.mkdtemp(dir=fmu.resolve().parent))
 
 
+def view_of(onnx_path: Path, fmi_version: int, component: Component | None = None) -> ModelDescriptionView:
+    """What the builder describes for the graph at `onnx_path` (described by `component`, default its own)."""
+    model = onnx.load(str(onnx_path))
+    component = component or Component.from_onnx(model)
+    identity = FmuIdentity(component.name, component.name, "{00000000-0000-0000-0000-000000000000}", fmi_version)
+    return ModelDescriptionView(identity, component, fmu_variables(component), tensor_dependencies(model),
+                                source_files=["graph.c"])  # FMI 2 lists the C sources; any name will do here
+
+
+def native_description(onnx_path: Path, folder: Path, fmi_version: int = 3) -> Path:
+    """The modelDescription.xml the native backend renders for `fmi_version` from the same graph, in `folder`."""
+    folder.mkdir()
+    (folder / "modelDescription.xml").write_text(render_model_description(view_of(onnx_path, fmi_version)),
+                                                 encoding="utf-8")
+    return folder
+
+
 class Reference:
     """The FMU semantics of docs/architecture.md written out directly on an onnxruntime session."""
 
@@ -97,3 +120,36 @@ class Reference:
             a = 1.0 - math.exp(-2.0 * math.pi * self.cutoff * T) if self.cutoff > 0 else 1.0
             self.y += a * (u - self.y)
         return self.y
+
+
+class Instance(FmuSlave):
+    """The package's FmuSlave on a damper FMU of either FMI version, initialised with the given parameters."""
+
+    def __init__(self, fmu: Path, name: str, cutoff: float = 0.0, gain: float = 1.0, velocity: float = 0.0,
+                 start: float = 0.0, logging_on: bool = True):
+        super().__init__(fmu, name, logging_on)
+        self.initialise(cutoff, gain, velocity, start)
+
+    def initialise(self, cutoff: float, gain: float, velocity: float, start: float = 0.0) -> None:
+        self.enter_initialization(start)
+        self.set_real(["filter_cutoff", "output_gain", "velocity"], [cutoff, gain, velocity])
+        self.exit_initialization()
+
+    def step(self, t: float, h: float, velocity: float) -> float:
+        """Set the velocity [m/s], step from t by h and return the force [N]."""
+        self.set_real(["velocity"], [velocity])
+        self.do_step(t, h)
+        return self.force()
+
+    def force(self) -> float:
+        return float(self.get_real(["force"])[0])
+
+    def logged(self, status: int) -> list[str]:
+        """The messages logged with `status`."""
+        return [m for s, _, m in self.messages if s == status]
+
+    def serialised_state(self) -> object:
+        """The current FMU state, taken through serialising and deserialising it (to free with `free_state`)."""
+        if self.fmi_version == 2:
+            return self.fmu.deSerializeFMUstate(self.fmu.serializeFMUstate(self.fmu.getFMUstate()))
+        return self.fmu.deserializeFMUState(self.fmu.serializeFMUState(self.fmu.getFMUState()))

@@ -62,7 +62,7 @@ def test_reading_outputs_never_advances_the_state(delay_fmus, open_fmu, referenc
         for _ in range(3):
             slave.outputs_now()
             slave.extrapolating()
-        slave.step((n - 1) * T, T)
+        slave.do_step((n - 1) * T, T)
         rows.append(slave.outputs_now())
     np.testing.assert_allclose(np.array(rows), reference.simulate(inputs, T, cutoff=100.0), rtol=RTOL, atol=ATOL)
 
@@ -74,7 +74,7 @@ def test_rollback_with_get_set_and_serialised_state(delay_fmus, open_fmu, fmi):
     slave.initialize(inputs[0])
     for n in range(1, 500):
         slave.set_real(slave.inputs, inputs[n])
-        slave.step((n - 1) * T, T)
+        slave.do_step((n - 1) * T, T)
     saved = slave.fmu.getFMUState()
     blob = slave.fmu.serializeFMUState(saved)
 
@@ -83,7 +83,7 @@ def test_rollback_with_get_set_and_serialised_state(delay_fmus, open_fmu, fmi):
         for n in range(500, 1_000):
             h = 1.7 * T if n % 2 else 0.3 * T  # steps other than T: samples and holds mixed
             slave.set_real(slave.inputs, inputs[n])
-            slave.step(t, h)
+            slave.do_step(t, h)
             t += h
             rows.append(slave.outputs_now())
         return np.array(rows)
@@ -120,8 +120,8 @@ def test_instances_in_one_process_are_independent(delay_fmus, open_fmu, referenc
     for n in range(1, 400):
         a.set_real(a.inputs, ua[n])
         b.set_real(b.inputs, ub[n])
-        a.step((n - 1) * T, T)
-        b.step((n - 1) * T, T)
+        a.do_step((n - 1) * T, T)
+        b.do_step((n - 1) * T, T)
         rows_a.append(a.outputs_now())
         rows_b.append(b.outputs_now())
     np.testing.assert_allclose(rows_a, reference.simulate(ua, T, cutoff=100.0), rtol=RTOL, atol=ATOL)
@@ -137,7 +137,7 @@ def test_extrapolating_flag_and_one_warning_per_excursion(delay_fmus, open_fmu, 
     flags = [slave.extrapolating()]
     for n in range(1, len(inputs)):
         slave.set_real(slave.inputs, inputs[n])
-        slave.step((n - 1) * T, T)
+        slave.do_step((n - 1) * T, T)
         flags.append(slave.extrapolating())
     assert flags == [False, False, True, True, True, False, False, True, False]
     warnings = [m for status, category, m in slave.messages if category == "logStatusWarning"]
@@ -152,14 +152,14 @@ def test_extrapolating_flag_and_one_warning_per_excursion(delay_fmus, open_fmu, 
 def test_non_finite_input_is_refused_with_a_message(delay_fmus, open_fmu, fmi, bad):
     slave = open_fmu(delay_fmus[fmi], logging_on=False)
     slave.initialize([0.1, 0.01])
-    slave.step(0.0, T)
+    slave.do_step(0.0, T)
     before = slave.outputs_now()
     with pytest.raises(Exception, match="status 3"):
-        slave.set_real([slave.vr["velocity"]], [bad])
+        slave.set_real(["velocity"], [bad])
     errors = [m for status, category, m in slave.messages if status == 3]
     assert errors and "velocity" in errors[-1] and "finite" in errors[-1]
-    assert slave.get_real([slave.vr["velocity"]])[0] == 0.1  # the old value is kept, the FMU still runs
-    slave.step(T, T)
+    assert slave.get_real(["velocity"])[0] == 0.1  # the old value is kept, the FMU still runs
+    slave.do_step(T, T)
     assert np.all(np.isfinite(slave.outputs_now())) and slave.outputs_now().shape == before.shape
 
 
@@ -167,12 +167,12 @@ def test_non_finite_input_is_refused_with_a_message(delay_fmus, open_fmu, fmi, b
 def test_calls_in_the_wrong_state_and_time_are_refused(delay_fmus, open_fmu, fmi):
     slave = open_fmu(delay_fmus[fmi], logging_on=False)
     with pytest.raises(Exception, match="status 3"):
-        slave.step(0.0, T)  # before initialisation
+        slave.do_step(0.0, T)  # before initialisation
     slave.initialize([0.0, 0.0])
     with pytest.raises(Exception, match="status 3"):
-        slave.step(5 * T, T)  # does not continue from t = 0
+        slave.do_step(5 * T, T)  # does not continue from t = 0
     with pytest.raises(Exception, match="status 3"):
-        slave.set_real([slave.vr["filter_cutoff"]], [10.0])  # fixed parameter after initialisation
+        slave.set_real(["filter_cutoff"], [10.0])  # fixed parameter after initialisation
     messages = " | ".join(m for _, _, m in slave.messages)
     assert "must not be called" in messages and "does not continue" in messages and "fixed" in messages
 
@@ -181,7 +181,7 @@ def test_calls_in_the_wrong_state_and_time_are_refused(delay_fmus, open_fmu, fmi
 def test_generic_graph_evaluated_once_per_step(generic_onnx, open_fmu, tmp_path, fmi):
     path = build_fmu(generic_onnx, BuildOptions(out=tmp_path / "other.fmu", fmi_version=fmi))
     slave = open_fmu(path)
-    assert [v.name for v in slave.md.modelVariables if v.causality == "input"] == ["x[0]", "x[1]", "x[2]"]
+    assert [v.name for v in slave.description.modelVariables if v.causality == "input"] == ["x[0]", "x[1]", "x[2]"]
     inputs = np.random.default_rng(4).uniform(-1, 1, (50, 3))
     reference = Reference(generic_graph())
     for h in (0.01, 0.037):
@@ -196,14 +196,14 @@ def test_hostile_names_are_sanitised_and_escaped(open_fmu, tmp_path, fmi):
     onnx.save(hostile_graph(), str(onnx_path))
     path = build_fmu(onnx_path, BuildOptions(out=tmp_path / "hostile.fmu", fmi_version=fmi, name='my "model" */'))
     slave = open_fmu(path)
-    names = [v.name for v in slave.md.modelVariables]
+    names = [v.name for v in slave.description.modelVariables]
     assert names.count("time") == (1 if fmi == 3 else 0)
     assert names.count("extrapolating") == 1
     for expected in ("a_b", "c_d_e", "f__g", "line_break", "time_2", "a_b_2", "extrapolating_2", "out_s_"):
         assert expected in names
-    assert slave.md.coSimulation.modelIdentifier == "my__model____"
-    assert slave.md.modelName == 'my "model" */'
-    described = {v.name: v.description for v in slave.md.modelVariables}
+    assert slave.description.coSimulation.modelIdentifier == "my__model____"
+    assert slave.description.modelName == 'my "model" */'
+    described = {v.name: v.description for v in slave.description.modelVariables}
     assert "'a\"b'" in described["a_b"]
     inputs = np.random.default_rng(2).uniform(-1, 1, (20, 6))
     got = slave.simulate(inputs, 0.01, parameters={"filter_cutoff": 0.0})
@@ -266,11 +266,7 @@ def test_initialization_preview_and_nonzero_start_time(delay_fmus, open_fmu, ref
     inputs = random_inputs(400, seed=31)
     slave = open_fmu(delay_fmus[fmi])
     start = 10.0
-    if fmi == 2:
-        slave.fmu.setupExperiment(startTime=start)
-        slave.fmu.enterInitializationMode()
-    else:
-        slave.fmu.enterInitializationMode(startTime=start)
+    slave.enter_initialization(start)
     slave.set_real(slave.inputs, inputs[0] * 0.5)
     slave.outputs_now()  # a preview with other inputs must not leave a trace
     slave.set_real(slave.inputs, inputs[0])
@@ -280,7 +276,7 @@ def test_initialization_preview_and_nonzero_start_time(delay_fmus, open_fmu, ref
     t = start
     for n in range(1, len(inputs)):
         slave.set_real(slave.inputs, inputs[n])
-        slave.step(t, 2.5 * T)
+        slave.do_step(t, 2.5 * T)
         t += 2.5 * T
         rows.append(slave.outputs_now())
     expected = reference.simulate(inputs, 2.5 * T, cutoff=100.0)
@@ -313,11 +309,11 @@ def test_10000_steps_of_2_5_t_with_a_rollback_match_onnxruntime(delay_fmus, open
             saved = slave.fmu.getFMUState()
             for m, u in enumerate(detour):
                 slave.set_real(slave.inputs, u)
-                slave.step(t + m * h, h)
+                slave.do_step(t + m * h, h)
             slave.fmu.setFMUState(saved)
             slave.fmu.freeFMUState(saved)
         slave.set_real(slave.inputs, inputs[n])
-        slave.step(t, h)
+        slave.do_step(t, h)
         rows.append(slave.outputs_now())
     expected = reference.simulate(inputs, h, cutoff=100.0)
     np.testing.assert_allclose(np.array(rows), expected, rtol=RTOL, atol=ATOL)

@@ -1,4 +1,6 @@
-"""The pythonfmu backend, run in fmpy and checked sample by sample against onnxruntime on the same step graph."""
+"""The pythonfmu backend, run in fmpy and checked sample by sample against onnxruntime on the same step graph: the
+behaviour both FMI versions share (each test runs for FMI 2 and FMI 3), then what is particular to FMI 2 (pythonfmu).
+FMI 3's own tests are in test_pythonfmu3.py."""
 
 from __future__ import annotations
 
@@ -14,11 +16,11 @@ import onnx
 import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, defaultCallbacks
 from fmpy.validation import validate_fmu
 from onnx import TensorProto, helper
 
 from nnfmu.component import Component, Port
+from nnfmu.cosim.slave import FmuSlave
 from nnfmu.fmu.model_description import FmuIdentity, ModelDescriptionView, tensor_dependencies
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.fmu.pythonfmu import PythonFmuBuildError, build_pythonfmu
@@ -26,10 +28,19 @@ from nnfmu.fmu.pythonfmu.runtimes import runtime
 from nnfmu.fmu.pythonfmu.fmi2_slave import NnfmuSlave
 from nnfmu.fmu.pythonfmu.model_description_fix import DescriptionFix, fix_model_description
 from nnfmu.fmu.variables import fmu_variables
-from pythonfmu_helpers import T, VMAX, Reference, build, delay_damper_graph, unzip
+from native_fmu_helpers import hostile_graph
+from pythonfmu_helpers import (DISCARD, ERROR, T, VMAX, WARNING, Instance, Reference, build, delay_damper_graph,
+                              native_description, unzip)
 
-VR_VELOCITY, VR_FORCE, VR_EXTRAPOLATING, VR_CUTOFF, VR_GAIN = range(5)
-FMI2_DISCARD, FMI2_ERROR, FMI2_WARNING = 2, 3, 1
+@pytest.fixture(params=[2, 3], ids=["fmi2", "fmi3"])
+def damper(request: pytest.FixtureRequest, pythonfmu_dampers) -> tuple[Path, Path]:
+    """The damper's (onnx, fmu) for each FMI version in turn."""
+    return pythonfmu_dampers[request.param]
+
+
+@pytest.fixture
+def damper2(pythonfmu_dampers) -> tuple[Path, Path]:
+    return pythonfmu_dampers[2]
 
 
 def description_fix(onnx_path: Path, component: Component | None = None) -> DescriptionFix:
@@ -41,107 +52,50 @@ def description_fix(onnx_path: Path, component: Component | None = None) -> Desc
     return DescriptionFix(view, "test damper", "test", runtime(2).capabilities)
 
 
-class Instance:
-    """An fmpy FMU2Slave with a log recorder, initialised at t = 0 with the given parameters."""
-
-    def __init__(self, fmu: Path, name: str, cutoff: float = 0.0, gain: float = 1.0, velocity: float = 0.0,
-                 start: float = 0.0):
-        md = read_model_description(str(fmu))
-        self.log: list[tuple[int, str]] = []
-        self._logger = fmi2CallbackLoggerTYPE(self._record)
-        self._callbacks = fmi2CallbackFunctions()
-        self._callbacks.logger = self._logger
-        self._callbacks.allocateMemory = defaultCallbacks.allocateMemory
-        self._callbacks.freeMemory = defaultCallbacks.freeMemory
-        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip(fmu),
-                             modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
-        self.fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
-        self.initialise(cutoff, gain, velocity, start)
-
-    def _record(self, env, instance, status, category, message) -> None:
-        self.log.append((status, message.decode("utf-8")))
-
-    def initialise(self, cutoff: float, gain: float, velocity: float, start: float = 0.0) -> None:
-        self.fmu.setupExperiment(startTime=start)
-        self.fmu.enterInitializationMode()
-        self.fmu.setReal([VR_CUTOFF, VR_GAIN, VR_VELOCITY], [cutoff, gain, velocity])
-        self.fmu.exitInitializationMode()
-
-    def step(self, t: float, h: float, velocity: float) -> float:
-        self.fmu.setReal([VR_VELOCITY], [velocity])
-        self.fmu.doStep(t, h)
-        return self.fmu.getReal([VR_FORCE])[0]
-
-    def close(self) -> None:
-        self.fmu.terminate()
-        self.fmu.freeInstance()
-
-
-@pytest.fixture(scope="module")
-def damper(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
-    return build(tmp_path_factory.mktemp("damper"), delay_damper_graph(seed=0), "damper")
-
-
-def test_model_description_validates_and_matches_the_variable_table(damper):
-    onnx_path, fmu = damper
-    assert validate_fmu(str(fmu)) == []
-    md = read_model_description(str(fmu))
-    expected = fmu_variables(Component.from_onnx(onnx.load(str(onnx_path)))).all
-    got = [(v.name, v.valueReference, v.causality, v.type, v.unit or "") for v in md.modelVariables]
-    assert got == [(v.name, v.value_reference, v.causality, v.type, v.unit) for v in expected]
-    assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
-    assert float(md.defaultExperiment.stepSize) == T
-    assert "onnxruntime" in md.description
-
-
-def test_fix_adds_the_initial_unknowns_that_pythonfmu_leaves_out(damper):
-    onnx_path, fmu = damper
-    extracted = Path(unzip(fmu))
-    raw = NnfmuSlave(instance_name="probe", resources=str(extracted / "resources")).to_xml()
-    (extracted / "modelDescription.xml").write_bytes(ET.tostring(raw, encoding="UTF-8", xml_declaration=True))
-    assert any("InitialUnknowns" in problem for problem in validate_fmu(str(extracted)))  # the pythonfmu pitfall
-
-    fixed = fix_model_description(raw, description_fix(onnx_path))
-    (extracted / "modelDescription.xml").write_bytes(ET.tostring(fixed, encoding="UTF-8", xml_declaration=True))
-    assert validate_fmu(str(extracted)) == []
-    unknowns = [(u.get("index"), u.get("dependencies")) for u in fixed.findall("ModelStructure/InitialUnknowns/")]
-    assert unknowns == [("2", "1 5"), ("3", "1")]  # force <- velocity, output_gain; extrapolating <- velocity
-    assert fixed.find("ModelVariables/ScalarVariable[@name='velocity']/Real").get("unit") == "m/s"
-
-
-def test_fix_refuses_a_description_that_disagrees_with_the_variable_table(damper):
-    onnx_path, fmu = damper
-    slave = NnfmuSlave(instance_name="probe", resources=str(Path(unzip(fmu)) / "resources"))
-    component = Component.from_onnx(onnx.load(str(onnx_path)))
-    component.outputs[0] = Port("torque", "N.m")
-    with pytest.raises(PythonFmuBuildError, match="torque"):
-        fix_model_description(slave.to_xml(), description_fix(onnx_path, component))
-
-
+# ----- both FMI versions -------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("h_over_t", [1.0, 2.5])
-def test_matches_onnxruntime_over_10000_steps_across_a_state_rollback(damper, h_over_t):
+def test_matches_onnxruntime_over_10000_steps_across_a_serialised_state_rollback(damper, h_over_t):
     onnx_path, fmu = damper
     h = h_over_t * T
     rng = np.random.default_rng(1)
     velocity = rng.uniform(-0.9 * VMAX, 0.9 * VMAX, 10_001)
     detour = rng.uniform(-0.9 * VMAX, 0.9 * VMAX, 100)
-    fmu_inst, ref = Instance(fmu, "a", velocity=velocity[0]), Reference(onnx_path, velocity=velocity[0])
-    assert fmu_inst.fmu.getReal([VR_FORCE])[0] == pytest.approx(ref.y, rel=1e-12, abs=1e-12)
+    inst, ref = Instance(fmu, "a", velocity=velocity[0]), Reference(onnx_path, velocity=velocity[0])
+    assert inst.force() == pytest.approx(ref.y, rel=1e-12, abs=1e-12)
     got, want = [], []
     for k in range(1, len(velocity)):
         t = (k - 1) * h
         if k == 5000:  # save (through serialisation), wander off, roll back
-            saved = fmu_inst.fmu.deSerializeFMUstate(fmu_inst.fmu.serializeFMUstate(fmu_inst.fmu.getFMUstate()))
-            detoured = [fmu_inst.step(t + j * h, h, v) for j, v in enumerate(detour)]
-            fmu_inst.fmu.setFMUstate(saved)
-            fmu_inst.fmu.freeFMUstate(saved)
+            saved = inst.serialised_state()
+            detoured = [inst.step(t + j * h, h, v) for j, v in enumerate(detour)]
+            inst.set_state(saved)
+            inst.free_state(saved)
             assert np.ptp(detoured) > 0
-        got.append(fmu_inst.step(t, h, velocity[k]))
+            if inst.fmi_version == 3:
+                assert inst.get_real(["time"])[0] == pytest.approx(t, rel=1e-15)
+        got.append(inst.step(t, h, velocity[k]))
         want.append(ref.step(t, h, velocity[k]))
-    fmu_inst.close()
+    inst.close()
     np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
     assert np.std(want) > 1.0  # the comparison is not between two constants
     assert ref.k == round(10_000 * h_over_t)
+
+
+def test_a_serialised_state_continues_in_another_instance(damper):
+    _, fmu = damper
+    velocity = np.random.default_rng(8).uniform(-0.9 * VMAX, 0.9 * VMAX, 60)
+    a, b = Instance(fmu, "a", cutoff=80.0, gain=0.5), Instance(fmu, "b")
+    for k, v in enumerate(velocity[:30]):
+        a.step(k * T, T, v)
+    moved = a.serialised_state()
+    b.set_state(moved)
+    b.free_state(moved)
+    assert list(b.get_real(["filter_cutoff", "output_gain"])) == [80.0, 0.5]
+    for k, v in enumerate(velocity[30:], start=30):
+        assert b.step(k * T, T, v) == a.step(k * T, T, v)  # bit-identical continuation
+    assert a.force() != 0.0
+    a.close()
+    b.close()
 
 
 @pytest.mark.parametrize("h_over_t", [2.5, 0.4])
@@ -149,11 +103,13 @@ def test_communication_step_other_than_the_sample_period_with_filter_and_gain(da
     onnx_path, fmu = damper
     h, n = h_over_t * T, 2000
     velocity = np.random.default_rng(2).uniform(-0.9 * VMAX, 0.9 * VMAX, n)
-    fmu_inst = Instance(fmu, "b", cutoff=50.0, gain=1.5, velocity=velocity[0])
+    inst = Instance(fmu, "b", cutoff=50.0, gain=1.5, velocity=velocity[0])
     ref = Reference(onnx_path, cutoff=50.0, gain=1.5, velocity=velocity[0])
-    got = [fmu_inst.step(j * h, h, v) for j, v in enumerate(velocity)]
+    got = [inst.step(j * h, h, v) for j, v in enumerate(velocity)]
     want = [ref.step(j * h, h, v) for j, v in enumerate(velocity)]
-    fmu_inst.close()
+    if inst.fmi_version == 3:
+        assert inst.fmu.doStep(n * h, h) == (False, False, False, pytest.approx((n + 1) * h, rel=1e-15))
+    inst.close()
     np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
     assert ref.k == int(round(n * h_over_t))  # every sample up to the end was evaluated
 
@@ -165,26 +121,13 @@ def test_samples_count_from_the_start_time_and_a_gap_in_time_is_refused(damper):
     inst, ref = Instance(fmu, "late", velocity=velocity[0], start=start), Reference(onnx_path, velocity=velocity[0])
     got = [inst.step(start + j * h, h, v) for j, v in enumerate(velocity)]
     np.testing.assert_allclose(got, [ref.step(j * h, h, v) for j, v in enumerate(velocity)], rtol=1e-12, atol=1e-12)
+    if inst.fmi_version == 3:
+        assert inst.get_real(["time"])[0] == pytest.approx(start + 300 * h, rel=1e-15)
     with pytest.raises(FMICallException) as gap:
-        inst.fmu.doStep(start + 400 * h, h)
-    assert gap.value.status == FMI2_DISCARD
-    assert any("last communication point" in m for status, m in inst.log if status == FMI2_ERROR)
+        inst.do_step(start + 400 * h, h)
+    assert gap.value.status == DISCARD
+    assert any("last communication point" in m for m in inst.logged(ERROR))
     inst.close()
-
-
-def test_two_different_fmus_with_the_same_name_in_one_process(tmp_path):
-    builds = [build(tmp_path, delay_damper_graph(seed), f"d{seed}") for seed in (3, 4)]
-    instances = [Instance(fmu, f"i{i}") for i, (_, fmu) in enumerate(builds)]
-    refs = [Reference(onnx_path) for onnx_path, _ in builds]
-    modules = [zipfile.ZipFile(fmu).read("resources/slavemodule.txt") for _, fmu in builds]
-    assert modules[0] != modules[1]  # Python caches modules by name: each FMU ships the slave under its own
-    velocity = np.random.default_rng(5).uniform(-0.5, 0.5, 200)
-    for k, v in enumerate(velocity):
-        for inst, ref in zip(instances, refs):
-            assert inst.step(k * T, T, v) == pytest.approx(ref.step(k * T, T, v), rel=1e-12, abs=1e-12)
-    assert instances[0].fmu.getReal([VR_FORCE]) != instances[1].fmu.getReal([VR_FORCE])
-    for inst in instances:
-        inst.close()
 
 
 def test_instances_of_one_fmu_are_independent_and_reset_clears_state(damper):
@@ -199,17 +142,34 @@ def test_instances_of_one_fmu_are_independent_and_reset_clears_state(damper):
     b.close()
 
 
+def test_two_different_fmus_with_the_same_name_in_one_process(damper, tmp_path):
+    onnx_path, fmu = damper
+    version = read_model_description(str(fmu)).fmiVersion[0]
+    other_onnx, other = build(tmp_path, delay_damper_graph(seed=3), "other", fmi_version=int(version))
+    instances = [Instance(fmu, "a"), Instance(other, "c")]
+    refs = [Reference(onnx_path), Reference(other_onnx)]
+    modules = [zipfile.ZipFile(f).read("resources/slavemodule.txt") for f in (fmu, other)]
+    assert modules[0] != modules[1]  # Python caches modules by name: each FMU ships the slave under its own
+    for k, v in enumerate(np.random.default_rng(5).uniform(-0.5, 0.5, 200)):
+        for inst, ref in zip(instances, refs):
+            assert inst.step(k * T, T, v) == pytest.approx(ref.step(k * T, T, v), rel=1e-12, abs=1e-12)
+        assert instances[0].force() != instances[1].force()
+    for inst in instances:
+        inst.close()
+
+
 def test_extrapolating_flag_and_one_warning_per_excursion(damper):
     _, fmu = damper
     inst = Instance(fmu, "env")
     flags = []
     for k, v in enumerate([0.5, 1.5, 2.0, 1.2, 0.3, -3.0, 0.0]):
         inst.step(k * T, T, v)
-        flags.append(inst.fmu.getBoolean([VR_EXTRAPOLATING])[0])
+        flags.append(inst.get_boolean(["extrapolating"])[0])
     inst.close()
     assert flags == [False, True, True, True, False, True, False]
-    warnings = [m for status, m in inst.log if status == FMI2_WARNING]
-    assert len(warnings) == 2 and "velocity" in warnings[0] and "1.5" in warnings[0] and "-3.0" in warnings[1]
+    warnings = [(c, m) for s, c, m in inst.messages if s == WARNING]
+    assert len(warnings) == 2 and all(c == "logStatusWarning" for c, _ in warnings)
+    assert "velocity" in warnings[0][1] and "1.5" in warnings[0][1] and "-3.0" in warnings[1][1]
 
 
 @pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
@@ -217,66 +177,55 @@ def test_non_finite_input_is_refused_with_an_error_status_and_a_logged_message(d
     onnx_path, fmu = damper
     inst, ref = Instance(fmu, "nan"), Reference(onnx_path)
     assert inst.step(0.0, T, 0.2) == pytest.approx(ref.step(0.0, T, 0.2), rel=1e-12, abs=1e-12)
-    inst.fmu.setReal([VR_VELOCITY], [bad])
+    inst.set_real(["velocity"], [bad])
     with pytest.raises(FMICallException) as refused:
-        inst.fmu.doStep(T, T)
-    assert refused.value.status == FMI2_DISCARD
-    errors = [m for status, m in inst.log if status == FMI2_ERROR]
-    assert any("velocity" in m and repr(bad) in m for m in errors)
-    assert inst.fmu.getReal([VR_VELOCITY]) == [0.2]  # the refused value never reached the graph
+        inst.do_step(T, T)
+    assert refused.value.status == DISCARD
+    assert any("velocity" in m and repr(bad) in m for m in inst.logged(ERROR))
+    assert inst.get_real(["velocity"])[0] == 0.2  # the refused value never reached the graph
     assert inst.step(T, T, 0.1) == pytest.approx(ref.step(T, T, 0.1), rel=1e-12, abs=1e-12)
     inst.close()
 
 
-def test_fixed_parameters_are_refused_once_initialisation_ends(damper):
-    onnx_path, fmu = damper
-    inst, ref = Instance(fmu, "fixed", gain=2.0), Reference(onnx_path, gain=2.0)
-    inst.fmu.setReal([VR_GAIN, VR_CUTOFF], [5.0, 10.0])
-    errors = [m for status, m in inst.log if status == FMI2_ERROR]
-    assert len(errors) == 2 and "'output_gain' is fixed" in errors[0] and "keeps 2.0" in errors[0]
-    assert inst.fmu.getReal([VR_GAIN, VR_CUTOFF]) == [2.0, 0.0]
-    assert inst.step(0.0, T, 0.3) == pytest.approx(ref.step(0.0, T, 0.3), rel=1e-12, abs=1e-12)
-    inst.close()
-
-
-def test_graph_without_component_gets_a_generic_description_evaluated_each_step(tmp_path, monkeypatch):
+@pytest.mark.parametrize("fmi_version", [2, 3])
+def test_graph_without_component_gets_a_generic_description_evaluated_each_step(tmp_path, monkeypatch, fmi_version):
     node = helper.make_node("Tanh", ["x"], ["y"])
     graph = helper.make_graph([node], "plain", [helper.make_tensor_value_info("x", TensorProto.DOUBLE, [2])],
                               [helper.make_tensor_value_info("y", TensorProto.DOUBLE, [2])])
     model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)], ir_version=9)
     onnx.save(model, str(tmp_path / "plain.onnx"))
     monkeypatch.chdir(tmp_path)
-    fmu = build_pythonfmu(tmp_path / "plain.onnx", BuildOptions(backend="pythonfmu"))
+    fmu = build_pythonfmu(tmp_path / "plain.onnx", BuildOptions(backend="pythonfmu", fmi_version=fmi_version))
     assert fmu == Path("exported/plain.fmu")
     assert validate_fmu(str(fmu)) == []
     md = read_model_description(str(fmu))
     assert md.coSimulation.modelIdentifier == "plain" and md.defaultExperiment.stepSize is None
-    assert [v.name for v in md.modelVariables][:4] == ["x[0]", "x[1]", "y[0]", "y[1]"]
-    inst = FMU2Slave(guid=md.guid, unzipDirectory=unzip(fmu), modelIdentifier="plain", instanceName="p")
-    inst.instantiate()
-    inst.setupExperiment(startTime=0.0)
-    inst.enterInitializationMode()
-    inst.setReal([5], [5.0])  # filter_cutoff [Hz]; without a sample period the filter runs at the step size
-    inst.exitInitializationMode()
-    t, y = 0.0, np.tanh([0.0, 0.0])
-    for h, x in [(0.01, [0.3, -0.1]), (0.5, [-2.0, 0.4]), (0.001, [1.0, 1.0]), (0.02, [0.7, -3.0])]:
-        inst.setReal([0, 1], x)
-        inst.doStep(t, h)
-        t += h
-        y = y + (1.0 - math.exp(-2.0 * math.pi * 5.0 * h)) * (np.tanh(x) - y)
-        np.testing.assert_allclose(inst.getReal([2, 3]), y, rtol=1e-14, atol=1e-15)
-    inst.terminate()
-    inst.freeInstance()
+    ports = [("x[0]", 0), ("x[1]", 1), ("y[0]", 2), ("y[1]", 3)]
+    assert [(v.name, v.valueReference) for v in md.modelVariables][:5] == (
+        ports + [("extrapolating", 4)] if fmi_version == 2 else [("time", 7)] + ports)
+    assert [(v.name, v.valueReference) for v in md.modelVariables if v.name == "filter_cutoff"] == [
+        ("filter_cutoff", 5)]
+    with FmuSlave(fmu, "p") as inst:
+        inst.enter_initialization(0.0)
+        inst.set_real(["filter_cutoff"], [5.0])  # [Hz]; without a sample period the filter runs at the step size
+        inst.exit_initialization()
+        t, y = 0.0, np.tanh([0.0, 0.0])
+        for h, x in [(0.01, [0.3, -0.1]), (0.5, [-2.0, 0.4]), (0.001, [1.0, 1.0]), (0.02, [0.7, -3.0])]:
+            inst.set_real(["x[0]", "x[1]"], x)
+            inst.do_step(t, h)
+            t += h
+            y = y + (1.0 - math.exp(-2.0 * math.pi * 5.0 * h)) * (np.tanh(x) - y)
+            np.testing.assert_allclose(inst.get_real(["y[0]", "y[1]"]), y, rtol=1e-14, atol=1e-15)
 
 
-def test_a_component_that_does_not_fit_its_graph_is_refused_at_build_time(tmp_path):
-    model = delay_damper_graph(seed=7)
-    component = Component.from_onnx(model)
-    component.inputs[0] = Port("speed", "m/s")
-    component.attach_to(model)
-    with pytest.raises(PythonFmuBuildError, match="'speed'"):
-        build(tmp_path, model, "misfit")
-    assert not (tmp_path / "misfit.fmu").exists()
+@pytest.mark.parametrize("fmi_version", [2, 3])
+def test_hostile_names_validate_and_give_the_native_variables(tmp_path, fmi_version):
+    onnx_path, fmu = build(tmp_path, hostile_graph(), "hostile", fmi_version)
+    assert validate_fmu(str(fmu)) == []
+    ours, native = (read_model_description(str(p)) for p in (fmu, native_description(onnx_path, tmp_path / "n",
+                                                                                       fmi_version)))
+    assert [(v.name, v.valueReference, v.causality, v.unit, v.description) for v in ours.modelVariables] == [
+        (v.name, v.valueReference, v.causality, v.unit, v.description) for v in native.modelVariables]
 
 
 def test_the_fmu_runs_in_a_python_without_nnfmu(damper):
@@ -298,12 +247,72 @@ def test_the_fmu_runs_in_a_python_without_nnfmu(damper):
 
 def test_the_same_graph_builds_the_same_fmu_bytes(damper, tmp_path):
     onnx_path, fmu = damper
-    again = build_pythonfmu(onnx_path, BuildOptions(out=tmp_path / "again.fmu", backend="pythonfmu"))
+    version = int(read_model_description(str(fmu)).fmiVersion[0])
+    again = build_pythonfmu(onnx_path, BuildOptions(out=tmp_path / "again.fmu", backend="pythonfmu",
+                                                    fmi_version=version))
     assert again.read_bytes() == fmu.read_bytes()
 
 
-def test_name_option_renames_the_component_and_gives_a_c_model_identifier(damper, tmp_path):
-    onnx_path, _ = damper
+# ----- FMI 2 only --------------------------------------------------------------------------------------------------
+def test_model_description_validates_and_matches_the_variable_table(damper2):
+    onnx_path, fmu = damper2
+    assert validate_fmu(str(fmu)) == []
+    md = read_model_description(str(fmu))
+    expected = fmu_variables(Component.from_onnx(onnx.load(str(onnx_path)))).all
+    got = [(v.name, v.valueReference, v.causality, v.type, v.unit or "") for v in md.modelVariables]
+    assert got == [(v.name, v.value_reference, v.causality, v.type, v.unit) for v in expected]
+    assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
+    assert float(md.defaultExperiment.stepSize) == T
+    assert "onnxruntime" in md.description
+
+
+def test_fix_adds_the_initial_unknowns_that_pythonfmu_leaves_out(damper2):
+    onnx_path, fmu = damper2
+    extracted = Path(unzip(fmu))
+    raw = NnfmuSlave(instance_name="probe", resources=str(extracted / "resources")).to_xml()
+    (extracted / "modelDescription.xml").write_bytes(ET.tostring(raw, encoding="UTF-8", xml_declaration=True))
+    assert any("InitialUnknowns" in problem for problem in validate_fmu(str(extracted)))  # the pythonfmu pitfall
+
+    fixed = fix_model_description(raw, description_fix(onnx_path))
+    (extracted / "modelDescription.xml").write_bytes(ET.tostring(fixed, encoding="UTF-8", xml_declaration=True))
+    assert validate_fmu(str(extracted)) == []
+    unknowns = [(u.get("index"), u.get("dependencies")) for u in fixed.findall("ModelStructure/InitialUnknowns/")]
+    assert unknowns == [("2", "1 5"), ("3", "1")]  # force <- velocity, output_gain; extrapolating <- velocity
+    assert fixed.find("ModelVariables/ScalarVariable[@name='velocity']/Real").get("unit") == "m/s"
+
+
+def test_fix_refuses_a_description_that_disagrees_with_the_variable_table(damper2):
+    onnx_path, fmu = damper2
+    slave = NnfmuSlave(instance_name="probe", resources=str(Path(unzip(fmu)) / "resources"))
+    component = Component.from_onnx(onnx.load(str(onnx_path)))
+    component.outputs[0] = Port("torque", "N.m")
+    with pytest.raises(PythonFmuBuildError, match="torque"):
+        fix_model_description(slave.to_xml(), description_fix(onnx_path, component))
+
+
+def test_fixed_parameters_are_refused_once_initialisation_ends(damper2):
+    onnx_path, fmu = damper2
+    inst, ref = Instance(fmu, "fixed", gain=2.0), Reference(onnx_path, gain=2.0)
+    inst.set_real(["output_gain", "filter_cutoff"], [5.0, 10.0])
+    errors = inst.logged(ERROR)
+    assert len(errors) == 2 and "'output_gain' is fixed" in errors[0] and "keeps 2.0" in errors[0]
+    assert list(inst.get_real(["output_gain", "filter_cutoff"])) == [2.0, 0.0]
+    assert inst.step(0.0, T, 0.3) == pytest.approx(ref.step(0.0, T, 0.3), rel=1e-12, abs=1e-12)
+    inst.close()
+
+
+def test_a_component_that_does_not_fit_its_graph_is_refused_at_build_time(tmp_path):
+    model = delay_damper_graph(seed=7)
+    component = Component.from_onnx(model)
+    component.inputs[0] = Port("speed", "m/s")
+    component.attach_to(model)
+    with pytest.raises(PythonFmuBuildError, match="'speed'"):
+        build(tmp_path, model, "misfit")
+    assert not (tmp_path / "misfit.fmu").exists()
+
+
+def test_name_option_renames_the_component_and_gives_a_c_model_identifier(damper2, tmp_path):
+    onnx_path, _ = damper2
     fmu = build_pythonfmu(onnx_path, BuildOptions(out=tmp_path / "fl.fmu", backend="pythonfmu", name="front-left 1"))
     md = read_model_description(str(fmu))
     assert (md.modelName, md.coSimulation.modelIdentifier) == ("front-left 1", "front_left_1")

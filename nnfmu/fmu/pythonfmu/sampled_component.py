@@ -3,9 +3,10 @@
 `SampledComponent` runs `resources/model.onnx` with onnxruntime as docs/architecture.md specifies, reading the ports,
 states, sample period and envelope from the ONNX metadata and the FMU variables from `resources/variables.json`.
 The FMI 2 slave (`fmi2_slave.py`, pythonfmu) and the FMI 3 slave (`fmi3_slave.py`, pythonfmu3) only translate FMI
-calls to it. This file is shipped unchanged beside them in every pythonfmu FMU and runs in the importing tool's
-Python: it needs numpy and onnxruntime there and must not import nnfmu or pythonfmu. It never raises after
-construction (both runtimes turn an exception into a fatal error): a bad call is reported and refused instead.
+calls to it; `SlaveBridge` is their version-independent half. This file is shipped unchanged beside them in every
+pythonfmu FMU and runs in the importing tool's Python: it needs numpy and onnxruntime there and must not import
+nnfmu or pythonfmu. It never raises after construction (both runtimes turn an exception into a fatal error): a bad
+call is reported and refused instead.
 """
 
 from __future__ import annotations
@@ -261,3 +262,56 @@ class SampledComponent:
     @staticmethod
     def from_bytes(data: bytes) -> dict[str, Any]:
         return json.loads(data.decode("utf-8"))
+
+
+class SlaveBridge:
+    """The half of the FMI 2 and FMI 3 slaves that does not depend on the FMI version, mixed in before the runtime's
+    slave class: builds the `SampledComponent`, registers the variable table and forwards Booleans and FMU state.
+
+    A slave supplies `runtime_name`, `_scalar(var, description)` (the runtime's variable object for one table entry)
+    and `_report(message, severity)`.
+    """
+
+    log_categories = LOG_CATEGORIES
+    runtime_name = ""
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self._core = SampledComponent(Path(self.resources), self._report)
+        self.description = self._core.description
+        for var in self._core.variables:
+            self._register(var)
+
+    def _register(self, var: dict[str, Any]) -> None:
+        """Register one table entry (in value-reference order, so the runtime assigns the same reference)."""
+        scalar = self._scalar(var, var["description"] or None)
+        self.register_variable(scalar, nested=False)
+        if scalar.value_reference != var["value_reference"]:
+            raise ValueError(f"{var['name']!r}: {self.runtime_name} gave value reference {scalar.value_reference}, "
+                             f"the variable table says {var['value_reference']}")
+
+    def exit_initialization_mode(self) -> None:
+        self._core.initialise()
+
+    def _read_reals(self, vrs: list[int], function: str) -> list[float]:
+        return [self._core.read(vr, "Real", function) for vr in vrs]
+
+    def _write_reals(self, vrs: list[int], values: list[float], function: str) -> None:
+        for vr, value in zip(vrs, values):
+            self._core.write(vr, value, "Real", function)
+
+    def get_boolean(self, vrs: list[int]) -> list[bool]:
+        return [bool(self._core.read(vr, "Boolean", "getBoolean")) for vr in vrs]
+
+    def set_boolean(self, vrs: list[int], values: list[bool]) -> None:
+        for vr, value in zip(vrs, values):
+            self._core.write(vr, value, "Boolean", "setBoolean")
+
+    def _get_fmu_state(self) -> dict[str, Any]:
+        return self._core.save()
+
+    def _set_fmu_state(self, state: dict[str, Any]) -> None:
+        self._core.restore(state)
+
+    _fmu_state_to_bytes = staticmethod(SampledComponent.to_bytes)
+    _fmu_state_from_bytes = staticmethod(SampledComponent.from_bytes)
