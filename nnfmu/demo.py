@@ -3,6 +3,9 @@
 Rig simulators make lab and held-out test records of a damper and a bushing; every thesis preset is trained on the
 lab record and exported as an ONNX step graph; each graph is built into a native FMU; the FMU is replayed on the
 held-out record with fmpy and validated against the measurement (NRMSE, R², peaks, PSD, rainflow pseudo-damage).
+Then the road test (`nnfmu.roadtest`): the damper and bushing networks as FMUs in the quarter car and the full
+vehicle on a generated ISO 8608 class C drive, against the monolithic reference with the rigs' truth physics, with
+the thesis comparison (spline vs hysteresis network vs reference) in a report per system.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from nnfmu.data.rigs import RigOptions, write_rig
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.models.workflow import TrainRequest, train_from_file
+from nnfmu.roadtest import RoadTestSettings, SystemRun, run_road_test
 from nnfmu.validate import ValidationSettings, compare, write_report
 
 PRESETS_BY_RIG: dict[str, tuple[str, ...]] = {
@@ -43,6 +47,19 @@ class DemoSettings:
     @property
     def test_duration(self) -> float:
         return 10.0 if self.quick else 30.0
+
+    @property
+    def road_test(self) -> RoadTestSettings:
+        """Quick: a 2 s quarter car and a 0.3 s full vehicle, two compared channels each and a 0.05 s bushing probe
+        (smoke runs of every road-test stage; the full vehicle's metrics are not meaningful that short). Full: the
+        thesis's 50 s drive for the quarter car; 20 s for the full vehicle, whose monolithic reference costs several
+        seconds per simulated second on 2 cores (the 50 s case is `bench/road_test.py`'s)."""
+        if self.quick:
+            return RoadTestSettings(
+                quarter_car=SystemRun(2.0, channels=("damper_force", "damper_displacement")),
+                full_vehicle=SystemRun(0.3, channels=("damper_fl_force", "lca_fl_angle")),
+                seed=self.seed, bushing_probe=0.05)
+        return RoadTestSettings(quarter_car=SystemRun(50.0), full_vehicle=SystemRun(20.0), seed=self.seed)
 
     def request(self, preset: str) -> TrainRequest:
         if self.quick:
@@ -71,6 +88,7 @@ class DemoSummary:
     report: Path
     models: list[ModelResult]
     seconds: float
+    road_test: dict[str, Path]
 
 
 def _single(m: Measurement, channel: str, label: str) -> Measurement:
@@ -79,7 +97,7 @@ def _single(m: Measurement, channel: str, label: str) -> Measurement:
 
 
 def run_demo(out: str | Path, settings: DemoSettings = DemoSettings(), log: Callable[[str], None] = print) -> DemoSummary:
-    """Run every stage into `out` (rig/, models/, fmu/, report/, summary.json) and return what it measured."""
+    """Run every stage into `out` (rig/, models/, fmu/, report/, road_test/, summary.json); return what it measured."""
     started = time.perf_counter()
     out = Path(out)
     comparisons = []
@@ -110,8 +128,16 @@ def run_demo(out: str | Path, settings: DemoSettings = DemoSettings(), log: Call
     report = write_report(comparisons, out / "report", "nnfmu demo: component FMUs vs held-out rig measurements",
                           {"seed": str(settings.seed), "quick": str(settings.quick),
                            "records": "lab: sine series + random (training); test: band-limited random (held out)"})
-    summary = DemoSummary(out=out, report=report, models=results, seconds=time.perf_counter() - started)
+    log(f"component report {report}")
+    onnx_files = {r.preset: Path(r.onnx) for r in results}
+    road = run_road_test(out / "road_test", onnx_files, settings.road_test, log)
+    for system, path in road.reports().items():
+        log(f"road test {system}: report {path}")
+    summary = DemoSummary(out=out, report=report, models=results, seconds=time.perf_counter() - started,
+                          road_test=road.reports())
     write_text_atomic(out / "summary.json", json.dumps(
-        {"report": str(report), "seconds": round(summary.seconds, 1), "models": [asdict(r) for r in results]},
+        {"report": str(report), "seconds": round(summary.seconds, 1), "models": [asdict(r) for r in results],
+         "road_test": {"summary": str(road.summary), "reports": {k: str(v) for k, v in road.reports().items()},
+                       "seconds": round(road.seconds, 1)}},
         indent=2))
     return summary

@@ -21,3 +21,12 @@ def test_quick_demo_runs_every_stage(tmp_path: Path) -> None:
     assert summary.report.name == "index.html" and summary.report.exists()
     written = json.loads((tmp_path / "summary.json").read_text())
     assert [m["preset"] for m in written["models"]] == presets
+    assert sorted(summary.road_test) == ["full-vehicle", "quarter-car"]
+    assert all(path.is_file() for path in summary.road_test.values())
+    road = json.loads(Path(written["road_test"]["summary"]).read_text())
+    quarter = road["systems"][0]
+    assert quarter["system"] == "quarter-car"
+    rows = {(r["channel"], r["model"]): r for r in quarter["thesis_table"]}
+    for model in ("damper-spline", "damper-hysteresis"):
+        # the co-simulated quarter car with a smoke-trained damper network stays near the truth-physics reference
+        assert 0.0 <= rows[("damper_displacement", model)]["nrmse"] < 0.5

@@ -1,0 +1,63 @@
+"""The thesis's road-test cases at full length: quarter car and full vehicle on a 50 s class C drive (JSON out).
+
+Usage: python bench/road_test.py [MODELS_DIR] [OUT_DIR] [DURATION_S]
+MODELS_DIR holds <preset>.onnx for the two damper and four bushing presets (e.g. a demo's models/ folder); when it
+does not exist they are trained there first on default rig records with the presets' default settings. Prints one
+JSON document: run times, the thesis comparison per system and damper network, the bushing networks along the
+reference motion, the largest use of each network input's training envelope, and the closed-loop bushing probe.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+from nnfmu.data.rigs import RigOptions, write_rig
+from nnfmu.demo import PRESETS_BY_RIG
+from nnfmu.models.workflow import TrainRequest, train_from_file
+from nnfmu.roadtest import RoadTestSettings, SystemRun, run_road_test
+
+
+def models_in(folder: Path) -> dict[str, Path]:
+    """ONNX files of every preset in `folder`, training the missing ones on default rig records."""
+    models = {}
+    for rig, presets in PRESETS_BY_RIG.items():
+        lab = folder / "rig" / f"{rig}_lab.csv"
+        for preset in presets:
+            path = folder / f"{preset}.onnx"
+            if not path.is_file():
+                if not lab.is_file():
+                    write_rig(rig, lab, RigOptions(seed=0))
+                train_from_file(lab, TrainRequest(preset=preset), path)
+            models[preset] = path
+    return models
+
+
+def main() -> None:
+    folder = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("bench-out/models")
+    out = Path(sys.argv[2]) if len(sys.argv) > 2 else Path("bench-out/road_test")
+    duration = float(sys.argv[3]) if len(sys.argv) > 3 else 50.0
+    started = time.perf_counter()
+    models = models_in(folder)
+    train_seconds = time.perf_counter() - started
+    settings = RoadTestSettings(quarter_car=SystemRun(duration), full_vehicle=SystemRun(duration))
+    result = run_road_test(out, models, settings, log=lambda line: print(line, file=sys.stderr, flush=True))
+    summary = json.loads(result.summary.read_text())
+    envelope = {}
+    for system in summary["systems"]:
+        for e in system["envelope"]:
+            key = f"{system['system']}: {e['run']}: {e['port']}"
+            envelope[key] = max(envelope.get(key, 0.0), e["range_used"] or 0.0)
+    print(json.dumps({
+        "duration_s": duration, "training_s": round(train_seconds, 1), "road_test_s": round(result.seconds, 1),
+        "reports": {k: str(v) for k, v in result.reports().items()},
+        "systems": [{k: s[k] for k in ("system", "seconds", "thesis_table", "bushing_networks_on_reference_motion",
+                                       "bushing_probe")} for s in summary["systems"]],
+        "largest_envelope_use": envelope,
+    }, indent=2))
+
+
+if __name__ == "__main__":
+    main()

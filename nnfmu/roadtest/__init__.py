@@ -1,0 +1,35 @@
+"""Virtual road test simulator runs: quarter car and full vehicle with network FMUs vs the monolithic reference."""
+
+from .envelope import Excursion, excursion
+from .reference import Reference, actuator_inputs, monolithic_reference
+from .runs import RoadTestResult, RoadTestSettings, SystemResult, SystemRun, run_road_test
+from .systems import (
+    BUSHING_MODELS, DAMPER_MODELS, SYSTEMS, ComponentFmus, RoadTestError, build_component_fmus, build_vehicle,
+    bushing_onnx, write_system,
+)
+from .thesis import ThesisRow, amplitude_ratio, thesis_row
+
+__all__ = [
+    "BUSHING_MODELS",
+    "ComponentFmus",
+    "DAMPER_MODELS",
+    "Excursion",
+    "Reference",
+    "RoadTestError",
+    "RoadTestResult",
+    "RoadTestSettings",
+    "SYSTEMS",
+    "SystemResult",
+    "SystemRun",
+    "ThesisRow",
+    "actuator_inputs",
+    "amplitude_ratio",
+    "build_component_fmus",
+    "build_vehicle",
+    "bushing_onnx",
+    "excursion",
+    "monolithic_reference",
+    "run_road_test",
+    "thesis_row",
+    "write_system",
+]

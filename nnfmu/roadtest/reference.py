@@ -1,0 +1,64 @@
+"""Monolithic reference of a road test: the vehicle with its components' truth physics in one fine-step solver.
+
+The components are closed by the rig simulators' own models (`truth_laws`: the damper dyno's and the bushing rig's
+physics the networks were trained on), so the reference is the "ground truth" a co-simulation with network FMUs
+must approach. The actuator inputs are those the co-simulation master feeds: the drive's displacements and the
+rates `derive_rates` takes from them (`nnfmu.cosim.drive_inputs` does the same).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from nnfmu.data import Measurement
+from nnfmu.data.derive import derive_rates
+from nnfmu.vehicle.fmu import VehicleBuildSettings, initial_state, vehicle_model
+from nnfmu.vehicle.models import MonolithicSettings, simulate_monolithic, truth_laws
+
+QUARTER_CAR_CORNER = "fl"  # the drive channel under the quarter car (the master's default corner)
+
+
+@dataclass(frozen=True)
+class Reference:
+    """The reference run: every vehicle output and component force as a Measurement (SI units), and its cost."""
+
+    measurement: Measurement
+    seconds: float
+
+
+def actuator_inputs(system: str, drive: Measurement) -> dict[str, object]:
+    """Actuator displacement and velocity arrays of `system`'s vehicle from the drive (rates derived)."""
+    rates = derive_rates(drive)
+    corners = [QUARTER_CAR_CORNER] if system == "quarter-car" else ["fl", "fr", "rl", "rr"]
+    inputs: dict[str, object] = {}
+    for corner in corners:
+        port = "actuator_" if system == "quarter-car" else f"actuator_{corner}_"
+        inputs[f"{port}displacement"] = rates[f"actuator_{corner}_displacement"]
+        inputs[f"{port}velocity"] = rates[f"actuator_{corner}_velocity"]
+    return inputs
+
+
+def monolithic_reference(system: str, drive: Measurement, components: Mapping[str, str] | None = None,
+                         step: float = 1e-4) -> Reference:
+    """Solve `system` ('quarter-car' or 'full-vehicle') with truth laws on every external component under `drive`
+    (`components` as for the vehicle FMU: the same ones built in); RK4 at `step` [s], outputs at the drive's sample
+    period, from the state the vehicle FMU starts in (`initial_state`: the static equilibrium, or the design position
+    where external bushings carry the only stiffness of a motion) with the components at rest."""
+    vehicle = vehicle_model(system, VehicleBuildSettings(components=dict(components or {})))
+    forces = [p.name for p in vehicle.inputs if not p.name.startswith("actuator")]
+    started = time.perf_counter()
+    solved = simulate_monolithic(vehicle, truth_laws(forces), actuator_inputs(system, drive),
+                                 MonolithicSettings(sample_period=drive.sample_period, step=step),
+                                 x0=np.array(initial_state(vehicle)))
+    seconds = time.perf_counter() - started
+    units = {p.name: p.unit for p in vehicle.outputs + vehicle.inputs}
+    channels = {name: values for name, values in solved.items() if name != "time"}
+    measurement = Measurement(
+        time=drive.time[0] + solved["time"], channels=channels, units={n: units[n] for n in channels},
+        source=f"monolithic reference of the {system} (truth physics, RK4 at {step:g} s) on {drive.source}",
+    )
+    return Reference(measurement, seconds)

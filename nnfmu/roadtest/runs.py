@@ -1,0 +1,321 @@
+"""`run_road_test`: the thesis's virtual road test simulator runs with network FMUs against the monolithic reference.
+
+drive file (ISO 8608 road) -> component and vehicle FMUs -> SSP systems -> co-simulation with the spline and with the
+hysteresis damper network -> monolithic reference (truth physics) -> validation report per system with the thesis
+comparison table -> `road_test.json`.
+
+The full vehicle's front LCA bushings: their networks sample at the rig's 1 kHz, and a 4.5 kg LCA on bushings of
+several kN/mm has modes of a few hundred Hz, which a force held for 1 ms cannot carry: the closed loop diverges at
+every step and coupling scheme tried (plain at 1 ms and 0.1 ms; iterated at 1 ms, whose fixed point iteration does
+not contract). So the full vehicle is co-simulated with its four damper networks and the parameter file's linear
+bushings built in (the reference has the same); the bushing networks are replayed open loop along the reference's
+motion of the front-left front bushing and compared with the bushing truth physics along the same motion; every
+front LCA bushing's motion is checked against the networks' training envelope; and a short closed-loop probe of the
+shipped system with bushing networks records whether it stays bounded.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+import onnx
+
+from nnfmu.atomic import write_text_atomic
+from nnfmu.component import Component
+from nnfmu.cosim.master import CosimSettings, cosimulate
+from nnfmu.cosim.replay import replay_fmu
+from nnfmu.cosim.ssp import open_system
+from nnfmu.data import Measurement, save_measurement
+from nnfmu.data.rigs import BUSHING_CHANNELS, BushingChannelTruth, BushingParams
+from nnfmu.validate import ChannelComparison, ValidationSettings, compare, write_report
+from nnfmu.vehicle.drive import DriveSettings, generate_drive, write_drive
+from nnfmu.vehicle.models.components import REFERENCE
+
+from .envelope import Excursion, excursion
+from .reference import Reference, monolithic_reference
+from .report import write_system_report
+from .systems import (
+    DAMPER_MODELS, RoadTestError, ComponentFmus, bushing_elements, build_component_fmus, build_vehicle,
+    check_models, damper_elements, write_system,
+)
+from .thesis import ThesisRow, thesis_row
+
+COMPARED = {
+    "quarter-car": ("damper_force", "damper_displacement", "damper_velocity", "body_acceleration",
+                    "spindle_vertical_force"),
+    "full-vehicle": ("damper_fl_force", "damper_fl_displacement", "damper_rl_force", "lca_fl_angle", "body_heave",
+                     "body_pitch", "spindle_fl_vertical_force", "bushing_fl_front_axial_displacement",
+                     "bushing_fl_front_radial_displacement"),
+}
+REPLAYED_BUSHING = "bushing_fl_front"  # whose networks are compared with the truth; all four are envelope-checked
+PROBE_CHANNEL = "bushing_fl_front_radial_displacement"
+Log = Callable[[str], None]
+
+
+@dataclass(frozen=True)
+class SystemRun:
+    """How one system runs: `duration` [s] of drive, communication `step` [s], coupling `iterations` (0: plain
+    Gauss-Seidel), network output low-pass `filter_cutoff` [Hz] (0: off, the raw networks), `channels` compared
+    with the reference (empty: the system's default set, `COMPARED`)."""
+
+    duration: float
+    step: float = 1e-4
+    iterations: int = 0
+    filter_cutoff: float = 0.0
+    channels: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.duration) and self.duration > 0):
+            raise RoadTestError(f"duration {self.duration!r} s must be a positive number")
+
+
+@dataclass(frozen=True)
+class RoadTestSettings:
+    """Which systems run and how (None: skipped); the road (ISO 8608 class, speed [m/s], seed, drive sample rate
+    [Hz]); the reference's RK4 step [s]; `bushing_probe` [s] of closed-loop full vehicle with bushing networks (0:
+    none); the time-history plot `window` [s] (the thesis's 30-35 s), used when the drive covers it."""
+
+    quarter_car: SystemRun | None = SystemRun(50.0)
+    full_vehicle: SystemRun | None = SystemRun(50.0)
+    road_class: str = "C"
+    speed: float = 20.0
+    seed: int = 0
+    sample_rate: float = 1000.0
+    reference_step: float = 1e-4
+    bushing_probe: float = 0.5
+    window: tuple[float, float] = (30.0, 35.0)
+
+    def runs(self) -> dict[str, SystemRun]:
+        chosen = {"quarter-car": self.quarter_car, "full-vehicle": self.full_vehicle}
+        return {name: run for name, run in chosen.items() if run is not None}
+
+
+@dataclass
+class SystemResult:
+    """One system's outcome: its SSP files, report, thesis table, envelope check, run times [s], probe record."""
+
+    system: str
+    ssds: dict[str, Path]
+    report: Path
+    rows: list[ThesisRow]
+    bushing_rows: list[ThesisRow]
+    excursions: list[Excursion]
+    seconds: dict[str, float]
+    probe: dict[str, object] | None = None
+
+    def to_dict(self) -> dict[str, object]:
+        return {"system": self.system, "ssds": {k: str(v) for k, v in self.ssds.items()}, "report": str(self.report),
+                "seconds": {k: round(v, 2) for k, v in self.seconds.items()},
+                "thesis_table": [r.to_dict() for r in self.rows],
+                "bushing_networks_on_reference_motion": [r.to_dict() for r in self.bushing_rows],
+                "envelope": [e.to_dict() for e in self.excursions], "bushing_probe": self.probe}
+
+
+@dataclass
+class RoadTestResult:
+    """Everything `run_road_test` wrote: the drive file, per-system results, `road_test.json`, total time [s]."""
+
+    out: Path
+    drive: Path
+    systems: list[SystemResult] = field(default_factory=list)
+    summary: Path | None = None
+    seconds: float = 0.0
+
+    def reports(self) -> dict[str, Path]:
+        return {s.system: s.report for s in self.systems}
+
+
+def _stretch(drive: Measurement, duration: float) -> Measurement:
+    """The first `duration` seconds of the drive (every sample with t <= duration)."""
+    n = int(np.searchsorted(drive.time, drive.time[0] + duration * (1 + 1e-12), side="right"))
+    return drive.slice(0, max(n, 2))
+
+
+def _on_reference(result: Measurement, reference: Measurement, channels: list[str], source: str) -> Measurement:
+    """`channels` of `result` interpolated onto the reference's time stamps inside both spans."""
+    keep = (reference.time >= result.time[0] - 1e-12) & (reference.time <= result.time[-1] + 1e-12)
+    time = reference.time[keep]
+    return Measurement(time=time, channels={c: np.interp(time, result.time, result[c]) for c in channels},
+                       units={c: result.units[c] for c in channels}, source=source)
+
+
+def _settings(window: tuple[float, float], span: float) -> ValidationSettings:
+    return ValidationSettings(window=window if window[1] <= span else None)
+
+
+def _cosim(ssd: Path, drive: Measurement, run: SystemRun) -> tuple[Measurement, float]:
+    started = time.perf_counter()
+    with open_system(ssd) as system:
+        result = cosimulate(system, drive, CosimSettings(step=run.step, iterations=run.iterations, tolerance=1e-6))
+    return result.measurement, time.perf_counter() - started
+
+
+def _network_ports(models: Mapping[str, Path], name: str) -> Component:
+    return Component.from_onnx(onnx.load(Path(models[name])))
+
+
+def _damper_excursions(run_name: str, system: str, component: Component, m: Measurement) -> list[Excursion]:
+    return [excursion(run_name, element, port, m[f"{element}_{port.name}"])
+            for element in damper_elements(system) for port in component.inputs]
+
+
+def _bushing_truth(reference: Measurement, element: str) -> Measurement:
+    """Forces of the bushing truth physics (rig defaults) along the reference's motion of bushing `element`."""
+    params = BushingParams()
+    channels, units = {}, {}
+    for key, ch in BUSHING_CHANNELS.items():
+        force, _ = BushingChannelTruth(getattr(params, key)).simulate(reference.sample_period,
+                                                                       reference[f"{element}_{ch.position}"])
+        channels[f"{element}_{ch.force}"] = force
+        units[f"{element}_{ch.force}"] = ch.force_unit
+    return Measurement(reference.time, channels, units, source=f"bushing truth physics along {reference.source}")
+
+
+def _bushing_replay(bushing_fmu: Path, reference: Measurement, element: str) -> Measurement:
+    """The merged bushing FMU (filter off) replayed along the reference's motion of bushing `element`."""
+    inputs = Component.from_onnx(onnx.load(bushing_fmu.with_suffix(".onnx"))).inputs
+    motion = Measurement(reference.time, {p.name: reference[f"{element}_{p.name}"] for p in inputs},
+                         {p.name: p.unit for p in inputs}, source=f"{element} motion in {reference.source}")
+    replayed = replay_fmu(bushing_fmu, motion)
+    return Measurement(replayed.time, {f"{element}_{k}": v for k, v in replayed.channels.items()},
+                       {f"{element}_{k}": u for k, u in replayed.units.items()},
+                       source=f"{bushing_fmu.name} replayed on the {element} motion")
+
+
+def _probe(ssd: Path, drive: Measurement, run: SystemRun, reference: Measurement, seconds: float) -> dict[str, object]:
+    """Closed loop with bushing networks for `seconds`: peak |radial deflection| against the reference's (whose
+    bushings are the linear ones); `bounded` when below 10 times it (runs seen either stay within tens of percent or
+    grow by orders of magnitude)."""
+    short = _stretch(drive, seconds)
+    record: dict[str, object] = {"ssd": str(ssd), "duration_s": seconds, "step_s": run.step,
+                                 "iterations": run.iterations, "filter_cutoff_hz": run.filter_cutoff,
+                                 "channel": PROBE_CHANNEL}
+    reference_peak = float(np.max(np.abs(_stretch(reference, seconds)[PROBE_CHANNEL])))
+    try:
+        result, _ = _cosim(ssd, short, run)
+    except Exception as error:  # noqa: BLE001 -- a diverging loop makes an FMU refuse its input; that is the finding
+        return record | {"bounded": False, "error": str(error), "reference_peak": reference_peak}
+    values = result[PROBE_CHANNEL]
+    peak = float(np.max(np.abs(values))) if np.all(np.isfinite(values)) else math.inf
+    return record | {"reference_peak": reference_peak, "cosim_peak": peak if math.isfinite(peak) else None,
+                     "peak_ratio": peak / reference_peak if math.isfinite(peak) else None,
+                     "bounded": bool(math.isfinite(peak) and peak < 10 * reference_peak)}
+
+
+def _bushing_checks(system: str, bushing_fmu: Path, ref: Measurement, validation: ValidationSettings,
+                    excursions: list[Excursion]) -> list[ChannelComparison]:
+    """Every front LCA bushing's reference motion against the networks' envelope (appended to `excursions`), and
+    the networks replayed along REPLAYED_BUSHING's motion compared with the truth physics along it."""
+    component = Component.from_onnx(onnx.load(bushing_fmu.with_suffix(".onnx")))
+    for element in bushing_elements(system):
+        excursions.extend(excursion("reference", element, port, ref[f"{element}_{port.name}"])
+                          for port in component.inputs)
+    truth = _bushing_truth(ref, REPLAYED_BUSHING)
+    return compare(_bushing_replay(bushing_fmu, ref, REPLAYED_BUSHING), truth, truth.names, validation)
+
+
+def _run_system(system: str, run: SystemRun, models: Mapping[str, Path], fmus: ComponentFmus, drive: Measurement,
+                settings: RoadTestSettings, out: Path, log: Log) -> SystemResult:
+    """One system: FMUs and SSDs, reference, both damper networks co-simulated and compared, bushing checks, report."""
+    drive = _stretch(drive, run.duration)
+    linear = system == "full-vehicle"
+    vehicle = build_vehicle(system, out / "fmu", linear_bushings=linear)
+    ssds = {model: write_system(system, vehicle, fmus.dampers[model], None, out / "systems" / system / model,
+                                run.filter_cutoff) for model in DAMPER_MODELS}
+    seconds: dict[str, float] = {}
+    log(f"{system}: monolithic reference over {run.duration:g} s (truth physics, RK4 at {settings.reference_step:g} s)")
+    components = {name: REFERENCE for name in bushing_elements(system)}
+    reference: Reference = monolithic_reference(system, drive, components, settings.reference_step)
+    seconds["reference"] = reference.seconds
+    ref = reference.measurement
+    validation = _settings(settings.window, float(ref.time[-1] - ref.time[0]))
+    results_dir = out / "results" / system
+    save_measurement(ref, results_dir / "reference.csv")
+    rows: list[ThesisRow] = []
+    excursions: list[Excursion] = []
+    comparisons: dict[str, list[ChannelComparison]] = {}
+    for model in DAMPER_MODELS:
+        result, seconds[model] = _cosim(ssds[model], drive, run)
+        log(f"{system} with {model}: co-simulated {run.duration:g} s at {run.step:g} s in {seconds[model]:.1f} s")
+        channels = list(run.channels or COMPARED[system])
+        on_ref = _on_reference(result, ref, channels, f"{system} co-simulation with {model}")
+        save_measurement(on_ref, results_dir / f"{model}.csv")
+        comparisons[model] = compare(on_ref, ref, channels, validation)
+        rows.extend(thesis_row(c, model) for c in comparisons[model])
+        excursions.extend(_damper_excursions(f"co-simulation with {model}", system,
+                                             _network_ports(models, model), result))
+    order = list(run.channels or COMPARED[system])
+    rows.sort(key=lambda row: (order.index(row.channel), DAMPER_MODELS.index(row.model)))  # side by side per channel
+    excursions.extend(_damper_excursions("reference", system, _network_ports(models, DAMPER_MODELS[0]), ref))
+    bushing_rows: list[ThesisRow] = []
+    probe = None
+    if bushing_elements(system) and fmus.bushing is not None:
+        comparisons["bushing networks"] = _bushing_checks(system, fmus.bushing, ref, validation, excursions)
+        bushing_rows = [thesis_row(c, "bushing networks") for c in comparisons["bushing networks"]]
+        shipped = build_vehicle(system, out / "fmu")
+        ssds["lca-bushing-networks"] = write_system(system, shipped, fmus.dampers[DAMPER_MODELS[1]], fmus.bushing,
+                                                    out / "systems" / system / "lca-bushing-networks",
+                                                    run.filter_cutoff)
+        if settings.bushing_probe > 0:
+            probe = _probe(ssds["lca-bushing-networks"], drive, run, ref, settings.bushing_probe)
+            log(f"{system} with LCA bushing networks in the loop: {probe}")
+    report_dir = out / "report" / system
+    model_reports = {}
+    for model, chosen in comparisons.items():
+        title = (f"{system}: {model} vs the monolithic reference" if model in DAMPER_MODELS else
+                 f"{system}: {REPLAYED_BUSHING} networks vs truth physics along the reference motion")
+        model_reports[model] = write_report(chosen, report_dir / model.replace(" ", "-"), title,
+                                            {"system": system, "drive": drive.source})
+    outcome = SystemResult(system, ssds, report_dir / "index.html", rows, bushing_rows, excursions, seconds, probe)
+    write_system_report(outcome.to_dict(), _context(system, run, settings, drive), model_reports, outcome.report)
+    return outcome
+
+
+def _context(system: str, run: SystemRun, settings: RoadTestSettings, drive: Measurement) -> dict[str, str]:
+    return {
+        "system": system,
+        "drive": f"{drive.source}, {run.duration:g} s at {settings.sample_rate:g} Hz",
+        "co-simulation": f"fmpy Gauss-Seidel, step {run.step:g} s, iterations {run.iterations}, network output "
+                         f"filter {run.filter_cutoff:g} Hz (0 = off); vehicle FMU exact at 1e-4 s",
+        "reference": f"monolithic RK4 at {settings.reference_step:g} s, rig truth physics in every network's place",
+        "front LCA bushings": "the parameter file's linear bushings in vehicle and reference; the bushing networks "
+                              "are compared open loop along the reference motion" if system == "full-vehicle" else
+                              "none (quarter car)",
+    }
+
+
+def run_road_test(out: str | Path, models: Mapping[str, str | Path], settings: RoadTestSettings = RoadTestSettings(),
+                  log: Log = print) -> RoadTestResult:
+    """Run the road test of every system in `settings` into `out` (drive.csv, fmu/, systems/, results/, report/,
+    road_test.json). `models` maps 'damper-spline', 'damper-hysteresis' and (for the full vehicle) the four
+    'bushing-*' presets to ONNX step graphs. Raises RoadTestError for a missing model or bad settings."""
+    started = time.perf_counter()
+    out = Path(out)
+    models = {k: Path(v) for k, v in models.items()}
+    runs = settings.runs()
+    if not runs:
+        raise RoadTestError("no system to run: both quarter_car and full_vehicle are None")
+    for system in runs:
+        check_models(models, system)
+    drive = generate_drive(DriveSettings(road_class=settings.road_class, speed=settings.speed, seed=settings.seed,
+                                         duration=max(r.duration for r in runs.values()) + 1 / settings.sample_rate,
+                                         sample_rate=settings.sample_rate))
+    drive_path = write_drive(drive, out / "drive.csv")
+    log(f"drive file {drive_path}: ISO 8608 class {settings.road_class} at {settings.speed:g} m/s")
+    fmus = build_component_fmus(models, out / "fmu", "full-vehicle" in runs)
+    outcome = RoadTestResult(out=out, drive=drive_path)
+    for system, run in runs.items():
+        outcome.systems.append(_run_system(system, run, models, fmus, drive, settings, out, log))
+    outcome.seconds = time.perf_counter() - started
+    outcome.summary = out / "road_test.json"
+    write_text_atomic(outcome.summary, json.dumps(
+        {"drive": str(drive_path), "seconds": round(outcome.seconds, 1),
+         "settings": asdict(settings), "systems": [s.to_dict() for s in outcome.systems]},
+        indent=2, allow_nan=False))
+    return outcome

@@ -1,0 +1,109 @@
+"""The shipped road-test systems as FMUs and SSP files: a quarter car with a damper network, and the full vehicle with
+four damper networks and its four front lower-control-arm (LCA) bushings as network FMUs (the thesis's set-up).
+
+A bushing has one network per channel (axial and radial force, axial and conical torque); `bushing_onnx` merges them
+into one step graph (`nnfmu.export.merge`), so one FMU per bushing carries all four and its ports (`axial_force`,
+`axial_displacement`, ...) meet the vehicle's `bushing_fl_front_axial_force` etc. by `connect_by_name`'s rule.
+Every element is a native FMU; the vehicle's components are all external (force inputs).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import onnx
+
+from nnfmu.atomic import atomic_path
+from nnfmu.cosim.ssp import connect_by_name, write_ssd
+from nnfmu.export.merge import merge_step_graphs
+from nnfmu.fmu.build import build_fmu
+from nnfmu.fmu.options import BuildOptions
+from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
+from nnfmu.vehicle.models.components import REFERENCE
+from nnfmu.vehicle.models.full_vehicle import FRONT_CORNERS
+from nnfmu.vehicle.models.ports import CORNERS
+
+SYSTEMS = ("quarter-car", "full-vehicle")
+DAMPER_MODELS = ("damper-spline", "damper-hysteresis")
+BUSHING_MODELS = ("bushing-axial-force", "bushing-radial-force", "bushing-axial-torque", "bushing-conical-torque")
+VEHICLE_SAMPLE_PERIOD = 1e-4  # [s] the vehicle FMU's exact step; every communication step is a multiple of it
+
+
+class RoadTestError(ValueError):
+    """A road test cannot be set up or run as asked; the message names the system, model file or setting."""
+
+
+def damper_elements(system: str) -> list[str]:
+    """SSD element names of the dampers of `system`, named like the vehicle's ports ('damper', 'damper_fl', ...)."""
+    return ["damper"] if system == "quarter-car" else [f"damper_{c}" for c in CORNERS]
+
+
+def bushing_elements(system: str) -> list[str]:
+    """SSD element names of the network bushings of `system`: the front LCA bushings of the full vehicle."""
+    return [] if system == "quarter-car" else [f"bushing_{c}_{p}" for c in FRONT_CORNERS for p in ("front", "rear")]
+
+
+def check_models(models: Mapping[str, Path], system: str) -> None:
+    """Every ONNX file `system` needs is named in `models` and exists; RoadTestError lists what is missing."""
+    if system not in SYSTEMS:
+        raise RoadTestError(f"unknown road-test system {system!r}; choose one of {', '.join(SYSTEMS)}")
+    needed = DAMPER_MODELS + (BUSHING_MODELS if bushing_elements(system) else ())
+    missing = [m for m in needed if m not in models]
+    if missing:
+        raise RoadTestError(f"{system}: no ONNX file given for {', '.join(missing)} (given: {', '.join(models)})")
+    absent = [f"{m}: {models[m]}" for m in needed if not Path(models[m]).is_file()]
+    if absent:
+        raise RoadTestError(f"{system}: ONNX file(s) not found: {'; '.join(absent)}")
+
+
+def bushing_onnx(models: Mapping[str, Path], out: Path) -> Path:
+    """Merge the four bushing channel networks into one step graph at `out` (written atomically)."""
+    parts = [onnx.load(Path(models[name])) for name in BUSHING_MODELS]
+    merged = merge_step_graphs(parts, "lca_bushing", "front LCA bushing: axial and radial force, axial and conical "
+                                                     "torque networks in one step graph")
+    with atomic_path(out) as tmp:
+        onnx.save(merged, tmp)
+    return out
+
+
+@dataclass(frozen=True)
+class ComponentFmus:
+    """The network FMUs of one road test: one per damper model, and the merged bushing (None if not built)."""
+
+    dampers: dict[str, Path]
+    bushing: Path | None
+
+
+def build_component_fmus(models: Mapping[str, Path], out: Path, with_bushing: bool) -> ComponentFmus:
+    """Native FMUs of the damper networks (and the merged bushing when `with_bushing`) in `out`."""
+    dampers = {name: build_fmu(Path(models[name]), BuildOptions(out=out / f"{name}.fmu")) for name in DAMPER_MODELS}
+    bushing = None
+    if with_bushing:
+        merged = bushing_onnx(models, out / "lca-bushing.onnx")
+        bushing = build_fmu(merged, BuildOptions(out=out / "lca-bushing.fmu"))
+    return ComponentFmus(dampers, bushing)
+
+
+def build_vehicle(system: str, out: Path, linear_bushings: bool = False) -> Path:
+    """The vehicle FMU of `system` at the vehicle's sample period: every component external (force inputs), or with
+    `linear_bushings` the front LCA bushings built in as the parameter file's linear elements."""
+    components = {name: REFERENCE for name in bushing_elements(system)} if linear_bushings else {}
+    name = f"{system}-linear-bushings" if linear_bushings and components else system
+    return build_vehicle_fmu(system, out / f"{name}.fmu",
+                             VehicleBuildSettings(components=components, sample_period=VEHICLE_SAMPLE_PERIOD))
+
+
+def write_system(system: str, vehicle_fmu: Path, damper_fmu: Path, bushing_fmu: Path | None, folder: Path,
+                 filter_cutoff: float) -> Path:
+    """`folder/SystemStructure.ssd` joining the vehicle, its damper networks and (if `bushing_fmu` is given) its
+    front LCA bushing FMUs by name; each network FMU's output low-pass set to `filter_cutoff` [Hz] (0: off)."""
+    components = {name: damper_fmu for name in damper_elements(system)}
+    if bushing_fmu is not None:
+        components |= {name: bushing_fmu for name in bushing_elements(system)}
+    parameters = {name: {"filter_cutoff": filter_cutoff} for name in components}
+    folder.mkdir(parents=True, exist_ok=True)
+    label = f"{system} with {damper_fmu.stem}" + (" and LCA bushing networks" if bushing_fmu is not None else "")
+    structure = connect_by_name(label, ("vehicle", vehicle_fmu), components, folder, parameters)
+    return write_ssd(structure, folder / "SystemStructure.ssd")

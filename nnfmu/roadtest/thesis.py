@@ -1,0 +1,50 @@
+"""The thesis's comparison of a co-simulated channel with its reference, as one row of numbers per channel and model.
+
+The thesis compared the hysteresis network with the spline baseline by force peaks, the amplitude at 1 Hz and mean
+shifts at 0 Hz; durability engineers add RMS and rainflow pseudo-damage. All come from one `ChannelComparison`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from nnfmu.validate import ChannelComparison
+from nnfmu.validate.summary import json_float
+
+AMPLITUDE_FREQUENCY = 1.0  # [Hz] where the thesis read its amplitude ratio
+
+
+@dataclass(frozen=True)
+class ThesisRow:
+    """One channel of one model against the reference; ratios [1], mean shift in the channel's unit."""
+
+    channel: str
+    unit: str
+    model: str
+    peak_ratio: float
+    valley_ratio: float
+    rms_ratio: float
+    damage_ratio: float
+    amplitude_ratio_1hz: float
+    mean_shift: float
+    nrmse: float
+
+    def to_dict(self) -> dict[str, object]:
+        return {k: (json_float(v) if isinstance(v, float) else v) for k, v in asdict(self).items()}
+
+
+def amplitude_ratio(c: ChannelComparison, frequency: float = AMPLITUDE_FREQUENCY) -> float:
+    """sqrt(PSD_result / PSD_reference) at `frequency` [Hz] (linear between PSD lines): the amplitude ratio there."""
+    result = float(np.interp(frequency, c.psd_result.frequency, c.psd_result.density))
+    reference = float(np.interp(frequency, c.psd_reference.frequency, c.psd_reference.density))
+    return float(np.sqrt(result / reference)) if reference > 0 else float("nan")
+
+
+def thesis_row(c: ChannelComparison, model: str) -> ThesisRow:
+    """The thesis comparison of channel `c` for `model`."""
+    m = c.metrics
+    return ThesisRow(channel=c.name, unit=c.unit, model=model, peak_ratio=m.peak_ratio, valley_ratio=m.valley_ratio,
+                     rms_ratio=m.rms_ratio, damage_ratio=m.pseudo_damage_ratio, amplitude_ratio_1hz=amplitude_ratio(c),
+                     mean_shift=m.mean_shift, nrmse=m.nrmse)

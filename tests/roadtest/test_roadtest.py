@@ -1,0 +1,160 @@
+"""Road test: SSP systems for both vehicles, a linear damper against its exact monolithic counterpart, and the road
+test with trained damper networks writing its reports and summary with finite metrics."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import onnx
+import pytest
+import torch
+from onnx import TensorProto, helper, numpy_helper
+
+from nnfmu.component import Component, Port
+from nnfmu.cosim.master import CosimSettings, cosimulate
+from nnfmu.cosim.ssp import open_system
+from nnfmu.data.rigs import RigOptions, write_rig
+from nnfmu.export import export_onnx
+from nnfmu.export.graph import IR_VERSION, OPSET
+from nnfmu.fmu.build import build_fmu
+from nnfmu.fmu.options import BuildOptions
+from nnfmu.models.features import FeatureSpec, Tap
+from nnfmu.models.networks import MLP
+from nnfmu.models.presets import get_preset
+from nnfmu.models.scaling import MinMaxScaler
+from nnfmu.models.trained import TrainedModel
+from nnfmu.models.workflow import TrainRequest, train_from_file
+from nnfmu.roadtest import (
+    BUSHING_MODELS, DAMPER_MODELS, RoadTestError, RoadTestResult, RoadTestSettings, SystemRun, actuator_inputs,
+    build_vehicle, run_road_test, write_system,
+)
+from nnfmu.roadtest.systems import bushing_elements, damper_elements
+from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.vehicle.fmu import VehicleBuildSettings, vehicle_model
+from nnfmu.vehicle.models import LinearLaw, MonolithicSettings, simulate_monolithic
+
+DAMPING = 2500.0  # [N.s/m] of the linear damper
+PERIOD = 1e-3  # [s] the rigs' sample period
+
+
+def linear_damper(path: Path) -> Path:
+    """An nnfmu step graph F = c v at the rigs' sample period (no state)."""
+    graph = helper.make_graph([helper.make_node("Mul", ["velocity", "c"], ["force"], name="viscous")], "damper",
+                              [helper.make_tensor_value_info("velocity", TensorProto.DOUBLE, [1])],
+                              [helper.make_tensor_value_info("force", TensorProto.DOUBLE, [1])],
+                              [numpy_helper.from_array(np.array([DAMPING]), "c")])
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", OPSET)])
+    model.ir_version = IR_VERSION
+    Component("linear_damper", [Port("velocity", "m/s", min=-2.0, max=2.0)], [Port("force", "N")],
+              sample_period=PERIOD).attach_to(model)
+    onnx.save(model, path)
+    return path
+
+
+def random_network(preset: str, path: Path, seed: int) -> Path:
+    """A small random-weight network on the preset's inputs, exported as a step graph (for wiring, not accuracy)."""
+    spec = get_preset(preset).spec
+    spec = FeatureSpec(taps=tuple(Tap(t.channel, (0,)) for t in spec.taps), output=spec.output)
+    torch.manual_seed(seed)
+    rng = np.random.default_rng(seed)
+    train = {c: rng.normal(scale=1e-3, size=200) for c in spec.channels}
+    units = {"axial_displacement": "m", "axial_velocity": "m/s", "axial_force": "N", "radial_displacement": "m",
+             "radial_velocity": "m/s", "radial_force": "N", "axial_rotation": "rad", "axial_angular_velocity": "rad/s",
+             "axial_torque": "N.m", "conical_rotation": "rad", "conical_angular_velocity": "rad/s",
+             "conical_torque": "N.m", "velocity": "m/s", "force": "N"}
+    model = TrainedModel(spec=spec, network=MLP(spec.n_features, 3),
+                         feature_scaler=MinMaxScaler.fit(spec.features(train, PERIOD)),
+                         target_scaler=MinMaxScaler.fit(rng.normal(scale=10.0, size=200)), sample_period=PERIOD,
+                         units=units, metrics={}, data_hash="ef" * 32, settings={},
+                         envelope={c: (float(train[c].min()), float(train[c].max())) for c in spec.channels})
+    return export_onnx(model, path, name=preset.replace("-", "_")).path
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """Damper networks smoke-trained on a short dyno record; random bushing networks (wiring only)."""
+    folder = tmp_path_factory.mktemp("networks")
+    lab, _ = write_rig("damper", folder / "damper.csv", RigOptions(duration=12.0, excitation="random"))
+    models = {p: train_from_file(lab, TrainRequest(preset=p, restarts=1, max_epochs=3, hidden=(3,)),
+                                 folder / f"{p}.onnx").path for p in DAMPER_MODELS}
+    return models | {p: random_network(p, folder / f"{p}.onnx", i) for i, p in enumerate(BUSHING_MODELS)}
+
+
+@pytest.fixture(scope="module")
+def road(trained: dict[str, Path], tmp_path_factory: pytest.TempPathFactory) -> RoadTestResult:
+    """A short road test of both systems (the full vehicle a fraction of a second)."""
+    settings = RoadTestSettings(quarter_car=SystemRun(2.0), full_vehicle=SystemRun(0.3), bushing_probe=0.05)
+    return run_road_test(tmp_path_factory.mktemp("road"), trained, settings, log=lambda _: None)
+
+
+def test_ssds_of_both_systems_open_and_wire_every_network(road: RoadTestResult) -> None:
+    shipped = {("quarter-car", m): road.systems[0].ssds[m] for m in DAMPER_MODELS}
+    shipped[("full-vehicle", "lca-bushing-networks")] = road.systems[1].ssds["lca-bushing-networks"]
+    for (system, _), ssd in shipped.items():
+        with open_system(ssd) as opened:
+            elements = {e.name: e for e in opened.elements}
+            assert sorted(elements) == sorted(["vehicle", *damper_elements(system), *bushing_elements(system)])
+            driven = {(c.end_element, c.end_connector): (c.start_element, c.start_connector)
+                      for c in opened.connections}
+            for damper in damper_elements(system):
+                assert driven[("vehicle", f"{damper}_force")] == (damper, "force")
+                assert driven[(damper, "velocity")] == ("vehicle", f"{damper}_velocity")
+                assert elements[damper].parameters == {"filter_cutoff": 0.0}
+            for bushing_name in bushing_elements(system):
+                for port in ("axial_force", "radial_force", "axial_torque", "conical_torque"):
+                    assert driven[("vehicle", f"{bushing_name}_{port}")] == (bushing_name, port)
+                assert driven[(bushing_name, "conical_rotation")] == ("vehicle", f"{bushing_name}_conical_rotation")
+
+
+def test_linear_damper_cosimulation_approaches_the_monolithic_solution(tmp_path: Path) -> None:
+    damper = build_fmu(linear_damper(tmp_path / "linear.onnx"), BuildOptions(out=tmp_path / "linear.fmu"))
+    vehicle = build_vehicle("quarter-car", tmp_path)
+    ssd = write_system("quarter-car", vehicle, damper, None, tmp_path / "system", 0.0)
+    drive = generate_drive(DriveSettings(duration=1.0))
+    with open_system(ssd) as system:
+        result = cosimulate(system, drive, CosimSettings(step=1e-4)).measurement
+    model = vehicle_model("quarter-car", VehicleBuildSettings())
+    exact = simulate_monolithic(model, {"damper_force": LinearLaw(0.0, DAMPING)}, actuator_inputs("quarter-car", drive),
+                                MonolithicSettings(sample_period=drive.sample_period))
+    for channel in ("damper_displacement", "damper_force"):
+        cosim = np.interp(exact["time"], result.time, result[channel])
+        error = np.sqrt(np.mean((cosim - exact[channel]) ** 2)) / np.sqrt(np.mean(exact[channel] ** 2))
+        assert error < 0.03, (channel, error)
+
+
+def test_road_test_writes_reports_and_finite_thesis_metrics(road: RoadTestResult) -> None:
+    result = road
+    assert [s.system for s in result.systems] == ["quarter-car", "full-vehicle"]
+    written = json.loads(result.summary.read_text())
+    for system in written["systems"]:
+        assert Path(system["report"]).is_file()
+        models = {row["model"] for row in system["thesis_table"]}
+        assert models == set(DAMPER_MODELS)
+        # the full vehicle runs 0.3 s, too short for peaks of channels still settling; the quarter car runs 2 s
+        keys = ("peak_ratio", "valley_ratio", "rms_ratio", "damage_ratio", "amplitude_ratio_1hz", "mean_shift",
+                "nrmse") if system["system"] == "quarter-car" else ("rms_ratio", "mean_shift", "nrmse")
+        for row in system["thesis_table"]:
+            for key in keys:
+                assert row[key] is not None and math.isfinite(row[key]), (system["system"], row["channel"], key)
+        for ssd in system["ssds"].values():
+            with open_system(ssd):
+                pass
+        assert all(e["share_outside"] is not None for e in system["envelope"])
+    full = written["systems"][1]
+    assert {r["channel"].split("_")[-2] + "_" + r["channel"].split("_")[-1]
+            for r in full["bushing_networks_on_reference_motion"]} == {"axial_force", "radial_force", "axial_torque",
+                                                                        "conical_torque"}
+    assert full["bushing_probe"]["duration_s"] == 0.05
+    quarter = written["systems"][0]
+    assert quarter["bushing_probe"] is None and quarter["bushing_networks_on_reference_motion"] == []
+
+
+def test_missing_models_are_named(tmp_path: Path) -> None:
+    with pytest.raises(RoadTestError, match="bushing-axial-force"):
+        run_road_test(tmp_path, {p: tmp_path / "x.onnx" for p in DAMPER_MODELS}, RoadTestSettings(quarter_car=None))
+    with pytest.raises(RoadTestError, match="not found"):
+        run_road_test(tmp_path, {p: tmp_path / "x.onnx" for p in DAMPER_MODELS},
+                      RoadTestSettings(full_vehicle=None))
