@@ -149,7 +149,10 @@ def demo(
         table.add_row(m.preset, f"{m.train_seconds:.1f}", f"{m.test_split_nrmse:.4f}", f"{m.replay_nrmse:.4f}",
                       f"{m.replay_r2:.4f}", f"{m.replay_peak_error:+.3f}", f"{m.replay_pseudo_damage_ratio:.3f}")
     console.print(table)
-    console.print(f"report: {summary.report}\nsummary: {summary.out / 'summary.json'} ({summary.seconds:.0f} s)")
+    console.print(f"component report: {summary.report}")
+    for system, report in summary.road_test.items():
+        console.print(f"road test {system} report: {report}")
+    console.print(f"summary: {summary.out / 'summary.json'} ({summary.seconds:.0f} s)")
 
 
 @app.command()
