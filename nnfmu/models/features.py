@@ -208,7 +208,95 @@ class LowpassSquare(Derived):
         return y, y
 
 
-DERIVED_KINDS: dict[str, type[Derived]] = {cls.kind: cls for cls in (SmoothSign, Lowpass, LowpassSquare)}
+@dataclass(frozen=True)
+class Highpass(Derived):
+    """First-order high-pass of a channel, time constant tau [s]: x_k - y_k with y the `Lowpass` of x (same tau).
+
+    What a Maxwell branch of stiffness c carries is c·highpass(position, tau), so a bank of these is the memory of
+    a generalised Maxwell material with inputs that are not collinear with the position itself (a low-pass bank is:
+    the net then forms x - lowpass(x) itself from large opposite weights). The state slot holds the low-pass part
+    y_{k-1}, 0 at rest; same exact discretisation as `Lowpass`.
+    """
+
+    kind: ClassVar[str] = "highpass"
+    tau: float = 0.01
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        object.__setattr__(self, "tau", _check_positive(self.tau, f"highpass({self.channel}) tau"))
+
+    def coefficient(self, sample_period: float) -> float:
+        return -math.expm1(-sample_period / self.tau)
+
+    def state_slots(self) -> tuple[StateSlot, ...]:
+        return (
+            StateSlot(
+                name=f"{self.name}.lowpass[k-1]", channel=self.channel,
+                description=f"previous low-pass part (input minus output) of {self.name}",
+            ),
+        )
+
+    def compute(self, x: np.ndarray, initial: np.ndarray, sample_period: float) -> np.ndarray:
+        a = self.coefficient(sample_period)
+        low, _ = lfilter([a], [1.0, -(1.0 - a)], x, zi=[(1.0 - a) * float(initial[0])])
+        return x - low
+
+    def emit(self, g: NodeSink, x: str, state: str | None, sample_period: float) -> tuple[str, str | None]:
+        assert state is not None, "highpass has a state slot"
+        a = g.constant("highpass_coefficient", np.array([self.coefficient(sample_period)]))
+        step = g.node("Mul", [g.node("Sub", [x, state], "highpass_error"), a], "highpass_step")
+        low = g.node("Add", [state, step], "highpass_lowpass")
+        return g.node("Sub", [x, low], "highpass"), low
+
+
+@dataclass(frozen=True)
+class Difference(Derived):
+    """Backward difference of a channel over `delay` samples: x_k - x_{k-delay} (a rate or increment, not a copy).
+
+    Against a tap at k-delay it spans the same inputs but is not nearly collinear with x_k, so the net needs no
+    large opposite weights to take the difference. The state slots hold x_{k-1} .. x_{k-delay}, 0 at rest.
+    """
+
+    kind: ClassVar[str] = "difference"
+    delay: int = 1
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        d = self.delay
+        if isinstance(d, bool) or not isinstance(d, (int, np.integer)) or d < 1:
+            raise ValueError(f"difference({self.channel}) delay must be an integer >= 1, got {d!r}")
+        object.__setattr__(self, "delay", int(d))
+
+    @property
+    def name(self) -> str:
+        return f"{self.kind}({self.channel}, delay={self.delay})"
+
+    def state_slots(self) -> tuple[StateSlot, ...]:
+        return tuple(
+            StateSlot(name=f"{self.name}:{self.channel}[k-{j}]", channel=self.channel,
+                      description=f"{self.channel} delayed by {j} samples, for {self.name}")
+            for j in range(1, self.delay + 1)
+        )
+
+    def compute(self, x: np.ndarray, initial: np.ndarray, sample_period: float) -> np.ndarray:
+        history = np.concatenate([np.asarray(initial, dtype=np.float64)[::-1], x])  # history[delay + k] = x_k
+        return x - history[: len(x)]
+
+    def emit(self, g: NodeSink, x: str, state: str | None, sample_period: float) -> tuple[str, str | None]:
+        assert state is not None, "difference has state slots"
+        last = g.constant("difference_oldest", np.array([self.delay - 1], dtype=np.int64))
+        value = g.node("Sub", [x, g.node("Gather", [state, last], "difference_delayed", axis=0)], "difference")
+        if self.delay == 1:
+            return value, x
+        starts = g.constant("difference_keep_start", np.array([0], dtype=np.int64))
+        ends = g.constant("difference_keep_end", np.array([self.delay - 1], dtype=np.int64))
+        kept = g.node("Slice", [state, starts, ends], "difference_kept")
+        return value, g.node("Concat", [x, kept], "difference_line", axis=0)
+
+
+DERIVED_KINDS: dict[str, type[Derived]] = {
+    cls.kind: cls for cls in (SmoothSign, Lowpass, LowpassSquare, Highpass, Difference)
+}
 
 
 def derived_from_dict(d: dict[str, Any]) -> Derived:

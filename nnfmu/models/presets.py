@@ -3,28 +3,40 @@ training settings, so `nnfmu train DATA --preset NAME` needs nothing else.
 
 Each preset holds two definitions. `thesis_spec`/`thesis` reproduce the thesis (inputs, delays, fixed hidden size;
 `--thesis`). `spec`/`architecture` are what nnfmu trains by default, with hidden sizes chosen by validation error
-starting at the thesis's size. Bushings: the same input channels plus a bank of first-order low-pass filters of the
-position with one time constant per decade (1, 10, 100 ms) — the memory of a generalised Maxwell (Prony-series)
-material, which a one-sample delay line at 1 kHz cannot hold. Damper hysteresis: velocity on an octave-spaced
-delay line (0, 2, 4, 8, 16 samples) instead of the thesis's single delay.
+starting at the thesis's size. The defaults' extra inputs are chosen to be well conditioned: no feature is a delayed
+or smoothed copy of another (nearly collinear after scaling), which a net can only difference through large
+opposite weights (the thesis's limit is |weight| <~ 10). Bushings: the same input channels plus a bank of
+first-order high-pass filters of the position, one time constant per decade (1, 10, 100 ms): c·highpass(x, tau) is
+the force of a Maxwell branch, so the bank is the memory of a generalised Maxwell (Prony-series) material, which a
+one-sample delay line at 1 kHz cannot hold. Damper hysteresis: velocity, its backward differences over 2 and 8 samples
+(valve lag, acceleration) instead of the thesis's single delay, and the seal friction's smoothed sign. Damper
+spline: velocity, the seal friction's smoothed sign and the valve's blow-off knee as tanh(v/0.1 m/s).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from nnfmu.models.features import FeatureSpec, Lowpass, Tap
+from nnfmu.models.features import Derived, Difference, FeatureSpec, Highpass, SmoothSign, Tap
 from nnfmu.models.train import Architecture, TrainSettings
 
 # Hidden sizes tried by default after the thesis's size (chosen by validation error).
 AUTO_HIDDEN = (3, 5, 7, 9, 12)
 # GRU hidden size for the recurrent option when the user gives none.
 GRU_HIDDEN = (8,)
-# Time constants [s] of the default low-pass memory bank: one per decade across the rigs' 1-20 Hz band and beyond.
+# Time constants [s] of the default high-pass memory bank: one per decade across the rigs' 1-20 Hz band and beyond.
 MEMORY_TAUS = (0.001, 0.01, 0.1)
-# Default damper-hysteresis delays [samples]: the thesis's time-delay idea with octave-spaced delays, so that at
-# 1 kHz the line spans the valve's lag (~1-4 ms) and the acceleration (inertia) over 16 ms.
-HYSTERESIS_DELAYS = (0, 2, 4, 8, 16)
+# Default damper-hysteresis velocity differences [samples]: the thesis's time-delay idea as rates, so that at 1 kHz
+# they cover the valve's lag behind the velocity (~1-4 ms, series compliance) and the acceleration (inertia).
+HYSTERESIS_DIFFERENCES = (2, 8)
+# Velocity scales [m/s] of the damper's smoothed-sign features: the seal's Coulomb friction switches within a few
+# mm/s (30-80 N, Dixon); a digressive valve blows off at a knee of 0.1-0.3 m/s. tanh(v/scale) gives the net each
+# bend as an input instead of asking a tanh unit on the [-1, 1]-scaled velocity for a steep (large-weight) slope.
+SEAL_FRICTION_VELOCITY = 0.01
+VALVE_KNEE_VELOCITY = 0.1
+# Rate scale [rad/s] of the conical channel's friction-sign feature: its friction is a larger share of its torque
+# than in the other channels (a stiff, small-angle channel), ~2 % of the peak rate of a front LCA bushing's rig drive.
+CONICAL_FRICTION_RATE = 0.05
 
 
 @dataclass(frozen=True)
@@ -54,19 +66,23 @@ def _taps(channels: tuple[str, ...], delays: tuple[int, ...]) -> tuple[Tap, ...]
     return tuple(Tap(c, delays) for c in channels)
 
 
+def memory_bank(channel: str) -> tuple[Highpass, ...]:
+    """The default Maxwell memory of a position channel: its high-pass at every MEMORY_TAUS time constant."""
+    return tuple(Highpass(channel, tau=t) for t in MEMORY_TAUS)
+
+
 def _preset(
     name: str, description: str, channels: tuple[str, ...], output: str, thesis_delays: tuple[int, ...], hidden: int,
-    memory_of: str | None, delays: tuple[int, ...] = (0,),
+    derived: tuple[Derived, ...] = (),
 ) -> Preset:
-    """A preset whose thesis net taps `channels` at `thesis_delays` with `hidden` units; the default taps them at
-    `delays`, adds the low-pass memory bank of `memory_of` (None: no bank) and searches the hidden size."""
-    derived = tuple(Lowpass(memory_of, tau=t) for t in MEMORY_TAUS) if memory_of else ()
+    """A preset whose thesis net taps `channels` at `thesis_delays` with `hidden` units; the default taps them at the
+    current sample only, adds the `derived` features and searches the hidden size."""
     return Preset(
         name=name,
         description=description,
         thesis_spec=FeatureSpec(taps=_taps(channels, thesis_delays), output=output),
         thesis=Architecture("mlp", (hidden,)),
-        spec=FeatureSpec(taps=_taps(channels, delays), output=output, derived=derived),
+        spec=FeatureSpec(taps=_taps(channels, (0,)), output=output, derived=derived),
         architecture=Architecture("mlp", auto_from(hidden)),
     )
 
@@ -76,27 +92,33 @@ PRESETS: dict[str, Preset] = {
     for p in (
         _preset(
             "damper-spline", "damper force-velocity characteristic (thesis 1-3-1 on velocity)",
-            ("velocity",), "force", (0,), 3, None,
+            ("velocity",), "force", (0,), 3,
+            (SmoothSign("velocity", scale=SEAL_FRICTION_VELOCITY), SmoothSign("velocity", scale=VALVE_KNEE_VELOCITY)),
         ),
         _preset(
             "damper-hysteresis", "damper force with hysteresis and inertia from velocity history (thesis 2-5-1 time-delay net)",
-            ("velocity",), "force", (0, 1), 5, None, HYSTERESIS_DELAYS,
+            ("velocity",), "force", (0, 1), 5,
+            (
+                *(Difference("velocity", delay=d) for d in HYSTERESIS_DIFFERENCES),
+                SmoothSign("velocity", scale=SEAL_FRICTION_VELOCITY),
+            ),
         ),
         _preset(
             "bushing-axial-force", "bushing axial force from axial displacement and velocity (thesis 2-3-1)",
-            ("axial_displacement", "axial_velocity"), "axial_force", (0,), 3, "axial_displacement",
+            ("axial_displacement", "axial_velocity"), "axial_force", (0,), 3, memory_bank("axial_displacement"),
         ),
         _preset(
             "bushing-radial-force", "bushing radial force from radial displacement and velocity (thesis 2-3-1)",
-            ("radial_displacement", "radial_velocity"), "radial_force", (0,), 3, "radial_displacement",
+            ("radial_displacement", "radial_velocity"), "radial_force", (0,), 3, memory_bank("radial_displacement"),
         ),
         _preset(
             "bushing-axial-torque", "bushing axial torque from rotation and angular velocity (thesis 4-7-1 with delays)",
-            ("axial_rotation", "axial_angular_velocity"), "axial_torque", (0, 1), 7, "axial_rotation",
+            ("axial_rotation", "axial_angular_velocity"), "axial_torque", (0, 1), 7, memory_bank("axial_rotation"),
         ),
         _preset(
             "bushing-conical-torque", "bushing conical torque from conical rotation and rate (thesis 4-7-1 with delays)",
-            ("conical_rotation", "conical_angular_velocity"), "conical_torque", (0, 1), 7, "conical_rotation",
+            ("conical_rotation", "conical_angular_velocity"), "conical_torque", (0, 1), 7,
+            (*memory_bank("conical_rotation"), SmoothSign("conical_angular_velocity", scale=CONICAL_FRICTION_RATE)),
         ),
     )
 }

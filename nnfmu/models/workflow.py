@@ -23,7 +23,7 @@ class TrainRequest:
 
     output: output channel; inputs/delays: replace the preset's input taps (delays apply to every input); hidden: one
     size, or several to choose among by validation error; thesis: the thesis's inputs, delays and fixed hidden size
-    instead of nnfmu's default (low-pass memory bank, hidden size by validation); recurrent: GRU instead of the MLP; select_inputs: choose the
+    instead of nnfmu's default (high-pass memory bank, hidden size by validation); recurrent: GRU instead of the MLP; select_inputs: choose the
     inputs by sensitivity analysis (overrides the preset's and `inputs`); optimizer: auto, lm, adam or lbfgs.
     """
 

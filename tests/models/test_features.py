@@ -9,7 +9,7 @@ import onnxruntime as ort
 import pytest
 
 from nnfmu.export.graph import GraphBuilder
-from nnfmu.models.features import FeatureSpec, Lowpass, SmoothSign, Tap, derived_from_dict
+from nnfmu.models.features import Difference, FeatureSpec, Highpass, Lowpass, SmoothSign, Tap, derived_from_dict
 
 T = 0.001
 
@@ -19,6 +19,18 @@ def spec_with_everything() -> FeatureSpec:
         taps=(Tap("velocity", (0, 1, 3)), Tap("displacement", (2,)), Tap("temperature")),
         output="force",
         derived=(SmoothSign("velocity", scale=0.05), Lowpass("velocity", tau=0.004), Lowpass("acceleration", tau=0.01)),
+    )
+
+
+def spec_with_rates_and_memory() -> FeatureSpec:
+    """Highpass and difference features beside a tap and a low-pass of the same channel (their states interleave)."""
+    return FeatureSpec(
+        taps=(Tap("displacement", (0, 1)),),
+        output="force",
+        derived=(
+            Highpass("displacement", tau=0.002), Difference("velocity", delay=1), Lowpass("displacement", tau=0.002),
+            Difference("displacement", delay=4), Highpass("velocity", tau=0.05),
+        ),
     )
 
 
@@ -84,7 +96,28 @@ def test_smooth_sign_is_tanh_of_scaled_channel():
     np.testing.assert_array_equal(spec.features({"velocity": v}, T)[:, 0], np.tanh(v / 0.2))
 
 
-@pytest.mark.parametrize("make", [spec_with_everything, lambda: FeatureSpec((Tap("velocity"),), "force")])
+def test_highpass_is_the_channel_minus_its_lowpass():
+    tau = 0.003
+    spec = FeatureSpec(taps=(), output="force", derived=(Highpass("velocity", tau=tau),))
+    k = np.arange(50)
+    y = spec.features({"velocity": np.ones(50)}, T)[:, 0]
+    np.testing.assert_allclose(y, np.exp(-(k + 1) * T / tau), rtol=1e-12, atol=1e-15)  # 1 - lowpass step response
+    x = np.random.default_rng(3).normal(size=80)
+    low = FeatureSpec(taps=(), output="force", derived=(Lowpass("velocity", tau=tau),)).features({"velocity": x}, T)
+    np.testing.assert_allclose(spec.features({"velocity": x}, T)[:, 0], x - low[:, 0], rtol=0, atol=1e-15)
+    assert [s.name for s in spec.state_layout()] == ["highpass(velocity, tau=0.003).lowpass[k-1]"]
+
+
+def test_difference_is_the_change_over_its_delay_from_rest():
+    spec = FeatureSpec(taps=(), output="force", derived=(Difference("velocity", delay=2),))
+    x = np.array([1.0, 3.0, 6.0, 10.0, 15.0])
+    np.testing.assert_array_equal(spec.features({"velocity": x}, T)[:, 0], [1.0, 3.0, 5.0, 7.0, 9.0])
+    assert spec.feature_names == ["difference(velocity, delay=2)"] and spec.state_size == 2
+
+
+@pytest.mark.parametrize(
+    "make", [spec_with_everything, spec_with_rates_and_memory, lambda: FeatureSpec((Tap("velocity"),), "force")]
+)
 def test_features_equal_emitted_step_nodes(make):
     spec = make()
     rng = np.random.default_rng(1)
@@ -92,8 +125,9 @@ def test_features_equal_emitted_step_nodes(make):
     np.testing.assert_allclose(run_feature_nodes(spec, channels), spec.features(channels, T), rtol=1e-13, atol=1e-15)
 
 
-def test_dict_round_trip_through_json():
-    spec = spec_with_everything()
+@pytest.mark.parametrize("make", [spec_with_everything, spec_with_rates_and_memory])
+def test_dict_round_trip_through_json(make):
+    spec = make()
     again = FeatureSpec.from_dict(json.loads(json.dumps(spec.to_dict())))
     assert again == spec
 
@@ -109,6 +143,9 @@ def test_dict_round_trip_through_json():
         (lambda: FeatureSpec((Tap("force"),), "force"), "'force' is also an input"),
         (lambda: FeatureSpec((), "force"), "no features"),
         (lambda: Lowpass("velocity", tau=0.0), "tau"),
+        (lambda: Highpass("velocity", tau=-1.0), "tau must be a finite number > 0, got -1.0"),
+        (lambda: Difference("velocity", delay=0), "delay must be an integer >= 1, got 0"),
+        (lambda: Difference("velocity", delay=1.5), "1.5"),
         (lambda: SmoothSign("velocity", scale=float("nan")), "nan"),
         (lambda: derived_from_dict({"kind": "energy", "channel": "velocity"}), "'energy'"),
         (lambda: derived_from_dict({"kind": "lowpass", "channel": "velocity", "cutoff": 3}), "cutoff"),

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
-from nnfmu.models.features import Lowpass, Tap
+from nnfmu.data.rigs import RigOptions, simulate_rig
+from nnfmu.models.features import FeatureSpec, Highpass, Lowpass, Tap
 from nnfmu.models.presets import MEMORY_TAUS, PRESETS, custom_spec, get_preset
 from nnfmu.models.workflow import TrainRequest, resolve
 
@@ -38,14 +40,39 @@ def test_input_channels_follow_the_rig_names():
     ]:
         preset = get_preset(name)
         assert preset.thesis_spec.channels == channels and preset.spec.channels == channels
-        # the default adds the low-pass memory bank of the position channel
-        assert preset.spec.derived == tuple(Lowpass(channels[0], tau=t) for t in MEMORY_TAUS)
+        # the default adds the high-pass memory bank of the position channel
+        assert preset.spec.derived[:3] == tuple(Highpass(channels[0], tau=t) for t in MEMORY_TAUS)
+        assert preset.spec.taps == (Tap(channels[0]), Tap(channels[1]))
     assert get_preset("bushing-axial-torque").thesis_spec.taps == (
         Tap("axial_rotation", (0, 1)), Tap("axial_angular_velocity", (0, 1))
     )
     hysteresis = get_preset("damper-hysteresis")
     assert hysteresis.thesis_spec.taps == (Tap("velocity", (0, 1)),) and hysteresis.thesis.hidden == (5,)
     assert hysteresis.spec.channels == ["velocity"] and hysteresis.output == "force"
+    # the default's history enters as rates (differences), not as delayed copies of the velocity
+    assert hysteresis.spec.taps == (Tap("velocity"),)
+    assert [d.kind for d in hysteresis.spec.derived] == ["difference", "difference", "smooth_sign"]
+    assert [d.kind for d in get_preset("damper-spline").spec.derived] == ["smooth_sign", "smooth_sign"]
+
+
+def largest_correlation(spec: FeatureSpec, record) -> float:
+    """Largest |correlation| between two different feature columns of `spec` over a rig record."""
+    columns = spec.features({c: record[c] for c in spec.channels}, record.sample_period)
+    correlation = np.abs(np.corrcoef(columns.T))
+    np.fill_diagonal(correlation, 0.0)
+    return float(correlation.max())
+
+
+def test_default_bushing_memory_is_not_collinear_with_the_position():
+    """The high-pass bank leaves no pair of inputs as collinear as the low-pass bank it replaced (nets that difference
+    near-copies need large opposite weights)."""
+    record = simulate_rig("bushing", RigOptions(seed=0, duration=10.0)).measurement
+    for name in ("bushing-axial-force", "bushing-radial-force", "bushing-axial-torque", "bushing-conical-torque"):
+        spec = get_preset(name).spec
+        position, rate = (t.channel for t in spec.taps)
+        lowpass_bank = FeatureSpec(spec.taps, spec.output, tuple(Lowpass(position, tau=t) for t in MEMORY_TAUS))
+        assert largest_correlation(lowpass_bank, record) > 0.999
+        assert largest_correlation(spec, record) < 0.99
 
 
 def test_every_preset_is_listed_and_unknown_names_are_refused():
