@@ -244,6 +244,34 @@ def cosim(
         typer.echo(f"mean iterations per step {result.mean_iterations:.2f}, unconverged steps {result.unconverged_steps}")
 
 
+@app.command()
+def loop(
+    data: Path = typer.Argument(..., help="Measurement (CSV or MDF4) with the model's inputs and the output channel."),
+    model: Path = typer.Option(..., help="nnfmu ONNX step graph to check and extend."),
+    output: str = typer.Option("force", help="Measured output channel the model predicts."),
+    out: Path = typer.Option(..., "--out", "-o", help="Folder for every iteration's ONNX and FMU, report.json and report.html."),
+    max_effects: int = typer.Option(3, help="Most effects to add."),
+) -> None:
+    """Replay the model's FMU on measured data, trace the residual to missing physical effects, add them, report."""
+    from nnfmu.data import DataError
+    from nnfmu.fmu.errors import FmuBuildError
+    from nnfmu.loop import DiagnosisError
+    from nnfmu.loop.loop_settings import LoopError, LoopSettings
+    from nnfmu.loop.run import run_loop
+
+    try:
+        report = run_loop(data, model, output, out, LoopSettings(max_effects=max_effects))
+    except (LoopError, DiagnosisError, DataError, FmuBuildError) as error:
+        _fail(error)
+    typer.echo(report.summary)
+    typer.echo(f"effects added: {', '.join(report.effects_added) or 'none'}")
+    for key in ("nrmse", "r2", "peak_error", "pseudo_damage_ratio"):
+        typer.echo(f"  {key}: {report.error_before[key]:.4g} -> {report.error_after[key]:.4g}")
+    for note in report.notes:
+        typer.echo(f"  note: {note}")
+    typer.echo(f"ONNX: {report.onnx}\nFMU: {report.fmu}\nreport: {out / 'report.html'}")
+
+
 @data_app.command("check")
 def data_check(
     path: Path = typer.Argument(..., help="CSV (`name [unit]` headers, `time [s]` first) or MDF4 file."),

@@ -1,0 +1,90 @@
+"""Settings of `nnfmu loop` and the exception it raises for unusable input, checked once here."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from .settings import DiagnosisSettings
+
+
+class LoopError(ValueError):
+    """The loop cannot run on this data or model; the message names the file, channel or value at fault."""
+
+
+@dataclass(frozen=True)
+class LoopSettings:
+    """How the loop splits the record, diagnoses, extends and retrains.
+
+    Record blocks: the record is cut into `segments` equal segments, each split in time order into a fit part
+    (`fit_fraction`; its last `validation_fraction` of the segment for early stopping), a diagnosis part and a test
+    part (`test_fraction`, the rest of the segment). The diagnosis and the reported error use only their parts.
+    `max_effects`: effects added at most. `diagnosis`: the residual diagnosis. Retraining: `max_epochs` and
+    `patience` of Levenberg-Marquardt, `lm_max_samples` (it fits on at most this many evenly strided training
+    rows, and checks on as many validation rows), `lm_mu` (its initial damping: a warm start sits near the old
+    minimum, so the first steps start damped, gradient-descent-like, instead of a full Gauss-Newton jump that early
+    stopping would throw away), `extra_hidden` numbers of hidden units added beside the copied ones (chosen
+    by validation error), `seed`. `parsimony`: a significant effect gives way to a rival with fewer regressors that
+    explains alone at least (1 - parsimony) of what it explains alone (see `run._candidates`). `min_explained`: an
+    effect is added only when it explains at least this fraction of the residual variance (beyond the effects ranked
+    above it; alone, for a simpler rival): with tens of thousands of samples a network's own approximation error
+    makes tiny effects statistically significant, and the loop adds what matters, not what is merely detectable. Extensions: `friction_scale` (fraction of the rms velocity: the smoothed sign's
+    velocity scale), `memory_taus` [s] (low-pass states of velocity for hysteresis), `frequency_taus` [s] (low-pass
+    states of displacement), `thermal_tau` [s] (thermal time constant of the running mean square of velocity that
+    stands in for an unmeasured temperature), `amplitude_tau` [s] (averaging time of the running mean square of
+    displacement). `backend`/`fmi_version`: the FMUs built.
+    """
+
+    max_effects: int = 3
+    segments: int = 5
+    fit_fraction: float = 0.6
+    validation_fraction: float = 0.1
+    test_fraction: float = 0.2
+    diagnosis: DiagnosisSettings = field(default_factory=DiagnosisSettings)
+    max_epochs: int = 200
+    patience: int = 12
+    lm_max_samples: int = 8000
+    lm_mu: float = 1.0
+    extra_hidden: tuple[int, ...] = (0, 3, 6)
+    seed: int = 0
+    parsimony: float = 0.35
+    min_explained: float = 0.05
+    friction_scale: float = 0.02
+    memory_taus: tuple[float, ...] = (0.002, 0.02)
+    frequency_taus: tuple[float, ...] = (0.01, 0.1, 1.0)
+    thermal_tau: float = 300.0
+    amplitude_tau: float = 1.0
+    backend: str = "native"
+    fmi_version: int = 2
+
+    def __post_init__(self) -> None:
+        if isinstance(self.max_effects, bool) or not isinstance(self.max_effects, int) or self.max_effects < 0:
+            raise LoopError(f"max_effects must be an integer >= 0, got {self.max_effects!r}")
+        if self.segments < 1:
+            raise LoopError(f"segments must be >= 1, got {self.segments!r}")
+        parts = (self.fit_fraction, self.validation_fraction, self.test_fraction)
+        if not all(math.isfinite(p) and p > 0 for p in parts):
+            raise LoopError(f"fit, validation and test fractions must be positive, got {parts}")
+        if self.validation_fraction >= self.fit_fraction or self.fit_fraction + self.test_fraction >= 1:
+            raise LoopError(
+                f"fractions leave no room: validation {self.validation_fraction} must be below fit {self.fit_fraction}, "
+                f"and fit + test ({self.fit_fraction + self.test_fraction}) below 1 so a diagnosis part remains"
+            )
+        if self.max_epochs < 1 or self.patience < 1 or self.lm_max_samples < 1:
+            raise LoopError(f"max_epochs, patience and lm_max_samples must be >= 1, got {self.max_epochs}, "
+                            f"{self.patience} and {self.lm_max_samples}")
+        if not self.extra_hidden or any(h < 0 for h in self.extra_hidden):
+            raise LoopError(f"extra_hidden must be non-negative unit counts, got {self.extra_hidden!r}")
+        if not (math.isfinite(self.lm_mu) and self.lm_mu > 0):
+            raise LoopError(f"lm_mu must be a positive damping, got {self.lm_mu!r}")
+        if not (0 <= self.parsimony < 1 and 0 <= self.min_explained < 1):
+            raise LoopError(f"parsimony and min_explained must lie in [0, 1), got {self.parsimony!r} and "
+                            f"{self.min_explained!r}")
+        positive = {
+            "friction_scale": (self.friction_scale,), "memory_taus": self.memory_taus,
+            "frequency_taus": self.frequency_taus, "thermal_tau": (self.thermal_tau,),
+            "amplitude_tau": (self.amplitude_tau,),
+        }
+        for name, values in positive.items():
+            if not values or not all(math.isfinite(v) and v > 0 for v in values):
+                raise LoopError(f"{name} must be positive, got {getattr(self, name)!r}")

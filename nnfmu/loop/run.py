@@ -1,0 +1,370 @@
+"""`nnfmu loop`: replay the model's FMU on the measured inputs, diagnose the residual on data not used to fit, add
+the top effect to the feature spec, retrain warm-started, rebuild the FMU, replay again; until the residual is
+consistent with noise, no addable effect is significant, or `max_effects` were added. Then the report.
+
+Every file goes into a staging folder beside `out_dir`, which replaces `out_dir` only when everything succeeded, so
+bad input or a failure midway leaves no half-written result.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from nnfmu.cosim.replay import ReplaySettings, replay_fmu
+from nnfmu.data import DataError, Measurement, check_measurement, load_measurement
+from nnfmu.export import export_onnx
+from nnfmu.fmu.build import build_fmu
+from nnfmu.fmu.options import BuildOptions
+from nnfmu.models.features import FeatureSpec
+from nnfmu.models.trained import TrainedModel
+from nnfmu.validate import ValidationSettings, channel_metrics
+
+from .blocks import RecordBlocks, part_measurement, plan_blocks
+from .diagnose import diagnose
+from .evidence import Diagnosis, EffectEvidence
+from .extend import Extension, NoExtension, extend_spec
+from .loop_report import write_loop_report
+from .loop_settings import LoopError, LoopSettings
+from .onnx_model import load_onnx_model
+from .warm_start import warm_start
+
+PERIOD_TOLERANCE = 1e-6  # relative sample-period mismatch accepted between data and model
+
+
+@dataclass
+class Iteration:
+    """One added effect: its diagnosis evidence, the extension, the test errors before and after, the files."""
+
+    effect: str
+    explained_variance: float | None
+    explained_variance_alone: float | None
+    p_value: float | None
+    extension: str
+    reason: str
+    features_added: tuple[str, ...]
+    error_before: dict[str, float]
+    error_after: dict[str, float]
+    diagnosis_nrmse_before: float
+    diagnosis_nrmse_after: float
+    accepted: bool
+    onnx: Path
+    fmu: Path
+    extra_hidden: int
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "effect": self.effect,
+            "explained_variance": self.explained_variance,
+            "explained_variance_alone": self.explained_variance_alone,
+            "p_value": self.p_value,
+            "extension": self.extension,
+            "reason": self.reason,
+            "features_added": list(self.features_added),
+            "error_before": self.error_before,
+            "error_after": self.error_after,
+            "diagnosis_nrmse_before": self.diagnosis_nrmse_before,
+            "diagnosis_nrmse_after": self.diagnosis_nrmse_after,
+            "accepted": self.accepted,
+            "onnx": str(self.onnx),
+            "fmu": str(self.fmu),
+            "extra_hidden_units": self.extra_hidden,
+        }
+
+
+@dataclass
+class LoopReport:
+    """The whole loop: effects added in order, every iteration, the overall test error before and after, the final
+    model's files, the diagnoses (first and last) and notes (effects that could not be added, and why)."""
+
+    data: str
+    model: str
+    output: str
+    blocks: dict[str, list[list[float]]]
+    effects_added: list[str]
+    iterations: list[Iteration]
+    error_before: dict[str, float]
+    error_after: dict[str, float]
+    onnx: Path
+    fmu: Path
+    consistent_with_noise: bool
+    summary: str
+    notes: list[str]
+    missing_measurements: list[str]
+    diagnoses: list[Diagnosis] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "data": self.data,
+            "model": self.model,
+            "output": self.output,
+            "blocks": self.blocks,
+            "blocks_note": (
+                "each segment of the record is cut in time order into train and validation (fit), diagnosis and test; "
+                "the diagnosis runs on the diagnosis part and every error is on the test part, never fitted on"
+            ),
+            "effects_added": list(self.effects_added),
+            "iterations": [it.to_dict() for it in self.iterations],
+            "error_before": self.error_before,
+            "error_after": self.error_after,
+            "onnx": str(self.onnx),
+            "fmu": str(self.fmu),
+            "consistent_with_noise": self.consistent_with_noise,
+            "summary": self.summary,
+            "notes": list(self.notes),
+            "missing_measurements": list(self.missing_measurements),
+            "diagnoses": [d.to_dict() for d in self.diagnoses],
+        }
+
+
+def _load(data: str | os.PathLike[str] | Measurement) -> Measurement:
+    """The measurement itself, or the rig file read (LoopError naming the file for unreadable data)."""
+    if isinstance(data, Measurement):
+        return data
+    try:
+        return load_measurement(data)
+    except DataError as err:
+        raise LoopError(f"cannot read the data: {err}") from None
+
+
+def _check(m: Measurement, model: TrainedModel, model_path: Path, output: str, settings: LoopSettings) -> None:
+    """LoopError naming the file and channel or value when the data cannot drive the model."""
+    if output != model.spec.output:
+        raise LoopError(f"{model_path}: the model predicts {model.spec.output!r}, not {output!r}")
+    absent = [c for c in (*model.spec.channels, output) if c not in m]
+    if absent:
+        raise LoopError(
+            f"{m.source}: channel(s) {', '.join(map(repr, absent))} needed by {model_path.name} (inputs "
+            f"{', '.join(model.spec.channels)}, output {output}) are not in the data (it has: {', '.join(m.names)})"
+        )
+    try:
+        check_measurement(m, required=(*model.spec.channels, output), min_samples=2)
+    except DataError as err:
+        raise LoopError(f"unusable data: {err}") from None
+    dt, period = m.sample_period, model.sample_period
+    if abs(dt - period) > PERIOD_TOLERANCE * period:
+        raise LoopError(
+            f"{m.source}: sample period {dt:.9g} s ({1 / dt:.6g} Hz) differs from the {period:.9g} s ({1 / period:.6g} "
+            f"Hz) {model_path.name} was trained at; its delay lines and filters count samples, so resample the data "
+            f"to {1 / period:.6g} Hz first"
+        )
+
+
+def _errors(predicted: np.ndarray, measured: np.ndarray, rows: np.ndarray, slope: float) -> dict[str, float]:
+    """nrmse, r2, peak_error and pseudo_damage_ratio of `predicted` on `rows`."""
+    return {k: float(v) for k, v in channel_metrics(predicted[rows], measured[rows], slope).error_summary().items()}
+
+
+def _number(x: float | None) -> float | None:
+    """A JSON-safe float (None for a missing or infinite value)."""
+    return None if x is None or not np.isfinite(x) else float(x)
+
+
+def _nrmse(predicted: np.ndarray, measured: np.ndarray, rows: np.ndarray) -> float:
+    return float(np.sqrt(np.mean((predicted[rows] - measured[rows]) ** 2)) / np.sqrt(np.mean(measured[rows] ** 2)))
+
+
+class _Stage:
+    """Builds and replays each iteration's model inside the staging folder."""
+
+    def __init__(self, staging: Path, out_dir: Path, m: Measurement, blocks: RecordBlocks, settings: LoopSettings,
+                 name: str) -> None:
+        self.staging, self.out_dir, self.m, self.blocks, self.settings, self.name = (
+            staging, out_dir, m, blocks, settings, name)
+
+    def fmu(self, onnx_path: Path, k: int) -> Path:
+        out = self.staging / f"model_{k}.fmu"
+        build_fmu(onnx_path, BuildOptions(out=out, backend=self.settings.backend,
+                                          fmi_version=self.settings.fmi_version, name=self.name))
+        return out
+
+    def replay(self, fmu_path: Path, output: str) -> np.ndarray:
+        return np.asarray(replay_fmu(fmu_path, self.m, ReplaySettings(filter_cutoff=0.0))[output], dtype=float)
+
+    def export(self, model: TrainedModel, k: int, effect: str) -> Path:
+        path = self.staging / f"model_{k}.onnx"
+        a, b = self.blocks.ranges["test"][0]
+        export_onnx(model, path, name=self.name, verify_on={c: self.m[c][a:b] for c in model.spec.channels},
+                    description=f"{model.spec.output} model extended by nnfmu loop with {effect} on {self.m.source}")
+        return path
+
+    def final(self, path: Path) -> Path:
+        """Where a staged file lies once the staging folder became `out_dir`."""
+        return self.out_dir / path.relative_to(self.staging)
+
+
+def _candidates(d: Diagnosis, settings: LoopSettings) -> list[tuple[EffectEvidence, str]]:
+    """Effects to try, in order, with why. The significant effects that explain at least `min_explained` of the
+    residual variance beyond those above them, in the diagnosis's order; before the first of them, any simpler rival
+    (fewer regressors, explaining alone at least `min_explained` and at least (1 - parsimony) of what the top effect
+    explains alone). On data where a richer family mimics a simpler one (displacement minus its 1 s low-pass against
+    displacement itself) the simpler explanation goes first; the richer effect, if real, stays significant beyond it
+    at the next diagnosis."""
+    chosen = [e for e in d.significant if (e.additional_explained_variance or 0.0) >= settings.min_explained]
+    if not chosen:
+        return []
+    top = chosen[0]
+    floor = max(settings.min_explained, (1 - settings.parsimony) * (top.explained_variance or 0.0))
+    rivals = sorted(
+        (e for e in d.ranking if e.testable and e.name != top.name and (e.explained_variance or 0.0) >= floor
+         and len(e.regressors) < len(top.regressors)),
+        key=lambda e: (len(e.regressors), -(e.explained_variance or 0.0)),
+    )
+    reasons = [(e, f"explains alone {e.explained_variance:.1%} of the residual variance, near the "
+                   f"{top.explained_variance:.1%} of {top.name}, with fewer regressors (the simpler explanation first)")
+               for e in rivals]
+    return reasons + [(e, "significant in the diagnosis") for e in chosen]
+
+
+def _next_extension(d: Diagnosis, model: TrainedModel, m: Measurement, fit: np.ndarray, added: list[str],
+                    settings: LoopSettings, notes: list[str]) -> tuple[Extension, EffectEvidence, str] | None:
+    """The first candidate effect not added yet that the network can take, its evidence and why it was chosen;
+    notes say why significant effects before it could not be added."""
+    for evidence, reason in _candidates(d, settings):
+        if evidence.name in added:
+            if evidence.significant:
+                notes.append(f"{evidence.name} is still significant after it was added; the network may need more "
+                             f"capacity or data for it")
+            continue
+        ext = extend_spec(evidence.name, model.spec, m, fit, settings)
+        if isinstance(ext, NoExtension):
+            note = f"{evidence.name} is significant but not added: {ext.reason}"
+            if evidence.significant and note not in notes:
+                notes.append(note)
+            continue
+        return ext, evidence, reason
+    return None
+
+
+def _replace_dir(staging: Path, out_dir: Path) -> None:
+    """Put `staging` in place of `out_dir` (an earlier result there is removed only after the new one is in)."""
+    old = None
+    if out_dir.exists():
+        old = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.old-", dir=out_dir.parent))
+        os.replace(out_dir, old / out_dir.name)
+    os.replace(staging, out_dir)
+    if old is not None:
+        shutil.rmtree(old)
+
+
+def run_loop(
+    data: str | os.PathLike[str] | Measurement,
+    model_path: str | os.PathLike[str],
+    output: str,
+    out_dir: str | os.PathLike[str],
+    settings: LoopSettings = LoopSettings(),
+) -> LoopReport:
+    """Close the loop on `data` (a rig file or a Measurement) for the ONNX model at `model_path` predicting `output`;
+    write every iteration's ONNX and FMU, report.json, report.html and plots into `out_dir`. LoopError for bad input
+    (missing channel, other sample rate, too short a record); nothing is written then."""
+    model_path, out_dir = Path(model_path), Path(out_dir)
+    model, component = load_onnx_model(model_path)
+    m = _load(data)
+    _check(m, model, model_path, output, settings)
+    blocks = plan_blocks(len(m), settings, m.source)
+    rows = {part: blocks.rows(part) for part in ("train", "validation", "diagnosis", "test")}
+    fit = np.concatenate([rows["train"], rows["validation"]])
+    diagnosis_part = part_measurement(m, rows["diagnosis"], "diagnosis")
+    measured = np.asarray(m[output], dtype=float)
+    slope = ValidationSettings().slope_for(output)
+    out_dir.parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.staging-", dir=out_dir.parent))
+    try:
+        stage = _Stage(staging, out_dir, m, blocks, settings, component.name)
+        onnx_path = staging / "model_0.onnx"
+        shutil.copyfile(model_path, onnx_path)
+        fmu_path = stage.fmu(onnx_path, 0)
+        predicted = stage.replay(fmu_path, output)
+        first_prediction = predicted
+        added: list[str] = []
+        iterations: list[Iteration] = []
+        diagnoses: list[Diagnosis] = []
+        notes: list[str] = []
+        steps: list[tuple[np.ndarray, FeatureSpec]] = []
+        while True:
+            d = diagnose(diagnosis_part, predicted[rows["diagnosis"]], output, model.spec.channels, settings.diagnosis)
+            diagnoses.append(d)
+            if d.consistent_with_noise:
+                break
+            if len(added) >= settings.max_effects:
+                if d.significant:
+                    notes.append(f"stopped at max_effects = {settings.max_effects}; still significant: "
+                                 + ", ".join(e.name for e in d.significant))
+                break
+            chosen = _next_extension(d, model, m, fit, added, settings, notes)
+            if chosen is None:
+                small = [e.name for e in d.significant
+                         if e.name not in added and (e.additional_explained_variance or 0.0) < settings.min_explained]
+                if small:
+                    notes.append(f"significant but below min_explained = {settings.min_explained:.0%} of the residual "
+                                 f"variance, so not added: {', '.join(small)}")
+                break
+            ext, evidence, reason = chosen
+            k = len(iterations) + 1
+            started = warm_start(model, ext.spec, m, rows["train"], rows["validation"], settings, ext.effect)
+            new_onnx = stage.export(started.model, k, ext.effect)
+            new_fmu = stage.fmu(new_onnx, k)
+            new_predicted = stage.replay(new_fmu, output)
+            before = _nrmse(predicted, measured, rows["diagnosis"])
+            after = _nrmse(new_predicted, measured, rows["diagnosis"])
+            accepted = after < before
+            iterations.append(Iteration(
+                effect=ext.effect,
+                explained_variance=_number(evidence.additional_explained_variance),
+                explained_variance_alone=_number(evidence.explained_variance),
+                p_value=_number(evidence.p_value),
+                extension=ext.note,
+                reason=reason,
+                features_added=ext.added,
+                error_before=_errors(predicted, measured, rows["test"], slope),
+                error_after=_errors(new_predicted, measured, rows["test"], slope),
+                diagnosis_nrmse_before=before,
+                diagnosis_nrmse_after=after,
+                accepted=accepted,
+                onnx=stage.final(new_onnx),
+                fmu=stage.final(new_fmu),
+                extra_hidden=started.extra_hidden,
+            ))
+            steps.append((predicted, ext.spec))
+            if not accepted:
+                notes.append(f"adding {ext.effect} did not lower the error on the diagnosis part (NRMSE {before:.4g} "
+                             f"-> {after:.4g}); it was not kept and the loop stopped")
+                break
+            added.append(ext.effect)
+            model, predicted, onnx_path, fmu_path = started.model, new_predicted, new_onnx, new_fmu
+        last = diagnoses[-1]
+        report = LoopReport(
+            data=m.source,
+            model=str(model_path),
+            output=output,
+            blocks=blocks.describe(m.time),
+            effects_added=added,
+            iterations=iterations,
+            error_before=_errors(first_prediction, measured, rows["test"], slope),
+            error_after=_errors(predicted, measured, rows["test"], slope),
+            onnx=stage.final(onnx_path),
+            fmu=stage.final(fmu_path),
+            consistent_with_noise=last.consistent_with_noise,
+            summary=_summary(added, last),
+            notes=notes,
+            missing_measurements=sorted({note for dg in diagnoses for note in dg.missing_measurements}),
+            diagnoses=diagnoses,
+        )
+        write_loop_report(staging, report, m, rows, first_prediction, predicted, steps)
+        _replace_dir(staging, out_dir)
+    finally:
+        if staging.exists():
+            shutil.rmtree(staging)
+    return report
+
+
+def _summary(added: list[str], last: Diagnosis) -> str:
+    """The outcome in one sentence."""
+    found = f"added {', '.join(added)}" if added else "added nothing"
+    return f"{found}; final diagnosis: {last.summary}"

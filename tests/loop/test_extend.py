@@ -1,0 +1,174 @@
+"""The loop's building blocks: the running-mean-square feature against its step graph and an analytic response,
+each effect's feature-spec extension, reading a model back from its ONNX file, the warm start that starts exactly
+where the old model stands, and the record's fit/diagnosis/test blocks."""
+
+from __future__ import annotations
+
+from functools import cache
+
+import numpy as np
+import onnxruntime as ort
+import pytest
+import torch
+
+from nnfmu.data import Measurement
+from nnfmu.data.rigs import RigOptions, simulate_rig
+from nnfmu.export import export_onnx, run_step_graph
+from nnfmu.export.graph import GraphBuilder
+from nnfmu.loop.blocks import plan_blocks
+from nnfmu.loop.extend import Extension, NoExtension, extend_spec
+from nnfmu.loop.loop_settings import LoopError, LoopSettings
+from nnfmu.loop.onnx_model import load_onnx_model
+from nnfmu.loop.warm_start import _warm_network, warm_start
+from nnfmu.models import Architecture, TrainSettings, train_model
+from nnfmu.models.features import FeatureSpec, LowpassSquare, SmoothSign, Tap, derived_from_dict
+
+T = 0.001
+SPEC = FeatureSpec((Tap("velocity", (0, 2)),), "force")
+
+
+@cache
+def rig() -> Measurement:
+    return simulate_rig("damper", RigOptions(duration=6.0, seed=2, excitation="random",
+                                             effects=("inertia", "temperature"))).measurement
+
+
+@cache
+def small_model():
+    return train_model(rig(), SPEC, Architecture("mlp", (3,)), TrainSettings(max_epochs=20, restarts=1)).model
+
+
+def test_lowpass_square_step_response_is_the_exact_exponential_of_the_square():
+    spec = FeatureSpec((), "force", (LowpassSquare("velocity", tau=0.004),))
+    k = np.arange(40)
+    y = spec.features({"velocity": np.full(40, 3.0)}, T)[:, 0]
+    np.testing.assert_allclose(y, 9.0 * (1.0 - np.exp(-(k + 1) * T / 0.004)), rtol=1e-13)
+
+
+def test_lowpass_square_step_nodes_equal_numpy_sample_by_sample():
+    spec = FeatureSpec((Tap("velocity", (0, 1)),), "force", (LowpassSquare("velocity", tau=0.01),))
+    x = np.random.default_rng(4).normal(size=50)
+    g = GraphBuilder(reserved=["velocity", "state", "features_out", "state_next"])
+    features, state_next = spec.emit(g, {"velocity": "velocity"}, "state", T)
+    g.output(features, "features_out")
+    g.output(state_next, "state_next")
+    graph = g.model("f", "test", [("velocity", 1), ("state", spec.state_size)],
+                    [("features_out", spec.n_features), ("state_next", spec.state_size)])
+    session = ort.InferenceSession(graph.SerializeToString())
+    state, rows = np.zeros(spec.state_size), []
+    for k in range(len(x)):
+        out, state = session.run(None, {"velocity": x[k : k + 1], "state": state})
+        rows.append(out)
+    np.testing.assert_allclose(np.array(rows), spec.features({"velocity": x}, T), rtol=1e-13, atol=1e-15)
+
+
+def test_lowpass_square_round_trips_and_refuses_a_bad_tau():
+    feature = LowpassSquare("velocity", tau=2.5)
+    assert derived_from_dict(feature.to_dict()) == feature
+    with pytest.raises(ValueError, match="tau"):
+        LowpassSquare("velocity", tau=-1.0)
+
+
+@pytest.mark.parametrize(
+    ("effect", "added"),
+    [
+        ("gas_force", ["displacement[k]"]),
+        ("inertia", ["velocity[k-1]"]),
+        ("hysteresis", ["lowpass(velocity, tau=0.002)", "lowpass(velocity, tau=0.02)"]),
+        ("temperature", ["temperature[k]"]),
+        ("frequency_dependence", [f"lowpass(displacement, tau={t!r})" for t in (0.01, 0.1, 1.0)]),
+        ("amplitude_dependence", ["lowpass_square(displacement, tau=1.0)"]),
+    ],
+)
+def test_each_effect_extends_the_spec_with_its_features(effect, added):
+    m = rig()
+    ext = extend_spec(effect, SPEC, m, np.arange(len(m)), LoopSettings())
+    assert isinstance(ext, Extension)
+    assert list(ext.added) == added
+    assert [n for n in ext.spec.feature_names if n not in added] == SPEC.feature_names  # old features kept
+
+
+def test_seal_friction_scale_follows_the_fit_rows_rms_velocity():
+    m = rig()
+    rows = np.arange(1000)
+    ext = extend_spec("seal_friction", SPEC, m, rows, LoopSettings(friction_scale=0.05))
+    (feature,) = ext.spec.derived
+    assert isinstance(feature, SmoothSign)
+    assert feature.scale == pytest.approx(0.05 * np.sqrt(np.mean(m["velocity"][rows] ** 2)))
+
+
+def test_temperature_without_its_channel_becomes_a_running_mean_square_of_velocity():
+    m = rig()
+    channels = {k: v for k, v in m.channels.items() if k != "temperature"}
+    bare = Measurement(m.time, channels, {k: m.units[k] for k in channels}, m.source)
+    ext = extend_spec("temperature", SPEC, bare, np.arange(len(m)), LoopSettings(thermal_tau=200.0))
+    assert ext.added == ("lowpass_square(velocity, tau=200.0)",)
+
+
+def test_effects_that_cannot_be_added_say_why():
+    m = rig()
+    rows = np.arange(len(m))
+    offset = extend_spec("sensor_offset", SPEC, m, rows, LoopSettings())
+    assert isinstance(offset, NoExtension) and "measurement, not to the component" in offset.reason
+    channels = {"velocity": m["velocity"], "force": m["force"]}
+    bare = Measurement(m.time, channels, {k: m.units[k] for k in channels}, m.source)
+    gas = extend_spec("gas_force", SPEC, bare, rows, LoopSettings())
+    assert isinstance(gas, NoExtension) and gas.missing_channels == ("displacement",)
+    spec = FeatureSpec((Tap("velocity", (0, 1)),), "force")
+    again = extend_spec("inertia", spec, bare, rows, LoopSettings())
+    assert isinstance(again, NoExtension) and "already has" in again.reason
+
+
+def test_a_model_read_back_from_onnx_predicts_what_its_graph_computes(tmp_path):
+    model = small_model()
+    path = tmp_path / "m.onnx"
+    export_onnx(model, path)
+    loaded, component = load_onnx_model(path)
+    assert loaded.spec == model.spec and loaded.sample_period == model.sample_period
+    v = rig()["velocity"][:500]
+    np.testing.assert_allclose(loaded.predict({"velocity": v}), run_step_graph(path, {"velocity": v})["force"],
+                               rtol=1e-10, atol=1e-9)
+    np.testing.assert_allclose(loaded.feature_scaler.gain, model.feature_scaler.gain, rtol=1e-12)
+
+
+def test_warm_started_network_starts_exactly_at_the_old_model():
+    """Old columns carry the old scaled features, the new column anything: the output is the old model's."""
+    model = small_model()
+    m = rig()
+    ext = extend_spec("gas_force", SPEC, m, np.arange(len(m)), LoopSettings())
+    network = _warm_network(model, ext.spec, extra=3, seed=0)
+    scaled = model.feature_scaler.scale(SPEC.features({"velocity": m["velocity"]}, T))
+    full = np.full((len(m), ext.spec.n_features), 123.0)
+    full[:, [ext.spec.feature_names.index(n) for n in SPEC.feature_names]] = scaled
+    with torch.no_grad():
+        new = network(torch.from_numpy(full))[:, 0].numpy()
+        old = model.network(torch.from_numpy(scaled))[:, 0].numpy()
+    np.testing.assert_allclose(new, old, rtol=1e-12, atol=1e-12)
+
+
+def test_warm_start_keeps_old_scalers_and_lowers_the_validation_error():
+    model = small_model()
+    m = rig()
+    blocks = plan_blocks(len(m), LoopSettings(diagnosis=LoopSettings().diagnosis), m.source)
+    ext = extend_spec("temperature", SPEC, m, blocks.rows("train"), LoopSettings())
+    result = warm_start(model, ext.spec, m, blocks.rows("train"), blocks.rows("validation"),
+                        LoopSettings(max_epochs=30, extra_hidden=(0, 2)), "temperature")
+    new = result.model
+    np.testing.assert_array_equal(new.feature_scaler.lo[:2], model.feature_scaler.lo)
+    np.testing.assert_array_equal(new.feature_scaler.hi[:2], model.feature_scaler.hi)
+    train = blocks.rows("train")
+    assert new.feature_scaler.lo[2] == pytest.approx(np.min(m["temperature"][train]))
+    assert set(result.validation_mse) == {0, 2} and result.extra_hidden in (0, 2)
+    assert new.network.hidden.out_features == 3 + result.extra_hidden
+    assert new.settings["loop"]["effect"] == "temperature"
+
+
+def test_blocks_interleave_fit_diagnosis_and_test_without_overlap():
+    blocks = plan_blocks(10000, LoopSettings(), "record")
+    parts = {p: blocks.rows(p) for p in ("train", "validation", "diagnosis", "test")}
+    joined = np.concatenate(list(parts.values()))
+    assert len(joined) == 10000 and len(np.unique(joined)) == 10000
+    assert len(parts["diagnosis"]) == 2000 and len(parts["test"]) == 2000
+    assert len(blocks.ranges["test"]) == 5  # one test block per segment
+    with pytest.raises(LoopError, match="4900 samples are too short"):
+        plan_blocks(4900, LoopSettings(), "record")
