@@ -18,7 +18,7 @@ from nnfmu.data import Measurement
 from nnfmu.data.units import base_name
 from nnfmu.models.features import FeatureSpec
 from nnfmu.validate import welch_psd
-from nnfmu.validate.plots import axis_label, psd_unit
+from nnfmu.validate.plots import axis_label, new_axes, psd_unit
 
 if TYPE_CHECKING:
     from .run import LoopReport
@@ -26,15 +26,6 @@ if TYPE_CHECKING:
 TEMPLATE = "loop_report.html.j2"
 LOOP_WINDOW = 2.0  # s of the first test block drawn in the force-velocity and force-displacement loops
 MAX_SCATTER = 4000  # points per residual scatter
-
-
-def _axes(title: str) -> tuple[Figure, object]:
-    figure = Figure(figsize=(8.0, 4.5), dpi=100, layout="constrained")
-    FigureCanvasAgg(figure)
-    axes = figure.add_subplot()
-    axes.set_title(title, parse_math=False)
-    axes.grid(True, alpha=0.3)
-    return figure, axes
 
 
 def feature_unit(spec: FeatureSpec, name: str, units: dict[str, str]) -> str:
@@ -75,7 +66,7 @@ def plot_loops(report: "LoopReport", m: Measurement, rows: np.ndarray, before: n
                x_channel: str, path: Path) -> Path:
     """Output over `x_channel` (velocity or displacement): measured, first model, final model, first test window."""
     window = rows[: int(round(LOOP_WINDOW / m.sample_period))]
-    figure, axes = _axes(f"{report.output} vs {x_channel}, test part {m.time[window[0]]:.3g} s to "
+    figure, axes = new_axes(f"{report.output} vs {x_channel}, test part {m.time[window[0]]:.3g} s to "
                          f"{m.time[window[-1]]:.3g} s")
     x = m[x_channel][window]
     axes.plot(x, m[report.output][window], color="black", linewidth=1.0, label="measured")
@@ -92,7 +83,7 @@ def plot_residual_psd(report: "LoopReport", m: Measurement, test_ranges: tuple[t
                       before: np.ndarray, after: np.ndarray, path: Path) -> Path:
     """Welch PSD of the residual before and after, averaged over the test blocks."""
     unit = m.units.get(report.output, "")
-    figure, axes = _axes(f"PSD of the {report.output} residual on the test part")
+    figure, axes = new_axes(f"PSD of the {report.output} residual on the test part")
     measured = np.asarray(m[report.output], dtype=float)
     for predicted, style in ((before, {"color": "tab:blue", "label": "before"}),
                              (after, {"color": "tab:red", "label": "after"})):

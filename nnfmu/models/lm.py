@@ -15,7 +15,7 @@ import torch
 from torch.nn.utils import parameters_to_vector, vector_to_parameters
 
 from nnfmu.models.networks import MLP
-from nnfmu.models.stopping import EarlyStopping
+from nnfmu.models.stopping import FitHistory, TrainingLog
 
 
 @dataclass(frozen=True)
@@ -29,20 +29,6 @@ class LMSettings:
     mu_increase: float = 10.0
     mu_max: float = 1e10
     min_gradient: float = 1e-10
-
-
-@dataclass
-class FitHistory:
-    """Per-epoch losses (epoch 0 = the initial weights), the epoch whose weights were kept, and why training stopped."""
-
-    train_loss: list[float]
-    validation_loss: list[float]
-    best_epoch: int
-    stop_reason: str
-
-    @property
-    def best_validation_loss(self) -> float:
-        return self.validation_loss[self.best_epoch]
 
 
 def mlp_jacobian(network: MLP, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
@@ -83,10 +69,7 @@ def fit_lm(
     """
     x, y = train
     x_val, y_val = validation
-    stopper = EarlyStopping(settings.patience)
-    train_loss = [_mse(network, x, y)]
-    validation_loss = [_mse(network, x_val, y_val)]
-    stopper.update(0, validation_loss[0], network)
+    log = TrainingLog(network, settings.patience, _mse(network, x, y), _mse(network, x_val, y_val))
     params = list(network.parameters())
     mu = settings.mu
     reason = "max_epochs"
@@ -105,7 +88,7 @@ def fit_lm(
             step = torch.linalg.solve(hessian + mu * eye, gradient)
             vector_to_parameters(weights - step, params)
             loss = _mse(network, x, y)
-            if math.isfinite(loss) and loss < train_loss[-1]:
+            if math.isfinite(loss) and loss < log.train_loss[-1]:
                 mu = max(mu * settings.mu_decrease, 1e-20)
                 improved = True
                 break
@@ -114,12 +97,10 @@ def fit_lm(
             vector_to_parameters(weights, params)
             reason = "mu_max"
             break
-        train_loss.append(loss)
-        validation_loss.append(_mse(network, x_val, y_val))
+        stop = log.record(epoch, loss, _mse(network, x_val, y_val))
         if on_epoch is not None:
             on_epoch(epoch, settings.max_epochs)
-        if stopper.update(epoch, validation_loss[-1], network):
+        if stop:
             reason = "validation"
             break
-    stopper.restore(network)
-    return FitHistory(train_loss, validation_loss, stopper.best_epoch, reason)
+    return log.finish(reason)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import copy
 import math
+from dataclasses import dataclass
 
 import torch
 
@@ -39,3 +40,43 @@ class EarlyStopping:
         if self._best_state is None:
             raise RuntimeError("no finite validation loss was recorded, so there are no best weights to restore")
         network.load_state_dict(self._best_state)
+
+
+@dataclass
+class FitHistory:
+    """Per-epoch losses (epoch 0 = the initial weights), the epoch whose weights were kept, and why training stopped."""
+
+    train_loss: list[float]
+    validation_loss: list[float]
+    best_epoch: int
+    stop_reason: str
+
+    @property
+    def best_validation_loss(self) -> float:
+        return self.validation_loss[self.best_epoch]
+
+
+class TrainingLog:
+    """The losses of one training run, epoch by epoch, with early stopping on the validation loss.
+
+    Every optimiser (Levenberg–Marquardt, Adam, L-BFGS, the GRU's) records its epochs here, so the stopping rule and
+    the history it returns are the same for all of them.
+    """
+
+    def __init__(self, network: torch.nn.Module, patience: int, train_loss: float, validation_loss: float) -> None:
+        self.network = network
+        self.stopper = EarlyStopping(patience)
+        self.train_loss = [train_loss]
+        self.validation_loss = [validation_loss]
+        self.stopper.update(0, validation_loss, network)
+
+    def record(self, epoch: int, train_loss: float, validation_loss: float) -> bool:
+        """Add one epoch's losses; True when training should stop on the validation loss."""
+        self.train_loss.append(train_loss)
+        self.validation_loss.append(validation_loss)
+        return self.stopper.update(epoch, validation_loss, self.network)
+
+    def finish(self, reason: str) -> FitHistory:
+        """Load the best epoch's weights into the network and return the history."""
+        self.stopper.restore(self.network)
+        return FitHistory(self.train_loss, self.validation_loss, self.stopper.best_epoch, reason)

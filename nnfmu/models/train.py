@@ -14,12 +14,12 @@ import torch
 
 from nnfmu.data.measurement import Measurement
 from nnfmu.models.features import FeatureSpec
-from nnfmu.models.lm import FitHistory, LMSettings, fit_lm
+from nnfmu.models.lm import LMSettings, fit_lm
 from nnfmu.models.metrics import SplitMetrics, max_abs_weight, split_metrics, weight_warning
 from nnfmu.models.networks import GRUNet, MLP
 from nnfmu.models.scaling import MinMaxScaler
 from nnfmu.models.splits import SplitFractions, Splits, contiguous_splits
-from nnfmu.models.stopping import EarlyStopping
+from nnfmu.models.stopping import FitHistory, TrainingLog
 from nnfmu.models.trained import TrainedModel
 
 NetworkKind = Literal["mlp", "gru"]
@@ -193,9 +193,7 @@ def _fit_mlp_gradient(
         return torch.mean((network(xs)[:, 0] - ys) ** 2)
 
     with torch.no_grad():
-        train_loss, validation_loss = [float(mse(x, y))], [float(mse(x_val, y_val))]
-    stopper = EarlyStopping(settings.patience)
-    stopper.update(0, validation_loss[0], network)
+        log = TrainingLog(network, settings.patience, float(mse(x, y)), float(mse(x_val, y_val)))
     if method == "lbfgs":
         optimiser: torch.optim.Optimizer = torch.optim.LBFGS(network.parameters(), max_iter=1, line_search_fn="strong_wolfe")
     else:
@@ -219,14 +217,12 @@ def _fit_mlp_gradient(
                 mse(x[batch], y[batch]).backward()
                 optimiser.step()
         with torch.no_grad():
-            train_loss.append(float(mse(x, y)))
-            validation_loss.append(float(mse(x_val, y_val)))
+            stop = log.record(epoch, float(mse(x, y)), float(mse(x_val, y_val)))
         on_epoch(epoch, settings.max_epochs)
-        if stopper.update(epoch, validation_loss[-1], network):
+        if stop:
             reason = "validation"
             break
-    stopper.restore(network)
-    return FitHistory(train_loss, validation_loss, stopper.best_epoch, reason)
+    return log.finish(reason)
 
 
 def _chunks(
@@ -265,9 +261,7 @@ def _fit_gru(network: GRUNet, data: PreparedData, settings: TrainSettings, on_ep
         return torch.mean((network(xs)[..., 0][scored] - ys[scored]) ** 2)
 
     with torch.no_grad():
-        train_loss, validation_loss = [float(mse(x_train, y_train))], [float(mse(x_val, y_val))]
-    stopper = EarlyStopping(settings.patience)
-    stopper.update(0, validation_loss[0], network)
+        log = TrainingLog(network, settings.patience, float(mse(x_train, y_train)), float(mse(x_val, y_val)))
     optimiser = torch.optim.Adam(network.parameters(), lr=settings.learning_rate)
     batch = settings.sequences_per_batch
     reason = "max_epochs"
@@ -283,14 +277,12 @@ def _fit_gru(network: GRUNet, data: PreparedData, settings: TrainSettings, on_ep
             optimiser.step()
             total += float(loss.detach()) * len(pick)
         with torch.no_grad():
-            train_loss.append(total / len(order))
-            validation_loss.append(float(mse(x_val, y_val)))
+            stop = log.record(epoch, total / len(order), float(mse(x_val, y_val)))
         on_epoch(epoch, settings.max_epochs)
-        if stopper.update(epoch, validation_loss[-1], network):
+        if stop:
             reason = "validation"
             break
-    stopper.restore(network)
-    return FitHistory(train_loss, validation_loss, stopper.best_epoch, reason)
+    return log.finish(reason)
 
 
 def fit_network(

@@ -32,8 +32,9 @@ def psd_unit(unit: str) -> str:
     return f"{base}^2/Hz"
 
 
-def _new_axes(title: str):
-    figure = Figure(figsize=(8.0, 4.0), dpi=100, layout="constrained")
+def new_axes(title: str, height: float = 4.0):
+    """A figure with one grid-lined axes, drawn off-screen (Agg); `title` is shown literally (no math text)."""
+    figure = Figure(figsize=(8.0, height), dpi=100, layout="constrained")
     FigureCanvasAgg(figure)
     axes = figure.add_subplot()
     axes.set_title(title, parse_math=False)
@@ -48,7 +49,7 @@ def _save(figure: Figure, path: Path) -> Path:
 
 def plot_time_window(c: ChannelComparison, path: Path) -> Path:
     """Result over reference inside the comparison's window (the span around the global peak)."""
-    figure, axes = _new_axes(f"{c.name}: {c.window[0]:g} to {c.window[1]:g} s")
+    figure, axes = new_axes(f"{c.name}: {c.window[0]:g} to {c.window[1]:g} s")
     inside = (c.time >= c.window[0]) & (c.time <= c.window[1])
     axes.plot(c.time[inside], c.reference[inside], **REFERENCE_STYLE)
     axes.plot(c.time[inside], c.result[inside], **RESULT_STYLE)
@@ -60,7 +61,7 @@ def plot_time_window(c: ChannelComparison, path: Path) -> Path:
 
 def plot_psd(c: ChannelComparison, path: Path) -> Path:
     """Welch PSDs of result and reference, log density axis where any density is positive."""
-    figure, axes = _new_axes(f"{c.name}: power spectral density")
+    figure, axes = new_axes(f"{c.name}: power spectral density")
     axes.plot(c.psd_reference.frequency, c.psd_reference.density, **REFERENCE_STYLE)
     axes.plot(c.psd_result.frequency, c.psd_result.density, **RESULT_STYLE)
     if np.any(c.psd_reference.density > 0) or np.any(c.psd_result.density > 0):
@@ -79,7 +80,7 @@ def _exceedance(signal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def plot_rainflow(c: ChannelComparison, path: Path) -> Path:
     """Cumulative rainflow cycle count exceeding each range (log-log), the load spectrum behind the damage ratio."""
-    figure, axes = _new_axes(f"{c.name}: rainflow range exceedance (pseudo-damage ratio "
+    figure, axes = new_axes(f"{c.name}: rainflow range exceedance (pseudo-damage ratio "
                              f"{c.metrics.pseudo_damage_ratio:.3g}, m = {c.basquin_slope:g})")
     any_cycles = False
     for signal, style in ((c.reference, REFERENCE_STYLE), (c.result, RESULT_STYLE)):
