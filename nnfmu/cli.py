@@ -134,7 +134,7 @@ def demo(
     seed: int = typer.Option(0, help="Seed of the rig records and the training."),
     quick: bool = typer.Option(False, help="Short records and training: checks every stage runs, not results to quote."),
 ) -> None:
-    """Run the pipeline end to end on built-in data: rig data, networks, ONNX, FMUs, replay, validation report."""
+    """Run the pipeline end to end on built-in data: rig data, networks, ONNX, FMUs, replay, road test, reports."""
     from rich.console import Console
     from rich.table import Table
 
