@@ -48,8 +48,24 @@ class LinearLaw:
         return self.stiffness * x + self.damping * v
 
 
+class _TruthStates:
+    """State handling of the truth laws: the rig's truth model owns the states and their derivatives."""
+
+    truth: DamperTruth | BushingChannelTruth
+
+    @property
+    def n_states(self) -> int:
+        return self.truth.n_states
+
+    def initial_state(self) -> np.ndarray:
+        return self.truth.initial_state()
+
+    def derivatives(self, t: float, state: np.ndarray, x: float, v: float) -> np.ndarray:
+        return self.truth.derivatives(t, state, x, v)
+
+
 @dataclass(frozen=True)
-class DamperTruthLaw:
+class DamperTruthLaw(_TruthStates):
     """The damper dyno's truth physics (tension positive). Its moving-mass effect is refused: in the vehicle that mass
     is part of the unsprung mass already."""
 
@@ -61,35 +77,15 @@ class DamperTruthLaw:
                 "damper truth law: drop the 'inertia' effect; the vehicle's unsprung mass carries it"
             )
 
-    @property
-    def n_states(self) -> int:
-        return self.truth.n_states
-
-    def initial_state(self) -> np.ndarray:
-        return self.truth.initial_state()
-
-    def derivatives(self, t: float, state: np.ndarray, x: float, v: float) -> np.ndarray:
-        return self.truth.derivatives(t, state, x, v)
-
     def force(self, state: np.ndarray, x: float, v: float) -> float:
         return float(self.truth.force(state, x, v, 0.0))
 
 
 @dataclass(frozen=True)
-class BushingTruthLaw:
+class BushingTruthLaw(_TruthStates):
     """One channel of the bushing rig's truth physics (N or N.m)."""
 
     truth: BushingChannelTruth
-
-    @property
-    def n_states(self) -> int:
-        return self.truth.n_states
-
-    def initial_state(self) -> np.ndarray:
-        return self.truth.initial_state()
-
-    def derivatives(self, t: float, state: np.ndarray, x: float, v: float) -> np.ndarray:
-        return self.truth.derivatives(t, state, x, v)
 
     def force(self, state: np.ndarray, x: float, v: float) -> float:
         return float(self.truth.force(state, x))
