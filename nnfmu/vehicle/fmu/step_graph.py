@@ -9,7 +9,7 @@ without advancing it (x_k = (1 - first) advanced + first x, exact for first in {
 The linear part advances exactly (zero-order hold): x_k = Ad x + Bd0 u + fd. Built-in spline dampers (forces g) are
 stepped as `nnfmu.vehicle.models.DiscreteVehicle.step` does: the graph unrolls its predictor-corrector sub-steps, and
 evaluates each spline as f0 + s0 (v - v0) + sum_i (s_i - s_{i-1}) Relu(v - v_i), which is its piecewise-linear table
-extended linearly beyond the end points. Operators: Concat, Gemm, MatMul, Mul, Add, Sub, Relu, Identity.
+extended linearly beyond the end points. Operators: Concat, Gemm, MatMul, Mul, Add, Sub, Relu, Identity (built with the exporter's GraphBuilder).
 """
 
 from __future__ import annotations
@@ -18,14 +18,14 @@ from dataclasses import dataclass
 
 import numpy as np
 import onnx
-from onnx import TensorProto, helper, numpy_helper
+from onnx import TensorProto, helper
+
+from nnfmu.export.graph import IR_VERSION, OPSET, GraphBuilder
 
 from ..models.linear import DiscreteVehicle, LinearVehicle
 from ..models.reference import SplineDamper
 from .errors import VehicleBuildError
 
-OPSET = 17
-IR_VERSION = 8  # what opset 17 was released with; every onnxruntime >= 1.14 loads it
 STATE_IN, STATE_OUT, INPUTS, OUTPUTS = "x", "x_next", "u", "y"
 FIRST_IN, FIRST_OUT = "first", "first_next"
 
@@ -65,42 +65,19 @@ def spline_terms(laws: list[SplineDamper]) -> SplineTerms:
     return SplineTerms(np.array(slope), np.array(offset), select, np.array(knots), kink_slopes)
 
 
-class _Graph:
-    """Nodes and float64 initializers with readable names that are unique in the graph."""
-
-    def __init__(self) -> None:
-        self.nodes: list[onnx.NodeProto] = []
-        self.initializers: list[onnx.TensorProto] = []
-        self._count: dict[str, int] = {}
-
-    def _unique(self, name: str) -> str:
-        self._count[name] = self._count.get(name, 0) + 1
-        return name if self._count[name] == 1 else f"{name}_{self._count[name]}"
-
-    def constant(self, name: str, value: np.ndarray) -> str:
-        unique = self._unique(name)
-        array = np.ascontiguousarray(np.asarray(value, dtype=np.float64))
-        self.initializers.append(numpy_helper.from_array(array, unique))
-        return unique
-
-    def op(self, op_type: str, inputs: list[str], name: str, **attributes: object) -> str:
-        output = self._unique(name)
-        self.nodes.append(helper.make_node(op_type, inputs, [output], name=output, **attributes))
-        return output
-
-    def affine(self, row: str, matrix: str, bias: str, name: str) -> str:
-        """row (1, n) @ matrix.T + bias, with `matrix` stored (m, n)."""
-        return self.op("Gemm", [row, matrix, bias], name, transB=1)
+def _affine(graph: GraphBuilder, row: str, matrix: str, bias: str, name: str) -> str:
+    """row (1, n) @ matrix.T + bias, with `matrix` stored (m, n)."""
+    return graph.node("Gemm", [row, matrix, bias], name, transB=1)
 
 
-def _spline(graph: _Graph, v: str, terms: dict[str, str], name: str) -> str:
+def _spline(graph: GraphBuilder, v: str, terms: dict[str, str], name: str) -> str:
     """Forces of the spline dampers at velocities v (1, nn)."""
-    linear = graph.op("Add", [graph.op("Mul", [v, terms["slope"]], f"{name}_slope"), terms["offset"]], f"{name}_line")
+    linear = graph.node("Add", [graph.node("Mul", [v, terms["slope"]], f"{name}_slope"), terms["offset"]], f"{name}_line")
     if "select" not in terms:
         return linear
-    spread = graph.op("MatMul", [v, terms["select"]], f"{name}_at_knots")
-    past = graph.op("Relu", [graph.op("Sub", [spread, terms["knots"]], f"{name}_past_knots")], f"{name}_beyond")
-    return graph.op("Add", [linear, graph.op("MatMul", [past, terms["kink_slopes"]], f"{name}_kinks")], name)
+    spread = graph.node("MatMul", [v, terms["select"]], f"{name}_at_knots")
+    past = graph.node("Relu", [graph.node("Sub", [spread, terms["knots"]], f"{name}_past_knots")], f"{name}_beyond")
+    return graph.node("Add", [linear, graph.node("MatMul", [past, terms["kink_slopes"]], f"{name}_kinks")], name)
 
 
 def discrete_step_graph(discrete: DiscreteVehicle) -> onnx.ModelProto:
@@ -109,23 +86,23 @@ def discrete_step_graph(discrete: DiscreteVehicle) -> onnx.ModelProto:
         raise VehicleBuildError(f"{discrete.vehicle.name}: hold {discrete.hold!r}; an FMU holds its inputs (use 'zoh')")
     vehicle = discrete.vehicle
     nx, nu, ny = len(vehicle.states), len(vehicle.inputs), len(vehicle.outputs)
-    graph = _Graph()
+    graph = GraphBuilder(reserved=(STATE_IN, FIRST_IN, INPUTS, OUTPUTS, STATE_OUT, FIRST_OUT))
     spline = _spline_constants(graph, vehicle)
     advanced = _advance(graph, discrete, spline)
-    keep = graph.op("Mul", [FIRST_IN, STATE_IN], "kept_state")
-    later = graph.op("Sub", [graph.constant("one", np.ones(1)), FIRST_IN], "later_sample")
-    state = graph.op("Add", [graph.op("Mul", [later, advanced], "advanced_state"), keep], "state")
-    at_sample = graph.op("Concat", [state, INPUTS], "state_and_inputs", axis=1)
+    keep = graph.node("Mul", [FIRST_IN, STATE_IN], "kept_state")
+    later = graph.node("Sub", [graph.constant("one", np.ones(1)), FIRST_IN], "later_sample")
+    state = graph.node("Add", [graph.node("Mul", [later, advanced], "advanced_state"), keep], "state")
+    at_sample = graph.node("Concat", [state, INPUTS], "state_and_inputs", axis=1)
     output_matrix = np.hstack([vehicle.C, vehicle.D])
     if not vehicle.is_linear:
         force = _damper_forces(graph, at_sample, spline, "output_force")
-        at_sample = graph.op("Concat", [at_sample, force], "state_inputs_and_forces", axis=1)
+        at_sample = graph.node("Concat", [at_sample, force], "state_inputs_and_forces", axis=1)
         output_matrix = np.hstack([output_matrix, vehicle.Dyn])
     out, out_offset = graph.constant("output_matrix", output_matrix), graph.constant("output_offset", vehicle.e)
-    y = graph.affine(at_sample, out, out_offset, "outputs")
-    graph.op("Identity", [y], OUTPUTS)
-    graph.op("Identity", [state], STATE_OUT)
-    graph.op("Mul", [FIRST_IN, graph.constant("zero", np.zeros(1))], FIRST_OUT)
+    y = _affine(graph, at_sample, out, out_offset, "outputs")
+    graph.output(y, OUTPUTS)
+    graph.output(state, STATE_OUT)
+    graph.output(graph.node("Mul", [FIRST_IN, graph.constant("zero", np.zeros(1))], "not_first"), FIRST_OUT)
     onnx_graph = helper.make_graph(
         graph.nodes,
         vehicle.name,
@@ -139,7 +116,7 @@ def discrete_step_graph(discrete: DiscreteVehicle) -> onnx.ModelProto:
     return model
 
 
-def _spline_constants(graph: _Graph, vehicle: LinearVehicle) -> dict[str, str]:
+def _spline_constants(graph: GraphBuilder, vehicle: LinearVehicle) -> dict[str, str]:
     """Initializers of the spline dampers' stroke velocities and Relu form (none for a linear vehicle)."""
     if vehicle.is_linear:
         return {}
@@ -159,20 +136,20 @@ def _spline_constants(graph: _Graph, vehicle: LinearVehicle) -> dict[str, str]:
     return names
 
 
-def _damper_forces(graph: _Graph, state_and_inputs: str, spline: dict[str, str], name: str) -> str:
+def _damper_forces(graph: GraphBuilder, state_and_inputs: str, spline: dict[str, str], name: str) -> str:
     """Forces g of the spline dampers from the row [x, u]: the splines at their stroke velocities Cn x + Dn u."""
-    velocity = graph.affine(state_and_inputs, spline["rate_matrix"], spline["zero_rate"], f"{name}_velocity")
+    velocity = _affine(graph, state_and_inputs, spline["rate_matrix"], spline["zero_rate"], f"{name}_velocity")
     return _spline(graph, velocity, spline, name)
 
 
-def _advance(graph: _Graph, discrete: DiscreteVehicle, spline: dict[str, str]) -> str:
+def _advance(graph: GraphBuilder, discrete: DiscreteVehicle, spline: dict[str, str]) -> str:
     """The state one step of `discrete.dt` after x with u held: exact if linear, else `discrete.substeps`
     predictor-corrector sub-steps."""
     vehicle = discrete.vehicle
     if vehicle.is_linear:
-        state_input = graph.op("Concat", [STATE_IN, INPUTS], "start_state_and_inputs", axis=1)
+        state_input = graph.node("Concat", [STATE_IN, INPUTS], "start_state_and_inputs", axis=1)
         step = graph.constant("step_matrix", np.hstack([discrete.Ad, discrete.Bd0]))
-        return graph.affine(state_input, step, graph.constant("step_offset", discrete.fd), "advanced")
+        return _affine(graph, state_input, step, graph.constant("step_offset", discrete.fd), "advanced")
     predict = graph.constant("predict_matrix", np.hstack([discrete.Ad, discrete.Bd0, discrete.Bnd]))
     predict_offset = graph.constant("predict_offset", discrete.fd)
     correct = graph.constant("correct_matrix", discrete.Bnr)
@@ -180,14 +157,14 @@ def _advance(graph: _Graph, discrete: DiscreteVehicle, spline: dict[str, str]) -
     x = STATE_IN
     for j in range(discrete.substeps):
         tag = f"sub{j + 1}"
-        at_start = graph.op("Concat", [x, INPUTS], f"{tag}_state_and_inputs", axis=1)
+        at_start = graph.node("Concat", [x, INPUTS], f"{tag}_state_and_inputs", axis=1)
         g0 = _damper_forces(graph, at_start, spline, f"{tag}_force")
-        held = graph.op("Concat", [at_start, g0], f"{tag}_with_force", axis=1)
-        predicted = graph.affine(held, predict, predict_offset, f"{tag}_predicted")
-        at_end = graph.op("Concat", [predicted, INPUTS], f"{tag}_predicted_and_inputs", axis=1)
+        held = graph.node("Concat", [at_start, g0], f"{tag}_with_force", axis=1)
+        predicted = _affine(graph, held, predict, predict_offset, f"{tag}_predicted")
+        at_end = graph.node("Concat", [predicted, INPUTS], f"{tag}_predicted_and_inputs", axis=1)
         g1 = _damper_forces(graph, at_end, spline, f"{tag}_end_force")
-        change = graph.op("Sub", [g1, g0], f"{tag}_force_change")
-        x = graph.op("Add", [predicted, graph.affine(change, correct, no_correction, f"{tag}_ramp")], f"{tag}_state")
+        change = graph.node("Sub", [g1, g0], f"{tag}_force_change")
+        x = graph.node("Add", [predicted, _affine(graph, change, correct, no_correction, f"{tag}_ramp")], f"{tag}_state")
     return x
 
 
