@@ -2,8 +2,10 @@
 import json, sys, time, tempfile
 from pathlib import Path
 import numpy as np
-sys.path.insert(0, "tests/cosim")
-from cosim_system_helpers import build, damper_graph
+import onnx
+from nnfmu.cosim.linear_damper import linear_damper_graph
+from nnfmu.fmu.build import build_fmu
+from nnfmu.fmu.options import BuildOptions
 from nnfmu.cosim.master import CosimSettings, cosimulate
 from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd
 from nnfmu.data.derive import derive_rates
@@ -21,7 +23,8 @@ drive = derive_rates(Measurement(d4.time, {"actuator_displacement": x}, {"actuat
 drive = Measurement(drive.time, {k: drive[k] for k in ("actuator_displacement", "actuator_velocity")},
                     {"actuator_displacement": "m", "actuator_velocity": "m/s"}, drive.source)
 vehicle_fmu = build_vehicle_fmu("quarter-car", folder / "quarter_car.fmu", VehicleBuildSettings())
-damper_fmu = build(damper_graph(), folder, "damper")  # F = 2400 N.s/m * v (the front damper's linear reference)
+onnx.save(linear_damper_graph(VehicleParameters.load().front_damper.damping), folder / "damper.onnx")
+damper_fmu = build_fmu(folder / "damper.onnx", BuildOptions(out=folder / "damper.fmu"))  # the front damper's linear reference
 ssd = write_ssd(connect_by_name("quarter car + damper", ("vehicle", vehicle_fmu), {"damper": damper_fmu}, folder,
                                 parameters={"damper": {"filter_cutoff": 0.0}}), folder / "SystemStructure.ssd")
 vehicle = build_quarter_car(VehicleParameters.load())

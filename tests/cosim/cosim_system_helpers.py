@@ -18,6 +18,7 @@ from onnx import TensorProto, helper, numpy_helper
 from scipy.linalg import expm
 
 from nnfmu.component import Component, Port, StatePort
+from nnfmu.cosim.linear_damper import linear_damper_graph
 from nnfmu.cosim.ssp import connect_by_name, write_ssd
 from nnfmu.data import Measurement
 from nnfmu.fmu.build import build_fmu
@@ -136,13 +137,7 @@ def plant_step_graph(plant: LinearPlant, h: float, name: str) -> onnx.ModelProto
 
 def damper_graph() -> onnx.ModelProto:
     """A stateless linear damper F = c v (no sample period: evaluated once per communication step)."""
-    graph = helper.make_graph([helper.make_node("Mul", ["velocity", "c"], ["force"], name="viscous")], "damper",
-                              [_double("velocity", [1])], [_double("force", [1])], [_const("c", np.array([DAMPING]))])
-    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", OPSET)], ir_version=IR_VERSION)
-    Component(name="damper", inputs=[Port("velocity", "m/s")], outputs=[Port("force", "N")],
-              description="linear damper").attach_to(model)
-    onnx.checker.check_model(model)
-    return model
+    return linear_damper_graph(DAMPING)
 
 
 def build(model: onnx.ModelProto, folder: Path, name: str) -> Path:

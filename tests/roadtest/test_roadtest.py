@@ -11,14 +11,12 @@ import numpy as np
 import onnx
 import pytest
 import torch
-from onnx import TensorProto, helper, numpy_helper
 
-from nnfmu.component import Component, Port
+from nnfmu.cosim.linear_damper import linear_damper_graph
 from nnfmu.cosim.master import CosimSettings, cosimulate
 from nnfmu.cosim.ssp import open_system
 from nnfmu.data.rigs import RigOptions, write_rig
 from nnfmu.export import export_onnx
-from nnfmu.export.graph import IR_VERSION, OPSET
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.models.features import FeatureSpec, Tap
@@ -42,15 +40,7 @@ PERIOD = 1e-3  # [s] the rigs' sample period
 
 def linear_damper(path: Path) -> Path:
     """An nnfmu step graph F = c v at the rigs' sample period (no state)."""
-    graph = helper.make_graph([helper.make_node("Mul", ["velocity", "c"], ["force"], name="viscous")], "damper",
-                              [helper.make_tensor_value_info("velocity", TensorProto.DOUBLE, [1])],
-                              [helper.make_tensor_value_info("force", TensorProto.DOUBLE, [1])],
-                              [numpy_helper.from_array(np.array([DAMPING]), "c")])
-    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", OPSET)])
-    model.ir_version = IR_VERSION
-    Component("linear_damper", [Port("velocity", "m/s", min=-2.0, max=2.0)], [Port("force", "N")],
-              sample_period=PERIOD).attach_to(model)
-    onnx.save(model, path)
+    onnx.save(linear_damper_graph(DAMPING, PERIOD, "linear_damper", (-2.0, 2.0)), path)
     return path
 
 
