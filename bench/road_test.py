@@ -4,7 +4,7 @@ Usage: python bench/road_test.py [MODELS_DIR] [OUT_DIR] [DURATION_S]
 MODELS_DIR holds <preset>.onnx for the two damper and four bushing presets (e.g. a demo's models/ folder); when it
 does not exist they are trained there first on default rig records with the presets' default settings. Prints one
 JSON document: run times, the thesis comparison per system and damper network, the bushing networks along the
-reference motion, the largest use of each network input's training envelope, and the closed-loop bushing probe.
+reference motion, and the largest use of each network input's training envelope.
 """
 
 from __future__ import annotations
@@ -53,8 +53,8 @@ def main() -> None:
     print(json.dumps({
         "duration_s": duration, "training_s": round(train_seconds, 1), "road_test_s": round(result.seconds, 1),
         "reports": {k: str(v) for k, v in result.reports().items()},
-        "systems": [{k: s[k] for k in ("system", "seconds", "thesis_table", "bushing_networks_on_reference_motion",
-                                       "bushing_probe")} for s in summary["systems"]],
+        "systems": [{k: s[k] for k in ("system", "seconds", "thesis_table", "bushing_networks_on_reference_motion")}
+                    for s in summary["systems"]],
         "largest_envelope_use": envelope,
     }, indent=2))
 

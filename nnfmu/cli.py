@@ -181,6 +181,7 @@ def vehicle_build(
     out: Path = typer.Option(..., "--out", "-o", help="FMU path to write."),
     params: Optional[Path] = typer.Option(None, help="Vehicle parameter file (TOML, SI units); default: a mid-size car."),
     reference: Optional[list[str]] = typer.Option(None, help="Components to model inside the vehicle (linear bushing, spline damper), e.g. damper_fl,bushing_fl_front; the rest are ports."),
+    stabilise: Optional[list[str]] = typer.Option(None, help="Ports to stabilise with their linear reference over each step (stiff bushings on a light arm), e.g. bushing_fl_front,bushing_fl_rear."),
     sample_period: float = typer.Option(1e-4, help="Internal sample period [s] of the exact discrete model."),
     fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
     axle: str = typer.Option("front", help="Quarter car only: which corner's parameters, front or rear."),
@@ -192,7 +193,8 @@ def vehicle_build(
     from nnfmu.vehicle.models.errors import VehicleModelError
 
     try:
-        settings = VehicleBuildSettings(params_path=params, components={n: "reference" for n in _split(reference)},
+        settings = VehicleBuildSettings(params_path=params, components={n: "reference" for n in _split(reference)}
+                                        | {n: "stabilised" for n in _split(stabilise)},
                                         sample_period=sample_period, fmi_version=fmi, axle=axle, backend=backend)
         path = build_vehicle_fmu(model, out, settings)
     except (VehicleModelError, FmuBuildError) as error:

@@ -4,7 +4,11 @@ four damper networks and its four front lower-control-arm (LCA) bushings as netw
 A bushing has one network per channel (axial and radial force, axial and conical torque); `bushing_onnx` merges them
 into one step graph (`nnfmu.export.merge`), so one FMU per bushing carries all four and its ports (`axial_force`,
 `axial_displacement`, ...) meet the vehicle's `bushing_fl_front_axial_force` etc. by `connect_by_name`'s rule.
-Every element is a native FMU; the vehicle's components are all external (force inputs).
+Every element is a native FMU. The vehicle's dampers are external force ports; its LCA bushings are stabilised
+ports (`nnfmu.vehicle.models.linear`): a 4.5 kg arm on bushings of several kN/mm has modes near 240 Hz, which a force
+held for the networks' 1 ms cannot carry (every plain exchange diverges within milliseconds), so the vehicle keeps the
+parameter file's linear bushing over each step and applies the network force plus the linear bushing's change since
+the step start. The vehicle FMU samples at the communication step, so each step starts at a sample.
 """
 
 from __future__ import annotations
@@ -21,14 +25,13 @@ from nnfmu.export.merge import merge_step_graphs
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
-from nnfmu.vehicle.models.components import REFERENCE
+from nnfmu.vehicle.models.components import STABILISED
 from nnfmu.vehicle.models.full_vehicle import FRONT_CORNERS
 from nnfmu.vehicle.models.ports import CORNERS
 
 SYSTEMS = ("quarter-car", "full-vehicle")
 DAMPER_MODELS = ("damper-spline", "damper-hysteresis")
 BUSHING_MODELS = ("bushing-axial-force", "bushing-radial-force", "bushing-axial-torque", "bushing-conical-torque")
-VEHICLE_SAMPLE_PERIOD = 1e-4  # [s] the vehicle FMU's exact step; every communication step is a multiple of it
 
 
 class RoadTestError(ValueError):
@@ -86,13 +89,16 @@ def build_component_fmus(models: Mapping[str, Path], out: Path, with_bushing: bo
     return ComponentFmus(dampers, bushing)
 
 
-def build_vehicle(system: str, out: Path, linear_bushings: bool = False) -> Path:
-    """The vehicle FMU of `system` at the vehicle's sample period: every component external (force inputs), or with
-    `linear_bushings` the front LCA bushings built in as the parameter file's linear elements."""
-    components = {name: REFERENCE for name in bushing_elements(system)} if linear_bushings else {}
-    name = f"{system}-linear-bushings" if linear_bushings and components else system
-    return build_vehicle_fmu(system, out / f"{name}.fmu",
-                             VehicleBuildSettings(components=components, sample_period=VEHICLE_SAMPLE_PERIOD))
+def vehicle_components(system: str) -> dict[str, str]:
+    """Component choices of the road-test vehicle: dampers external, front LCA bushings stabilised."""
+    return {name: STABILISED for name in bushing_elements(system)}
+
+
+def build_vehicle(system: str, out: Path, step: float) -> Path:
+    """The vehicle FMU of `system` (`vehicle_components`) sampled at the communication `step` [s] (exact: every
+    component is a port, so the vehicle is linear)."""
+    return build_vehicle_fmu(system, out / f"{system}.fmu",
+                             VehicleBuildSettings(components=vehicle_components(system), sample_period=step))
 
 
 def write_system(system: str, vehicle_fmu: Path, damper_fmu: Path, bushing_fmu: Path | None, folder: Path,

@@ -22,6 +22,7 @@ from nnfmu.vehicle.models import (
     truth_laws,
 )
 from nnfmu.vehicle.models.full_vehicle import COMPONENTS
+from nnfmu.vehicle.models.ports import component_channels
 
 CORNERS = ("fl", "fr", "rl", "rr")
 SI_UNITS = {"m", "m/s", "m/s^2", "N", "N.m", "rad", "rad/s", "rad/s^2"}
@@ -179,6 +180,57 @@ def test_external_ports_closed_by_the_reference_laws_equal_the_built_in_model(
     np.testing.assert_allclose(closed, car.A, rtol=0, atol=1e-9 * np.max(np.abs(car.A)))
     actuators = [car.input_index(n) for n in car.input_names]
     np.testing.assert_allclose(open_loop.B[:, : len(actuators)], car.B, rtol=0, atol=1e-12 * np.max(np.abs(car.B)))
+
+
+def _bushing_laws(vehicle: LinearVehicle, params: VehicleParameters) -> list[tuple[int, int, int, float, float]]:
+    """(force input, displacement output, rate output, stiffness, damping) of every LCA bushing channel."""
+    laws = []
+    for corner in ("fl", "fr"):
+        for position, b in (("front", params.lca.front_bushing), ("rear", params.lca.rear_bushing)):
+            rates = ((b.axial_stiffness, b.axial_damping), (b.radial_stiffness, b.radial_damping),
+                     (b.torsional_stiffness, b.torsional_damping), (b.conical_stiffness, b.conical_damping))
+            for (force, disp, rate), (k, c) in zip(component_channels(f"bushing_{corner}_{position}"), rates):
+                laws.append((vehicle.input_index(force), vehicle.output_index(disp), vehicle.output_index(rate), k, c))
+    return laws
+
+
+@pytest.mark.parametrize("dt", [1e-3, 2e-3])
+def test_stabilised_bushings_fed_their_linear_law_once_per_step_equal_the_built_in_model(
+    car: LinearVehicle, linear_params: VehicleParameters, dt: float
+) -> None:
+    """A stabilised port fed the linear law's force at each step start is exact at any step (the held force plus the
+    reference's change is the reference itself); the same exchange through plain external ports diverges."""
+    dampers_in = {k: v for k, v in ALL_REFERENCE.items() if k.startswith("damper")}
+    t = np.arange(int(round(0.5 / dt)) + 1) * dt
+    inputs = _posts(t, {"fl": 0.02, "fr": 0.05, "rl": 0.2, "rr": 0.25})
+    x0 = car.equilibrium()
+    ref = simulate(car, inputs, SimulationSettings(dt=dt), x0=x0)["lca_fl_angle"]
+    diverged = {}
+    for choice in ("stabilised", "external"):
+        ports = build_full_vehicle(linear_params, dampers_in | {n: choice for n in COMPONENTS if n.startswith("bushing")})
+        disc, laws = ports.discretise(dt), _bushing_laws(ports, linear_params)
+        x, angle = x0.copy(), []
+        for k in range(len(t)):
+            u = ports.input_vector({name: values[k] for name, values in inputs.items()})
+            y = ports.output_vector(x, u)
+            for force, disp, rate, stiffness, damping in laws:
+                u[force] = stiffness * y[disp] + damping * y[rate]
+            angle.append(y[ports.output_index("lca_fl_angle")])
+            x = disc.step(x, u)
+            if not np.all(np.abs(x) < 1e3):  # metres and radians: far beyond any real motion
+                break
+        diverged[choice] = len(angle) < len(t)
+        if choice == "stabilised":
+            np.testing.assert_allclose(angle, ref, rtol=0, atol=1e-9 * np.max(np.abs(ref)))
+    assert diverged == {"stabilised": False, "external": True}
+
+
+def test_stabilised_ports_start_at_the_reference_models_equilibrium(
+    car: LinearVehicle, linear_params: VehicleParameters
+) -> None:
+    stabilised = build_full_vehicle(linear_params, {n: "stabilised" if n.startswith("bushing") else v
+                                                    for n, v in ALL_REFERENCE.items()})
+    np.testing.assert_allclose(stabilised.equilibrium(), car.equilibrium(), rtol=1e-9, atol=1e-12)
 
 
 def test_external_damper_gauss_seidel_converges(car: LinearVehicle, linear_params: VehicleParameters) -> None:

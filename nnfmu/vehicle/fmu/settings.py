@@ -23,7 +23,8 @@ MAX_SUBSTEP = 1e-4
 @dataclass(frozen=True)
 class VehicleBuildSettings:
     """`params_path` (None: the packaged mid-size sedan), `components` maps a component name ('damper',
-    'damper_fl', 'bushing_fl_front', ...) to 'external' (force input port, the default) or 'reference' (built-in
+    'damper_fl', 'bushing_fl_front', ...) to 'external' (force input port, the default), 'stabilised' (force input port
+    with the reference element's change over a step applied, for stiff components) or 'reference' (built-in
     element), `sample_period` [s] of the FMU's samples, `axle` of the quarter car, FMI version and backend."""
 
     params_path: Path | None = None

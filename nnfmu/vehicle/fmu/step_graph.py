@@ -9,7 +9,8 @@ without advancing it (x_k = (1 - first) advanced + first x, exact for first in {
 The linear part advances exactly (zero-order hold): x_k = Ad x + Bd0 u + fd. Built-in spline dampers (forces g) are
 stepped as `nnfmu.vehicle.models.DiscreteVehicle.step` does: the graph unrolls its predictor-corrector sub-steps, and
 evaluates each spline as f0 + s0 (v - v0) + sum_i (s_i - s_{i-1}) Relu(v - v_i), which is its piecewise-linear table
-extended linearly beyond the end points. Operators: Concat, Gemm, MatMul, Mul, Add, Sub, Relu, Identity (built with the exporter's GraphBuilder).
+extended linearly beyond the end points. Stabilised force ports enter the advance as u - S x (S x at the sample's
+start; see `nnfmu.vehicle.models.linear`). Operators: Concat, Gemm, MatMul, Mul, Add, Sub, Relu, Identity (built with the exporter's GraphBuilder).
 """
 
 from __future__ import annotations
@@ -88,7 +89,7 @@ def discrete_step_graph(discrete: DiscreteVehicle) -> onnx.ModelProto:
     nx, nu, ny = len(vehicle.states), len(vehicle.inputs), len(vehicle.outputs)
     graph = GraphBuilder(reserved=(STATE_IN, FIRST_IN, INPUTS, OUTPUTS, STATE_OUT, FIRST_OUT))
     spline = _spline_constants(graph, vehicle)
-    advanced = _advance(graph, discrete, spline)
+    advanced = _advance(graph, discrete, spline, _held_inputs(graph, vehicle))
     keep = graph.node("Mul", [FIRST_IN, STATE_IN], "kept_state")
     later = graph.node("Sub", [graph.constant("one", np.ones(1)), FIRST_IN], "later_sample")
     state = graph.node("Add", [graph.node("Mul", [later, advanced], "advanced_state"), keep], "state")
@@ -142,12 +143,21 @@ def _damper_forces(graph: GraphBuilder, state_and_inputs: str, spline: dict[str,
     return _spline(graph, velocity, spline, name)
 
 
-def _advance(graph: GraphBuilder, discrete: DiscreteVehicle, spline: dict[str, str]) -> str:
-    """The state one step of `discrete.dt` after x with u held: exact if linear, else `discrete.substeps`
+def _held_inputs(graph: GraphBuilder, vehicle: LinearVehicle) -> str:
+    """The inputs the advance sees: u, or u - S x for a vehicle with stabilised force ports."""
+    if not np.any(vehicle.stabiliser):
+        return INPUTS
+    held = _affine(graph, STATE_IN, graph.constant("stabiliser", vehicle.stabiliser),
+                   graph.constant("zero_inputs", np.zeros(len(vehicle.inputs))), "stabiliser_force")
+    return graph.node("Sub", [INPUTS, held], "held_inputs")
+
+
+def _advance(graph: GraphBuilder, discrete: DiscreteVehicle, spline: dict[str, str], inputs: str) -> str:
+    """The state one step of `discrete.dt` after x with `inputs` held: exact if linear, else `discrete.substeps`
     predictor-corrector sub-steps."""
     vehicle = discrete.vehicle
     if vehicle.is_linear:
-        state_input = graph.node("Concat", [STATE_IN, INPUTS], "start_state_and_inputs", axis=1)
+        state_input = graph.node("Concat", [STATE_IN, inputs], "start_state_and_inputs", axis=1)
         step = graph.constant("step_matrix", np.hstack([discrete.Ad, discrete.Bd0]))
         return _affine(graph, state_input, step, graph.constant("step_offset", discrete.fd), "advanced")
     predict = graph.constant("predict_matrix", np.hstack([discrete.Ad, discrete.Bd0, discrete.Bnd]))
@@ -157,11 +167,11 @@ def _advance(graph: GraphBuilder, discrete: DiscreteVehicle, spline: dict[str, s
     x = STATE_IN
     for j in range(discrete.substeps):
         tag = f"sub{j + 1}"
-        at_start = graph.node("Concat", [x, INPUTS], f"{tag}_state_and_inputs", axis=1)
+        at_start = graph.node("Concat", [x, inputs], f"{tag}_state_and_inputs", axis=1)
         g0 = _damper_forces(graph, at_start, spline, f"{tag}_force")
         held = graph.node("Concat", [at_start, g0], f"{tag}_with_force", axis=1)
         predicted = _affine(graph, held, predict, predict_offset, f"{tag}_predicted")
-        at_end = graph.node("Concat", [predicted, INPUTS], f"{tag}_predicted_and_inputs", axis=1)
+        at_end = graph.node("Concat", [predicted, inputs], f"{tag}_predicted_and_inputs", axis=1)
         g1 = _damper_forces(graph, at_end, spline, f"{tag}_end_force")
         change = graph.node("Sub", [g1, g0], f"{tag}_force_change")
         x = graph.node("Add", [predicted, _affine(graph, change, correct, no_correction, f"{tag}_ramp")], f"{tag}_state")

@@ -61,7 +61,7 @@ class Assembly:
     post_damping: np.ndarray = field(init=False)
     weight: np.ndarray = field(init=False)
     preload: np.ndarray = field(init=False)
-    forces: list[tuple[VehiclePort, np.ndarray]] = field(default_factory=list)
+    forces: list[tuple[VehiclePort, np.ndarray, LinearSpring | None]] = field(default_factory=list)
     feedbacks: list[tuple[str, Deflection, SplineDamper]] = field(default_factory=list)
     outputs: list[tuple[VehiclePort, str, Deflection, LinearSpring | None]] = field(default_factory=list)
 
@@ -110,11 +110,14 @@ class Assembly:
         self.post_damping -= spring.damping * np.outer(r, deflection.post)
         self.preload -= spring.preload * r
 
-    def add_force_input(self, port: VehiclePort, deflection: Deflection) -> None:
-        """An external force (input port) resisting `deflection`."""
+    def add_force_input(self, port: VehiclePort, deflection: Deflection, stabiliser: LinearSpring | None = None) -> None:
+        """An external force (input port) resisting `deflection`. With a `stabiliser` (the element's linear
+        reference), the force set at a step's start is applied plus the stabiliser's change since then, so a stiff
+        component coupled through a held force acts on the vehicle with its linear part solved exactly over the step
+        (see `LinearVehicle.stabiliser`)."""
         if np.any(deflection.post):
             raise VehicleModelError(f"force port {port.name} must act between bodies, not on an actuator post")
-        self.forces.append((port, deflection.row))
+        self.forces.append((port, deflection.row, stabiliser))
 
     def add_feedback(self, name: str, deflection: Deflection, law: SplineDamper) -> None:
         """A nonlinear damper resisting `deflection` with force law(rate of deflection)."""
@@ -137,7 +140,7 @@ class Assembly:
             minv = np.linalg.inv(self.mass)
         except np.linalg.LinAlgError:
             raise VehicleModelError(f"{name}: singular mass matrix (a coordinate carries no mass or inertia)") from None
-        force_rows = np.array([-row for _, row in self.forces]).T.reshape(n, nf)
+        force_rows = np.array([-row for _, row, _ in self.forces]).T.reshape(n, nf)
         q_u = np.hstack([self.post_stiffness, self.post_damping, force_rows])
         lower_a = np.hstack([-minv @ self.stiffness, -minv @ self.damping])
         lower_b = minv @ q_u
@@ -164,7 +167,7 @@ class Assembly:
             name=name,
             description=description,
             states=states,
-            inputs=post_ports + [port for port, _ in self.forces],
+            inputs=post_ports + [port for port, _, _ in self.forces],
             outputs=[port for port, *_ in self.outputs],
             A=a,
             B=b,
@@ -179,7 +182,17 @@ class Assembly:
             Cn=cn,
             Dn=dn,
             Dyn=np.array([r[3] for r in rows]).reshape(len(rows), nn),
+            stabiliser=self._stabiliser(q_u.shape[1]),
         )
+
+    def _stabiliser(self, inputs: int) -> np.ndarray:
+        """(nu, nx) rows S: the stabilised force ports' linear reference force S x (zero rows for other inputs)."""
+        n, first = self.size, inputs - len(self.forces)
+        s = np.zeros((inputs, 2 * n))
+        for i, (_, row, spring) in enumerate(self.forces):
+            if spring is not None:
+                s[first + i] = np.concatenate([spring.stiffness * row, spring.damping * row])
+        return s
 
     def _output_rows(
         self,

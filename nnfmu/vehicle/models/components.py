@@ -1,4 +1,5 @@
-"""Which component ports are external (forces are inputs) and which use the built-in reference element."""
+"""Which component ports are external (forces are inputs), which use the built-in reference element, and which are
+external but stabilised by the reference element (see `Assembly.add_force_input`)."""
 
 from __future__ import annotations
 
@@ -8,13 +9,14 @@ from .errors import VehicleModelError
 
 EXTERNAL = "external"
 REFERENCE = "reference"
-CHOICES = (EXTERNAL, REFERENCE)
+STABILISED = "stabilised"
+CHOICES = (EXTERNAL, REFERENCE, STABILISED)
 
 
 def resolve_components(
     model: str, names: list[str], chosen: Mapping[str, str] | None, default: str = EXTERNAL
 ) -> dict[str, str]:
-    """Every component of `model` mapped to 'external' or 'reference'; unnamed components get `default`."""
+    """Every component of `model` mapped to one of `CHOICES`; unnamed components get `default`."""
     chosen = dict(chosen or {})
     unknown = sorted(set(chosen) - set(names))
     if unknown:

@@ -20,7 +20,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from .assembly import Assembly, Deflection, RigidMotion
-from .components import REFERENCE, resolve_components
+from .components import REFERENCE, STABILISED, resolve_components
 from .geometry import SIDES, BushingFrame, mirror_point, mirror_rotation, unit
 from .linear import LinearVehicle
 from .parameters import AxleParameters, BushingParameters, DamperParameters, VehicleParameters
@@ -57,7 +57,8 @@ def _coordinates() -> list[VehiclePort]:
 
 
 def build_full_vehicle(params: VehicleParameters, components: Mapping[str, str] | None = None) -> LinearVehicle:
-    """Full vehicle; `components` maps e.g. 'damper_fl' or 'bushing_fl_front' to 'external' (default) or 'reference'."""
+    """Full vehicle; `components` maps e.g. 'damper_fl' or 'bushing_fl_front' to 'external' (default), 'reference'
+    or 'stabilised' (external, stabilised by the reference element: the linear damping or bushing)."""
     choice = resolve_components("full vehicle", COMPONENTS, components)
     coords = _coordinates()
     asm = Assembly(coords, posts=list(CORNERS), gravity=params.gravity)
@@ -137,7 +138,8 @@ def _add_corner(
     elif choice == REFERENCE:
         asm.add_feedback(f"damper_{corner}", stroke, SplineDamper(damper.velocity, damper.force))
     else:
-        asm.add_force_input(damper_input(corner), stroke)
+        stabiliser = LinearSpring(0.0, damper.damping) if choice == STABILISED else None
+        asm.add_force_input(damper_input(corner), stroke, stabiliser)
     for port, kind in zip(damper_outputs(corner), ("displacement", "velocity")):
         asm.add_output(port, kind, stroke)
     tyre = Deflection(-wheel[2], asm.post_row(corner))
@@ -221,7 +223,7 @@ def _add_bushing(
         if choice == REFERENCE:
             asm.add_spring(deflection, spring)
         else:
-            asm.add_force_input(port, deflection)
+            asm.add_force_input(port, deflection, spring if choice == STABILISED else None)
     asm.add_spring(Deflection(frame.lateral @ moved, none), LinearSpring(p.radial_stiffness, p.radial_damping))
     asm.add_spring(Deflection(frame.rot_lateral @ turned, none), LinearSpring(p.conical_stiffness, p.conical_damping))
     out = bushing_outputs(name)

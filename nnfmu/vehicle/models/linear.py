@@ -15,6 +15,13 @@ The nonlinear forces g (spline dampers) are not exact: a model with such element
 step (<= max_substep), and over each sub-step g is taken linear in time from its value at the sub-step start to its
 value at a predicted end state (explicit predictor-corrector: predict with g held, correct with the ramp of g), so the
 linear part stays exact and the error of the nonlinear part falls with the square of the sub-step.
+
+Stabilised force ports (rows of `stabiliser` S, the ports' linear reference elements): over a step from x[k] the
+vehicle applies the force u set at the step start plus S (x(t) - x[k]), i.e. x' = (A + B S) x + B (u - S x[k]) + ...,
+still exact for the linear part. A stiff component (a bushing of kN/mm on a light arm) coupled through a force held
+for a step then acts on the vehicle with only its deviation from the reference held, which keeps the exchange stable
+at steps its own modes would otherwise forbid; at the sample itself the applied force is u, so the outputs and the
+continuous model are those of a plain external port.
 """
 
 from __future__ import annotations
@@ -39,6 +46,7 @@ class LinearVehicle:
 
     `gravity` and `preload` (nx,) add up to the constant term f; `e` (ny,) is the constant output term (static loads).
     Bn (nx, nn), Cn (nn, nx), Dn (nn, nu), Dyn (ny, nn) connect the nn nonlinear built-in elements `feedback_laws`.
+    `stabiliser` (nu, nx): the stabilised force ports' reference force S x (zero rows elsewhere; None: no such port).
     """
 
     name: str
@@ -59,6 +67,16 @@ class LinearVehicle:
     Cn: np.ndarray
     Dn: np.ndarray
     Dyn: np.ndarray
+    stabiliser: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.stabiliser is None:
+            self.stabiliser = np.zeros((len(self.inputs), len(self.states)))
+
+    @property
+    def stabilised_A(self) -> np.ndarray:
+        """A + B S: the state matrix over a step, stabilised ports' reference elements built in."""
+        return self.A + self.B @ self.stabiliser
 
     @property
     def f(self) -> np.ndarray:
@@ -104,18 +122,20 @@ class LinearVehicle:
         return self.A @ x + self.B @ u + self.Bn @ self.nonlinear_forces(x, u) + self.f
 
     def equilibrium(self, u: np.ndarray | None = None) -> np.ndarray:
-        """Static state for constant inputs u (default: all zero); rate inputs (unit '.../s') are taken as zero."""
+        """Static state for constant inputs u (default: all zero); rate inputs (unit '.../s') are taken as zero.
+        A stabilised port at rest is taken to carry its reference element's force."""
         u = np.zeros(len(self.inputs)) if u is None else np.asarray(u, dtype=float).copy()
         u[[i for i, port in enumerate(self.inputs) if port.unit.endswith("/s")]] = 0.0
         g = np.array([law(v) for law, v in zip(self.feedback_laws, self.Dn @ u)], dtype=float).reshape(
             len(self.feedback_laws)
         )
-        if np.linalg.cond(self.A) > 1e12:
+        a = self.stabilised_A
+        if np.linalg.cond(a) > 1e12:
             raise VehicleModelError(
                 f"{self.name}: no unique static equilibrium: the stiffness is singular, as happens when external "
                 "components (bushings) carry the only stiffness of some motion; give the initial state x0 instead"
             )
-        return np.linalg.solve(self.A, -(self.B @ u + self.Bn @ g + self.f))
+        return np.linalg.solve(a, -(self.B @ u + self.Bn @ g + self.f))
 
     def natural_frequencies(self) -> np.ndarray:
         """Damped natural frequencies [Hz] of the linear part (one per oscillating mode), ascending."""
@@ -132,13 +152,14 @@ class LinearVehicle:
         h = dt / substeps
         nx, nu = self.B.shape
         held = np.hstack([self.B, self.Bn, self.f.reshape(nx, 1)])
-        gamma, ad = _zoh(self.A, held, h)
+        a = self.stabilised_A
+        gamma, ad = _zoh(a, held, h)
         bd0, bnd, fd = gamma[:, :nu], gamma[:, nu:-1], gamma[:, -1]
         bd1 = np.zeros_like(bd0)
         if hold == "foh":
-            ramp = _ramp_integral(self.A, self.B, h)
+            ramp = _ramp_integral(a, self.B, h)
             bd0, bd1 = bd0 - ramp / h, ramp / h
-        bnr = _ramp_integral(self.A, self.Bn, h) / h
+        bnr = _ramp_integral(a, self.Bn, h) / h
         return DiscreteVehicle(self, dt, hold, substeps, ad, bd0, bd1, bnd, bnr, fd)
 
 
@@ -176,7 +197,8 @@ class DiscreteVehicle:
 
     With nonlinear built-in elements, per sub-step (u interpolated between u[k] and u[k+1] for foh, held for zoh):
     g0 = g(x, u0); x_pred = Ad x + Bd0 u0 + Bd1 u1 + Bnd g0 + fd; x_next = x_pred + Bnr (g(x_pred, u1) - g0).
-    Bnd is the held-force response and Bnr the response to a unit-per-sub-step force ramp.
+    Bnd is the held-force response and Bnr the response to a unit-per-sub-step force ramp. The matrices are those of
+    the stabilised state matrix, and every input is taken less S x at the step start (`held_inputs`).
     """
 
     vehicle: LinearVehicle
@@ -195,6 +217,7 @@ class DiscreteVehicle:
         if self.hold == "foh" and u_next is None:
             raise VehicleModelError(f"{self.vehicle.name}: a first-order hold step needs the inputs at the step end")
         end = u if u_next is None or self.hold == "zoh" else u_next
+        u, end = self.held_inputs(x, u), self.held_inputs(x, end)
         for j in range(self.substeps):
             u0 = u + (end - u) * (j / self.substeps)
             u1 = u + (end - u) * ((j + 1) / self.substeps)
@@ -206,6 +229,10 @@ class DiscreteVehicle:
             x_pred = x_pred + self.Bnd @ g0
             x = x_pred + self.Bnr @ (self.vehicle.nonlinear_forces(x_pred, u1) - g0)
         return x
+
+    def held_inputs(self, x_start: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """Inputs as the stabilised step sees them: u - S x at the step start (u itself without stabilised ports)."""
+        return u - self.vehicle.stabiliser @ x_start
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from .assembly import Assembly, Deflection
-from .components import REFERENCE, resolve_components
+from .components import REFERENCE, STABILISED, resolve_components
 from .errors import VehicleModelError
 from .linear import LinearVehicle
 from .parameters import VehicleParameters
@@ -61,7 +61,8 @@ def build_quarter_car(
     elif choice["damper"] == REFERENCE:
         asm.add_feedback("damper", stroke, SplineDamper(damper.velocity, damper.force))
     else:
-        asm.add_force_input(damper_input(""), stroke)
+        stabiliser = LinearSpring(0.0, damper.damping) if choice["damper"] == STABILISED else None
+        asm.add_force_input(damper_input(""), stroke, stabiliser)
     for port, kind in zip(damper_outputs(""), ("displacement", "velocity")):
         asm.add_output(port, kind, stroke)
     asm.add_output(coords[0], "displacement", Deflection(body, asm.post_row()))
