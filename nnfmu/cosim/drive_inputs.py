@@ -48,8 +48,7 @@ class DriveInputs:
         self.names = list(names)
         self.channels = [_channel_for(n, source, corner) for n in names]
         self.time = np.asarray(source.time, dtype=float)
-        self.values = np.column_stack([np.asarray(source[c], dtype=float) for c in self.channels]) if names else \
-            np.zeros((len(self.time), 0))
+        self._columns = [np.ascontiguousarray(source[c], dtype=float) for c in self.channels]
         self.source = drive.source
         self._slack = TIME_TOLERANCE * drive.sample_period
 
@@ -63,8 +62,16 @@ class DriveInputs:
 
     def at(self, t: float) -> np.ndarray:
         """Input values at time `t` [s] (linear between samples); DriveInputError outside the drive."""
-        if t < self.start - self._slack or t > self.end + self._slack:
+        return self.table(np.array([t]))[0]
+
+    def table(self, times: np.ndarray) -> np.ndarray:
+        """Input values at each of `times` [s], one row per time (linear between samples, as `at`); DriveInputError
+        naming the first time outside the drive."""
+        outside = (times < self.start - self._slack) | (times > self.end + self._slack)
+        if np.any(outside):
+            t = float(times[np.argmax(outside)])
             raise DriveInputError(f"{self.source}: time {t:.9g} s lies outside the drive ({self.start:.9g} s to "
                                   f"{self.end:.9g} s)")
-        t = min(max(t, self.start), self.end)
-        return np.array([np.interp(t, self.time, self.values[:, i]) for i in range(self.values.shape[1])])
+        clipped = np.clip(times, self.start, self.end)
+        return np.column_stack([np.interp(clipped, self.time, column) for column in self._columns]) \
+            if self._columns else np.zeros((len(times), 0))

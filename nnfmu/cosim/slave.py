@@ -1,19 +1,43 @@
 """One FMU instance in fmpy behind a small interface that hides whether it is FMI 2 or FMI 3.
 
 The co-simulation master and the replay of measured data both drive FMUs through this class, by variable name.
+
+FMI 2 log messages come through fmpy's native logger proxy, which formats the message's arguments but holds a single
+logger for the whole process. So every instance registers the same module-level logger, and the instance's key in
+the callbacks' componentEnvironment routes each message to the instance that logged it.
 """
 
 from __future__ import annotations
 
+import itertools
 import shutil
 import tempfile
-from ctypes import byref
+from ctypes import byref, c_void_p
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Sequence
 
 import numpy as np
 
-LogSink = Callable[[str, int, str, str], None]  # (instance name, status, category, message)
+Messages = list[tuple[int, str, str]]  # (status, category, message) as an FMU logged them
+_FMI2_SINKS: dict[int, Messages] = {}  # an FMI 2 instance's key (its componentEnvironment) -> its messages
+_FMI2_KEYS = itertools.count(1)
+_FMI2_LOGGER: object | None = None  # the ctypes logger, made on first use
+
+
+def _route_fmi2_message(env, instance_name, status, category, message) -> None:  # noqa: ANN001 (ctypes callback)
+    sink = _FMI2_SINKS.get(env or 0)
+    if sink is not None:
+        sink.append((status, category.decode(errors="replace"), message.decode(errors="replace")))
+
+
+def _fmi2_logger() -> object:
+    """The one ctypes logger every FMI 2 instance registers (made once, kept alive for the process)."""
+    global _FMI2_LOGGER
+    if _FMI2_LOGGER is None:
+        from fmpy.fmi2 import fmi2CallbackLoggerTYPE
+
+        _FMI2_LOGGER = fmi2CallbackLoggerTYPE(_route_fmi2_message)
+    return _FMI2_LOGGER
 
 
 class FmuSlave:
@@ -31,22 +55,26 @@ class FmuSlave:
         self.description = read_model_description(str(self.path))
         self.fmi_version = 3 if self.description.fmiVersion.startswith("3") else 2
         self.variables = {v.name: v for v in self.description.modelVariables}
-        self.messages: list[tuple[int, str, str]] = []
+        self.messages: Messages = []
+        self._key = 0
         self._unzip_dir = tempfile.mkdtemp(prefix="nnfmu-fmu-")
         directory = extract(str(self.path), unzipdir=self._unzip_dir)
         kwargs = dict(guid=self.description.guid, unzipDirectory=directory, instanceName=instance_name,
                       modelIdentifier=self.description.coSimulation.modelIdentifier)
         if self.fmi_version == 2:
-            from fmpy.fmi2 import FMU2Slave, defaultCallbacks, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+            from fmpy.fmi2 import FMU2Slave, defaultCallbacks, fmi2CallbackFunctions
             from fmpy.logging import addLoggerProxy
 
             self.fmu = FMU2Slave(**kwargs)
+            self._key = next(_FMI2_KEYS)
+            _FMI2_SINKS[self._key] = self.messages
             callbacks = fmi2CallbackFunctions()
-            callbacks.logger = fmi2CallbackLoggerTYPE(self._log2)
+            callbacks.logger = _fmi2_logger()
             callbacks.allocateMemory = defaultCallbacks.allocateMemory
             callbacks.freeMemory = defaultCallbacks.freeMemory
+            callbacks.componentEnvironment = c_void_p(self._key)
             addLoggerProxy(byref(callbacks))
-            self._callbacks = callbacks  # keep the ctypes callbacks alive as long as the instance
+            self._callbacks = callbacks  # the FMU keeps a pointer to them: alive as long as the instance
             self.fmu.instantiate(callbacks=callbacks, loggingOn=logging_on)
         else:
             from fmpy.fmi3 import FMU3Slave
@@ -54,9 +82,6 @@ class FmuSlave:
             self.fmu = FMU3Slave(**kwargs)
             self.fmu.instantiate(loggingOn=logging_on, logMessage=self._log3)
         self._open = True
-
-    def _log2(self, env, instance_name, status, category, message) -> None:  # noqa: ANN001 (ctypes callback)
-        self.messages.append((status, category.decode(errors="replace"), message.decode(errors="replace")))
 
     def _log3(self, env, status, category, message) -> None:  # noqa: ANN001 (ctypes callback)
         self.messages.append((status, category.decode(errors="replace"), message.decode(errors="replace")))
@@ -122,6 +147,7 @@ class FmuSlave:
             pass  # an instance that failed earlier may refuse to terminate; it is freed all the same
         finally:
             self.fmu.freeInstance()
+            _FMI2_SINKS.pop(self._key, None)
             shutil.rmtree(self._unzip_dir, ignore_errors=True)
 
     def __enter__(self) -> "FmuSlave":

@@ -1,0 +1,165 @@
+"""Speed of the fmpy co-simulation master: 50 s of road excitation at a 1 ms communication step (one JSON line).
+
+Usage: python bench/cosim.py [MODELS_DIR] [DURATION_S] [REPEATS]
+Systems as the road test builds them (`nnfmu.roadtest.systems`): the quarter car with a damper network (2 FMUs) and
+the full vehicle with four damper networks and its four front LCA bushing networks on stabilised ports (9 FMUs), the
+vehicle FMU sampled at the communication step, plain Gauss-Seidel, network output filters off. MODELS_DIR holds
+<preset>.onnx of the two damper and four bushing presets; without it, the presets are trained in a temporary folder on
+short rig records with short training (the networks' size and graph are the presets', their accuracy is not quoted).
+Preparation (training, FMU builds) is not timed. Timed: the whole `cosimulate` call (instantiation, initialisation,
+the run, teardown), the median of REPEATS runs; `loop_s` is the stepping alone. Whether the full vehicle stayed
+bounded: every channel finite, and the peaks of its motion channels within BOUNDED_RATIO of a run of the same system
+with the parameter file's linear bushings built in instead of the networks. Progress goes to stderr; stdout gets one
+JSON object on one line (targets of issue #4: full vehicle <= 10 s, quarter car <= 1 s for 50 s).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from nnfmu.cosim.master import CosimError, CosimSettings, cosimulate
+from nnfmu.cosim.ssp import open_system, read_ssd
+from nnfmu.data import Measurement
+from nnfmu.data.rigs import RigOptions, write_rig
+from nnfmu.demo import PRESETS_BY_RIG
+from nnfmu.models.workflow import TrainRequest, train_from_file
+from nnfmu.roadtest.systems import bushing_elements, build_component_fmus, build_vehicle, write_system
+from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
+from nnfmu.vehicle.models.components import REFERENCE
+
+STEP = 1e-3  # [s] communication step
+DAMPER = "damper-hysteresis"
+QUICK_RECORDS = {"damper": 40.0, "bushing": 20.0}  # [s] rig records for the quick networks
+QUICK_TRAINING = {"restarts": 1, "max_epochs": 15}
+TARGETS = {"full_vehicle_wall_s": 10.0, "quarter_car_wall_s": 1.0}  # [s] for 50 s simulated
+MOTION_CHANNELS = ("body_heave", "body_pitch", "lca_fl_angle", "damper_fl_displacement",
+                   "bushing_fl_front_axial_displacement", "bushing_fl_front_radial_displacement")
+BOUNDED_RATIO = 10.0  # a diverging loop grows by orders of magnitude; a stable one stays within tens of percent
+
+
+def log(line: str) -> None:
+    print(line, file=sys.stderr, flush=True)
+
+
+def networks(folder: Path) -> dict[str, Path]:
+    """<preset>.onnx of every damper and bushing preset in `folder`, the missing ones trained quickly there."""
+    models = {}
+    for rig, presets in PRESETS_BY_RIG.items():
+        lab = folder / "rig" / f"{rig}_lab.csv"
+        for preset in presets:
+            path = folder / f"{preset}.onnx"
+            if not path.is_file():
+                if not lab.is_file():
+                    write_rig(rig, lab, RigOptions(seed=0, duration=QUICK_RECORDS[rig]))
+                started = time.perf_counter()
+                train_from_file(lab, TrainRequest(preset=preset, **QUICK_TRAINING), path)
+                log(f"trained {preset} in {time.perf_counter() - started:.1f} s")
+            models[preset] = path
+    return models
+
+
+def linear_bushing_vehicle(out: Path) -> Path:
+    """The full vehicle with the parameter file's linear LCA bushings built in (the boundedness yardstick)."""
+    components = {name: REFERENCE for name in bushing_elements("full-vehicle")}
+    return build_vehicle_fmu("full-vehicle", out / "full-vehicle-linear-bushings.fmu",
+                             VehicleBuildSettings(components=components, sample_period=STEP))
+
+
+def timed_runs(ssd: Path, drive: Measurement, duration: float, repeats: int) -> tuple[list[float], list[float],
+                                                                                     Measurement | None, str]:
+    """(wall times [s] of whole runs, their stepping times [s], the last result, error text or '')."""
+    walls, loops, result = [], [], None
+    settings = CosimSettings(step=STEP, stop_time=duration)
+    for _ in range(repeats):
+        with open_system(ssd) as system:
+            started = time.perf_counter()
+            try:
+                result = cosimulate(system, drive, settings).measurement
+            except CosimError as error:  # a diverging loop: an FMU refuses a non-finite input
+                return walls + [time.perf_counter() - started], loops, None, str(error)
+            walls.append(time.perf_counter() - started)
+            loops.append(float(result.notes["wall_time_s"]))
+    return walls, loops, result, ""
+
+
+def summary(name: str, fmus: int, walls: list[float], loops: list[float], duration: float, error: str) -> dict:
+    """One system's timings: every run, medians, real-time factor (None if the run failed) and the error text."""
+    wall = statistics.median(walls)
+    record = {"system": name, "fmus": fmus, "wall_s": [round(w, 3) for w in walls], "median_wall_s": round(wall, 3),
+              "median_loop_s": round(statistics.median(loops), 3) if loops else None,
+              "real_time_factor": round(duration / wall, 2) if not error else None}
+    return record | ({"error": error} if error else {})
+
+
+def boundedness(result: Measurement | None, yardstick: Measurement) -> dict:
+    """All channels finite, and each motion channel's peak against the linear-bushing run's."""
+    if result is None:
+        return {"bounded": False}
+    finite = all(bool(np.all(np.isfinite(result[c]))) for c in result.names)
+    ratios = {c: float(np.max(np.abs(result[c])) / np.max(np.abs(yardstick[c]))) for c in MOTION_CHANNELS}
+    largest = max(result.names, key=lambda c: float(np.max(np.abs(result[c]))))
+    return {"bounded": finite and all(r < BOUNDED_RATIO for r in ratios.values()), "all_finite": finite,
+            "peak_ratio_to_linear_bushings": {c: round(r, 3) for c, r in ratios.items()},
+            "largest_channel": f"{largest} [{result.units[largest]}]",
+            "largest_abs_value": float(np.max(np.abs(result[largest])))}
+
+
+def met(records: dict[str, dict], duration: float) -> dict[str, bool]:
+    """Whether each system ran without error within its target, scaled to the simulated duration."""
+    return {key: "error" not in records[system] and records[system]["median_wall_s"] <= limit * duration / 50.0
+            for key, system, limit in (("full_vehicle_wall_s", "full-vehicle", TARGETS["full_vehicle_wall_s"]),
+                                       ("quarter_car_wall_s", "quarter-car", TARGETS["quarter_car_wall_s"]))}
+
+
+def main() -> None:
+    duration = float(sys.argv[2]) if len(sys.argv) > 2 else 50.0
+    repeats = int(sys.argv[3]) if len(sys.argv) > 3 else 3
+    with tempfile.TemporaryDirectory(prefix="nnfmu-bench-cosim-") as scratch:
+        work = Path(scratch)
+        prepared = time.perf_counter()
+        models = networks(Path(sys.argv[1]) if len(sys.argv) > 1 else work / "models")
+        fmus = build_component_fmus(models, work / "fmu", with_bushing=True)
+        drive = generate_drive(DriveSettings(duration=duration + STEP))
+        ssds = {system: write_system(system, build_vehicle(system, work / "fmu", STEP), fmus.dampers[DAMPER],
+                                     fmus.bushing if bushing_elements(system) else None, work / system, 0.0)
+                for system in ("quarter-car", "full-vehicle")}
+        linear = write_system("full-vehicle", linear_bushing_vehicle(work / "fmu"), fmus.dampers[DAMPER], None,
+                              work / "full-vehicle-linear-bushings", 0.0)
+        log(f"prepared in {time.perf_counter() - prepared:.1f} s")
+        load = os.getloadavg()[0]  # other work on the machine slows the timed runs
+        records, results = {}, {}
+        for system, ssd in ssds.items():
+            walls, loops, results[system], error = timed_runs(ssd, drive, duration, repeats)
+            records[system] = summary(system, len(read_ssd(ssd).elements), walls, loops, duration, error)
+            log(json.dumps(records[system]))
+        _, _, yardstick, error = timed_runs(linear, drive, duration, 1)
+        if yardstick is None:
+            raise SystemExit(f"the linear-bushing yardstick run failed: {error}")
+    full, quarter = records["full-vehicle"], records["quarter-car"]
+    print(json.dumps({
+        "simulated_s": duration, "step_s": STEP, "steps": round(duration / STEP), "repeats": repeats,
+        "full_vehicle_wall_s": full["median_wall_s"], "quarter_car_wall_s": quarter["median_wall_s"],
+        "real_time_factor": {"full_vehicle": full["real_time_factor"], "quarter_car": quarter["real_time_factor"]},
+        "fmus": {"full_vehicle": full["fmus"], "quarter_car": quarter["fmus"]},
+        "targets_s": TARGETS, "targets_met": met(records, duration),
+        "full_vehicle_stability": boundedness(results["full-vehicle"], yardstick),
+        "systems": records,
+        "setup": {"scheme": "gauss-seidel, plain", "vehicle_sample_period_s": STEP, "damper_network": DAMPER,
+                  "bushings": "network FMUs on stabilised vehicle ports", "network_output_filter": "off",
+                  "models": sys.argv[1] if len(sys.argv) > 1 else "quick-trained (bench)",
+                  "cpus": os.cpu_count(), "load_average_1min_before_runs": round(load, 2), "python": platform.python_version(), "machine": platform.machine()},
+    }, allow_nan=False))
+
+
+if __name__ == "__main__":
+    main()
