@@ -294,8 +294,51 @@ class Difference(Derived):
         return value, g.node("Concat", [x, kept], "difference_line", axis=0)
 
 
+@dataclass(frozen=True)
+class Stop(Derived):
+    """Stop operator of half-width `radius` (channel unit): s_k = x_k - p_k, with p the play operator's output
+    p_k = min(max(p_{k-1}, x_k - r), x_k + r), the driven side of a gap of width 2r that moves only once x closes it.
+
+    Of displacement, s is where the driving side sits in a backlash gap (±r: in contact and pushing; in between:
+    crossing the gap after a reversal), or the elastic part of an elastic-perfectly-plastic (Prandtl) element; a bank
+    of radii is a Prandtl-Ishlinskii hysteresis model. It stays in [-r, r] wherever the motion is centred. The state
+    slot holds p_{k-1}, 0 at rest; the step graph clips with Relu: clip(u, -r, r) = relu(u + r) - relu(u - r) - r.
+    """
+
+    kind: ClassVar[str] = "stop"
+    radius: float = 0.001
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        object.__setattr__(self, "radius", _check_positive(self.radius, f"stop({self.channel}) radius"))
+
+    def state_slots(self) -> tuple[StateSlot, ...]:
+        return (
+            StateSlot(name=f"{self.name}.play[k-1]", channel=self.channel,
+                      description=f"previous play-operator output (driven side of the gap) of {self.name}"),
+        )
+
+    def compute(self, x: np.ndarray, initial: np.ndarray, sample_period: float) -> np.ndarray:
+        r = self.radius
+        play = float(initial[0])
+        out = np.empty(len(x))
+        for k, value in enumerate(np.asarray(x, dtype=np.float64).tolist()):
+            play = min(max(play, value - r), value + r)
+            out[k] = value - play
+        return out
+
+    def emit(self, g: NodeSink, x: str, state: str | None, sample_period: float) -> tuple[str, str | None]:
+        assert state is not None, "stop has a state slot"
+        r = g.constant("stop_radius", np.array([self.radius]))
+        u = g.node("Sub", [x, state], "stop_travel")
+        upper = g.node("Relu", [g.node("Add", [u, r], "stop_above_lower")], "stop_relu_lower")
+        lower = g.node("Relu", [g.node("Sub", [u, r], "stop_above_upper")], "stop_relu_upper")
+        clipped = g.node("Sub", [g.node("Sub", [upper, lower], "stop_inside"), r], "stop")
+        return clipped, g.node("Sub", [x, clipped], "stop_play")
+
+
 DERIVED_KINDS: dict[str, type[Derived]] = {
-    cls.kind: cls for cls in (SmoothSign, Lowpass, LowpassSquare, Highpass, Difference)
+    cls.kind: cls for cls in (SmoothSign, Lowpass, LowpassSquare, Highpass, Difference, Stop)
 }
 
 

@@ -1,4 +1,5 @@
-"""The BRFD importer on the stored slice of the measured friction damper: SI units, attribution, bad files."""
+"""The BRFD importer on the stored slice of the measured friction damper: SI units, attribution, joined runs, bad
+files."""
 
 from __future__ import annotations
 
@@ -10,10 +11,11 @@ import numpy as np
 import pytest
 
 from nnfmu.data import DataError
-from nnfmu.data.importers import load_brfd
+from nnfmu.data.importers import load_brfd, load_brfd_series
 
 SLICE = Path(__file__).parent / "brfd"
 FILES = sorted(SLICE.glob("*.json.gz"))
+RUNS = [SLICE / f"1Hz36lbtension{a}amplitude.json.gz" for a in ("0.5", "1", "1.5")]  # whole runs at 256 Hz
 INCH = 0.0254  # m
 KIP = 4448.2216152605  # N: 1000 lbf
 
@@ -28,8 +30,8 @@ def write(path: Path, content: object) -> Path:
 
 
 def test_the_slice_is_small_and_attributed():
-    assert 2 <= len(FILES) <= 3
-    assert sum(p.stat().st_size for p in SLICE.iterdir()) < 200_000
+    assert len(FILES) == 4
+    assert sum(p.stat().st_size for p in SLICE.iterdir()) < 300_000
     readme = (SLICE / "README.md").read_text(encoding="utf-8")
     assert "CC BY-SA 4.0" in readme and "0e09aa9d950760277e31c08cd93fd01f39a5af09" in readme
     assert 'Cite: Coble, Huggins, Cao, Ricles, Downey, "Dataset-Friction-Damper-with-Backlash", 2022.' in readme
@@ -46,19 +48,38 @@ def test_import_converts_to_si_and_keeps_the_licence(path):
     assert np.allclose(m["displacement"], rows[:, 1] * INCH, rtol=1e-15, atol=0)
     assert np.allclose(m["force"], rows[:, 2] * KIP, rtol=1e-15, atol=0)
     assert np.allclose(m["velocity"], rows[:, 3] * INCH, rtol=1e-15, atol=0)
-    assert m.sample_period == pytest.approx(1 / 1024)
+    assert m.sample_period == pytest.approx(json.load(gzip.open(path))["dt"])  # 1/1024 s, or 4/1024 s subsampled
     assert "CC BY-SA 4.0" in m.notes["licence"] and "Coble" in m.notes["licence"]
     assert m.source == str(path)
 
 
 def test_the_measured_velocity_is_the_rate_of_the_measured_displacement():
     """An independent check of the units: in/s and in converted alike, so dx/dt matches v (to the rig's noise)."""
-    m = load_brfd(SLICE / "1Hz30lbtension1amplitude.json.gz")
+    m = load_brfd(SLICE / "1Hz36lbtension1amplitude.json.gz")
     rate = np.gradient(m["displacement"], m.sample_period)
     inner = slice(50, -50)
     scale = np.polyfit(m["velocity"][inner], rate[inner], 1)[0]
     assert scale == pytest.approx(1.0, abs=0.05)
     assert np.max(np.abs(m["displacement"])) == pytest.approx(1.0 * INCH, rel=0.05)  # the 1 in amplitude test
+
+
+def test_runs_join_in_order_on_one_time_axis():
+    runs = [load_brfd(path) for path in RUNS]
+    m = load_brfd_series(RUNS)
+    assert len(m) == sum(len(run) for run in runs) and m.units == runs[0].units
+    np.testing.assert_array_equal(m.time, np.arange(len(m)) * runs[0].sample_period)
+    np.testing.assert_array_equal(m["force"], np.concatenate([run["force"] for run in runs]))
+    assert f"{RUNS[1].name}: rows {len(runs[0])}-{len(runs[0]) + len(runs[1]) - 1}" in m.notes["runs"]
+    assert "CC BY-SA 4.0" in m.notes["licence"]
+
+
+def test_runs_at_other_sample_rates_are_not_joined(tmp_path):
+    rows = [[i / 1024, 0.0, 0.0, 0.0] for i in range(20)]
+    other = write(tmp_path / "fast.json.gz", {"data": rows, "dt": 1 / 1024})
+    with pytest.raises(DataError, match=r"fast\.json\.gz: sample period 0\.000976562 s differs"):
+        load_brfd_series([RUNS[0], other])
+    with pytest.raises(DataError, match="no BRFD files"):
+        load_brfd_series([])
 
 
 def test_missing_file(tmp_path):

@@ -12,6 +12,7 @@ import gzip
 import json
 import os
 import zlib
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -103,3 +104,31 @@ def load_brfd(path: str | os.PathLike[str], min_samples: int = 16) -> Measuremen
     check_measurement(measurement, min_samples=min_samples)
     _check_period(path, content, time)
     return measurement
+
+
+def load_brfd_series(paths: Sequence[str | os.PathLike[str]], min_samples: int = 16) -> Measurement:
+    """Several BRFD runs joined in the given order into one record on a uniform time axis from 0 (each run starts
+    and ends at rest, displacement and velocity near 0, so the motion is continuous at the joins); `notes["runs"]`
+    lists each run's rows.
+
+    Raises DataError naming the file whose sample period differs from the first run's, or as `load_brfd` does.
+    """
+    if not paths:
+        raise DataError("no BRFD files given")
+    runs = [load_brfd(path, min_samples) for path in paths]
+    period = runs[0].sample_period
+    for run in runs[1:]:
+        if not np.isclose(run.sample_period, period, rtol=1e-9):
+            raise DataError(
+                f"{run.source}: sample period {run.sample_period:g} s differs from the {period:g} s of {runs[0].source}"
+            )
+    n = sum(len(run) for run in runs)
+    starts = np.cumsum([0] + [len(run) for run in runs])
+    rows = "; ".join(f"{Path(run.source).name}: rows {a}-{b - 1}" for run, a, b in zip(runs, starts[:-1], starts[1:]))
+    return Measurement(
+        time=np.arange(n) * period,
+        channels={name: np.concatenate([run[name] for run in runs]) for name in runs[0].names},
+        units=dict(runs[0].units),
+        source=" + ".join(run.source for run in runs),
+        notes={**runs[0].notes, "runs": rows},
+    )

@@ -1,0 +1,54 @@
+"""The stop-operator feature (backlash gap position): analytic values, its play-operator state, and equality with the
+emitted ONNX nodes run sample by sample in onnxruntime."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nnfmu.models.features import FeatureSpec, Stop, Tap, derived_from_dict
+
+from .test_features import T, run_feature_nodes
+
+
+def stop_spec(radius: float) -> FeatureSpec:
+    return FeatureSpec(taps=(), output="force", derived=(Stop("displacement", radius=radius),))
+
+
+def test_stop_follows_the_motion_inside_the_gap_and_saturates_at_its_half_width():
+    """A triangle wave of amplitude 3 through a gap of half-width 1: from rest the driven side stays at 0 until x
+    reaches 1; after each reversal s falls by the travel since the reversal, until it reaches -1 (2 of travel)."""
+    x = np.array([0.0, 0.5, 1.0, 2.0, 3.0, 2.5, 2.0, 1.0, 0.0, 1.0, 1.5, 3.0])
+    expected = [0.0, 0.5, 1.0, 1.0, 1.0, 0.5, 0.0, -1.0, -1.0, 0.0, 0.5, 1.0]
+    np.testing.assert_array_equal(stop_spec(1.0).features({"displacement": x}, T)[:, 0], expected)
+
+
+def test_stop_is_independent_of_where_the_motion_is_centred():
+    t = np.arange(400) * T
+    x = 0.02 * np.sin(2 * np.pi * 5 * t)
+    spec = stop_spec(0.004)
+    centred = spec.features({"displacement": x}, T)[:, 0]
+    shifted = spec.features({"displacement": x + 0.5}, T)[:, 0]
+    after_first_reversal = t > 0.1  # the first reversal (t = 0.05 s) has closed the gap: the start is forgotten
+    np.testing.assert_allclose(shifted[after_first_reversal], centred[after_first_reversal], rtol=0, atol=1e-12)
+    assert np.max(np.abs(centred)) == pytest.approx(0.004)
+
+
+def test_stop_state_name_round_trip_and_bad_radius():
+    stop = Stop("displacement", radius=0.0025)
+    assert stop.name == "stop(displacement, radius=0.0025)"
+    assert [s.name for s in stop_spec(0.0025).state_layout()] == ["stop(displacement, radius=0.0025).play[k-1]"]
+    assert derived_from_dict(stop.to_dict()) == stop
+    with pytest.raises(ValueError, match="radius must be a finite number > 0, got 0"):
+        Stop("displacement", radius=0)
+
+
+def test_stop_equals_its_emitted_step_nodes():
+    spec = FeatureSpec(
+        taps=(Tap("velocity", (0, 1)),),
+        output="force",
+        derived=(Stop("displacement", radius=0.3), Stop("displacement", radius=1.2), Stop("velocity", radius=0.5)),
+    )
+    rng = np.random.default_rng(4)
+    channels = {"velocity": rng.normal(size=120), "displacement": np.cumsum(rng.normal(size=120))}
+    np.testing.assert_allclose(run_feature_nodes(spec, channels), spec.features(channels, T), rtol=1e-13, atol=1e-15)
