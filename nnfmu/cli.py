@@ -134,7 +134,7 @@ def demo(
     seed: int = typer.Option(0, help="Seed of the rig records and the training."),
     quick: bool = typer.Option(False, help="Short records and training: checks every stage runs, not results to quote."),
 ) -> None:
-    """Run the pipeline end to end on built-in data: rig data, networks, ONNX, FMUs, replay, road test, reports."""
+    """Run the pipeline end to end on built-in data: rig data, networks, ONNX, FMUs, replay, road test, loop."""
     from rich.console import Console
     from rich.table import Table
 
@@ -152,6 +152,14 @@ def demo(
     console.print(f"component report: {summary.report}")
     for system, report in summary.road_test.items():
         console.print(f"road test {system} report: {report}")
+    loop = summary.loop
+    table = Table(title=f"closing the loop: {loop.summary}; effects added: {', '.join(loop.effects_added) or 'none'}")
+    for column in ("held-out error", "before", "after"):
+        table.add_column(column, justify="left" if column == "held-out error" else "right")
+    for key in ("nrmse", "r2", "peak_error", "pseudo_damage_ratio"):
+        table.add_row(key, f"{loop.error_before[key]:.4f}", f"{loop.error_after[key]:.4f}")
+    console.print(table)
+    console.print(f"loop report: {summary.out / 'loop' / 'report.html'}")
     console.print(f"summary: {summary.out / 'summary.json'} ({summary.seconds:.0f} s)")
 
 

@@ -5,7 +5,10 @@ lab record and exported as an ONNX step graph; each graph is built into a native
 held-out record with fmpy and validated against the measurement (NRMSE, R², peaks, PSD, rainflow pseudo-damage).
 Then the road test (`nnfmu.roadtest`): the damper and bushing networks as FMUs in the quarter car and the full
 vehicle on a generated ISO 8608 class C drive, against the monolithic reference with the rigs' truth physics, with
-the thesis comparison (spline vs hysteresis network vs reference) in a report per system.
+the thesis comparison (spline vs hysteresis network vs reference) in a report per system. Last, the loop
+(`nnfmu.loop`): a damper whose rig record carries an effect the model was not told about (the gas spring of a
+monotube), a hysteresis network trained on the record's fit blocks, and `run_loop` tracing the residual to the
+missing effect, adding it and reporting the held-out error before and after.
 """
 
 from __future__ import annotations
@@ -20,13 +23,20 @@ from nnfmu.atomic import write_text_atomic
 from nnfmu.cosim.replay import replay_fmu
 from nnfmu.data import load_measurement
 from nnfmu.data.measurement import Measurement
-from nnfmu.data.rigs import RigOptions, write_rig
+from nnfmu.data.rigs import DEFAULT_EFFECTS, RigOptions, write_rig
+from nnfmu.export import export_onnx
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
+from nnfmu.loop.blocks import part_measurement, plan_blocks
+from nnfmu.loop.loop_settings import LoopSettings
+from nnfmu.loop.run import LoopReport, run_loop
+from nnfmu.models import TrainSettings, get_preset, train_model
 from nnfmu.models.workflow import TrainRequest, train_from_file
 from nnfmu.roadtest import RoadTestSettings, SystemRun, run_road_test
 from nnfmu.validate import ValidationSettings, compare, write_report
 
+UNDECLARED_EFFECT = "gas_force"  # the loop stage's damper has it; its starting model has no displacement input
+LOOP_PRESET = "damper-hysteresis"
 PRESETS_BY_RIG: dict[str, tuple[str, ...]] = {
     "damper": ("damper-spline", "damper-hysteresis"),
     "bushing": ("bushing-axial-force", "bushing-radial-force", "bushing-axial-torque", "bushing-conical-torque"),
@@ -60,6 +70,11 @@ class DemoSettings:
                 seed=self.seed)
         return RoadTestSettings(quarter_car=SystemRun(50.0), full_vehicle=SystemRun(20.0), seed=self.seed)
 
+    @property
+    def loop_duration(self) -> float:
+        """Length [s] of the loop stage's rig record (fit, diagnosis and test blocks all come from it)."""
+        return 30.0 if self.quick else 60.0
+
     def request(self, preset: str) -> TrainRequest:
         if self.quick:
             return TrainRequest(preset=preset, seed=self.seed, restarts=1, max_epochs=15)
@@ -88,6 +103,7 @@ class DemoSummary:
     models: list[ModelResult]
     seconds: float
     road_test: dict[str, Path]
+    loop: LoopReport
 
 
 def _single(m: Measurement, channel: str, label: str) -> Measurement:
@@ -95,8 +111,30 @@ def _single(m: Measurement, channel: str, label: str) -> Measurement:
     return Measurement(time=m.time, channels={label: m[channel]}, units={label: m.units[channel]}, source=m.source)
 
 
+def close_the_loop(out: Path, settings: DemoSettings, log: Callable[[str], None]) -> LoopReport:
+    """A damper record with `UNDECLARED_EFFECT` on, `LOOP_PRESET` (which lacks its inputs) trained on the loop's fit
+    blocks only, and `run_loop` on the whole record (its diagnosis and test blocks were not fitted)."""
+    lab, _ = write_rig("damper", out / "rig" / "damper_undeclared.csv",
+                       RigOptions(seed=settings.seed + 2, duration=settings.loop_duration, excitation="random",
+                                  effects=(*DEFAULT_EFFECTS["damper"], UNDECLARED_EFFECT)))
+    measured = load_measurement(lab)
+    loop_settings = LoopSettings()
+    fit = part_measurement(measured, plan_blocks(len(measured), loop_settings, str(lab)).rows("train"), "fit")
+    preset = get_preset(LOOP_PRESET)
+    train = TrainSettings(seed=settings.seed, restarts=1, max_epochs=15) if settings.quick else TrainSettings(
+        seed=settings.seed)
+    first = export_onnx(train_model(fit, preset.spec, preset.architecture, train).model,
+                        out / "loop" / f"{LOOP_PRESET}.onnx").path
+    log(f"loop: {lab} has '{UNDECLARED_EFFECT}', which {first.name} was not given; running the loop")
+    report = run_loop(measured, first, "force", out / "loop", loop_settings)
+    log(f"loop: {report.summary}; effects added: {', '.join(report.effects_added) or 'none'}; held-out NRMSE "
+        f"{report.error_before['nrmse']:.4f} -> {report.error_after['nrmse']:.4f}")
+    return report
+
+
 def run_demo(out: str | Path, settings: DemoSettings = DemoSettings(), log: Callable[[str], None] = print) -> DemoSummary:
-    """Run every stage into `out` (rig/, models/, fmu/, report/, road_test/, summary.json); return what it measured."""
+    """Run every stage into `out` (rig/, models/, fmu/, report/, road_test/, loop/, summary.json); return what it
+    measured."""
     started = time.perf_counter()
     out = Path(out)
     comparisons = []
@@ -132,11 +170,14 @@ def run_demo(out: str | Path, settings: DemoSettings = DemoSettings(), log: Call
     road = run_road_test(out / "road_test", onnx_files, settings.road_test, log)
     for system, path in road.reports().items():
         log(f"road test {system}: report {path}")
+    loop = close_the_loop(out, settings, log)
     summary = DemoSummary(out=out, report=report, models=results, seconds=time.perf_counter() - started,
-                          road_test=road.reports())
+                          road_test=road.reports(), loop=loop)
     write_text_atomic(out / "summary.json", json.dumps(
         {"report": str(report), "seconds": round(summary.seconds, 1), "models": [asdict(r) for r in results],
          "road_test": {"summary": str(road.summary), "reports": {k: str(v) for k, v in road.reports().items()},
-                       "seconds": round(road.seconds, 1)}},
+                       "seconds": round(road.seconds, 1)},
+         "loop": {"report": str(out / "loop" / "report.json"), "effects_added": loop.effects_added,
+                  "error_before": loop.error_before, "error_after": loop.error_after}},
         indent=2))
     return summary

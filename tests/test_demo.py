@@ -30,3 +30,9 @@ def test_quick_demo_runs_every_stage(tmp_path: Path) -> None:
     for model in ("damper-spline", "damper-hysteresis"):
         # the co-simulated quarter car with a smoke-trained damper network stays near the truth-physics reference
         assert 0.0 <= rows[("damper_displacement", model)]["nrmse"] < 0.5
+    loop = written["loop"]
+    assert Path(loop["report"]).is_file()
+    assert summary.loop.fmu.is_file() and summary.loop.onnx.is_file()
+    # the demo's damper has an undeclared gas spring; the loop must trace the residual to it
+    assert "gas_force" in loop["effects_added"]
+    assert loop["error_after"]["nrmse"] < loop["error_before"]["nrmse"]

@@ -25,7 +25,9 @@ class VehicleBuildSettings:
     """`params_path` (None: the packaged mid-size sedan), `components` maps a component name ('damper',
     'damper_fl', 'bushing_fl_front', ...) to 'external' (force input port, the default), 'stabilised' (force input port
     with the reference element's change over a step applied, for stiff components) or 'reference' (built-in
-    element), `sample_period` [s] of the FMU's samples, `axle` of the quarter car, FMI version and backend."""
+    element), `sample_period` [s] of the FMU's samples, `axle` of the quarter car, FMI version and backend.
+    A stabilised port holds its reference from the start of each *sample*: sample at the communication step, or
+    the stabilisation is renewed at every sample inside a step and mostly lost."""
 
     params_path: Path | None = None
     components: dict[str, str] = field(default_factory=dict)
