@@ -108,12 +108,17 @@ class BushingChannelTruth:
     params: BushingChannelParams
     effects: tuple[str, ...] = DEFAULT_EFFECTS["bushing"]
     _iwan: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False, compare=False)
+    _maxwell: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         unknown = [e for e in self.effects if e not in BUSHING_EFFECTS]
         if unknown:
             raise ValueError(f"unknown bushing effect(s) {unknown}; valid: {', '.join(BUSHING_EFFECTS)}")
-        object.__setattr__(self, "_iwan", iwan_elements(self.params.friction_max, self.params.friction_x2))
+        k, slip = iwan_elements(self.params.friction_max, self.params.friction_x2)
+        object.__setattr__(self, "_iwan", (k[: self.n_friction], slip[: self.n_friction]))
+        maxwell = (np.asarray(self.params.maxwell_stiffness[: self.n_maxwell], dtype=float),
+                   np.asarray(self.params.maxwell_time[: self.n_maxwell], dtype=float))
+        object.__setattr__(self, "_maxwell", maxwell)  # per-call arrays would dominate a solver's right-hand side
 
     @property
     def n_maxwell(self) -> int:
@@ -138,11 +143,10 @@ class BushingChannelTruth:
 
     def derivatives(self, t: float, state: np.ndarray, x: float, v: float) -> np.ndarray:
         """d(state)/dt at time t [s] for position x and rate v; a Jenkins element holds while it slides outward."""
-        p = self.params
-        z, f = state[: self.n_maxwell], state[self.n_maxwell :]
-        dz = np.asarray(p.maxwell_stiffness[: self.n_maxwell]) * v - z / np.asarray(p.maxwell_time[: self.n_maxwell])
+        stiffness, relaxation = self._maxwell
+        z, f = state[: len(stiffness)], state[len(stiffness) :]
+        dz = stiffness * v - z / relaxation
         k, slip = self._iwan
-        k, slip = k[: self.n_friction], slip[: self.n_friction]
         df = np.where((np.abs(f) >= slip) & (f * v > 0), 0.0, k * v)
         return np.concatenate([dz, df])
 
