@@ -91,6 +91,44 @@ class BushingTruthLaw(_TruthStates):
         return float(self.truth.force(state, x))
 
 
+class BushingTruthBank:
+    """Bushing truth laws with the same state layout evaluated together on arrays (one row per law): the monolithic
+    solver calls the laws at every RK4 stage, and per-law numpy calls on a handful of states would dominate it.
+    Same arithmetic as `BushingChannelTruth.derivatives` and `force`, row by row."""
+
+    def __init__(self, laws: list[BushingTruthLaw]) -> None:
+        truths = [law.truth for law in laws]
+        layout = {(t.n_maxwell, t.n_friction) for t in truths}
+        if len(layout) != 1:
+            raise VehicleModelError(f"bushing laws in one bank need one state layout, got {sorted(layout)}")
+        self.n_maxwell, self.n_friction = layout.pop()
+        self.size = len(truths)
+        self.linear = np.array([t.params.stiffness for t in truths])
+        self.cubic = np.array([t.params.cubic_stiffness for t in truths])
+        self.maxwell_stiffness = np.array([t._maxwell[0] for t in truths]).reshape(self.size, self.n_maxwell)
+        self.maxwell_time = np.array([t._maxwell[1] for t in truths]).reshape(self.size, self.n_maxwell)
+        self.iwan_stiffness = np.array([t._iwan[0] for t in truths]).reshape(self.size, self.n_friction)
+        self.iwan_slip = np.array([t._iwan[1] for t in truths]).reshape(self.size, self.n_friction)
+
+    @property
+    def n_states(self) -> int:
+        return self.size * (self.n_maxwell + self.n_friction)
+
+    def initial_state(self) -> np.ndarray:
+        return np.zeros(self.n_states)
+
+    def derivatives(self, t: float, state: np.ndarray, x: np.ndarray, v: np.ndarray) -> np.ndarray:
+        rows = state.reshape(self.size, -1)
+        z, f = rows[:, : self.n_maxwell], rows[:, self.n_maxwell :]
+        rate = v[:, None]
+        dz = self.maxwell_stiffness * rate - z / self.maxwell_time
+        df = np.where((np.abs(f) >= self.iwan_slip) & (f * rate > 0), 0.0, self.iwan_stiffness * rate)
+        return np.hstack([dz, df]).ravel()
+
+    def forces(self, state: np.ndarray, x: np.ndarray, v: np.ndarray) -> np.ndarray:
+        return self.linear * x + self.cubic * x**3 + state.reshape(self.size, -1).sum(axis=1)
+
+
 def truth_laws(force_inputs: list[str]) -> dict[str, ComponentLaw]:
     """Default truth physics for every damper and bushing force input in `force_inputs` (rig defaults, no inertia)."""
     damper_effects = tuple(e for e in DEFAULT_EFFECTS["damper"] if e != "inertia")

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import VehicleModelError
-from .laws import ComponentLaw
+from .laws import BushingTruthBank, BushingTruthLaw, ComponentLaw
 from .linear import LinearVehicle, input_samples
 from .ports import component_channels
 
@@ -50,6 +50,38 @@ def _wire(vehicle: LinearVehicle, laws: Mapping[str, ComponentLaw]) -> _Wiring:
         disp_rows=np.array([vehicle.output_index(ports[n][0]) for n in names], dtype=int),
         rate_rows=np.array([vehicle.output_index(ports[n][1]) for n in names], dtype=int),
     )
+
+
+class _OneLaw:
+    """A single law on length-1 arrays, so the solver treats it like a bank."""
+
+    def __init__(self, law: ComponentLaw) -> None:
+        self.law = law
+        self.n_states = law.n_states
+
+    def initial_state(self) -> np.ndarray:
+        return self.law.initial_state()
+
+    def derivatives(self, t: float, state: np.ndarray, x: np.ndarray, v: np.ndarray) -> np.ndarray:
+        return self.law.derivatives(t, state, x[0], v[0])
+
+    def forces(self, state: np.ndarray, x: np.ndarray, v: np.ndarray) -> np.ndarray:
+        return np.array([self.law.force(state, x[0], v[0])])
+
+
+def _groups(laws: list[ComponentLaw]) -> list[tuple[_OneLaw | BushingTruthBank, np.ndarray]]:
+    """The laws as groups evaluated together, each with the indices of its laws: bushing truth laws of one state
+    layout form a bank, every other law is its own group."""
+    groups: list[tuple[_OneLaw | BushingTruthBank, np.ndarray]] = []
+    layouts: dict[tuple[int, int], list[int]] = {}
+    for i, law in enumerate(laws):
+        if isinstance(law, BushingTruthLaw):
+            layouts.setdefault((law.truth.n_maxwell, law.truth.n_friction), []).append(i)
+        else:
+            groups.append((_OneLaw(law), np.array([i])))
+    for members in layouts.values():
+        groups.append((BushingTruthBank([laws[i] for i in members]), np.array(members)))
+    return groups
 
 
 def _components(vehicle: LinearVehicle) -> list[str]:
@@ -87,28 +119,28 @@ def simulate_monolithic(
     if closed:
         raise VehicleModelError(f"{vehicle.name}: inputs {closed} are force ports that the laws close")
     u_samples = input_samples(vehicle, inputs, period, None)
-    sizes = [law.n_states for law in law_list]
-    offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(int)
+    groups = _groups(law_list)
     nx = len(vehicle.states)
+    offsets = nx + np.concatenate([[0], np.cumsum([group.n_states for group, _ in groups])]).astype(int)
+    spans = [(group, members, wiring.disp_rows[members], wiring.rate_rows[members], a, b)
+             for (group, members), a, b in zip(groups, offsets[:-1], offsets[1:])]
     x = np.zeros(nx) if x0 is None else np.asarray(x0, dtype=float)
-    z = np.concatenate([x] + [law.initial_state() for law in law_list])
+    z = np.concatenate([x] + [group.initial_state() for group, _ in groups])
 
     def forces(z: np.ndarray, u: np.ndarray) -> np.ndarray:
         y = vehicle.C @ z[:nx] + vehicle.D @ u
-        return np.array(
-            [
-                law.force(z[nx + a : nx + b], y[i], y[j])
-                for law, a, b, i, j in zip(law_list, offsets[:-1], offsets[1:], wiring.disp_rows, wiring.rate_rows)
-            ]
-        )
+        f = np.empty(len(law_list))
+        for group, members, disp, rate, a, b in spans:
+            f[members] = group.forces(z[a:b], y[disp], y[rate])
+        return f
 
     def rhs(t: float, z: np.ndarray, u: np.ndarray) -> np.ndarray:
         u = u.copy()
         u[wiring.force_columns] = forces(z, u)
         y = vehicle.C @ z[:nx] + vehicle.D @ u
         parts = [vehicle.derivative(z[:nx], u)]
-        for law, a, b, i, j in zip(law_list, offsets[:-1], offsets[1:], wiring.disp_rows, wiring.rate_rows):
-            parts.append(law.derivatives(t, z[nx + a : nx + b], y[i], y[j]))
+        for group, _, disp, rate, a, b in spans:
+            parts.append(group.derivatives(t, z[a:b], y[disp], y[rate]))
         return np.concatenate(parts)
 
     n = u_samples.shape[0]
