@@ -104,15 +104,21 @@ def _reversal_travel(v: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
     return direction, travel
 
 
+def mean_stroke(v: np.ndarray, dt: float) -> float:
+    """Mean travel [m] between motion reversals of the velocity `v` (the whole travel when it never reverses)."""
+    direction, travel = _reversal_travel(v, dt)
+    ends = np.nonzero(np.diff(direction))[0]
+    finite = travel[ends][np.isfinite(travel[ends])]
+    return float(np.mean(finite)) if finite.size else float(np.sum(np.abs(v)) * dt)
+
+
 def _hysteresis(s: EffectSignals, settings: DiagnosisSettings) -> Regressors:
     dt = s.sample_period
     delays = sorted({max(1, int(round(delay / dt))) for delay in settings.memory_delays})
     columns = [_delayed(s.predicted, d) - s.predicted for d in delays]
     names = [f"predicted {s.output} delayed {d * dt * 1e3:.3g} ms - predicted {s.output}" for d in delays]
     direction, travel = _reversal_travel(s["velocity"], dt)
-    ends = np.nonzero(np.diff(direction))[0]
-    finite = travel[ends][np.isfinite(travel[ends])]
-    stroke = float(np.mean(finite)) if finite.size else float(np.sum(np.abs(s["velocity"])) * dt)
+    stroke = mean_stroke(s["velocity"], dt)
     for fraction in settings.reversal_fractions:
         length = fraction * stroke if stroke > 0 else 1.0
         columns.append(direction * np.exp(-travel / length))
@@ -123,6 +129,37 @@ def _hysteresis(s: EffectSignals, settings: DiagnosisSettings) -> Regressors:
         f"mean travel between reversals ({stroke:.3g} m)"
     )
     return Regressors(tuple(names), np.column_stack(columns), (), note + _derived_note(s, "velocity"))
+
+
+def stop_operator(x: np.ndarray, radius: float) -> np.ndarray:
+    """x minus its play-operator output at half-width `radius`, the driven side starting at x[0] - clipped to
+    [-radius, radius]: where the driving side sits in a backlash gap (±radius: in contact)."""
+    play = float(x[0])
+    out = np.empty(len(x))
+    for k, value in enumerate(np.asarray(x, dtype=float).tolist()):
+        play = min(max(play, value - radius), value + radius)
+        out[k] = value - play
+    return out
+
+
+def backlash_radii(v: np.ndarray, dt: float, fractions: tuple[float, ...]) -> tuple[float, ...]:
+    """Half-widths [m] of the backlash gaps tried: each fraction of the mean travel between reversals is the travel
+    over which that gap closes after a reversal (2 × radius)."""
+    stroke = mean_stroke(v, dt)
+    return tuple(0.5 * fraction * (stroke if stroke > 0 else 1.0) for fraction in fractions)
+
+
+def _backlash(s: EffectSignals, settings: DiagnosisSettings) -> Regressors:
+    radii = backlash_radii(s["velocity"], s.sample_period, settings.reversal_fractions)
+    columns = [stop_operator(s["displacement"], r) for r in radii]
+    names = tuple(f"stop(displacement, radius={r:.3g} m)" for r in radii)
+    fractions = ", ".join(f"{f:g}" for f in settings.reversal_fractions)
+    note = (
+        "backlash (play) at motion reversals: the displacement's stop operators (position inside a gap of half-width "
+        f"{', '.join(f'{r:.3g}' for r in radii)} m, closed after {fractions} of the mean travel between reversals), "
+        "a Prandtl-Ishlinskii bank"
+    )
+    return Regressors(names, np.column_stack(columns), (), note + _derived_note(s, "displacement"))
 
 
 def _inertia(s: EffectSignals, settings: DiagnosisSettings) -> Regressors:
@@ -182,6 +219,10 @@ EFFECTS: dict[str, EffectFamily] = {
         EffectFamily("gas_force", "gas spring: preload and displacement dependence", ("displacement",), _gas_force),
         EffectFamily(
             "hysteresis", "memory: compliance lag, force build-up after reversals", ("velocity",), _hysteresis
+        ),
+        EffectFamily(
+            "backlash", "play at motion reversals: dead zone, then re-engagement over the gap's travel",
+            ("displacement", "velocity"), _backlash,
         ),
         EffectFamily("inertia", "moving mass between load cell and actuator", ("acceleration",), _inertia),
         EffectFamily("temperature", "damping fade with oil temperature", ("velocity",), _temperature),

@@ -7,6 +7,7 @@ states inside the step graph, each computable sample by sample from the componen
 | seal_friction | smooth_sign(velocity, scale): tanh at `friction_scale` × the fit part's rms velocity |
 | inertia | acceleration at delay 0 when measured, else velocity at delay 1 (with delay 0: a finite difference) |
 | hysteresis | lowpass(velocity, tau) states at `memory_taus` (compliance lag, Maxwell-like memory) |
+| backlash | stop(displacement, radius) states: the position inside a gap closed after each of the diagnosis's `reversal_fractions` of the fit part's mean travel between reversals (a play operator's state each) |
 | temperature | the measured temperature channel, else lowpass_square(velocity, `thermal_tau`): a running mean square of velocity, the damper's dissipated power c·v² through the thermal lag of oil and tube |
 | frequency_dependence | lowpass(displacement, tau) states at `frequency_taus` |
 | amplitude_dependence | lowpass_square(displacement, `amplitude_tau`): the running amplitude² |
@@ -22,8 +23,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from nnfmu.data import Measurement
-from nnfmu.models.features import Derived, FeatureSpec, Lowpass, LowpassSquare, SmoothSign, Tap
+from nnfmu.models.features import Derived, FeatureSpec, Lowpass, LowpassSquare, SmoothSign, Stop, Tap
 
+from .effects import backlash_radii
 from .loop_settings import LoopSettings
 from .signals import direction_prefix
 
@@ -112,6 +114,16 @@ def extend_spec(
             return missing
         states = tuple(Lowpass(velocity, tau=tau) for tau in settings.memory_taus)
         return _result(effect, spec, _with_derived(spec, states), ", ".join(d.name for d in states) + ": memory states")
+    if effect == "backlash":
+        if missing := need(displacement):
+            return missing
+        dt = measurement.sample_period
+        rate = (measurement[velocity][fit_rows] if velocity in measurement
+                else np.gradient(measurement[displacement][fit_rows], dt))
+        radii = backlash_radii(rate, dt, settings.diagnosis.reversal_fractions)
+        stops = tuple(Stop(displacement, radius=float(f"{r:.3g}")) for r in radii)
+        return _result(effect, spec, _with_derived(spec, stops),
+                       ", ".join(d.name for d in stops) + ": position inside the backlash gap (play-operator states)")
     if effect == "temperature":
         if temperature in measurement:
             return _result(effect, spec, _with_delays(spec, temperature, (0,)), "the measured temperature channel")

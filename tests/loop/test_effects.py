@@ -40,7 +40,7 @@ def regressors(name: str, m: Measurement, inputs=("velocity",)):
 
 def test_the_library_has_the_stable_names():
     assert list(EFFECTS) == [
-        "seal_friction", "gas_force", "hysteresis", "inertia", "temperature", "frequency_dependence",
+        "seal_friction", "gas_force", "hysteresis", "backlash", "inertia", "temperature", "frequency_dependence",
         "amplitude_dependence", "sensor_offset",
     ]
     for family in EFFECTS.values():
@@ -115,7 +115,7 @@ def test_a_family_without_its_channel_is_reported_untestable():
     predicted = m["force"] + np.random.default_rng(0).standard_normal(len(m))
     d = diagnose(m, predicted, "force", ["velocity"], DiagnosisSettings())
     untestable = {e.name: e for e in d.ranking if not e.testable}
-    assert set(untestable) == {"gas_force", "frequency_dependence", "amplitude_dependence"}
+    assert set(untestable) == {"gas_force", "backlash", "frequency_dependence", "amplitude_dependence"}
     assert untestable["gas_force"].missing_channels == ("displacement",)
     assert any("gas_force could not be tested" in note for note in d.missing_measurements)
 

@@ -152,7 +152,8 @@ def test_warm_start_keeps_old_scalers_and_lowers_the_validation_error():
     blocks = plan_blocks(len(m), LoopSettings(diagnosis=LoopSettings().diagnosis), m.source)
     ext = extend_spec("temperature", SPEC, m, blocks.rows("train"), LoopSettings())
     result = warm_start(model, ext.spec, m, blocks.rows("train"), blocks.rows("validation"),
-                        LoopSettings(max_epochs=30, extra_hidden=(0, 2)), "temperature")
+                        LoopSettings(max_epochs=30, extra_hidden=(0, 2), lm_max_samples=3000),
+                        "temperature")
     new = result.model
     np.testing.assert_array_equal(new.feature_scaler.lo[:2], model.feature_scaler.lo)
     np.testing.assert_array_equal(new.feature_scaler.hi[:2], model.feature_scaler.hi)

@@ -1,6 +1,9 @@
-"""`run_loop` end to end on damper-rig records whose truth is known: the velocity-history model lacks one effect or
-two, and the loop must name them (and nothing the truth lacks) and lower the error; on a record that holds nothing
-but the model and white noise it must add nothing; bad input is refused before anything is written."""
+"""`run_loop` end to end on damper-rig records whose truth is known. Every effect the rig simulates is left out of
+the first model in turn (gas force and temperature lack an input; seal friction, hysteresis and inertia lack the
+velocity features that carry them), and two at a time: the loop must name exactly the missing effects and lower the
+held-out error (halve it where the record is long enough; bench/loop_effects.py measures the full sweep). On a record
+that holds nothing but the model and white noise it must add nothing; bad input is refused before anything is
+written."""
 
 from __future__ import annotations
 
@@ -16,16 +19,30 @@ from nnfmu.component import Component
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import RigOptions, simulate_rig
 from nnfmu.export import export_onnx, run_step_graph
+from nnfmu.loop.blocks import part_measurement, plan_blocks
 from nnfmu.loop.loop_settings import LoopError, LoopSettings
-from nnfmu.loop.run import LoopReport, run_loop
+from nnfmu.loop.run import TRIAL_TIE, LoopReport, _best_trial, run_loop
 from nnfmu.models import Architecture, TrainSettings, get_preset, train_model
+from nnfmu.models.features import Difference, FeatureSpec, SmoothSign
 
-BASE = ("hysteresis", "inertia")  # what a velocity-history network represents
-DURATION = 25.0  # s of random drive at 1 kHz
-SETTINGS = LoopSettings(max_effects=3, max_epochs=100, extra_hidden=(0, 4), lm_max_samples=3000)
+# Rig sensors at half their default noise: a 5 N rms load cell (0.05 % of its 10 kN range) and a 1 mm/s velocity
+# transducer, the quiet end of a damper dyno (0.05-0.1 % of range). At the default noise the floor that no model fed
+# the noisy velocity beats (1.28 % NRMSE against the measurement) exceeds the gas force's own share (1.12 %).
+NOISE = 0.5
+DURATION = 20.0  # s of random drive at 1 kHz
+HEATING = 40.0  # s: the oil heats ~9 K, enough fade to stand out of a small network's own error (20 s: ~4 K)
+SETTINGS = LoopSettings(max_effects=3, max_epochs=60, extra_hidden=(0, 4), lm_max_samples=4000)
+
+FULL = ("hysteresis", "seal_friction", "inertia")  # every effect a velocity-history network represents
+HISTORY = get_preset("damper-hysteresis").spec  # velocity, its differences over 2 and 8 ms, the friction sign
+NO_SIGN = FeatureSpec(taps=HISTORY.taps, output="force",
+                      derived=tuple(d for d in HISTORY.derived if not isinstance(d, SmoothSign)))
+STATIC = FeatureSpec(taps=HISTORY.taps, output="force",
+                     derived=tuple(d for d in HISTORY.derived if not isinstance(d, Difference)))
+SPECS = {"history": HISTORY, "no_sign": NO_SIGN, "static": STATIC}
 
 
-def record(effects: tuple[str, ...], seed: int = 1, noise: float = 1.0, duration: float = DURATION) -> Measurement:
+def record(effects: tuple[str, ...], seed: int = 1, noise: float = NOISE, duration: float = DURATION) -> Measurement:
     return simulate_rig(
         "damper", RigOptions(duration=duration, seed=seed, effects=effects, excitation="random", noise=noise)
     ).measurement
@@ -37,12 +54,13 @@ def without(m: Measurement, channel: str) -> Measurement:
 
 
 @cache
-def velocity_model(effects: tuple[str, ...], folder: str) -> str:
-    """The damper-hysteresis preset (velocity on a delay line), small, trained on the record of `effects`."""
-    m = record(effects)
-    result = train_model(m, get_preset("damper-hysteresis").spec, Architecture("mlp", (5,)),
-                         TrainSettings(max_epochs=100, restarts=1))
-    path = Path(folder) / f"velocity_model_{'_'.join(effects)}.onnx"
+def first_model(effects: tuple[str, ...], spec: str, folder: str, duration: float = DURATION) -> str:
+    """A small network on `SPECS[spec]` trained on the training blocks only of the record of `effects`, so that the
+    loop's test blocks are held out from the first model as from the retrained one."""
+    m = record(effects, duration=duration)
+    fit = part_measurement(m, plan_blocks(len(m), SETTINGS, m.source).rows("train"), "fit")
+    result = train_model(fit, SPECS[spec], Architecture("mlp", (6,)), TrainSettings(max_epochs=100, restarts=1))
+    path = Path(folder) / f"{spec}_{'_'.join(effects)}_{duration:g}s.onnx"
     export_onnx(result.model, path)
     return str(path)
 
@@ -54,38 +72,42 @@ def models(tmp_path_factory) -> Path:
 
 def truth_nrmse(onnx_path: str | Path, effects: tuple[str, ...]) -> float:
     """NRMSE of the model against the noise-free truth of a fresh record (another seed): the model's own error."""
-    m = record(effects, seed=7, noise=0.0, duration=15.0)
+    m = record(effects, seed=7, noise=0.0, duration=10.0)
     component = Component.from_onnx(onnx.load(str(onnx_path)))
     predicted = run_step_graph(onnx_path, {p.name: m[p.name] for p in component.inputs})["force"]
     return float(np.sqrt(np.mean((predicted - m["force"]) ** 2)) / np.sqrt(np.mean(m["force"] ** 2)))
 
 
-def loop(effects: tuple[str, ...], models: Path, out: Path, drop: str | None = None) -> LoopReport:
-    m = record(effects)
+def loop(effects: tuple[str, ...], spec: str, models: Path, out: Path, drop: str | None = None,
+         duration: float = DURATION) -> LoopReport:
+    m = record(effects, duration=duration)
     if drop:
         m = without(m, drop)
-    return run_loop(m, velocity_model(effects, str(models)), "force", out, SETTINGS)
+    return run_loop(m, first_model(effects, spec, str(models), duration), "force", out, SETTINGS)
 
 
-def assert_named_and_improved(report: LoopReport, missing: set[str], truth: tuple[str, ...]) -> None:
-    assert missing <= set(report.effects_added), report.summary
-    assert set(report.effects_added) <= set(truth), f"added an effect the truth lacks: {report.effects_added}"
-    assert report.error_after["nrmse"] < report.error_before["nrmse"]
+def assert_named_and_improved(report: LoopReport, missing: set[str], at_most: float = 1.0) -> float:
+    """The loop added exactly the missing effects, kept every step, and the test-block NRMSE against the measurement
+    fell to at most `at_most` of its first value; returns that ratio."""
+    assert set(report.effects_added) == missing, report.summary
     assert all(it.accepted for it in report.iterations)
+    ratio = report.error_after["nrmse"] / report.error_before["nrmse"]
+    print(f"{'+'.join(sorted(missing))}: test NRMSE {report.error_before['nrmse']:.4f} -> "
+          f"{report.error_after['nrmse']:.4f} ({ratio:.2f})")
+    assert ratio < at_most
+    return ratio
 
 
 def test_undeclared_gas_force_is_named_and_the_error_falls(models, tmp_path):
-    truth = (*BASE, "gas_force")
+    truth = (*FULL, "gas_force")
     out = tmp_path / "loop"
-    report = loop(truth, models, out)
+    report = loop(truth, "history", models, out)
     assert report.effects_added[0] == "gas_force"
-    assert_named_and_improved(report, {"gas_force"}, truth)
-    before, after = truth_nrmse(velocity_model(truth, str(models)), truth), truth_nrmse(report.onnx, truth)
-    print(f"gas_force: test NRMSE {report.error_before['nrmse']:.4f} -> {report.error_after['nrmse']:.4f}; "
-          f"held-out truth NRMSE {before:.4f} -> {after:.4f}")
-    # The issue asks for half; measured 0.0250 -> 0.0137 (0.55) and 0.0274 -> 0.0214 (0.78) in runs that differ only
-    # in the first model's training (BLAS threads): the velocity-history net's own error (~1.3 %) bounds the fall.
-    assert after < before
+    # The bench (60 s of data, networks sized by validation) halves it; this short record and small net reach ~0.6.
+    assert_named_and_improved(report, {"gas_force"}, at_most=0.8)
+    before, after = truth_nrmse(first_model(truth, "history", str(models)), truth), truth_nrmse(report.onnx, truth)
+    print(f"gas_force: held-out truth NRMSE {before:.4f} -> {after:.4f}")
+    assert after < 0.8 * before
 
     document = json.loads((out / "report.json").read_text())
     assert document["effects_added"] == report.effects_added
@@ -96,6 +118,7 @@ def test_undeclared_gas_force_is_named_and_the_error_falls(models, tmp_path):
         assert set(first[key]) == {"nrmse", "r2", "peak_error", "pseudo_damage_ratio"}
     assert Path(document["onnx"]).is_file() and Path(document["fmu"]).is_file()
     assert Path(document["onnx"]).parent == out
+    assert "gas_force" in first["trials"]  # every rival retrained is reported with its diagnosis-part NRMSE
     spec = Component.from_onnx(onnx.load(document["onnx"])).metadata["feature_spec"]
     assert {"channel": "displacement", "delays": [0]} in spec["taps"]
     for name in document["plots"].values():
@@ -105,47 +128,71 @@ def test_undeclared_gas_force_is_named_and_the_error_falls(models, tmp_path):
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")], "staging folder left behind"
 
 
+def test_undeclared_seal_friction_is_named_and_the_error_falls(models, tmp_path):
+    report = loop(FULL, "no_sign", models, tmp_path / "loop")
+    assert_named_and_improved(report, {"seal_friction"}, at_most=0.8)
+    spec = Component.from_onnx(onnx.load(str(report.onnx))).metadata["feature_spec"]
+    assert any(d["kind"] == "smooth_sign" for d in spec["derived"])
+
+
+def test_undeclared_hysteresis_is_named_and_the_error_halves(models, tmp_path):
+    """The series compliance makes the force lag the velocity; the static model has no memory to hold the lag."""
+    report = loop(("hysteresis", "seal_friction"), "static", models, tmp_path / "loop")
+    assert_named_and_improved(report, {"hysteresis"}, at_most=0.5)
+    spec = Component.from_onnx(onnx.load(str(report.onnx))).metadata["feature_spec"]
+    assert any(d["kind"] == "lowpass" and d["channel"] == "velocity" for d in spec["derived"])
+
+
+def test_undeclared_inertia_is_named_and_the_error_halves(models, tmp_path):
+    report = loop(("seal_friction", "inertia"), "static", models, tmp_path / "loop")
+    assert_named_and_improved(report, {"inertia"}, at_most=0.5)
+    spec = Component.from_onnx(onnx.load(str(report.onnx))).metadata["feature_spec"]
+    assert {"channel": "velocity", "delays": [0, 1]} in spec["taps"]  # acceleration as a finite difference
+
+
 def test_undeclared_temperature_with_its_channel_adds_the_channel(models, tmp_path):
-    truth = (*BASE, "temperature")
-    report = loop(truth, models, tmp_path / "loop")
-    assert_named_and_improved(report, {"temperature"}, truth)
+    truth = (*FULL, "temperature")
+    report = loop(truth, "history", models, tmp_path / "loop", duration=HEATING)
+    assert_named_and_improved(report, {"temperature"})
     spec = Component.from_onnx(onnx.load(str(report.onnx))).metadata["feature_spec"]
     assert {"channel": "temperature", "delays": [0]} in spec["taps"]
-    before, after = truth_nrmse(velocity_model(truth, str(models)), truth), truth_nrmse(report.onnx, truth)
-    print(f"temperature: test NRMSE {report.error_before['nrmse']:.4f} -> {report.error_after['nrmse']:.4f}; "
-          f"held-out truth NRMSE {before:.4f} -> {after:.4f}")
-    assert after < before  # measured 0.0206 -> 0.0147 (0.71), 0.0235 -> 0.0188 (0.80)
 
 
 def test_temperature_without_its_channel_is_added_as_a_state_and_the_missing_channel_reported(models, tmp_path):
-    truth = (*BASE, "temperature")
-    report = loop(truth, models, tmp_path / "loop", drop="temperature")
-    assert_named_and_improved(report, {"temperature"}, truth)
+    truth = (*FULL, "temperature")
+    report = loop(truth, "history", models, tmp_path / "loop", drop="temperature", duration=HEATING)
+    assert_named_and_improved(report, {"temperature"})
     spec = Component.from_onnx(onnx.load(str(report.onnx))).metadata["feature_spec"]
     assert "temperature" not in [t["channel"] for t in spec["taps"]]
     assert any(d["kind"] == "lowpass_square" and d["channel"] == "velocity" for d in spec["derived"])
     assert any("temperature" in note and "would confirm" in note for note in report.missing_measurements)
-    print(f"temperature proxy: test NRMSE {report.error_before['nrmse']:.4f} -> {report.error_after['nrmse']:.4f}")
 
 
 def test_two_undeclared_effects_gas_force_and_temperature_are_both_named(models, tmp_path):
-    """Both need an input the velocity-history model lacks (displacement, temperature). Seal friction is no such
-    case: it is a function of the current velocity, which the model has, so whether it shows depends on training."""
-    truth = (*BASE, "gas_force", "temperature")
-    report = loop(truth, models, tmp_path / "loop")
-    assert_named_and_improved(report, {"gas_force", "temperature"}, truth)
-    before, after = truth_nrmse(velocity_model(truth, str(models)), truth), truth_nrmse(report.onnx, truth)
-    print(f"gas_force + temperature: test NRMSE {report.error_before['nrmse']:.4f} -> "
-          f"{report.error_after['nrmse']:.4f}; held-out truth NRMSE {before:.4f} -> {after:.4f}")
-    assert after < before
+    """Both need an input the velocity-history model lacks (displacement, temperature)."""
+    report = loop((*FULL, "gas_force", "temperature"), "history", models, tmp_path / "loop", duration=HEATING)
+    assert_named_and_improved(report, {"gas_force", "temperature"})
+
+
+def test_two_undeclared_effects_gas_force_and_seal_friction_are_both_named(models, tmp_path):
+    """One needs a new input (displacement), the other a feature of an input the model has (the friction sign)."""
+    report = loop((*FULL, "gas_force"), "no_sign", models, tmp_path / "loop")
+    assert_named_and_improved(report, {"gas_force", "seal_friction"}, at_most=0.8)
+
+
+def test_the_best_rival_wins_unless_a_simpler_one_comes_within_the_tie():
+    assert _best_trial([0.0085, 0.0080]) == 0  # the simpler explanation, within TRIAL_TIE of the best
+    assert _best_trial([0.0715, 0.0167]) == 1  # far worse: the better explanation wins
+    assert _best_trial([0.0100 * (1 + TRIAL_TIE) * 1.01, 0.0105, 0.0100]) == 1  # the first within the tie
 
 
 def test_a_model_with_only_noise_left_gets_nothing_added(models, tmp_path):
     """The record's force is the model's own output plus white load-cell noise: nothing is missing."""
-    motion = record(BASE, seed=3)
-    path = velocity_model(BASE, str(models))
-    exact = run_step_graph(path, {"velocity": motion["velocity"]})["force"]
-    noise = np.random.default_rng(3).normal(0.0, 10.0, len(exact))  # the rig load cell's 10 N rms
+    motion = record(FULL, seed=3)
+    path = first_model(FULL, "history", str(models))
+    component = Component.from_onnx(onnx.load(path))
+    exact = run_step_graph(path, {p.name: motion[p.name] for p in component.inputs})["force"]
+    noise = np.random.default_rng(3).normal(0.0, 10.0 * NOISE, len(exact))  # the load cell's rms noise
     m = Measurement(motion.time, {**motion.channels, "force": exact + noise}, dict(motion.units), "model + noise")
     out = tmp_path / "loop"
     report = run_loop(m, path, "force", out, SETTINGS)
@@ -169,10 +216,10 @@ def test_a_model_with_only_noise_left_gets_nothing_added(models, tmp_path):
     ids=["missing channel", "other sample rate", "too short"],
 )
 def test_bad_input_is_refused_and_nothing_is_written(models, tmp_path, spoil, message):
-    m = spoil(record(BASE))
+    m = spoil(record(FULL))
     out = tmp_path / "loop"
     with pytest.raises(LoopError, match=message):
-        run_loop(m, velocity_model(BASE, str(models)), "force", out, SETTINGS)
+        run_loop(m, first_model(FULL, "history", str(models)), "force", out, SETTINGS)
     assert list(tmp_path.iterdir()) == []
 
 
@@ -181,7 +228,7 @@ def test_a_failed_run_leaves_an_earlier_result_untouched(models, tmp_path):
     out.mkdir()
     (out / "report.json").write_text("earlier")
     with pytest.raises(LoopError, match="not in the data"):
-        run_loop(without(record(BASE), "velocity"), velocity_model(BASE, str(models)), "force", out, SETTINGS)
+        run_loop(without(record(FULL), "velocity"), first_model(FULL, "history", str(models)), "force", out, SETTINGS)
     assert (out / "report.json").read_text() == "earlier"
     assert [p.name for p in tmp_path.iterdir()] == ["loop"]
 
@@ -195,5 +242,5 @@ def test_a_model_without_nnfmu_metadata_is_refused(tmp_path):
     )
     onnx.save(onnx.helper.make_model(graph), path)
     with pytest.raises(LoopError, match="no nnfmu feature spec"):
-        run_loop(record(BASE, duration=6.0), path, "force", tmp_path / "loop", SETTINGS)
+        run_loop(record(FULL, duration=6.0), path, "force", tmp_path / "loop", SETTINGS)
     assert not (tmp_path / "loop").exists()
