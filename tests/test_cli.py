@@ -5,10 +5,13 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
 from nnfmu.cli import app
+from nnfmu.cosim.ssp import connect_by_name, write_ssd
+from nnfmu.data import load_measurement
 
 runner = CliRunner()
 
@@ -58,6 +61,38 @@ def test_train_build_and_validate_chain(dyno: Path, tmp_path: Path) -> None:
     report = invoke("validate", dyno, dyno, "--channels", "force", "--out", tmp_path / "report")
     assert report.exit_code == 0, report.output
     assert "NRMSE 0" in report.output and (tmp_path / "report" / "index.html").exists()
+    _vehicle_cosim_and_loop_chain(dyno, onnx_path, fmu, tmp_path)
+
+
+def _vehicle_cosim_and_loop_chain(dyno: Path, onnx_path: Path, damper_fmu: Path, tmp_path: Path) -> None:
+    """The damper FMU in a quarter car built by the CLI, co-simulated by both masters on a CLI drive file; then the
+    loop's diagnosis of the model on its own dyno record (no effect added: --max-effects 0)."""
+    vehicle = tmp_path / "car.fmu"
+    built = invoke("vehicle", "build", "quarter-car", "--out", vehicle, "--sample-period", "1e-3")
+    assert built.exit_code == 0, built.output
+    stabilised = invoke("vehicle", "build", "full-vehicle", "--out", tmp_path / "full.fmu",
+                        "--stabilise", "bushing_fl_front,bushing_fl_rear")
+    assert stabilised.exit_code == 0 and (tmp_path / "full.fmu").exists(), stabilised.output
+    drive = tmp_path / "drive.csv"
+    assert invoke("drive", "generate", "--out", drive, "--duration", "2").exit_code == 0
+    ssd = write_ssd(connect_by_name("quarter car", ("vehicle", vehicle), {"damper": damper_fmu}, tmp_path / "system"),
+                    tmp_path / "system" / "SystemStructure.ssd")
+    results = {}
+    for master in ("fmpy", "libcosim"):
+        out = tmp_path / f"{master}.csv"
+        run = invoke("cosim", ssd, "--drive", drive, "--out", out, "--scheme", "jacobi", "--master", master)
+        assert run.exit_code == 0, run.output
+        results[master] = load_measurement(out)
+    assert "damper_force" in results["fmpy"].names and results["fmpy"].units["damper_force"] == "N"
+    for name in ("damper_force", "body_acceleration"):
+        scale = np.max(np.abs(results["fmpy"][name]))
+        np.testing.assert_allclose(results["libcosim"][name], results["fmpy"][name], rtol=0, atol=1e-6 * scale)
+    loop = invoke("loop", dyno, "--model", onnx_path, "--output", "force", "--out", tmp_path / "loop",
+                  "--max-effects", "0")
+    assert loop.exit_code == 0, loop.output
+    assert "effects added: none" in loop.output and (tmp_path / "loop" / "report.json").exists()
+    refused = invoke("loop", drive, "--model", onnx_path, "--out", tmp_path / "refused")
+    assert refused.exit_code != 0 and "velocity" in refused.output and not (tmp_path / "refused").exists()
 
 
 def test_build_failure_exits_nonzero_without_fmu(tmp_path: Path) -> None:
