@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-import numpy as np
 
 from .assembly import Assembly, Deflection
 from .components import REFERENCE, STABILISED, resolve_components

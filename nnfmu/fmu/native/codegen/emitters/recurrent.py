@@ -24,7 +24,7 @@ class Gru(Emitter):
         activations = node.attr("activations")
         if activations is not None and [a.lower() for a in activations] != ["sigmoid", "tanh"]:
             raise node.fail(f"activations {activations} are not supported (only the default Sigmoid, Tanh)")
-        x, w, r = node.input(0).shape, node.input(1).shape, node.input(2).shape
+        x, r = node.input(0).shape, node.input(2).shape
         if len(x) != 3:
             raise node.fail(f"X must be 3-D [seq, batch, input], got {x}")
         seq, batch, width = x
