@@ -29,13 +29,11 @@ import numpy as np
 from nnfmu.cosim.master import CosimError, CosimSettings, cosimulate
 from nnfmu.cosim.ssp import open_system, read_ssd
 from nnfmu.data import Measurement
-from nnfmu.data.rigs import RigOptions, write_rig
-from nnfmu.demo import PRESETS_BY_RIG
-from nnfmu.models.workflow import TrainRequest, train_from_file
 from nnfmu.roadtest.systems import bushing_elements, build_component_fmus, build_vehicle, write_system
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
 from nnfmu.vehicle.models.components import REFERENCE
+from road_test import models_in  # bench/ is on the path when a bench script runs
 
 STEP = 1e-3  # [s] communication step
 DAMPER = "damper-hysteresis"
@@ -49,23 +47,6 @@ BOUNDED_RATIO = 10.0  # a diverging loop grows by orders of magnitude; a stable 
 
 def log(line: str) -> None:
     print(line, file=sys.stderr, flush=True)
-
-
-def networks(folder: Path) -> dict[str, Path]:
-    """<preset>.onnx of every damper and bushing preset in `folder`, the missing ones trained quickly there."""
-    models = {}
-    for rig, presets in PRESETS_BY_RIG.items():
-        lab = folder / "rig" / f"{rig}_lab.csv"
-        for preset in presets:
-            path = folder / f"{preset}.onnx"
-            if not path.is_file():
-                if not lab.is_file():
-                    write_rig(rig, lab, RigOptions(seed=0, duration=QUICK_RECORDS[rig]))
-                started = time.perf_counter()
-                train_from_file(lab, TrainRequest(preset=preset, **QUICK_TRAINING), path)
-                log(f"trained {preset} in {time.perf_counter() - started:.1f} s")
-            models[preset] = path
-    return models
 
 
 def linear_bushing_vehicle(out: Path) -> Path:
@@ -127,7 +108,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="nnfmu-bench-cosim-") as scratch:
         work = Path(scratch)
         prepared = time.perf_counter()
-        models = networks(Path(sys.argv[1]) if len(sys.argv) > 1 else work / "models")
+        models = models_in(Path(sys.argv[1]) if len(sys.argv) > 1 else work / "models", QUICK_RECORDS,
+                           **QUICK_TRAINING)
         fmus = build_component_fmus(models, work / "fmu", with_bushing=True)
         drive = generate_drive(DriveSettings(duration=duration + STEP))
         ssds = {system: write_system(system, build_vehicle(system, work / "fmu", STEP), fmus.dampers[DAMPER],

@@ -20,8 +20,9 @@ from nnfmu.models.workflow import TrainRequest, train_from_file
 from nnfmu.roadtest import RoadTestSettings, SystemRun, run_road_test
 
 
-def models_in(folder: Path) -> dict[str, Path]:
-    """ONNX files of every preset in `folder`, training the missing ones on default rig records."""
+def models_in(folder: Path, durations: dict[str, float] | None = None, **training: int) -> dict[str, Path]:
+    """ONNX files of every preset in `folder`, training the missing ones on rig records (default length, or
+    `durations` [s] per rig) with the preset's settings (overridden by `training`, e.g. restarts=1)."""
     models = {}
     for rig, presets in PRESETS_BY_RIG.items():
         lab = folder / "rig" / f"{rig}_lab.csv"
@@ -29,8 +30,10 @@ def models_in(folder: Path) -> dict[str, Path]:
             path = folder / f"{preset}.onnx"
             if not path.is_file():
                 if not lab.is_file():
-                    write_rig(rig, lab, RigOptions(seed=0))
-                train_from_file(lab, TrainRequest(preset=preset), path)
+                    write_rig(rig, lab, RigOptions(seed=0, duration=(durations or {}).get(rig)))
+                started = time.perf_counter()
+                train_from_file(lab, TrainRequest(preset=preset, **training), path)
+                print(f"trained {preset} in {time.perf_counter() - started:.1f} s", file=sys.stderr, flush=True)
             models[preset] = path
     return models
 
