@@ -103,22 +103,23 @@ class BushingChannelTruth:
     """Force (or torque) of one bushing channel from its state and the prescribed position.
 
     States (those of the switched-on effects, in order): Maxwell branch forces z_i, then Jenkins element forces f_j.
+    `maxwell` (stiffness, relaxation time) and `iwan` (stiffness, slip force) hold the switched-on elements' arrays.
     """
 
     params: BushingChannelParams
     effects: tuple[str, ...] = DEFAULT_EFFECTS["bushing"]
-    _iwan: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False, compare=False)
-    _maxwell: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False, compare=False)
+    iwan: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False, compare=False)
+    maxwell: tuple[np.ndarray, np.ndarray] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         unknown = [e for e in self.effects if e not in BUSHING_EFFECTS]
         if unknown:
             raise ValueError(f"unknown bushing effect(s) {unknown}; valid: {', '.join(BUSHING_EFFECTS)}")
         k, slip = iwan_elements(self.params.friction_max, self.params.friction_x2)
-        object.__setattr__(self, "_iwan", (k[: self.n_friction], slip[: self.n_friction]))
+        object.__setattr__(self, "iwan", (k[: self.n_friction], slip[: self.n_friction]))
         maxwell = (np.asarray(self.params.maxwell_stiffness[: self.n_maxwell], dtype=float),
                    np.asarray(self.params.maxwell_time[: self.n_maxwell], dtype=float))
-        object.__setattr__(self, "_maxwell", maxwell)  # per-call arrays would dominate a solver's right-hand side
+        object.__setattr__(self, "maxwell", maxwell)  # per-call arrays would dominate a solver's right-hand side
 
     @property
     def n_maxwell(self) -> int:
@@ -143,10 +144,10 @@ class BushingChannelTruth:
 
     def derivatives(self, t: float, state: np.ndarray, x: float, v: float) -> np.ndarray:
         """d(state)/dt at time t [s] for position x and rate v; a Jenkins element holds while it slides outward."""
-        stiffness, relaxation = self._maxwell
+        stiffness, relaxation = self.maxwell
         z, f = state[: len(stiffness)], state[len(stiffness) :]
         dz = stiffness * v - z / relaxation
-        k, slip = self._iwan
+        k, slip = self.iwan
         df = np.where((np.abs(f) >= slip) & (f * v > 0), 0.0, k * v)
         return np.concatenate([dz, df])
 
@@ -170,7 +171,7 @@ class BushingChannelTruth:
             gain = k * tau * (1 - decay) / dt
             columns.append(lfilter([gain], [1.0, -decay], dx))
         if self.n_friction:
-            k, slip = self._iwan
+            k, slip = self.iwan
             f = np.zeros(IWAN_ELEMENTS)
             friction = np.empty((len(x), IWAN_ELEMENTS))
             for i, step in enumerate(dx):

@@ -105,10 +105,10 @@ class BushingTruthBank:
         self.size = len(truths)
         self.linear = np.array([t.params.stiffness for t in truths])
         self.cubic = np.array([t.params.cubic_stiffness for t in truths])
-        self.maxwell_stiffness = np.array([t._maxwell[0] for t in truths]).reshape(self.size, self.n_maxwell)
-        self.maxwell_time = np.array([t._maxwell[1] for t in truths]).reshape(self.size, self.n_maxwell)
-        self.iwan_stiffness = np.array([t._iwan[0] for t in truths]).reshape(self.size, self.n_friction)
-        self.iwan_slip = np.array([t._iwan[1] for t in truths]).reshape(self.size, self.n_friction)
+        self.maxwell_stiffness = np.array([t.maxwell[0] for t in truths]).reshape(self.size, self.n_maxwell)
+        self.maxwell_time = np.array([t.maxwell[1] for t in truths]).reshape(self.size, self.n_maxwell)
+        self.iwan_stiffness = np.array([t.iwan[0] for t in truths]).reshape(self.size, self.n_friction)
+        self.iwan_slip = np.array([t.iwan[1] for t in truths]).reshape(self.size, self.n_friction)
 
     @property
     def n_states(self) -> int:
