@@ -27,7 +27,7 @@ from nnfmu.data.rigs import DEFAULT_EFFECTS, RigOptions, write_rig
 from nnfmu.export import export_onnx
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.loop.blocks import part_measurement, plan_blocks
+from nnfmu.loop.blocks import training_part
 from nnfmu.loop.loop_settings import LoopSettings
 from nnfmu.loop.run import LoopReport, run_loop
 from nnfmu.models import TrainSettings, get_preset, train_model
@@ -124,7 +124,7 @@ def close_the_loop(out: Path, settings: DemoSettings, log: Callable[[str], None]
                                   effects=(*DEFAULT_EFFECTS["damper"], *UNDECLARED_EFFECTS), noise=LOOP_NOISE))
     measured = load_measurement(lab)
     loop_settings = LoopSettings()
-    fit = part_measurement(measured, plan_blocks(len(measured), loop_settings, str(lab)).rows("train"), "fit")
+    fit = training_part(measured, loop_settings)
     preset = get_preset(LOOP_PRESET)
     train = TrainSettings(seed=settings.seed, restarts=1, max_epochs=15) if settings.quick else TrainSettings(
         seed=settings.seed)

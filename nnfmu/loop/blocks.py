@@ -67,3 +67,9 @@ def part_measurement(m: Measurement, rows: np.ndarray, name: str) -> Measurement
         source=f"{m.source} ({name} part)",
         notes=dict(m.notes),
     )
+
+
+def training_part(m: Measurement, settings: LoopSettings) -> Measurement:
+    """The record's training blocks joined: what a first model may be fitted on so that the loop's diagnosis and
+    test blocks of the same record stay unseen."""
+    return part_measurement(m, plan_blocks(len(m), settings, m.source).rows("train"), "fit")

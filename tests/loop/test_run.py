@@ -19,7 +19,7 @@ from nnfmu.component import Component
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import RigOptions, simulate_rig
 from nnfmu.export import export_onnx, run_step_graph
-from nnfmu.loop.blocks import part_measurement, plan_blocks
+from nnfmu.loop.blocks import training_part
 from nnfmu.loop.loop_settings import LoopError, LoopSettings
 from nnfmu.loop.run import TRIAL_TIE, LoopReport, _best_trial, run_loop
 from nnfmu.models import Architecture, TrainSettings, get_preset, train_model
@@ -58,7 +58,7 @@ def first_model(effects: tuple[str, ...], spec: str, folder: str, duration: floa
     """A small network on `SPECS[spec]` trained on the training blocks only of the record of `effects`, so that the
     loop's test blocks are held out from the first model as from the retrained one."""
     m = record(effects, duration=duration)
-    fit = part_measurement(m, plan_blocks(len(m), SETTINGS, m.source).rows("train"), "fit")
+    fit = training_part(m, SETTINGS)
     result = train_model(fit, SPECS[spec], Architecture("mlp", (6,)), TrainSettings(max_epochs=100, restarts=1))
     path = Path(folder) / f"{spec}_{'_'.join(effects)}_{duration:g}s.onnx"
     export_onnx(result.model, path)
