@@ -127,47 +127,31 @@ def test_lca_angle_is_wheel_travel_over_arm_length(car: LinearVehicle, params: V
     assert d["bushing_fl_front_axial_rotation"] == pytest.approx(d["lca_fl_angle"], rel=0.05)
 
 
+def _port_laws(vehicle: LinearVehicle, params: VehicleParameters) -> list[tuple[int, int, int, float, float]]:
+    """(force input, displacement output, rate output, stiffness, damping) of the linear reference law of every
+    external damper and bushing port of `vehicle`."""
+    rates = {f"damper_{c}": [(0.0, (params.front_damper if c[0] == "f" else params.rear_damper).damping)]
+             for c in CORNERS}
+    for corner in ("fl", "fr"):
+        for position, b in (("front", params.lca.front_bushing), ("rear", params.lca.rear_bushing)):
+            rates[f"bushing_{corner}_{position}"] = [
+                (b.axial_stiffness, b.axial_damping), (b.radial_stiffness, b.radial_damping),
+                (b.torsional_stiffness, b.torsional_damping), (b.conical_stiffness, b.conical_damping),
+            ]
+    laws = []
+    for component, values in rates.items():
+        for (force, disp, rate), (k, c) in zip(component_channels(component), values):
+            if force in vehicle.input_names:
+                laws.append((vehicle.input_index(force), vehicle.output_index(disp), vehicle.output_index(rate), k, c))
+    return laws
+
+
 def _close_loops(open_loop: LinearVehicle, params: VehicleParameters) -> np.ndarray:
     """A of the all-external model with every port fed by the linear reference law (force = k d + c v)."""
     a = open_loop.A.copy()
-    laws = {
-        f"damper_{c}": [
-            (
-                "force",
-                "displacement",
-                "velocity",
-                0.0,
-                (params.front_damper if c[0] == "f" else params.rear_damper).damping,
-            )
-        ]
-        for c in CORNERS
-    }
-    for corner in ("fl", "fr"):
-        for position, b in (("front", params.lca.front_bushing), ("rear", params.lca.rear_bushing)):
-            laws[f"bushing_{corner}_{position}"] = [
-                ("axial_force", "axial_displacement", "axial_velocity", b.axial_stiffness, b.axial_damping),
-                ("radial_force", "radial_displacement", "radial_velocity", b.radial_stiffness, b.radial_damping),
-                (
-                    "axial_torque",
-                    "axial_rotation",
-                    "axial_angular_velocity",
-                    b.torsional_stiffness,
-                    b.torsional_damping,
-                ),
-                (
-                    "conical_torque",
-                    "conical_rotation",
-                    "conical_angular_velocity",
-                    b.conical_stiffness,
-                    b.conical_damping,
-                ),
-            ]
-    for component, ports in laws.items():
-        for force, disp, vel, k, c in ports:
-            i = open_loop.input_index(f"{component}_{force}")
-            row_d, row_v = open_loop.output_index(f"{component}_{disp}"), open_loop.output_index(f"{component}_{vel}")
-            assert not open_loop.D[row_d].any() and not open_loop.D[row_v].any()
-            a += np.outer(open_loop.B[:, i], k * open_loop.C[row_d] + c * open_loop.C[row_v])
+    for force, disp, rate, k, c in _port_laws(open_loop, params):
+        assert not open_loop.D[disp].any() and not open_loop.D[rate].any()
+        a += np.outer(open_loop.B[:, force], k * open_loop.C[disp] + c * open_loop.C[rate])
     return a
 
 
@@ -180,18 +164,6 @@ def test_external_ports_closed_by_the_reference_laws_equal_the_built_in_model(
     np.testing.assert_allclose(closed, car.A, rtol=0, atol=1e-9 * np.max(np.abs(car.A)))
     actuators = [car.input_index(n) for n in car.input_names]
     np.testing.assert_allclose(open_loop.B[:, : len(actuators)], car.B, rtol=0, atol=1e-12 * np.max(np.abs(car.B)))
-
-
-def _bushing_laws(vehicle: LinearVehicle, params: VehicleParameters) -> list[tuple[int, int, int, float, float]]:
-    """(force input, displacement output, rate output, stiffness, damping) of every LCA bushing channel."""
-    laws = []
-    for corner in ("fl", "fr"):
-        for position, b in (("front", params.lca.front_bushing), ("rear", params.lca.rear_bushing)):
-            rates = ((b.axial_stiffness, b.axial_damping), (b.radial_stiffness, b.radial_damping),
-                     (b.torsional_stiffness, b.torsional_damping), (b.conical_stiffness, b.conical_damping))
-            for (force, disp, rate), (k, c) in zip(component_channels(f"bushing_{corner}_{position}"), rates):
-                laws.append((vehicle.input_index(force), vehicle.output_index(disp), vehicle.output_index(rate), k, c))
-    return laws
 
 
 @pytest.mark.parametrize("dt", [1e-3, 2e-3])
@@ -208,7 +180,7 @@ def test_stabilised_bushings_fed_their_linear_law_once_per_step_equal_the_built_
     diverged = {}
     for choice in ("stabilised", "external"):
         ports = build_full_vehicle(linear_params, dampers_in | {n: choice for n in COMPONENTS if n.startswith("bushing")})
-        disc, laws = ports.discretise(dt), _bushing_laws(ports, linear_params)
+        disc, laws = ports.discretise(dt), _port_laws(ports, linear_params)
         x, angle = x0.copy(), []
         for k in range(len(t)):
             u = ports.input_vector({name: values[k] for name, values in inputs.items()})
