@@ -10,6 +10,13 @@ Prints one JSON object per case, then a summary line. Per case: the effects pres
 loop's test blocks of the record against the measurement (the issue's target: after/before <= 0.5), against the
 noise-free force of the same record (same noisy inputs), and against the noise-free force of a fresh record (another
 seed, noise-free inputs).
+
+Reference numbers show how far a case *can* fall. `missing_effect_nrmse`: the varying force of the missing effects
+(the noise-free record minus the same record simulated without them, less its mean, which a network's bias holds) on
+the test blocks, as a share of the rms measured force. `perfect_model`: the rig's own physics run on the recorded
+(noisy) inputs, scored like the models; its ratio to the error before is the lowest ratio any model fed these inputs
+could reach against this measurement. `removed`: the share of the reducible error the loop took out against the
+measurement, (before² - after²) / (before² - perfect²); halving needs after² <= before² / 4.
 Usage: python bench/loop_effects.py [--duration 40] [--noise 0.5] [--seed 1] [--case gas_force ...]
 """
 
@@ -27,7 +34,7 @@ import onnx
 
 from nnfmu.component import Component
 from nnfmu.data import Measurement
-from nnfmu.data.rigs import RigOptions, simulate_rig
+from nnfmu.data.rigs import DamperDyno, DamperTruth, RigOptions, simulate_rig
 from nnfmu.export import export_onnx, run_step_graph
 from nnfmu.loop.blocks import part_measurement, plan_blocks
 from nnfmu.loop.loop_settings import LoopSettings
@@ -101,11 +108,31 @@ def record(effects: tuple[str, ...], duration: float, seed: int, noise: float) -
                                              noise=noise)).measurement
 
 
+def perfect_model(effects: tuple[str, ...], m: Measurement, clean: Measurement) -> np.ndarray:
+    """The rig's truth law driven by the recorded displacement and velocity (at the rig's internal step, inputs
+    interpolated; the inertia's acceleration is the true one): the best any model fed the recorded inputs can do."""
+    substeps = max(1, round(m.sample_period / DamperDyno().internal_step))
+    fine = np.arange((len(m) - 1) * substeps + 1) * (m.sample_period / substeps)
+    x, v = (np.interp(fine, m.time - m.time[0], m[c]) for c in ("displacement", "velocity"))
+    a = np.gradient(np.interp(fine, m.time - m.time[0], clean["velocity"]), fine)
+    force, _ = DamperTruth(effects=effects).simulate(fine[1] - fine[0], x, v, a)
+    return force[::substeps]
+
+
+def missing_effect_nrmse(case: Case, duration: float, seed: int, measured: Measurement, rows: np.ndarray) -> float:
+    """Rms of the missing effects' force about its mean on `rows`, as a share of the rms measured force there."""
+    kept = tuple(e for e in case.effects if e not in case.missing)
+    missing = (record(case.effects, duration, seed, 0.0)["force"] - record(kept, duration, seed, 0.0)["force"])[rows]
+    return float(np.std(missing) / np.sqrt(np.mean(measured["force"][rows] ** 2)))
+
+
 def run_case(name: str, duration: float, noise: float, seed: int, settings: LoopSettings, folder: Path) -> dict:
     case = CASES[name]
     duration = case.duration or duration
     m = record(case.effects, duration, seed, noise)
-    clean = record(case.effects, duration, seed, 0.0)["force"]
+    clean_record = record(case.effects, duration, seed, 0.0)
+    clean = clean_record["force"]
+    ideal = perfect_model(case.effects, m, clean_record)
     started = time.perf_counter()
     blocks = plan_blocks(len(m), settings, m.source)
     fit = part_measurement(m, blocks.rows("train"), "fit")
@@ -132,12 +159,18 @@ def run_case(name: str, duration: float, noise: float, seed: int, settings: Loop
     ratios = {k: errors["after"][k] / before if (before := errors["before"][k]) > 0 else None
               for k in errors["before"]}
     present = set(case.missing)
+    missing = missing_effect_nrmse(case, duration, seed, m, test) if present else None
+    perfect = None if case.noise_only else nrmse(ideal[test], m["force"][test])  # noise_only: the model is the truth
+    before, after = errors["before"]["measured"], errors["after"]["measured"]
     return {
         "case": name, "seed": seed, "duration_s": duration, "rig_effects": list(case.effects),
         "start_features": case.spec.feature_names, "missing": list(case.missing), "effects_added": report.effects_added,
         "named_correctly": set(report.effects_added) == present,
         "nrmse_before": errors["before"], "nrmse_after": errors["after"], "ratio": ratios,
         "halved": bool(ratios["measured"] <= TARGET_RATIO) if present else None,
+        "missing_effect_nrmse": missing, "perfect_model": None if perfect is None else {
+            "nrmse": perfect, "ratio": perfect / before},
+        "removed": (before**2 - after**2) / (before**2 - perfect**2) if present and perfect is not None else None,
         "consistent_with_noise": report.consistent_with_noise, "summary": report.summary, "notes": report.notes,
         "first_fit_seconds": first_fit, "loop_seconds": looped,
     }
@@ -162,6 +195,7 @@ def main() -> None:
         "named_correctly": sum(r["named_correctly"] for r in results),
         "halved": sum(bool(r["halved"]) for r in effect_cases), "effect_cases": len(effect_cases),
         "worst_measured_ratio": max((r["ratio"]["measured"] for r in effect_cases), default=None),
+        "least_removed": min((r["removed"] for r in effect_cases), default=None),
         "seconds": sum(r["first_fit_seconds"] + r["loop_seconds"] for r in results),
     }), flush=True)
 
