@@ -119,10 +119,12 @@ def perfect_model(effects: tuple[str, ...], m: Measurement, clean: Measurement) 
     return force[::substeps]
 
 
-def missing_effect_nrmse(case: Case, duration: float, seed: int, measured: Measurement, rows: np.ndarray) -> float:
-    """Rms of the missing effects' force about its mean on `rows`, as a share of the rms measured force there."""
+def missing_effect_nrmse(case: Case, clean: np.ndarray, duration: float, seed: int, measured: Measurement,
+                         rows: np.ndarray) -> float:
+    """Rms about its mean, on `rows`, of the missing effects' force (`clean`, the noise-free force of the case's
+    record, minus the same record without them), as a share of the rms measured force there."""
     kept = tuple(e for e in case.effects if e not in case.missing)
-    missing = (record(case.effects, duration, seed, 0.0)["force"] - record(kept, duration, seed, 0.0)["force"])[rows]
+    missing = (clean - record(kept, duration, seed, 0.0)["force"])[rows]
     return float(np.std(missing) / np.sqrt(np.mean(measured["force"][rows] ** 2)))
 
 
@@ -132,7 +134,8 @@ def run_case(name: str, duration: float, noise: float, seed: int, settings: Loop
     m = record(case.effects, duration, seed, noise)
     clean_record = record(case.effects, duration, seed, 0.0)
     clean = clean_record["force"]
-    ideal = perfect_model(case.effects, m, clean_record)
+    # noise_only: the record's force is made from the model itself, so the rig's physics is no reference
+    ideal = None if case.noise_only else perfect_model(case.effects, m, clean_record)
     started = time.perf_counter()
     blocks = plan_blocks(len(m), settings, m.source)
     fit = part_measurement(m, blocks.rows("train"), "fit")
@@ -159,9 +162,9 @@ def run_case(name: str, duration: float, noise: float, seed: int, settings: Loop
     ratios = {k: errors["after"][k] / before if (before := errors["before"][k]) > 0 else None
               for k in errors["before"]}
     present = set(case.missing)
-    missing = missing_effect_nrmse(case, duration, seed, m, test) if present else None
-    perfect = None if case.noise_only else nrmse(ideal[test], m["force"][test])  # noise_only: the model is the truth
-    before, after = errors["before"]["measured"], errors["after"]["measured"]
+    missing = missing_effect_nrmse(case, clean, duration, seed, m, test) if present else None
+    perfect = None if ideal is None else nrmse(ideal[test], m["force"][test])
+    first_error, final_error = errors["before"]["measured"], errors["after"]["measured"]
     return {
         "case": name, "seed": seed, "duration_s": duration, "rig_effects": list(case.effects),
         "start_features": case.spec.feature_names, "missing": list(case.missing), "effects_added": report.effects_added,
@@ -169,8 +172,9 @@ def run_case(name: str, duration: float, noise: float, seed: int, settings: Loop
         "nrmse_before": errors["before"], "nrmse_after": errors["after"], "ratio": ratios,
         "halved": bool(ratios["measured"] <= TARGET_RATIO) if present else None,
         "missing_effect_nrmse": missing, "perfect_model": None if perfect is None else {
-            "nrmse": perfect, "ratio": perfect / before},
-        "removed": (before**2 - after**2) / (before**2 - perfect**2) if present and perfect is not None else None,
+            "nrmse": perfect, "ratio": perfect / first_error},
+        "removed": ((first_error**2 - final_error**2) / (first_error**2 - perfect**2)
+                    if present and perfect is not None else None),
         "consistent_with_noise": report.consistent_with_noise, "summary": report.summary, "notes": report.notes,
         "first_fit_seconds": first_fit, "loop_seconds": looped,
     }
