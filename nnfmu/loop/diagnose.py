@@ -11,7 +11,7 @@ from ..data import DataError, Measurement, check_measurement
 from .effects import select_families
 from .errors import DiagnosisError
 from .evidence import Diagnosis, EffectEvidence, effect_evidence
-from .ranking import cross_fit_errors, fold_mask, rank_effects, recalibration
+from .ranking import GainTest, cross_fit_errors, extend_base, fold_mask, gain_test, rank_effects, recalibration
 from .residual_tests import ResidualTest, residual_tests
 from .settings import DiagnosisSettings
 from .signals import build_signals
@@ -131,3 +131,26 @@ def diagnose(
         missing_measurements=tuple(_missing_measurements(ranking, consistent, tests)),
         summary=_summary(ranking, consistent, tests),
     )
+
+
+def explained_beyond(
+    measurement: Measurement,
+    predicted: np.ndarray,
+    output: str,
+    model_inputs: Sequence[str],
+    effect: str,
+    given: Sequence[str],
+    settings: DiagnosisSettings = DiagnosisSettings(),
+) -> GainTest:
+    """What `effect`'s regressors explain of the residual out of sample beyond the recalibration and the `given`
+    effects' regressors, with its Diebold-Mariano test: whether a richer family holds more than a simpler one that
+    spans most of it (three low-passed displacements against the displacement). Same input checks as `diagnose`."""
+    inputs = tuple(model_inputs)
+    predicted = np.asarray(predicted, dtype=float)
+    _check_input(measurement, predicted, output, inputs, settings)
+    signals = build_signals(measurement, predicted, output, inputs)
+    rich, *held = (family.compute(signals, settings) for family in select_families((effect, *given)))
+    base = recalibration(signals, {name: np.asarray(measurement.channels[name], dtype=float) for name in inputs})
+    for regressors in held:
+        base = extend_base(base, regressors.matrix)
+    return gain_test(signals.measured - predicted, base, rich.matrix, fold_mask(len(predicted), settings.blocks))

@@ -78,6 +78,11 @@ def _scaled(matrix: np.ndarray) -> np.ndarray:
     return matrix[:, keep] / scale[keep]
 
 
+def extend_base(base: np.ndarray, columns: np.ndarray) -> np.ndarray:
+    """The base columns with `columns` beside them, rescaled: what a family is tested beyond once another is given."""
+    return _scaled(np.column_stack([base, columns]))
+
+
 def _ridge(design: np.ndarray, target: np.ndarray) -> np.ndarray:
     """Least squares with a tiny ridge (RIDGE · n on the unit-rms columns): near-collinear columns (tanh at
     neighbouring scales) then get bounded coefficients instead of cancelling giants that explode out of sample."""
@@ -150,7 +155,7 @@ def rank_effects(
         best = max(significant, key=lambda name: tests[name].explained)
         selected.append(best)
         remaining.remove(best)
-        base = _scaled(np.column_stack([base, regressors[best].matrix]))
+        base = extend_base(base, regressors[best].matrix)
     rest = sorted(remaining, key=lambda name: -alone[name].explained)
     ranked = [
         RankedFamily(testable[n], regressors[n], (), alone[n], additional[n], n in selected, given[n])

@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 from functools import cache
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import onnx
@@ -21,7 +22,9 @@ from nnfmu.data.rigs import RigOptions, simulate_rig
 from nnfmu.export import export_onnx, run_step_graph
 from nnfmu.loop.blocks import training_part
 from nnfmu.loop.loop_settings import LoopError, LoopSettings
-from nnfmu.loop.run import TRIAL_TIE, LoopReport, _best_trial, run_loop
+from nnfmu.loop.extend import Extension, extend_spec
+from nnfmu.loop.ranking import GainTest
+from nnfmu.loop.run import SIGNIFICANT, TRIAL_TIE, LoopReport, _best_trial, _simpler_cover, _together, run_loop
 from nnfmu.models import Architecture, TrainSettings, get_preset, train_model
 from nnfmu.models.features import Difference, FeatureSpec, SmoothSign
 
@@ -184,6 +187,57 @@ def test_the_best_rival_wins_unless_a_simpler_one_comes_within_the_tie():
     assert _best_trial([0.0085, 0.0080]) == 0  # the simpler explanation, within TRIAL_TIE of the best
     assert _best_trial([0.0715, 0.0167]) == 1  # far worse: the better explanation wins
     assert _best_trial([0.0100 * (1 + TRIAL_TIE) * 1.01, 0.0105, 0.0100]) == 1  # the first within the tie
+
+
+def candidate(effect: str, spec: FeatureSpec, reason: str):
+    """A trial candidate as `_trial_group` makes it; only the evidence's name is read."""
+    return Extension(effect, spec, (), effect), SimpleNamespace(name=effect), reason
+
+
+def test_a_significant_effect_gives_way_to_a_simpler_family_that_holds_it():
+    m = record(FULL, duration=2.0)
+    rows = np.arange(len(m))
+
+    def family(name: str, regressors: int):
+        return SimpleNamespace(name=name, testable=True, regressors=("r",) * regressors)
+
+    d = SimpleNamespace(ranking=[family("frequency_dependence", 3), family("sensor_offset", 1), family("gas_force", 2)])
+    richer = (extend_spec("frequency_dependence", HISTORY, m, rows, SETTINGS), d.ranking[0], SIGNIFICANT)
+    asked = []
+
+    def beyond(held_by: str):
+        def test(effect: str, given: tuple[str, ...]) -> GainTest:
+            if effect == "frequency_dependence":  # beyond a simpler family: little only beyond the one holding it
+                asked.append(given)
+                return GainTest(0.06 if given[-1] == held_by else 0.4, 0.3, 0.5, 100.0, 3)
+            return GainTest(0.3, 1e-9, 5.0, 100.0, 3)  # the simpler family itself explains 30 %: 0.06 * 0.7 < 0.05
+        return test
+
+    def extend(effect: str):
+        return extend_spec(effect, HISTORY, m, rows, SETTINGS)
+
+    settings = LoopSettings(min_explained=0.05)
+    ext, evidence, reason = _simpler_cover(richer, d, beyond("gas_force"), extend, ("temperature",), set(), settings)
+    assert asked == [("temperature", "sensor_offset"), ("temperature", "gas_force")]  # the simplest first
+    assert ext.effect == "gas_force" and evidence.name == "gas_force"
+    assert reason.startswith(SIGNIFICANT) and "stands for frequency_dependence" in reason
+    assert _simpler_cover(richer, d, beyond("nothing"), extend, (), set(), settings) == richer
+    assert _simpler_cover(richer, d, beyond("gas_force"), extend, (), {"gas_force"}, settings) == richer  # taken
+
+
+def test_two_present_effects_are_offered_together_with_both_features():
+    m = record(FULL, duration=2.0)
+    rows = np.arange(len(m))
+    gas = extend_spec("gas_force", NO_SIGN, m, rows, SETTINGS)
+    seal = extend_spec("seal_friction", NO_SIGN, m, rows, SETTINGS)
+    evidence = SimpleNamespace(name="seal_friction")
+    both, kept, reason = _together((gas, SimpleNamespace(name="gas_force"), ""), (seal, evidence, SIGNIFICANT),
+                                   evidence, "gas_force beat seal_friction", m, rows, SETTINGS)
+    assert both.effect == "gas_force+seal_friction" and kept is evidence and reason.startswith("gas_force beat")
+    assert set(both.spec.feature_names) == set(gas.spec.feature_names) | set(seal.spec.feature_names)
+    assert both.added == (*gas.added, *seal.added)
+    # the first spec already holds what the second would add: nothing to offer together
+    assert _together((seal, evidence, ""), (seal, evidence, SIGNIFICANT), evidence, "", m, rows, SETTINGS) is None
 
 
 def test_a_model_with_only_noise_left_gets_nothing_added(models, tmp_path):
