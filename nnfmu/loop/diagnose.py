@@ -133,24 +133,34 @@ def diagnose(
     )
 
 
-def explained_beyond(
-    measurement: Measurement,
-    predicted: np.ndarray,
-    output: str,
-    model_inputs: Sequence[str],
-    effect: str,
-    given: Sequence[str],
-    settings: DiagnosisSettings = DiagnosisSettings(),
-) -> GainTest:
-    """What `effect`'s regressors explain of the residual out of sample beyond the recalibration and the `given`
-    effects' regressors, with its Diebold-Mariano test: whether a richer family holds more than a simpler one that
-    spans most of it (three low-passed displacements against the displacement). Same input checks as `diagnose`."""
-    inputs = tuple(model_inputs)
-    predicted = np.asarray(predicted, dtype=float)
-    _check_input(measurement, predicted, output, inputs, settings)
-    signals = build_signals(measurement, predicted, output, inputs)
-    rich, *held = (family.compute(signals, settings) for family in select_families((effect, *given)))
-    base = recalibration(signals, {name: np.asarray(measurement.channels[name], dtype=float) for name in inputs})
-    for regressors in held:
-        base = extend_base(base, regressors.matrix)
-    return gain_test(signals.measured - predicted, base, rich.matrix, fold_mask(len(predicted), settings.blocks))
+class FamilyGains:
+    """What one effect family explains of a model's residual out of sample beyond the recalibration and other
+    families, with its Diebold-Mariano test: whether a richer family holds more than a simpler one that spans most of
+    it (three low-passed displacements against the displacement). The signals, the recalibration and each family's
+    regressors are computed once per residual. Same input checks as `diagnose`."""
+
+    def __init__(self, measurement: Measurement, predicted: np.ndarray, output: str, model_inputs: Sequence[str],
+                 settings: DiagnosisSettings = DiagnosisSettings()) -> None:
+        inputs = tuple(model_inputs)
+        predicted = np.asarray(predicted, dtype=float)
+        _check_input(measurement, predicted, output, inputs, settings)
+        self._signals = build_signals(measurement, predicted, output, inputs)
+        self._settings = settings
+        self._base = recalibration(
+            self._signals, {name: np.asarray(measurement.channels[name], dtype=float) for name in inputs})
+        self._residual = self._signals.measured - predicted
+        self._fold = fold_mask(len(predicted), settings.blocks)
+        self._matrices: dict[str, np.ndarray] = {}
+
+    def _matrix(self, effect: str) -> np.ndarray:
+        if effect not in self._matrices:
+            (family,) = select_families((effect,))
+            self._matrices[effect] = family.compute(self._signals, self._settings).matrix
+        return self._matrices[effect]
+
+    def explained(self, effect: str, given: Sequence[str] = ()) -> GainTest:
+        """`effect`'s gain beyond the recalibration and the `given` families' regressors."""
+        base = self._base
+        for name in given:
+            base = extend_base(base, self._matrix(name))
+        return gain_test(self._residual, base, self._matrix(effect), self._fold)

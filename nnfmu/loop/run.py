@@ -13,7 +13,6 @@ import shutil
 import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +28,7 @@ from nnfmu.models.trained import TrainedModel
 from nnfmu.validate import ValidationSettings, channel_metrics
 
 from .blocks import RecordBlocks, part_measurement, plan_blocks
-from .diagnose import diagnose, explained_beyond
+from .diagnose import FamilyGains, diagnose
 from .evidence import Diagnosis, EffectEvidence
 from .extend import Extension, NoExtension, extend_spec
 from .loop_report import write_loop_report
@@ -281,13 +280,14 @@ def _trial_group(d: Diagnosis, model: TrainedModel, m: Measurement, fit: np.ndar
             group.append((ext, evidence, reason))
             continue
         if top is not None:
-            return group, _simpler_cover((ext, evidence, reason), d, beyond, extend, (top,), {*added, *names, top},
-                                         settings)
+            partner, _ = _simpler_cover((ext, evidence, reason), d, beyond, extend, (top,), {*added, *names, top},
+                                        settings)
+            return group, partner
         top = evidence.name
-        chosen = _simpler_cover((ext, evidence, reason), d, beyond, extend, (), set(added), settings)
+        chosen, why = _simpler_cover((ext, evidence, reason), d, beyond, extend, (), set(added), settings)
         if chosen[1].name in names:  # a rival in the group holds the top effect: the top is not retrained
             i = next(i for i, g in enumerate(group) if g[1].name == chosen[1].name)
-            group[i] = (group[i][0], group[i][1], group[i][2] + chosen[2][len(reason):])
+            group[i] = (group[i][0], group[i][1], f"{group[i][2]}; {why}")
         else:
             group.append(chosen)
     return group, None
@@ -312,8 +312,8 @@ def _stands_for(effect: str, share: float, p_value: float) -> str:
 
 def _simpler_cover(candidate: Candidate, d: Diagnosis, beyond: Callable[[str, tuple[str, ...]], GainTest],
                    extend: Callable[[str], Extension | NoExtension], given: tuple[str, ...], taken: set[str],
-                   settings: LoopSettings) -> Candidate:
-    """`candidate`, or the simplest family that holds it (its reason then says so): one with fewer regressors beyond
+                   settings: LoopSettings) -> tuple[Candidate, str]:
+    """`candidate`, or the simplest family that holds it, with why it stands for it ("" when none does): one with fewer regressors beyond
     which (and beyond `given`) its regressors explain less than `min_explained` of the residual left beyond `given`
     (three low-passed displacements hold the displacement). Retrained, the richer family would win only by the
     freedom of its extra inputs, which absorb some of the network's own error; if it is real it stays significant
@@ -328,8 +328,9 @@ def _simpler_cover(candidate: Candidate, d: Diagnosis, beyond: Callable[[str, tu
         if share < settings.min_explained:
             ext = extend(family.name)
             if isinstance(ext, Extension):
-                return ext, family, f"{reason}; {_stands_for(evidence.name, share, gain.p_value)}"
-    return candidate
+                why = _stands_for(evidence.name, share, gain.p_value)
+                return (ext, family, f"{reason}; {why}"), why
+    return candidate, ""
 
 
 def _together(first: Candidate, second: Candidate, evidence: EffectEvidence, why: str, m: Measurement,
@@ -447,8 +448,8 @@ def run_loop(
                     notes.append(f"stopped at max_effects = {settings.max_effects}; still significant: "
                                  + ", ".join(e.name for e in d.significant))
                 break
-            beyond = partial(explained_beyond, diagnosis_part, predicted[rows["diagnosis"]], output, model.spec.channels,
-                             settings=settings.diagnosis)
+            beyond = FamilyGains(diagnosis_part, predicted[rows["diagnosis"]], output, model.spec.channels,
+                                 settings.diagnosis).explained
             group, partner = _trial_group(d, model, m, fit, added, beyond, settings, notes)
             if not group:
                 small = [e.name for e in d.significant

@@ -15,7 +15,7 @@ from nnfmu.data import Measurement
 from nnfmu.data.importers import load_brfd
 from nnfmu.data.rigs import RigOptions, simulate_rig
 from nnfmu.loop import DiagnosisError, DiagnosisSettings, diagnose
-from nnfmu.loop.diagnose import explained_beyond
+from nnfmu.loop.diagnose import FamilyGains
 from nnfmu.loop.residual_tests import residual_tests, whiteness_test
 
 MODEL_EFFECTS = ("hysteresis", "seal_friction", "inertia")  # the rig's default: what the "model" has
@@ -68,10 +68,10 @@ def test_a_richer_family_adds_little_beyond_the_simpler_one_it_holds_and_a_diffe
     """Low-passed displacements hold the displacement: on a missing gas force they add nothing beyond it, while the
     friction sign, which the displacement cannot form, explains most of what is left of a missing seal friction."""
     measured, predicted = rig_case(("gas_force",))
-    held = explained_beyond(measured, predicted, "force", ["velocity"], "frequency_dependence", ("gas_force",))
+    held = FamilyGains(measured, predicted, "force", ["velocity"]).explained("frequency_dependence", ("gas_force",))
     assert held.explained < 0.01 and held.p_value > 0.05
     measured, predicted = rig_case(("gas_force", "seal_friction"))
-    other = explained_beyond(measured, predicted, "force", ["velocity"], "seal_friction", ("gas_force",))
+    other = FamilyGains(measured, predicted, "force", ["velocity"]).explained("seal_friction", ("gas_force",))
     assert other.explained > 0.5 and other.p_value < 1e-6
 
 

@@ -217,12 +217,13 @@ def test_a_significant_effect_gives_way_to_a_simpler_family_that_holds_it():
         return extend_spec(effect, HISTORY, m, rows, SETTINGS)
 
     settings = LoopSettings(min_explained=0.05)
-    ext, evidence, reason = _simpler_cover(richer, d, beyond("gas_force"), extend, ("temperature",), set(), settings)
+    (ext, evidence, reason), why = _simpler_cover(richer, d, beyond("gas_force"), extend, ("temperature",), set(),
+                                                  settings)
     assert asked == [("temperature", "sensor_offset"), ("temperature", "gas_force")]  # the simplest first
     assert ext.effect == "gas_force" and evidence.name == "gas_force"
-    assert reason.startswith(SIGNIFICANT) and "stands for frequency_dependence" in reason
-    assert _simpler_cover(richer, d, beyond("nothing"), extend, (), set(), settings) == richer
-    assert _simpler_cover(richer, d, beyond("gas_force"), extend, (), {"gas_force"}, settings) == richer  # taken
+    assert reason.startswith(SIGNIFICANT) and "stands for frequency_dependence" in reason and why in reason
+    assert _simpler_cover(richer, d, beyond("nothing"), extend, (), set(), settings) == (richer, "")
+    assert _simpler_cover(richer, d, beyond("gas_force"), extend, (), {"gas_force"}, settings) == (richer, "")  # taken
 
 
 def test_two_present_effects_are_offered_together_with_both_features():
