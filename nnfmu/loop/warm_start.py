@@ -96,7 +96,8 @@ def warm_start(
     settings: LoopSettings, effect: str,
 ) -> WarmStart:
     """Retrain `old` on `spec` (an extension of its spec) over rows `train`, early stopping on rows `validation`;
-    every extra hidden-unit count of `settings.extra_hidden` is tried and the lowest validation MSE kept."""
+    the extra hidden-unit counts of `settings.extra_hidden` are tried in rising order while each lowers the best
+    validation MSE so far, and the lowest kept."""
     features = spec.features({c: m[c] for c in spec.channels}, old.sample_period)
     target = np.asarray(m[spec.output], dtype=float)
     scaler = _extended_scaler(old, spec, features, train)
@@ -112,8 +113,9 @@ def warm_start(
         network = _warm_network(old, spec, extra, settings.seed + extra)
         history = fit_lm(network, (x[index_train], y[index_train]), (x[index_validation], y[index_validation]), lm)
         scores[extra] = history.best_validation_loss
-        if best is None or history.best_validation_loss < best[0]:
-            best = (history.best_validation_loss, extra, network, len(history.train_loss) - 1)
+        if best is not None and history.best_validation_loss >= best[0]:
+            break  # more units did not help: larger counts would only cost time
+        best = (history.best_validation_loss, extra, network, len(history.train_loss) - 1)
     assert best is not None
     _, extra, network, epochs = best
     network.eval()

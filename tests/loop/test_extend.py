@@ -19,9 +19,11 @@ from nnfmu.loop.blocks import plan_blocks
 from nnfmu.loop.extend import Extension, NoExtension, extend_spec
 from nnfmu.loop.loop_settings import LoopError, LoopSettings
 from nnfmu.loop.onnx_model import load_onnx_model
+from nnfmu.loop import warm_start as warm_start_module
 from nnfmu.loop.warm_start import _warm_network, warm_start
 from nnfmu.models import Architecture, TrainSettings, train_model
 from nnfmu.models.features import FeatureSpec, LowpassSquare, SmoothSign, Tap, derived_from_dict
+from nnfmu.models.stopping import FitHistory
 
 T = 0.001
 SPEC = FeatureSpec((Tap("velocity", (0, 2)),), "force")
@@ -162,6 +164,26 @@ def test_warm_start_keeps_old_scalers_and_lowers_the_validation_error():
     assert set(result.validation_mse) == {0, 2} and result.extra_hidden in (0, 2)
     assert new.network.hidden.out_features == 3 + result.extra_hidden
     assert new.settings["loop"]["effect"] == "temperature"
+
+
+def test_warm_start_tries_more_hidden_units_only_while_they_help(monkeypatch):
+    """Validation MSE falls from 0 to 2 extra units and rises at 4: 8 is never tried, 2 is kept."""
+    losses = {3: 0.5, 5: 0.3, 7: 0.4, 11: 0.1}  # by the network's hidden units (3 copied)
+    tried = []
+
+    def fake_fit(network, train, validation, settings):
+        tried.append(network.hidden.out_features)
+        return FitHistory([1.0], [losses[network.hidden.out_features]], 0, "fake")
+
+    monkeypatch.setattr(warm_start_module, "fit_lm", fake_fit)
+    m = rig()
+    blocks = plan_blocks(len(m), LoopSettings(), m.source)
+    ext = extend_spec("temperature", SPEC, m, blocks.rows("train"), LoopSettings())
+    result = warm_start(small_model(), ext.spec, m, blocks.rows("train"), blocks.rows("validation"),
+                        LoopSettings(extra_hidden=(0, 2, 4, 8)), "temperature")
+    assert tried == [3, 5, 7] and result.extra_hidden == 2 and result.validation_mse == {0: 0.5, 2: 0.3, 4: 0.4}
+    with pytest.raises(LoopError, match="rising order"):
+        LoopSettings(extra_hidden=(0, 6, 3))
 
 
 def test_blocks_interleave_fit_diagnosis_and_test_without_overlap():

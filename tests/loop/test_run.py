@@ -24,7 +24,8 @@ from nnfmu.loop.blocks import training_part
 from nnfmu.loop.loop_settings import LoopError, LoopSettings
 from nnfmu.loop.extend import Extension, extend_spec
 from nnfmu.loop.ranking import GainTest
-from nnfmu.loop.run import SIGNIFICANT, TRIAL_TIE, LoopReport, _best_trial, _simpler_cover, _together, run_loop
+from nnfmu.loop.run import LoopReport, run_loop
+from nnfmu.loop.trials import SIGNIFICANT, TRIAL_TIE, _best_trial, _partner_rivals, _simpler_cover, _together
 from nnfmu.models import Architecture, TrainSettings, get_preset, train_model
 from nnfmu.models.features import Difference, FeatureSpec, SmoothSign
 
@@ -190,7 +191,7 @@ def test_the_best_rival_wins_unless_a_simpler_one_comes_within_the_tie():
 
 
 def candidate(effect: str, spec: FeatureSpec, reason: str):
-    """A trial candidate as `_trial_group` makes it; only the evidence's name is read."""
+    """A trial candidate as `trial_group` makes it; only the evidence's name is read."""
     return Extension(effect, spec, (), effect), SimpleNamespace(name=effect), reason
 
 
@@ -224,6 +225,34 @@ def test_a_significant_effect_gives_way_to_a_simpler_family_that_holds_it():
     assert reason.startswith(SIGNIFICANT) and "stands for frequency_dependence" in reason and why in reason
     assert _simpler_cover(richer, d, beyond("nothing"), extend, (), set(), settings) == (richer, "")
     assert _simpler_cover(richer, d, beyond("gas_force"), extend, (), {"gas_force"}, settings) == (richer, "")  # taken
+
+
+def test_a_partner_is_offered_with_the_simpler_rivals_that_explain_near_as_much_beyond_the_top_effect():
+    m = record(FULL, duration=2.0)
+    rows = np.arange(len(m))
+
+    def family(name: str, regressors: int):
+        return SimpleNamespace(name=name, testable=True, regressors=("r",) * regressors)
+
+    d = SimpleNamespace(ranking=[family("frequency_dependence", 3), family("gas_force", 2), family("inertia", 1),
+                                 family("sensor_offset", 2)])
+    beyond_top = {"frequency_dependence": 0.43, "gas_force": 0.38, "inertia": 0.2, "sensor_offset": 0.01}
+
+    def beyond(effect: str, given: tuple[str, ...]) -> GainTest:
+        assert given == ("temperature",)
+        return GainTest(beyond_top[effect], 1e-9, 5.0, 100.0, 3)
+
+    def extend(effect: str):
+        return extend_spec(effect, HISTORY, m, rows, SETTINGS)
+
+    partner = (extend("frequency_dependence"), d.ranking[0], SIGNIFICANT)
+    settings = LoopSettings(parsimony=0.35, min_explained=0.05)
+    rivals = _partner_rivals(partner, d, beyond, extend, "temperature", set(), settings)
+    # inertia explains under (1 - 0.35) * 43 %, the offset under min_explained: only the gas force is offered
+    assert [(ext.effect, evidence.name) for ext, evidence, _ in rivals] == [("gas_force", "gas_force")]
+    assert "38.0% of the residual variance beyond temperature" in rivals[0][2]
+    assert _partner_rivals(partner, d, beyond, extend, "temperature", {"gas_force"}, settings) == []  # taken
+    assert len(_partner_rivals(partner, d, beyond, extend, "temperature", set(), LoopSettings(parsimony=0.6))) == 2
 
 
 def test_two_present_effects_are_offered_together_with_both_features():
