@@ -24,12 +24,13 @@ class LoopSettings:
     rows, and checks on as many validation rows), `lm_mu` (its initial damping: a warm start sits near the old
     minimum, so the first steps start damped, gradient-descent-like, instead of a full Gauss-Newton jump that early
     stopping would throw away), `extra_hidden` numbers of hidden units added beside the copied ones, in rising
-    order (chosen by validation error; a larger count is tried only while the last one improved it), `seed`. `parsimony`: a rival with fewer regressors that explains alone at least
-    (1 - parsimony) of what the top significant effect explains alone is retrained beside it, and the better
-    prediction of the diagnosis part wins (see `trials._candidates`). `min_explained`: an effect is added only when it
-    explains at least this fraction of the residual variance (beyond the effects ranked above it; alone, for a
-    simpler rival): with tens of thousands of samples a network's own approximation error makes tiny effects
-    statistically significant, and the loop adds what matters, not what is merely detectable. Extensions:
+    order (chosen by validation error; a larger count is tried only while the last one improved it), `seed`.
+    `parsimony`: a rival with fewer regressors that explains alone at least (1 - parsimony) of what the top
+    significant effect explains alone is retrained beside it, and the better prediction of the diagnosis part wins
+    (see `trials._candidates`). `min_explained`: an effect is added only when it explains at least this fraction
+    of the residual variance (beyond the effects ranked above it; alone, for a simpler rival): with tens of
+    thousands of samples a network's own approximation error makes tiny effects statistically significant, and the
+    loop adds what matters, not what is merely detectable. Extensions:
     `friction_scale` (fraction of the rms velocity: the smoothed sign's velocity scale), `memory_taus` [s] (low-pass states of velocity for hysteresis), `frequency_taus` [s] (low-pass
     states of displacement), `thermal_tau` [s] (thermal time constant of the running mean square of velocity that
     stands in for an unmeasured temperature), `amplitude_tau` [s] (averaging time of the running mean square of
@@ -57,9 +58,10 @@ class LoopSettings:
     # 0.78 % with 12 or 24 on offer (12 chosen) (rig, noise 0.5, 40 s, seed 2).
     extra_hidden: tuple[int, ...] = (0, 6, 12, 24)
     seed: int = 0
-    # Rivals are each retrained and the diagnosis part decides (trials._best_trial), so the window can be wide: on random
-    # damper drives displacement minus its 1 s low-pass explains 27.6 % of a missing gas force's residual against
-    # 25.4 % for the gas force, and the compliance-lag family 59 % of a missing inertia's against 54 % for inertia.
+    # Rivals are each retrained and the diagnosis part decides (trials._best_trial), so the window can be wide: on
+    # random damper drives displacement minus its 1 s low-pass explains 27.6 % of a missing gas force's residual
+    # against 25.4 % for the gas force, and the compliance-lag family 59 % of a missing inertia's against 54 % for
+    # inertia.
     parsimony: float = 0.35
     min_explained: float = 0.05
     friction_scale: float = 0.02
@@ -88,7 +90,8 @@ class LoopSettings:
                             f"{self.patience} and {self.lm_max_samples}")
         if not self.extra_hidden or self.extra_hidden[0] < 0 or any(
                 a >= b for a, b in zip(self.extra_hidden, self.extra_hidden[1:])):
-            raise LoopError(f"extra_hidden must be non-negative unit counts in rising order, got {self.extra_hidden!r}")
+            raise LoopError(f"extra_hidden must be non-negative unit counts in rising order, got "
+                            f"{self.extra_hidden!r}")
         if not (math.isfinite(self.lm_mu) and self.lm_mu > 0):
             raise LoopError(f"lm_mu must be a positive damping, got {self.lm_mu!r}")
         if not (0 <= self.parsimony < 1 and 0 <= self.min_explained < 1):
