@@ -122,6 +122,13 @@ def _stands_for(effect: str, share: float, p_value: float) -> str:
             f"(p = {p_value:.2g})")
 
 
+def _simpler_families(d: Diagnosis, evidence: EffectEvidence, taken: set[str]) -> list[EffectEvidence]:
+    """The testable families of the diagnosis with fewer regressors than `evidence`'s, not in `taken`, simplest
+    first."""
+    return sorted((e for e in d.ranking if e.testable and e.name not in taken and e.name != evidence.name
+                   and len(e.regressors) < len(evidence.regressors)), key=lambda e: len(e.regressors))
+
+
 def _simpler_cover(candidate: Candidate, d: Diagnosis, beyond: Callable[[str, tuple[str, ...]], GainTest],
                    extend: Callable[[str], Extension | NoExtension], given: tuple[str, ...], taken: set[str],
                    settings: LoopSettings) -> tuple[Candidate, str]:
@@ -132,9 +139,7 @@ def _simpler_cover(candidate: Candidate, d: Diagnosis, beyond: Callable[[str, tu
     real it stays significant beyond the simpler at the next diagnosis. Families in `taken` (added, or in the trial
     group) are not offered."""
     _, evidence, reason = candidate
-    simpler = sorted((e for e in d.ranking if e.testable and e.name not in taken and e.name != evidence.name
-                      and len(e.regressors) < len(evidence.regressors)), key=lambda e: len(e.regressors))
-    for family in simpler:
+    for family in _simpler_families(d, evidence, taken):
         gain = beyond(evidence.name, (*given, family.name))
         # on the scale of min_explained elsewhere: a share of the residual variance left beyond `given` alone
         share = gain.explained * (1 - max(0.0, beyond(family.name, given).explained))
@@ -158,8 +163,7 @@ def _partner_rivals(partner: Candidate, d: Diagnosis, beyond: Callable[[str, tup
     _, evidence, _ = partner
     floor = max(settings.min_explained, (1 - settings.parsimony) * beyond(evidence.name, (top,)).explained)
     rivals = []
-    for family in sorted((e for e in d.ranking if e.testable and e.name not in taken and e.name != evidence.name
-                          and len(e.regressors) < len(evidence.regressors)), key=lambda e: len(e.regressors)):
+    for family in _simpler_families(d, evidence, taken):
         explained = beyond(family.name, (top,)).explained
         ext = extend(family.name)
         if explained >= floor and isinstance(ext, Extension):
