@@ -85,6 +85,7 @@ def train(
     from rich.console import Console
     from rich.progress import Progress
     from rich.table import Table
+    from rich.text import Text
 
     from nnfmu.data import DataError
     from nnfmu.export import ExportError
@@ -94,7 +95,7 @@ def train(
                            delays=_int_list(delays, "--delays"), hidden=_int_list(hidden, "--hidden"),
                            recurrent=recurrent, thesis=thesis, restarts=restarts, seed=seed, max_epochs=max_epochs,
                            select_inputs=select_inputs, optimizer=optimizer, name=name)
-    console = Console()
+    console = Console(markup=False)  # feature and channel names carry brackets: velocity[k]
     try:
         with Progress(console=console, transient=True) as bar:
             task = bar.add_task("training", total=1.0)
@@ -123,7 +124,7 @@ def train(
         console.print("hidden size by validation MSE (scaled): " + ", ".join(
             f"{trial.hidden}: {trial.validation_mse:.3g}" for trial in outcome.trials))
     for warning in outcome.warnings:
-        console.print(f"[yellow]warning:[/yellow] {warning}")
+        console.print(Text("warning: ", style="yellow") + Text(warning))
     console.print(f"ONNX: {outcome.path} (onnxruntime vs torch max relative error "
                   f"{outcome.export.max_relative_error:.2g}); {outcome.seconds:.1f} s")
 
@@ -140,7 +141,7 @@ def demo(
 
     from nnfmu.demo import DemoSettings, run_demo
 
-    console = Console()
+    console = Console(markup=False)  # diagnosis test names carry brackets: test[velocity]
     summary = run_demo(out, DemoSettings(seed=seed, quick=quick), log=console.print)
     table = Table(title="component FMUs replayed on held-out random rig records")
     for column in ("preset", "train [s]", "test-split NRMSE", "FMU NRMSE", "R²", "peak error", "pseudo-damage ratio"):
@@ -153,7 +154,8 @@ def demo(
     for system, report in summary.road_test.items():
         console.print(f"road test {system} report: {report}")
     loop = summary.loop
-    table = Table(title=f"closing the loop: {loop.summary}; effects added: {', '.join(loop.effects_added) or 'none'}")
+    console.print(f"closing the loop: {loop.summary}")
+    table = Table(title=f"effects added: {', '.join(loop.effects_added) or 'none'}")
     for column in ("held-out error", "before", "after"):
         table.add_column(column, justify="left" if column == "held-out error" else "right")
     for key in ("nrmse", "r2", "peak_error", "pseudo_damage_ratio"):

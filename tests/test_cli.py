@@ -54,6 +54,7 @@ def test_train_build_and_validate_chain(dyno: Path, tmp_path: Path) -> None:
                      "--max-epochs", "5", "--restarts", "1")
     assert trained.exit_code == 0, trained.output
     assert "test" in trained.output and onnx_path.exists()
+    assert "velocity[k]" in trained.output  # printed as is, not eaten as console markup
     fmu = tmp_path / "damper.fmu"
     built = invoke("build", onnx_path, "--out", fmu)
     assert built.exit_code == 0, built.output
