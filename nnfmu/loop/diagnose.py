@@ -14,7 +14,7 @@ from .evidence import Diagnosis, EffectEvidence, effect_evidence
 from .ranking import GainTest, cross_fit_errors, extend_base, fold_mask, gain_test, rank_effects, recalibration
 from .residual_tests import ResidualTest, residual_tests
 from .settings import DiagnosisSettings
-from .signals import build_signals
+from .signals import EffectSignals, build_signals
 
 
 def _check_input(
@@ -83,6 +83,17 @@ def _summary(ranking: list[EffectEvidence], consistent: bool, tests: list[Residu
     return "missing effect(s), in order of evidence: " + "; ".join(parts)
 
 
+def _residual_setup(measurement: Measurement, predicted: np.ndarray, output: str, inputs: tuple[str, ...],
+                    settings: DiagnosisSettings) -> tuple[EffectSignals, np.ndarray, np.ndarray]:
+    """The checked input's effect signals, residual (measured - predicted) and recalibration columns (predicted
+    output and model inputs), shared by `diagnose` and `FamilyGains`."""
+    predicted = np.asarray(predicted, dtype=float)
+    _check_input(measurement, predicted, output, inputs, settings)
+    signals = build_signals(measurement, predicted, output, inputs)
+    base = recalibration(signals, {name: np.asarray(measurement.channels[name], dtype=float) for name in inputs})
+    return signals, signals.measured - predicted, base
+
+
 def diagnose(
     measurement: Measurement,
     predicted: np.ndarray,
@@ -97,11 +108,8 @@ def diagnose(
     is significant). Raises DiagnosisError naming the source and the channel or value for unusable input.
     """
     inputs = tuple(model_inputs)
-    predicted = np.asarray(predicted, dtype=float)
-    _check_input(measurement, predicted, output, inputs, settings)
+    signals, residual, base = _residual_setup(measurement, predicted, output, inputs, settings)
     families = select_families(settings.effects)
-    signals = build_signals(measurement, predicted, output, inputs)
-    residual = signals.measured - predicted
     if np.std(residual) <= 1e-12 * np.sqrt(np.mean(signals.measured**2)):
         raise DiagnosisError(
             f"{measurement.source}: the residual of {output!r} is constant ({np.mean(residual):g}): the prediction "
@@ -111,7 +119,6 @@ def diagnose(
     others = [name for name in measurement.channels if name != output and name not in inputs]
     tested = {name: np.asarray(measurement.channels[name], dtype=float) for name in (*inputs, *others)}
     tests = residual_tests(residual, tested, settings)
-    base = recalibration(signals, {name: tested[name] for name in inputs})
     recalibrated = cross_fit_errors(residual, base, fold_mask(len(residual), settings.blocks))
     ranking = effect_evidence(rank_effects(signals, families, base, settings), settings.alpha)
     tests_pass = all(t.p_value >= settings.alpha / len(tests) for t in tests)
@@ -137,19 +144,14 @@ class FamilyGains:
     """What one effect family explains of a model's residual out of sample beyond the recalibration and other
     families, with its Diebold-Mariano test: whether a richer family holds more than a simpler one that spans most of
     it (three low-passed displacements against the displacement). The signals, the recalibration and each family's
-    regressors are computed once per residual. Same input checks as `diagnose`."""
+    regressors are computed once per residual. Same input checks and set-up as `diagnose`."""
 
     def __init__(self, measurement: Measurement, predicted: np.ndarray, output: str, model_inputs: Sequence[str],
                  settings: DiagnosisSettings = DiagnosisSettings()) -> None:
-        inputs = tuple(model_inputs)
-        predicted = np.asarray(predicted, dtype=float)
-        _check_input(measurement, predicted, output, inputs, settings)
-        self._signals = build_signals(measurement, predicted, output, inputs)
+        self._signals, self._residual, self._base = _residual_setup(
+            measurement, predicted, output, tuple(model_inputs), settings)
         self._settings = settings
-        self._base = recalibration(
-            self._signals, {name: np.asarray(measurement.channels[name], dtype=float) for name in inputs})
-        self._residual = self._signals.measured - predicted
-        self._fold = fold_mask(len(predicted), settings.blocks)
+        self._fold = fold_mask(len(self._residual), settings.blocks)
         self._matrices: dict[str, np.ndarray] = {}
 
     def _matrix(self, effect: str) -> np.ndarray:
