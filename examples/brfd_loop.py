@@ -64,7 +64,7 @@ def _summary(files: list[str], m: Any, report: LoopReport, settings: LoopSetting
             {"effect": it.effect, "features_added": list(it.features_added), "accepted": it.accepted,
              "explained_variance": it.explained_variance, "p_value": it.p_value, "reason": it.reason,
              "test_error_before": it.error_before, "test_error_after": it.error_after,
-             "extra_hidden_units": it.extra_hidden}
+             "extra_hidden_units": it.extra_hidden, "retrained_from": f"{it.start} start"}
             for it in report.iterations
         ],
         "test_error_before": report.error_before,

@@ -1,6 +1,7 @@
 """`nnfmu loop`: replay the model's FMU on the measured inputs, diagnose the residual on data not used to fit, add
-the top effect to the feature spec, retrain warm-started, rebuild the FMU, replay again; until the residual is
-consistent with noise, no addable effect is significant, or `max_effects` were added. Then the report.
+the top effect to the feature spec, retrain (warm-started, and from a fresh start kept when it predicts better),
+rebuild the FMU, replay again; until the residual is consistent with noise, no addable effect is significant, or
+`max_effects` were added. Then the report.
 
 Every file goes into a staging folder beside `out_dir`, which replaces `out_dir` only when everything succeeded, so
 bad input or a failure midway leaves no half-written result.
@@ -56,6 +57,8 @@ class Iteration:
     onnx: Path
     fmu: Path
     extra_hidden: int
+    start: str
+    diagnosis_nrmse_by_start: dict[str, float]
     trials: dict[str, float] = field(default_factory=dict)
 
     @property
@@ -81,6 +84,8 @@ class Iteration:
             "onnx": str(self.onnx),
             "fmu": str(self.fmu),
             "extra_hidden_units": self.extra_hidden,
+            "retrained_from": f"{self.start} start",
+            "diagnosis_nrmse_by_start": dict(self.diagnosis_nrmse_by_start),
             "trials": dict(self.trials),
             "trials_note": ("diagnosis-part NRMSE of the network retrained with each rival explanation; the lowest "
                             f"won, or the simplest within {TRIAL_TIE:.0%} of it; the winner was also retrained "
@@ -273,8 +278,8 @@ def run_loop(
                 break
             k = len(iterations) + 1
             pick, group, trials, scores = retrain_rivals(group, partners, model, m, rows, fit, settings)
-            (ext, evidence, reason), started = group[pick], trials[pick]
-            new_onnx = stage.export(started.model, k, ext.effect)
+            (ext, evidence, reason), retrained = group[pick], trials[pick]
+            new_onnx = stage.export(retrained.model, k, ext.effect)
             new_fmu = stage.fmu(new_onnx, k)
             new_predicted = stage.replay(new_fmu, output)
             before = nrmse(predicted, measured, rows["diagnosis"])
@@ -295,7 +300,9 @@ def run_loop(
                 accepted=accepted,
                 onnx=stage.final(new_onnx),
                 fmu=stage.final(new_fmu),
-                extra_hidden=started.extra_hidden,
+                extra_hidden=retrained.extra_hidden,
+                start=retrained.start,
+                diagnosis_nrmse_by_start=retrained.diagnosis_nrmse_by_start,
                 trials={g[0].effect: score for g, score in zip(group, scores)},
             ))
             steps.append((predicted, ext.spec))
@@ -304,7 +311,7 @@ def run_loop(
                              f"-> {after:.4g}); it was not kept and the loop stopped")
                 break
             added.extend(ext.effect.split("+"))
-            model, predicted, onnx_path, fmu_path = started.model, new_predicted, new_onnx, new_fmu
+            model, predicted, onnx_path, fmu_path = retrained.model, new_predicted, new_onnx, new_fmu
         last = diagnoses[-1]
         report = LoopReport(
             data=m.source,

@@ -6,6 +6,7 @@ prediction of the diagnosis part; then the winner retrained together with a seco
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
@@ -16,7 +17,7 @@ from .evidence import Diagnosis, EffectEvidence
 from .extend import Extension, NoExtension, extend_spec
 from .loop_settings import LoopSettings
 from .ranking import GainTest
-from .warm_start import WarmStart, warm_start
+from .warm_start import Retrained, fresh_start, warm_start
 
 SIGNIFICANT = "significant in the diagnosis"
 # Rival explanations of one residual (a compliance lag, inertia and viscoelastic states all look like the force's
@@ -188,8 +189,9 @@ def _together(first: Candidate, second: Candidate, evidence: EffectEvidence, why
 
 def retrain_rivals(group: list[Candidate], partners: list[Candidate], model: TrainedModel, m: Measurement,
                    rows: dict[str, np.ndarray], fit: np.ndarray,
-                   settings: LoopSettings) -> tuple[int, list[Candidate], list[WarmStart], list[float]]:
-    """Retrain the model with each candidate of `group` and pick one by its diagnosis-part NRMSE (`_best_trial`).
+                   settings: LoopSettings) -> tuple[int, list[Candidate], list[Retrained], list[float]]:
+    """Retrain the model with each candidate of `group` (warm-started, and with `settings.fresh_rival` also from a
+    random start, the better on the diagnosis part kept) and pick one by its diagnosis-part NRMSE (`_best_trial`).
     Then retrain the winner together with its mate (the significant effect it beat, if a simpler rival won; else
     each of `partners`, the next significant effect and its simpler rivals, the best pair picked the same way): the
     pair wins only by more than TRIAL_TIE. Retrained alone, one effect's network also takes in part of another
@@ -198,9 +200,17 @@ def retrain_rivals(group: list[Candidate], partners: list[Candidate], model: Tra
     scores."""
     measured = np.asarray(m[model.spec.output], dtype=float)
 
-    def retrain(ext: Extension) -> tuple[WarmStart, float]:
+    def retrain(ext: Extension) -> tuple[Retrained, float]:
         trial = warm_start(model, ext.spec, m, rows["train"], rows["validation"], settings, ext.effect)
-        return trial, _diagnosis_nrmse(trial.model, m, measured, rows["diagnosis"])
+        scores = {"warm": _diagnosis_nrmse(trial.model, m, measured, rows["diagnosis"])}
+        trials = [trial]
+        if settings.fresh_rival:
+            hidden = trial.model.network.hidden.out_features
+            trials.append(fresh_start(model, ext.spec, m, rows["train"], rows["validation"], settings, ext.effect,
+                                      hidden))
+            scores["fresh"] = _diagnosis_nrmse(trials[-1].model, m, measured, rows["diagnosis"])
+        kept = min(trials, key=lambda t: scores[t.start])  # the warm start on a tie
+        return replace(kept, diagnosis_nrmse_by_start=scores), scores[kept.start]
 
     group = list(group)
     trials, scores = (list(t) for t in zip(*(retrain(ext) for ext, _, _ in group)))

@@ -1,6 +1,8 @@
-"""Retrain a model on an extended feature spec from where it stands: the old hidden units keep their weights, the
-new input columns start at zero weight (so training starts from the old model's output exactly), a few extra hidden
-units may join with zero output weight, and Levenberg-Marquardt trains on the fit part only.
+"""Retrain a model on an extended feature spec. The warm start goes on from where the model stands: the old hidden
+units keep their weights, the new input columns start at zero weight (so training starts from the old model's output
+exactly), a few extra hidden units may join with zero output weight. The fresh start draws a network of the same size
+at random, as a first fit does, which can leave the old network's basin. Levenberg-Marquardt trains on the fit part
+only, early stopping on its validation rows.
 
 Scaling: the old feature columns keep their scalers (the copied weights were learnt on them); the new columns are
 min-max scaled with the fit part's extremes. The target keeps its scaler.
@@ -9,7 +11,7 @@ min-max scaled with the fit part's extremes. The target keeps its scaler.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import torch
@@ -20,6 +22,7 @@ from nnfmu.models.lm import LMSettings, fit_lm
 from nnfmu.models.metrics import max_abs_weight, split_metrics
 from nnfmu.models.networks import MLP
 from nnfmu.models.scaling import MinMaxScaler
+from nnfmu.models.stopping import FitHistory
 from nnfmu.models.train import data_hash
 from nnfmu.models.trained import TrainedModel
 
@@ -31,13 +34,17 @@ EXTRA_WEIGHT_SCALE = 0.5  # std of the input weights and biases of added hidden 
 
 
 @dataclass(frozen=True)
-class WarmStart:
-    """The retrained model, the extra hidden units chosen, and each candidate's best validation MSE (scaled)."""
+class Retrained:
+    """The retrained model; `start`: "warm" or "fresh"; its hidden units beyond the old network's; each warm
+    candidate's best validation MSE (scaled) by extra units (the fresh start's under its own extra count); the
+    diagnosis-part NRMSE of each start tried, once judged."""
 
     model: TrainedModel
+    start: str
     extra_hidden: int
     validation_mse: dict[int, float]
     epochs: int
+    diagnosis_nrmse_by_start: dict[str, float] = field(default_factory=dict)
 
 
 def _extended_scaler(old: TrainedModel, spec: FeatureSpec, features: np.ndarray, train: np.ndarray) -> MinMaxScaler:
@@ -91,36 +98,91 @@ def _envelope(old: TrainedModel, spec: FeatureSpec, m: Measurement, train: np.nd
     return envelope
 
 
-def warm_start(
-    old: TrainedModel, spec: FeatureSpec, m: Measurement, train: np.ndarray, validation: np.ndarray,
-    settings: LoopSettings, effect: str,
-) -> WarmStart:
-    """Retrain `old` on `spec` (an extension of its spec) over rows `train`, early stopping on rows `validation`;
-    the extra hidden-unit counts of `settings.extra_hidden` are tried in rising order while each lowers the best
-    validation MSE so far, and the lowest kept."""
+@dataclass(frozen=True)
+class _Problem:
+    """The scaled training problem of one extended spec: all rows' features and target, the scaler, and the strided
+    training and validation rows LM works on."""
+
+    spec: FeatureSpec
+    target: np.ndarray
+    scaler: MinMaxScaler
+    x: torch.Tensor
+    y: torch.Tensor
+    train: torch.Tensor
+    validation: torch.Tensor
+
+    def fit(self, network: MLP, settings: LoopSettings, mu: float) -> FitHistory:
+        """Levenberg-Marquardt on the training rows from `network`'s weights, early stopping on the validation rows."""
+        lm = LMSettings(max_epochs=settings.max_epochs, patience=settings.patience, mu=mu)
+        return fit_lm(network, (self.x[self.train], self.y[self.train]),
+                      (self.x[self.validation], self.y[self.validation]), lm)
+
+
+def _problem(old: TrainedModel, spec: FeatureSpec, m: Measurement, train: np.ndarray, validation: np.ndarray,
+             settings: LoopSettings) -> _Problem:
     features = spec.features({c: m[c] for c in spec.channels}, old.sample_period)
     target = np.asarray(m[spec.output], dtype=float)
     scaler = _extended_scaler(old, spec, features, train)
-    x = torch.from_numpy(scaler.scale(features))
-    y = torch.from_numpy(old.target_scaler.scale(target))
-    index_train, index_validation = (
-        torch.from_numpy(rows[:: max(1, math.ceil(len(rows) / settings.lm_max_samples))]) for rows in (train, validation)
-    )
-    lm = LMSettings(max_epochs=settings.max_epochs, patience=settings.patience, mu=settings.lm_mu)
+    index_train, index_validation = (torch.from_numpy(rows[:: max(1, math.ceil(len(rows) / settings.lm_max_samples))])
+                                     for rows in (train, validation))
+    return _Problem(spec, target, scaler, torch.from_numpy(scaler.scale(features)),
+                    torch.from_numpy(old.target_scaler.scale(target)), index_train, index_validation)
+
+
+def warm_start(
+    old: TrainedModel, spec: FeatureSpec, m: Measurement, train: np.ndarray, validation: np.ndarray,
+    settings: LoopSettings, effect: str,
+) -> Retrained:
+    """Retrain `old` on `spec` (an extension of its spec) over rows `train`, early stopping on rows `validation`;
+    the extra hidden-unit counts of `settings.extra_hidden` are tried in rising order while each lowers the best
+    validation MSE so far, and the lowest kept."""
+    problem = _problem(old, spec, m, train, validation, settings)
     best: tuple[float, int, MLP, int] | None = None
     scores: dict[int, float] = {}
     for extra in settings.extra_hidden:
         network = _warm_network(old, spec, extra, settings.seed + extra)
-        history = fit_lm(network, (x[index_train], y[index_train]), (x[index_validation], y[index_validation]), lm)
+        history = problem.fit(network, settings, settings.lm_mu)
         scores[extra] = history.best_validation_loss
         if best is not None and history.best_validation_loss >= best[0]:
             break  # more units did not help: larger counts would only cost time
         best = (history.best_validation_loss, extra, network, len(history.train_loss) - 1)
     assert best is not None
     _, extra, network, epochs = best
+    return _retrained(old, problem, network, m, train, validation, effect, "warm", scores, epochs, settings)
+
+
+def fresh_start(
+    old: TrainedModel, spec: FeatureSpec, m: Measurement, train: np.ndarray, validation: np.ndarray,
+    settings: LoopSettings, effect: str, hidden: int,
+) -> Retrained:
+    """A network of `hidden` units on `spec` drawn at random under `settings.seed` (torch's default initialisation,
+    as the first fit draws its restarts) and trained like a first fit (LM from trainlm's damping), with `old`'s
+    scalers for the columns it had."""
+    problem = _problem(old, spec, m, train, validation, settings)
+    torch.manual_seed(settings.seed)
+    network = MLP(spec.n_features, hidden)
+    history = problem.fit(network, settings, LMSettings().mu)
+    extra = hidden - _hidden(old)
+    return _retrained(old, problem, network, m, train, validation, effect, "fresh",
+                      {extra: history.best_validation_loss}, len(history.train_loss) - 1, settings)
+
+
+def _hidden(model: TrainedModel) -> int:
+    network = model.network
+    assert isinstance(network, MLP)
+    return network.hidden.out_features
+
+
+def _retrained(
+    old: TrainedModel, problem: _Problem, network: MLP, m: Measurement, train: np.ndarray, validation: np.ndarray,
+    effect: str, start: str, scores: dict[int, float], epochs: int, settings: LoopSettings,
+) -> Retrained:
+    """`network` packaged as the extended model, with its metrics and the loop's record of how it was trained."""
+    spec, target = problem.spec, problem.target
+    extra = network.hidden.out_features - _hidden(old)
     network.eval()
     with torch.no_grad():
-        output = old.target_scaler.unscale(network(x)[:, 0].numpy())
+        output = old.target_scaler.unscale(network(problem.x)[:, 0].numpy())
     largest = max_abs_weight(network)
     metrics = {
         name: split_metrics(output[rows], target[rows], old.target_scaler, largest).as_dict()
@@ -129,7 +191,7 @@ def warm_start(
     model = TrainedModel(
         spec=spec,
         network=network,
-        feature_scaler=scaler,
+        feature_scaler=problem.scaler,
         target_scaler=old.target_scaler,
         sample_period=old.sample_period,
         units={c: m.units[c] for c in (*spec.channels, spec.output)},
@@ -143,7 +205,8 @@ def warm_start(
             "source": m.source,
             "loop": {
                 "effect": effect,
-                "warm_start_hidden": old.network.hidden.out_features if isinstance(old.network, MLP) else None,
+                "start": start,
+                "old_hidden": _hidden(old),
                 "extra_hidden": extra,
                 "validation_mse_by_extra_hidden": {str(k): v for k, v in scores.items()},
                 "epochs_run": epochs,
@@ -152,4 +215,4 @@ def warm_start(
             },
         },
     )
-    return WarmStart(model=model, extra_hidden=extra, validation_mse=scores, epochs=epochs)
+    return Retrained(model=model, start=start, extra_hidden=extra, validation_mse=scores, epochs=epochs)

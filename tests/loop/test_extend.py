@@ -20,9 +20,10 @@ from nnfmu.loop.extend import Extension, NoExtension, extend_spec
 from nnfmu.loop.loop_settings import LoopError, LoopSettings
 from nnfmu.loop.onnx_model import load_onnx_model
 from nnfmu.loop import warm_start as warm_start_module
-from nnfmu.loop.warm_start import _warm_network, warm_start
+from nnfmu.loop.warm_start import _warm_network, fresh_start, warm_start
 from nnfmu.models import Architecture, TrainSettings, train_model
 from nnfmu.models.features import FeatureSpec, LowpassSquare, SmoothSign, Tap, derived_from_dict
+from nnfmu.models.networks import MLP
 from nnfmu.models.stopping import FitHistory
 
 T = 0.001
@@ -164,6 +165,30 @@ def test_warm_start_keeps_old_scalers_and_lowers_the_validation_error():
     assert set(result.validation_mse) == {0, 2} and result.extra_hidden in (0, 2)
     assert new.network.hidden.out_features == 3 + result.extra_hidden
     assert new.settings["loop"]["effect"] == "temperature"
+
+
+def test_fresh_start_trains_a_seeded_network_of_the_given_size_on_the_extended_inputs():
+    model = small_model()
+    m = rig()
+    blocks = plan_blocks(len(m), LoopSettings(), m.source)
+    train, validation = blocks.rows("train"), blocks.rows("validation")
+    ext = extend_spec("temperature", SPEC, m, train, LoopSettings())
+    settings = LoopSettings(max_epochs=30, lm_max_samples=3000)
+    result = fresh_start(model, ext.spec, m, train, validation, settings, "temperature", hidden=5)
+    new = result.model
+    assert result.start == "fresh" and new.settings["loop"]["start"] == "fresh"
+    assert new.network.hidden.out_features == 5 and result.extra_hidden == 2 and set(result.validation_mse) == {2}
+    np.testing.assert_array_equal(new.feature_scaler.lo[:2], model.feature_scaler.lo)
+    # trained: below the validation MSE of the same seeded draw untrained
+    torch.manual_seed(settings.seed)
+    untrained = MLP(ext.spec.n_features, 5)
+    x = torch.from_numpy(new.feature_scaler.scale(ext.spec.features({c: m[c] for c in ext.spec.channels}, T)))
+    y = model.target_scaler.scale(np.asarray(m["force"]))
+    with torch.no_grad():
+        initial = float(np.mean((untrained(x)[:, 0].numpy()[validation] - y[validation]) ** 2))
+    assert result.validation_mse[2] < 0.5 * initial
+    again = fresh_start(model, ext.spec, m, train, validation, settings, "temperature", hidden=5)
+    torch.testing.assert_close(again.model.network.hidden.weight, new.network.hidden.weight, rtol=0, atol=0)
 
 
 def test_warm_start_tries_more_hidden_units_only_while_they_help(monkeypatch):

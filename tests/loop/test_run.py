@@ -25,7 +25,10 @@ from nnfmu.loop.loop_settings import LoopError, LoopSettings
 from nnfmu.loop.extend import Extension, extend_spec
 from nnfmu.loop.ranking import GainTest
 from nnfmu.loop.run import LoopReport, run_loop
-from nnfmu.loop.trials import SIGNIFICANT, TRIAL_TIE, _best_trial, _partner_rivals, _simpler_cover, _together
+from nnfmu.loop import trials as trials_module
+from nnfmu.loop.trials import (SIGNIFICANT, TRIAL_TIE, _best_trial, _partner_rivals, _simpler_cover, _together,
+                               retrain_rivals)
+from nnfmu.loop.warm_start import Retrained
 from nnfmu.models import Architecture, TrainSettings, get_preset, train_model
 from nnfmu.models.features import Difference, FeatureSpec, SmoothSign
 
@@ -123,12 +126,14 @@ def test_undeclared_gas_force_is_named_and_the_error_falls(models, tmp_path):
     assert Path(document["onnx"]).is_file() and Path(document["fmu"]).is_file()
     assert Path(document["onnx"]).parent == out
     assert "gas_force" in first["trials"]  # every rival retrained is reported with its diagnosis-part NRMSE
+    starts = first["diagnosis_nrmse_by_start"]  # the warm and the fresh start, the better kept
+    assert set(starts) == {"warm", "fresh"} and first["retrained_from"] == f"{min(starts, key=starts.get)} start"
     spec = Component.from_onnx(onnx.load(document["onnx"])).metadata["feature_spec"]
     assert {"channel": "displacement", "delays": [0]} in spec["taps"]
     for name in document["plots"].values():
         assert (out / name).stat().st_size > 1000
     html = (out / "report.html").read_text()
-    assert "gas_force" in html and "residual_psd.png" in html
+    assert "gas_force" in html and "residual_psd.png" in html and first["retrained_from"] in html
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")], "staging folder left behind"
 
 
@@ -188,6 +193,41 @@ def test_the_best_rival_wins_unless_a_simpler_one_comes_within_the_tie():
     assert _best_trial([0.0085, 0.0080]) == 0  # the simpler explanation, within TRIAL_TIE of the best
     assert _best_trial([0.0715, 0.0167]) == 1  # far worse: the better explanation wins
     assert _best_trial([0.0100 * (1 + TRIAL_TIE) * 1.01, 0.0105, 0.0100]) == 1  # the first within the tie
+
+
+def stand_in_retrained(start: str, error: float, hidden: int) -> Retrained:
+    """A retrained model that predicts the record's force plus `error` newtons everywhere."""
+    model = SimpleNamespace(spec=SimpleNamespace(channels=("velocity",), output="force"),
+                            network=SimpleNamespace(hidden=SimpleNamespace(out_features=hidden)),
+                            predict=lambda channels: record(FULL, duration=2.0)["force"] + error)
+    return Retrained(model=model, start=start, extra_hidden=hidden - 3, validation_mse={}, epochs=1)
+
+
+@pytest.mark.parametrize("warm_error, fresh_error, fresh_rival, kept", [
+    (20.0, 10.0, True, "fresh"), (10.0, 20.0, True, "warm"), (10.0, 10.0, True, "warm"), (20.0, 10.0, False, "warm"),
+])
+def test_the_warm_or_the_fresh_start_that_predicts_the_diagnosis_part_better_is_kept(
+        monkeypatch, warm_error, fresh_error, fresh_rival, kept):
+    m = record(FULL, duration=2.0)
+    rows = {part: np.arange(i * 400, (i + 1) * 400) for i, part in enumerate(("train", "validation", "diagnosis"))}
+    sizes = []
+
+    def fresh(old, spec, m, train, validation, settings, effect, hidden):
+        sizes.append(hidden)
+        return stand_in_retrained("fresh", fresh_error, hidden)
+
+    monkeypatch.setattr(trials_module, "warm_start", lambda *args: stand_in_retrained("warm", warm_error, 7))
+    monkeypatch.setattr(trials_module, "fresh_start", fresh)
+    group = [candidate("gas_force", STATIC, SIGNIFICANT)]
+    model = SimpleNamespace(spec=SimpleNamespace(output="force"))
+    pick, _, trials, scores = retrain_rivals(group, [], model, m, rows, np.arange(800),
+                                             LoopSettings(fresh_rival=fresh_rival))
+    assert pick == 0 and trials[0].start == kept
+    assert sizes == ([7] if fresh_rival else [])  # the fresh start has the warm start's size
+    by_start = trials[0].diagnosis_nrmse_by_start
+    assert set(by_start) == ({"warm", "fresh"} if fresh_rival else {"warm"})
+    assert scores[0] == by_start[kept] == min(by_start.values())
+    assert by_start["warm"] == pytest.approx(warm_error / np.sqrt(np.mean(m["force"][rows["diagnosis"]] ** 2)))
 
 
 def candidate(effect: str, spec: FeatureSpec, reason: str):
