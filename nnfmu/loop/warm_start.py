@@ -120,6 +120,7 @@ class _Problem:
 
 def _problem(old: TrainedModel, spec: FeatureSpec, m: Measurement, train: np.ndarray, validation: np.ndarray,
              settings: LoopSettings) -> _Problem:
+    """`spec`'s features over the whole record, scaled as `_extended_scaler` says, with the rows LM may use."""
     features = spec.features({c: m[c] for c in spec.channels}, old.sample_period)
     target = np.asarray(m[spec.output], dtype=float)
     scaler = _extended_scaler(old, spec, features, train)
@@ -168,6 +169,7 @@ def fresh_start(
 
 
 def _hidden(model: TrainedModel) -> int:
+    """Hidden units of a model's one-hidden-layer network (the loop extends MLPs only)."""
     network = model.network
     assert isinstance(network, MLP)
     return network.hidden.out_features
