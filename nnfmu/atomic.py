@@ -9,6 +9,20 @@ from contextlib import contextmanager
 from pathlib import Path
 
 
+def _umask() -> int:
+    umask = os.umask(0)
+    os.umask(umask)
+    return umask
+
+
+def staging_dir(parent: Path, prefix: str) -> Path:
+    """A new empty folder in `parent` to build a result in before renaming it into place, with the mode a plain
+    mkdir would give (mkdtemp makes 0700, which would hide the renamed result from other users)."""
+    path = Path(tempfile.mkdtemp(prefix=prefix, dir=parent))
+    path.chmod(0o777 & ~_umask())
+    return path
+
+
 @contextmanager
 def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
     """Yield a temporary path beside `target`; rename it onto `target` only if the block succeeds."""
@@ -17,9 +31,7 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
     os.close(fd)
     tmp_path = Path(tmp)
-    umask = os.umask(0)
-    os.umask(umask)
-    tmp_path.chmod(0o666 & ~umask)  # mkstemp makes 0600; give the result the mode a plain open() would
+    tmp_path.chmod(0o666 & ~_umask())  # mkstemp makes 0600; give the result the mode a plain open() would
     try:
         yield tmp_path
         os.replace(tmp_path, target)

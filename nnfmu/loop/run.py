@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from nnfmu.atomic import staging_dir
 from nnfmu.cosim.replay import ReplaySettings, replay_fmu
 from nnfmu.data import DataError, Measurement, check_measurement, load_measurement
 from nnfmu.export import export_onnx
@@ -243,7 +244,7 @@ def run_loop(
     measured = np.asarray(m[output], dtype=float)
     slope = ValidationSettings().slope_for(output)
     out_dir.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.staging-", dir=out_dir.parent))
+    staging = staging_dir(out_dir.parent, f".{out_dir.name}.staging-")
     try:
         stage = _Stage(staging, out_dir, m, blocks, settings, component.name)
         onnx_path = staging / "model_0.onnx"

@@ -8,6 +8,7 @@ written."""
 from __future__ import annotations
 
 import json
+import os
 from functools import cache
 from pathlib import Path
 from types import SimpleNamespace
@@ -135,6 +136,9 @@ def test_undeclared_gas_force_is_named_and_the_error_falls(models, tmp_path):
     html = (out / "report.html").read_text()
     assert "gas_force" in html and "residual_psd.png" in html and first["retrained_from"] in html
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")], "staging folder left behind"
+    umask = os.umask(0)
+    os.umask(umask)
+    assert out.stat().st_mode & 0o777 == 0o777 & ~umask  # as mkdir makes it, not the staging folder's 0700
 
 
 def test_undeclared_seal_friction_is_named_and_the_error_falls(models, tmp_path):
