@@ -172,6 +172,9 @@ def build(
     backend: str = typer.Option("native", help="native (generated C, no Python at run time) or pythonfmu (onnxruntime)."),
     fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
     name: Optional[str] = typer.Option(None, help="Model name (default: from the ONNX metadata)."),
+    filter_cutoff: Optional[float] = typer.Option(
+        None, help="Start value [Hz] of the FMU's output low-pass (default: the model's, 0 = off; the thesis used 100 "
+                   "for stability of a stiff coupling, at a large cost in accuracy: docs/fmu.md)."),
 ) -> None:
     """Build a standalone FMI co-simulation FMU from an ONNX model."""
     from nnfmu.fmu.build import build_fmu
@@ -179,7 +182,8 @@ def build(
     from nnfmu.fmu.options import BuildOptions
 
     try:
-        path = build_fmu(model, BuildOptions(out=out, backend=backend, fmi_version=fmi, name=name))
+        path = build_fmu(model, BuildOptions(out=out, backend=backend, fmi_version=fmi, name=name,
+                                             filter_cutoff=filter_cutoff))
     except FmuBuildError as error:
         _fail(error)
     typer.echo(f"FMU: {path}")
