@@ -31,6 +31,10 @@ OUTPUTS = ("damper_displacement", "damper_velocity", "body_displacement", "spind
 DAMPING = 2400.0  # [N.s/m]
 DRIVE = ("actuator_displacement", "actuator_velocity")
 NO_FILTER = {"filter_cutoff": 0.0}
+# The basic schemes these tests measure, named in full (the master's defaults are the one-pass accurate scheme):
+# plain Gauss-Seidel with the components first, and libcosim's algorithm (Jacobi, nothing estimated or refreshed).
+BASIC = {"order": "components-first", "extrapolation": "none"}
+LIBCOSIM = {"scheme": "jacobi", "extrapolation": "none", "refresh": False}
 
 
 def _double(name: str, shape: list[int]) -> onnx.ValueInfoProto:
