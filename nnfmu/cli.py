@@ -5,6 +5,9 @@ Imports of the working stages happen inside the commands, so `nnfmu build` never
 
 from __future__ import annotations
 
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Optional
 
@@ -18,6 +21,8 @@ vehicle_app = typer.Typer(no_args_is_help=True, help="Vehicle models for the vir
 app.add_typer(vehicle_app, name="vehicle")
 drive_app = typer.Typer(no_args_is_help=True, help="Drive files for a four-post road test simulator.")
 app.add_typer(drive_app, name="drive")
+PLATFORMS_HELP = ("Binaries of the native backend, comma-separated: linux64, win64 (default: linux64, plus win64 when "
+                  "the MinGW-w64 cross compiler x86_64-w64-mingw32-gcc is installed).")
 
 
 def _fail(error: Exception) -> None:
@@ -29,6 +34,23 @@ def _fail(error: Exception) -> None:
 def _split(items: Optional[list[str]]) -> list[str]:
     """Accept repeated options and comma-separated lists alike."""
     return [n.strip() for item in items or [] for n in item.split(",") if n.strip()]
+
+
+def _platforms(items: Optional[list[str]]) -> Optional[tuple[str, ...]]:
+    """`--platforms linux64,win64` as a tuple; None (the default choice) when not given."""
+    return tuple(_split(items)) if items else None
+
+
+@contextmanager
+def _warnings_as_lines() -> Iterator[None]:
+    """Print each warning raised inside the block as one `warning: ...` line on stderr."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            yield
+        finally:
+            for message in dict.fromkeys(str(w.message) for w in caught):
+                typer.echo(f"warning: {message}", err=True)
 
 
 @app.command()
@@ -172,6 +194,7 @@ def build(
     backend: str = typer.Option("native", help="native (generated C, no Python at run time) or pythonfmu (onnxruntime)."),
     fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
     name: Optional[str] = typer.Option(None, help="Model name (default: from the ONNX metadata)."),
+    platforms: Optional[list[str]] = typer.Option(None, help=PLATFORMS_HELP),
 ) -> None:
     """Build a standalone FMI co-simulation FMU from an ONNX model."""
     from nnfmu.fmu.build import build_fmu
@@ -179,7 +202,9 @@ def build(
     from nnfmu.fmu.options import BuildOptions
 
     try:
-        path = build_fmu(model, BuildOptions(out=out, backend=backend, fmi_version=fmi, name=name))
+        with _warnings_as_lines():
+            path = build_fmu(model, BuildOptions(out=out, backend=backend, fmi_version=fmi, name=name,
+                                                 platforms=_platforms(platforms)))
     except FmuBuildError as error:
         _fail(error)
     typer.echo(f"FMU: {path}")
@@ -196,6 +221,7 @@ def vehicle_build(
     fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
     axle: str = typer.Option("front", help="Quarter car only: which corner's parameters, front or rear."),
     backend: str = typer.Option("native", help="native or pythonfmu."),
+    platforms: Optional[list[str]] = typer.Option(None, help=PLATFORMS_HELP),
 ) -> None:
     """Build a vehicle model into a co-simulation FMU with external component ports."""
     from nnfmu.fmu.errors import FmuBuildError
@@ -205,8 +231,10 @@ def vehicle_build(
     try:
         settings = VehicleBuildSettings(params_path=params, components={n: "reference" for n in _split(reference)}
                                         | {n: "stabilised" for n in _split(stabilise)},
-                                        sample_period=sample_period, fmi_version=fmi, axle=axle, backend=backend)
-        path = build_vehicle_fmu(model, out, settings)
+                                        sample_period=sample_period, fmi_version=fmi, axle=axle, backend=backend,
+                                        platforms=_platforms(platforms))
+        with _warnings_as_lines():
+            path = build_vehicle_fmu(model, out, settings)
     except (VehicleModelError, FmuBuildError) as error:
         _fail(error)
     typer.echo(f"FMU: {path}")
