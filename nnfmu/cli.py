@@ -208,6 +208,35 @@ def build(
     except FmuBuildError as error:
         _fail(error)
     typer.echo(f"FMU: {path}")
+    _echo_reference_results(path)
+
+
+def _echo_reference_results(fmu: Path) -> None:
+    """Say whether the FMU carries reference results and how to check them."""
+    from nnfmu.fmu.reference_results import has_reference_results
+
+    if has_reference_results(fmu):
+        typer.echo(f"reference results: yes (FMI-LS-REF); verify with: nnfmu check {fmu}")
+    else:
+        typer.echo("reference results: none (the ONNX file carries no reference stimulus)")
+
+
+@app.command()
+def check(
+    fmu: Path = typer.Argument(..., help="FMU carrying reference results (FMI-LS-REF, extra/org.fmi-standard.fmi-ls-ref)."),
+    tolerance: Optional[float] = typer.Option(None, help="Allowed max error of each output as a fraction of its peak (default: the experiment's)."),
+) -> None:
+    """Replay the reference results an FMU carries with fmpy and report pass/fail per output (exit 1 on failure)."""
+    from nnfmu.fmu.check import CheckError, check_fmu, report_lines
+
+    try:
+        report = check_fmu(fmu, tolerance)
+    except CheckError as error:
+        _fail(error)
+    for line in report_lines(report):
+        typer.echo(line)
+    if not report.passed:
+        raise typer.Exit(code=1)
 
 
 @vehicle_app.command("build")

@@ -2,7 +2,8 @@
 
 FMU layout: `modelDescription.xml`, `binaries/<platform>/<identifier>.so|.dll` (this machine's, and win64 when the
 MinGW-w64 cross compiler is installed or asked for), `sources/` (glue, config.h, graph.c/.h, FMI headers copied from
-the installed fmpy, buildDescription.xml). Nothing of Python, onnxruntime or torch is needed to run it.
+the installed fmpy, buildDescription.xml) and, when the graph carries a reference stimulus, reference results under
+`extra/org.fmi-standard.fmi-ls-ref/`. Nothing of Python, onnxruntime or torch is needed to run it.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from nnfmu.fmu.native.compiler import compile_shared_library, select_targets
 from nnfmu.fmu.native.config import GraphLayout, port_map, render_config
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.fmu.package import package_fmu
+from nnfmu.fmu.reference_results import write_reference_results
 from nnfmu.fmu.variables import fmu_variables
 from nnfmu.resources import templates_dir
 
@@ -108,6 +110,7 @@ def build_native(onnx_path: Path, options: BuildOptions) -> Path:
         (sources / "buildDescription.xml").write_text(render_build_description(identifier, source_files(fmi)),
                                                       encoding="utf-8")
         (tree / "modelDescription.xml").write_text(render_model_description(view), encoding="utf-8")
+        write_reference_results(tree, model, component, variables)
         for platform in platforms:
             binary = tree / "binaries" / platform.folder(fmi) / f"{identifier}{platform.suffix}"
             compile_shared_library(platform, [sources / s for s in source_files(fmi)], sources, binary)
