@@ -18,63 +18,25 @@ from pathlib import Path
 import numpy as np
 import onnx
 import pytest
-import torch
+from exported_networks import FORCE, HELD_OUT_SEED_OFFSET, TORQUE, T, export_network, signals
 from onnx import numpy_helper
 from typer.testing import CliRunner
 
 from nnfmu.cli import app
-from nnfmu.export import export_onnx
 from nnfmu.export.merge import merge_step_graphs
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.check import CheckError, check_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.fmu.reference_results import LS_FOLDER, TOLERANCE
-from nnfmu.models.features import FeatureSpec, Lowpass, Tap
-from nnfmu.models.networks import MLP
-from nnfmu.models.scaling import MinMaxScaler
-from nnfmu.models.trained import TrainedModel
 from nnfmu.reference_stimulus import METADATA_KEY, REFERENCE_SAMPLES, ReferenceStimulus
 
-T = 0.001
-UNITS = {"axial_displacement": "m", "axial_velocity": "m/s", "axial_force": "N", "axial_rotation": "rad",
-         "axial_angular_velocity": "rad/s", "axial_torque": "N.m"}
-FORCE = FeatureSpec(taps=(Tap("axial_displacement", (0, 1)), Tap("axial_velocity")), output="axial_force",
-                    derived=(Lowpass("axial_displacement", tau=0.01),))
-TORQUE = FeatureSpec(taps=(Tap("axial_rotation", (0, 1, 2)), Tap("axial_angular_velocity", (0, 1))),
-                     output="axial_torque")
 runner = CliRunner()
-
-
-def _signals(channels: list[str], n: int, seed: int) -> dict[str, np.ndarray]:
-    rng = np.random.default_rng(seed)
-    t = np.arange(n) * T
-    return {c: (0.01 + i) * (np.sin(2 * np.pi * rng.uniform(1, 9) * t + rng.uniform(0, 6)) + 0.2 * rng.normal(size=n))
-            for i, c in enumerate(channels)}
-
-
-def _export(spec: FeatureSpec, path: Path, seed: int) -> Path:
-    """A random-weight network on `spec` (tanh units in their nonlinear range) exported with held-out inputs."""
-    torch.manual_seed(seed)
-    network = MLP(spec.n_features, 5)
-    with torch.no_grad():
-        for p in network.parameters():
-            p.mul_(3.0)
-    train = _signals(spec.channels, 400, seed)
-    model = TrainedModel(
-        spec=spec, network=network, feature_scaler=MinMaxScaler.fit(spec.features(train, T)),
-        target_scaler=MinMaxScaler.fit(np.random.default_rng(seed).normal(scale=500.0, size=400)),
-        sample_period=T, units=UNITS,
-        envelope={c: (float(train[c].min()), float(train[c].max())) for c in spec.channels},
-        metrics={"test": {"nrmse": 0.1}}, data_hash="ab" * 32, settings={"seed": seed},
-    )
-    held_out = _signals(spec.channels, 700, seed + 100)
-    return export_onnx(model, path, name=f"{spec.output}_net", verify_on=held_out).path
 
 
 @pytest.fixture(scope="module")
 def network(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     folder = tmp_path_factory.mktemp("reference")
-    onnx_path = _export(FORCE, folder / "force.onnx", 1)
+    onnx_path = export_network(FORCE, folder / "force.onnx", 1)
     fmus = {f"fmi{v}": build_fmu(onnx_path, BuildOptions(out=folder / f"force{v}.fmu", fmi_version=v)) for v in (2, 3)}
     return {"onnx": onnx_path, **fmus}
 
@@ -93,7 +55,7 @@ def _replace(fmu: Path, files: dict[str, bytes], target: Path, drop: tuple[str, 
 def test_export_stores_the_first_held_out_inputs_as_stimulus(network):
     model = onnx.load(network["onnx"])
     stimulus = ReferenceStimulus.from_onnx(model)
-    held_out = _signals(FORCE.channels, 700, 101)
+    held_out = signals(FORCE.channels, 700, 1 + HELD_OUT_SEED_OFFSET)
     assert stimulus is not None and stimulus.length == REFERENCE_SAMPLES
     for name in FORCE.channels:
         np.testing.assert_array_equal(stimulus.inputs[name], held_out[name][:REFERENCE_SAMPLES])
@@ -158,7 +120,7 @@ def test_fmu_with_one_weight_changed_fails_naming_the_output(network, tmp_path):
 
 
 def test_merged_graph_fmu_carries_the_parts_stimuli_and_passes(tmp_path):
-    parts = [onnx.load(_export(FORCE, tmp_path / "force.onnx", 3)), onnx.load(_export(TORQUE, tmp_path / "t.onnx", 4))]
+    parts = [onnx.load(export_network(FORCE, tmp_path / "force.onnx", 3)), onnx.load(export_network(TORQUE, tmp_path / "t.onnx", 4))]
     merged = merge_step_graphs(parts, "bushing", "force and torque")
     stimulus = ReferenceStimulus.from_onnx(merged)
     assert stimulus is not None and set(stimulus.inputs) == set(FORCE.channels) | set(TORQUE.channels)
