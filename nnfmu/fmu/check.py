@@ -25,6 +25,7 @@ from pathlib import Path
 from urllib.parse import unquote, urlparse
 
 import numpy as np
+from fmpy import read_model_description, simulate_fmu
 
 from nnfmu.fmu.reference_results import EXPERIMENTS_TYPE, LS_FOLDER, MANIFEST
 
@@ -232,8 +233,7 @@ def _parameters(archive: _Archive, path: str) -> dict[str, object]:
 
 
 def _run(folder: str, experiment: Experiment, archive: _Archive, tolerance: float | None) -> ExperimentResult:
-    from fmpy import read_model_description, simulate_fmu
-
+    """Simulate one experiment on the extracted FMU `folder` and compare its references."""
     result = ExperimentResult(experiment.name)
     if experiment.unsupported:
         result.skipped = experiment.unsupported

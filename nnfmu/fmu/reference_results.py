@@ -17,6 +17,7 @@ import hashlib
 import io
 import math
 import xml.etree.ElementTree as ET
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -149,8 +150,6 @@ def _documentation(run: ReferenceRun, component: Component) -> bytes:
 
 def has_reference_results(fmu: Path) -> bool:
     """Whether the FMU file carries an FMI-LS-REF manifest."""
-    import zipfile
-
     with zipfile.ZipFile(fmu) as archive:
         return f"{LS_FOLDER}/{MANIFEST}" in archive.namelist()
 

@@ -101,7 +101,7 @@ def test_win64_binary_under_wine_gives_the_linux64_outputs(delay_fmus, tmp_path,
         (tmp_path / "fmu.dll").write_bytes(archive.read(f"binaries/{windows}/{identifier}.dll"))
     args = [token, str(n_in), str(n_out)]
     native = _driver("gcc", fmi, tmp_path / "driver", [])
-    cross = _driver(MINGW, fmi, tmp_path / "driver.exe", ["-D__USE_MINGW_ANSI_STDIO=1", "-static"])
+    _driver(MINGW, fmi, tmp_path / "driver.exe", ["-D__USE_MINGW_ANSI_STDIO=1", "-static"])
     on_linux = subprocess.run([str(native), str(tmp_path / "fmu.so"), *args], capture_output=True, text=True,
                               timeout=120)
     # The DLL is loaded by its bare name from the program's folder (Windows search order); no path conversion.
