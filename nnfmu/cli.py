@@ -43,13 +43,22 @@ def _platforms(items: Optional[list[str]]) -> Optional[tuple[str, ...]]:
 
 @contextmanager
 def _warnings_as_lines() -> Iterator[None]:
-    """Print each warning raised inside the block as one `warning: ...` line on stderr."""
+    """Print each distinct build warning (a platform left out) raised inside the block as one `warning: ...` line on
+    stderr; other warnings pass on as Python shows them."""
+    from nnfmu.fmu.errors import PlatformSkippedWarning
+
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
+        warnings.simplefilter("always", PlatformSkippedWarning)
         try:
             yield
         finally:
-            for message in dict.fromkeys(str(w.message) for w in caught):
+            lines = []
+            for w in caught:
+                if issubclass(w.category, PlatformSkippedWarning):
+                    lines.append(str(w.message))
+                else:
+                    warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+            for message in dict.fromkeys(lines):
                 typer.echo(f"warning: {message}", err=True)
 
 
@@ -164,7 +173,8 @@ def demo(
     from nnfmu.demo import DemoSettings, run_demo
 
     console = Console(markup=False)  # diagnosis test names carry brackets: test[velocity]
-    summary = run_demo(out, DemoSettings(seed=seed, quick=quick), log=console.print)
+    with _warnings_as_lines():
+        summary = run_demo(out, DemoSettings(seed=seed, quick=quick), log=console.print)
     table = Table(title="component FMUs replayed on held-out random rig records")
     for column in ("preset", "train [s]", "test-split NRMSE", "FMU NRMSE", "R²", "peak error", "pseudo-damage ratio"):
         table.add_column(column, justify="left" if column == "preset" else "right")
@@ -329,7 +339,8 @@ def loop(
     from nnfmu.loop.run import run_loop
 
     try:
-        report = run_loop(data, model, output, out, LoopSettings(max_effects=max_effects))
+        with _warnings_as_lines():
+            report = run_loop(data, model, output, out, LoopSettings(max_effects=max_effects))
     except (LoopError, DiagnosisError, DataError, FmuBuildError) as error:
         _fail(error)
     typer.echo(report.summary)

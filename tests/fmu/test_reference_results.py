@@ -12,6 +12,7 @@ from __future__ import annotations
 import csv
 import hashlib
 import io
+import json
 import zipfile
 from pathlib import Path
 
@@ -188,3 +189,18 @@ def test_tampered_reference_file_fails_its_checksum(network, tmp_path):
 
 def test_graph_without_stimulus_gets_no_reference_results(delay_fmus):
     assert not any(n.startswith(LS_FOLDER) for n in zipfile.ZipFile(delay_fmus[2]).namelist())
+
+
+def test_malformed_stimulus_fails_the_build_naming_the_key(network, tmp_path):
+    from nnfmu.fmu.errors import FmuBuildError
+
+    model = onnx.load(network["onnx"])
+    for prop in model.metadata_props:
+        if prop.key == METADATA_KEY:
+            data = json.loads(prop.value)
+            data["inputs"]["axial_velocity"][0] = float("nan")
+            prop.value = json.dumps(data)
+    onnx.save(model, tmp_path / "bad.onnx")
+    with pytest.raises(FmuBuildError, match="nnfmu.reference_stimulus.*sample 0"):
+        build_fmu(tmp_path / "bad.onnx", BuildOptions(out=tmp_path / "bad.fmu"))
+    assert not (tmp_path / "bad.fmu").exists()

@@ -153,3 +153,20 @@ def test_platforms_choose_the_binaries(delay_onnx, tmp_path):
         "binaries/x86_64-windows/damper.dll"]
     assert [n for n in zipfile.ZipFile(only_linux).namelist() if n.startswith("binaries/")] == [
         "binaries/linux64/damper.so"]
+
+
+def test_cli_says_in_one_warning_line_that_win64_was_left_out(delay_onnx, tmp_path, monkeypatch):
+    from typer.testing import CliRunner
+
+    from nnfmu.cli import app
+
+    monkeypatch.delenv("CC_WIN64", raising=False)
+    monkeypatch.setattr(compiler, "WIN64_COMPILER", "x86_64-w64-mingw32-gcc-not-installed")
+    result = CliRunner().invoke(app, ["build", str(delay_onnx), "--out", str(tmp_path / "d.fmu")])
+    assert result.exit_code == 0, result.output
+    warnings = [line for line in result.output.splitlines() if line.startswith("warning:")]
+    assert len(warnings) == 1 and "apt-get install gcc-mingw-w64-x86-64" in warnings[0]
+    refused = CliRunner().invoke(app, ["build", str(delay_onnx), "--out", str(tmp_path / "e.fmu"),
+                                       "--platforms", "linux64,win64"])
+    assert refused.exit_code == 2 and "x86_64-w64-mingw32-gcc" in refused.output
+    assert not (tmp_path / "e.fmu").exists()

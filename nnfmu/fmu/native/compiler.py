@@ -26,7 +26,7 @@ LIBRARIES = ("-lm",)
 COMPILE_TIMEOUT_S = 300
 WIN64 = "win64"
 WIN64_COMPILER = "x86_64-w64-mingw32-gcc"
-WIN64_INSTALL_HINT = "apt-get install gcc-mingw-w64-x86-64 (Debian/Ubuntu), or set CC_WIN64"
+WIN64_INSTALL_HINT = "on Debian/Ubuntu: apt-get install gcc-mingw-w64-x86-64; or set CC_WIN64"
 
 
 @dataclass(frozen=True)
