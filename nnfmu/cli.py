@@ -204,6 +204,9 @@ def build(
     backend: str = typer.Option("native", help="native (generated C, no Python at run time) or pythonfmu (onnxruntime)."),
     fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
     name: Optional[str] = typer.Option(None, help="Model name (default: from the ONNX metadata)."),
+    filter_cutoff: Optional[float] = typer.Option(
+        None, help="Start value [Hz] of the FMU's output low-pass (default: the model's, 0 = off; the thesis used 100 "
+                   "for stability of a stiff coupling, at a large cost in accuracy: docs/fmu.md)."),
     platforms: Optional[list[str]] = typer.Option(None, help=PLATFORMS_HELP),
 ) -> None:
     """Build a standalone FMI co-simulation FMU from an ONNX model."""
@@ -214,7 +217,7 @@ def build(
     try:
         with _warnings_as_lines():
             path = build_fmu(model, BuildOptions(out=out, backend=backend, fmi_version=fmi, name=name,
-                                                 platforms=_platforms(platforms)))
+                                                 filter_cutoff=filter_cutoff, platforms=_platforms(platforms)))
     except FmuBuildError as error:
         _fail(error)
     typer.echo(f"FMU: {path}")

@@ -20,7 +20,7 @@ import onnx
 
 METADATA_KEY = "nnfmu.component"
 FORMAT_VERSION = 1
-DEFAULT_FILTER_CUTOFF_HZ = 100.0  # the thesis's output low-pass on a trained network
+DEFAULT_FILTER_CUTOFF_HZ = 0.0  # off: an FMU computes its model; the thesis's 100 Hz is an option (docs/fmu.md)
 
 
 @dataclass(frozen=True)
@@ -66,7 +66,7 @@ class Component:
 
     `sample_period` [s] is the period the model was trained at; `None` marks a stateless graph from another tool,
     which an FMU evaluates once per communication step. `filter_cutoff` [Hz] is the start value of the FMU's output
-    low-pass (0: off, as for an exact model that must not be filtered). `metadata` holds provenance: nnfmu version,
+    low-pass (0: off, the default: what the FMU reports is the model itself). `metadata` holds provenance: nnfmu version,
     training data hash, feature spec, training settings and metrics.
     """
 

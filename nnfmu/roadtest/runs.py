@@ -55,13 +55,13 @@ Log = Callable[[str], None]
 @dataclass(frozen=True)
 class SystemRun:
     """How one system runs: `duration` [s] of drive, communication `step` [s], coupling `iterations` (0: plain
-    Gauss-Seidel), network output low-pass `filter_cutoff` [Hz] (0: off, the raw networks), `channels` compared
+    Gauss-Seidel), network output low-pass `filter_cutoff` [Hz] (None: the FMUs' default, off; 0: off), `channels` compared
     with the reference (empty: the system's default set, `COMPARED`)."""
 
     duration: float
     step: float = 1e-3
     iterations: int = 0
-    filter_cutoff: float = 0.0
+    filter_cutoff: float | None = None
     channels: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
@@ -243,7 +243,8 @@ def _context(system: str, run: SystemRun, settings: RoadTestSettings, drive: Mea
         "system": system,
         "drive": f"{drive.source}, {run.duration:g} s at {settings.sample_rate:g} Hz",
         "co-simulation": f"fmpy Gauss-Seidel, step {run.step:g} s, iterations {run.iterations}, network output "
-                         f"filter {run.filter_cutoff:g} Hz (0 = off); vehicle FMU exact at {run.step:g} s",
+                         f"filter {'the FMU default (off)' if run.filter_cutoff is None else f'{run.filter_cutoff:g} Hz'}; "
+                         f"vehicle FMU exact at {run.step:g} s",
         "reference": f"monolithic RK4 at {settings.reference_step:g} s, rig truth physics in every network's place",
         "front LCA bushings": "networks in the loop through stabilised ports (the vehicle holds only each network's "
                               "deviation from the linear bushing over a step); also replayed open loop along the "

@@ -102,13 +102,14 @@ def build_vehicle(system: str, out: Path, step: float) -> Path:
 
 
 def write_system(system: str, vehicle_fmu: Path, damper_fmu: Path, bushing_fmu: Path | None, folder: Path,
-                 filter_cutoff: float) -> Path:
+                 filter_cutoff: float | None = None) -> Path:
     """`folder/SystemStructure.ssd` joining the vehicle, its damper networks and (if `bushing_fmu` is given) its
-    front LCA bushing FMUs by name; each network FMU's output low-pass set to `filter_cutoff` [Hz] (0: off)."""
+    front LCA bushing FMUs by name; each network FMU's output low-pass set to `filter_cutoff` [Hz] (0: off; None: the
+    FMUs' own default, nothing set)."""
     components = {name: damper_fmu for name in damper_elements(system)}
     if bushing_fmu is not None:
         components |= {name: bushing_fmu for name in bushing_elements(system)}
-    parameters = {name: {"filter_cutoff": filter_cutoff} for name in components}
+    parameters = {name: {"filter_cutoff": filter_cutoff} for name in components} if filter_cutoff is not None else {}
     folder.mkdir(parents=True, exist_ok=True)
     label = f"{system} with {damper_fmu.stem}" + (" and LCA bushing networks" if bushing_fmu is not None else "")
     structure = connect_by_name(label, ("vehicle", vehicle_fmu), components, folder, parameters)

@@ -67,7 +67,7 @@ def test_ssds_of_both_systems_open_and_wire_every_network(road: RoadTestResult) 
             for damper in damper_elements(system):
                 assert driven[("vehicle", f"{damper}_force")] == (damper, "force")
                 assert driven[(damper, "velocity")] == ("vehicle", f"{damper}_velocity")
-                assert elements[damper].parameters == {"filter_cutoff": 0.0}
+                assert elements[damper].parameters == {}  # the networks run at their FMU defaults
             for bushing_name in bushing_elements(system):
                 for port in ("axial_force", "radial_force", "axial_torque", "conical_torque"):
                     assert driven[("vehicle", f"{bushing_name}_{port}")] == (bushing_name, port)

@@ -290,13 +290,13 @@ def test_communication_step_of_two_and_a_half_periods(quarter_car_fmus: dict[str
                   {name: want[name][latest] for name in vehicle.output_names}, vehicle.output_names)
 
 
-def test_component_filter_cutoff_defaults_to_the_thesis_value_and_round_trips() -> None:
+def test_component_filter_cutoff_defaults_to_off_and_round_trips() -> None:
     ports = [Port("velocity", "m/s")], [Port("force", "N")]
-    assert Component("damper", *ports).filter_cutoff == 100.0
+    assert Component("damper", *ports).filter_cutoff == 0.0
     legacy = Component("damper", *ports).to_dict()
     del legacy["filter_cutoff"]
-    assert Component.from_dict(legacy).filter_cutoff == 100.0
-    assert Component.from_dict(Component("vehicle", *ports, filter_cutoff=0.0).to_dict()).filter_cutoff == 0.0
+    assert Component.from_dict(legacy).filter_cutoff == 0.0
+    assert Component.from_dict(Component("damper", *ports, filter_cutoff=100.0).to_dict()).filter_cutoff == 100.0
     with pytest.raises(ValueError, match="filter_cutoff"):
         Component("damper", *ports, filter_cutoff=-1.0)
 

@@ -15,7 +15,6 @@ from pathlib import Path
 
 import onnx
 
-from nnfmu.component import Component
 from nnfmu.fmu.errors import FmuBuildError, PlatformSkippedWarning
 from nnfmu.fmu.model_description import (
     FmuIdentity,
@@ -74,10 +73,7 @@ def build_native(onnx_path: Path, options: BuildOptions) -> Path:
     """Build the native FMU for the step graph `onnx_path`; return its path. Raises FmuBuildError."""
     onnx_path = Path(onnx_path)
     model = load_model(onnx_path)
-    try:
-        component = Component.from_onnx(model, options.name)
-    except (ValueError, KeyError, TypeError) as err:  # malformed or too new `nnfmu.component` metadata
-        raise FmuBuildError(f"{onnx_path}: cannot read the component description: {err}") from err
+    component = options.component_of(model, onnx_path)
     identifier = c_identifier(component.name)
     target = Path(options.out) if options.out is not None else default_output(identifier)
     try:

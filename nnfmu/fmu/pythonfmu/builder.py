@@ -24,7 +24,6 @@ from google.protobuf.message import DecodeError
 from onnxruntime.capi.onnxruntime_pybind11_state import Fail, InvalidArgument, InvalidGraph
 from onnxruntime.capi.onnxruntime_pybind11_state import NotImplemented as OrtNotImplemented
 
-from nnfmu.component import Component
 from nnfmu.fmu.model_description import GENERATION_TOOL, FmuIdentity, ModelDescriptionView, tensor_dependencies
 from nnfmu.fmu.names import c_identifier
 from nnfmu.fmu.options import BuildOptions
@@ -43,7 +42,7 @@ def build_pythonfmu(onnx_path: Path, options: BuildOptions) -> Path:
     """Build `options.out` (default `exported/<identifier>.fmu`) from the step graph `onnx_path`; return its path."""
     model = _load(Path(onnx_path))
     run = runtime(options.fmi_version)
-    component = Component.from_onnx(model, options.name)
+    component = options.component_of(model, Path(onnx_path))
     component.attach_to(model)  # the slave reads its ports from here, also for graphs from other tools
     identifier = c_identifier(component.name)
     variables = fmu_variables(component)
