@@ -5,6 +5,9 @@ Imports of the working stages happen inside the commands, so `nnfmu build` never
 
 from __future__ import annotations
 
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Optional
 
@@ -18,6 +21,8 @@ vehicle_app = typer.Typer(no_args_is_help=True, help="Vehicle models for the vir
 app.add_typer(vehicle_app, name="vehicle")
 drive_app = typer.Typer(no_args_is_help=True, help="Drive files for a four-post road test simulator.")
 app.add_typer(drive_app, name="drive")
+PLATFORMS_HELP = ("Binaries of the native backend, comma-separated: linux64, win64 (default: linux64, plus win64 when "
+                  "the MinGW-w64 cross compiler x86_64-w64-mingw32-gcc is installed).")
 
 
 def _fail(error: Exception) -> None:
@@ -29,6 +34,32 @@ def _fail(error: Exception) -> None:
 def _split(items: Optional[list[str]]) -> list[str]:
     """Accept repeated options and comma-separated lists alike."""
     return [n.strip() for item in items or [] for n in item.split(",") if n.strip()]
+
+
+def _platforms(items: Optional[list[str]]) -> Optional[tuple[str, ...]]:
+    """`--platforms linux64,win64` as a tuple; None (the default choice) when not given."""
+    return tuple(_split(items)) if items else None
+
+
+@contextmanager
+def _warnings_as_lines() -> Iterator[None]:
+    """Print each distinct build warning (a platform left out) raised inside the block as one `warning: ...` line on
+    stderr; other warnings pass on as Python shows them."""
+    from nnfmu.fmu.errors import PlatformSkippedWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PlatformSkippedWarning)
+        try:
+            yield
+        finally:
+            lines = []
+            for w in caught:
+                if issubclass(w.category, PlatformSkippedWarning):
+                    lines.append(str(w.message))
+                else:
+                    warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+            for message in dict.fromkeys(lines):
+                typer.echo(f"warning: {message}", err=True)
 
 
 @app.command()
@@ -142,7 +173,8 @@ def demo(
     from nnfmu.demo import DemoSettings, run_demo
 
     console = Console(markup=False)  # diagnosis test names carry brackets: test[velocity]
-    summary = run_demo(out, DemoSettings(seed=seed, quick=quick), log=console.print)
+    with _warnings_as_lines():
+        summary = run_demo(out, DemoSettings(seed=seed, quick=quick), log=console.print)
     table = Table(title="component FMUs replayed on held-out random rig records")
     for column in ("preset", "train [s]", "test-split NRMSE", "FMU NRMSE", "R²", "peak error", "pseudo-damage ratio"):
         table.add_column(column, justify="left" if column == "preset" else "right")
@@ -175,6 +207,7 @@ def build(
     filter_cutoff: Optional[float] = typer.Option(
         None, help="Start value [Hz] of the FMU's output low-pass (default: the model's, 0 = off; the thesis used 100 "
                    "for stability of a stiff coupling, at a large cost in accuracy: docs/fmu.md)."),
+    platforms: Optional[list[str]] = typer.Option(None, help=PLATFORMS_HELP),
 ) -> None:
     """Build a standalone FMI co-simulation FMU from an ONNX model."""
     from nnfmu.fmu.build import build_fmu
@@ -182,11 +215,41 @@ def build(
     from nnfmu.fmu.options import BuildOptions
 
     try:
-        path = build_fmu(model, BuildOptions(out=out, backend=backend, fmi_version=fmi, name=name,
-                                             filter_cutoff=filter_cutoff))
+        with _warnings_as_lines():
+            path = build_fmu(model, BuildOptions(out=out, backend=backend, fmi_version=fmi, name=name,
+                                                 filter_cutoff=filter_cutoff, platforms=_platforms(platforms)))
     except FmuBuildError as error:
         _fail(error)
     typer.echo(f"FMU: {path}")
+    _echo_reference_results(path)
+
+
+def _echo_reference_results(fmu: Path) -> None:
+    """Say whether the FMU carries reference results and how to check them."""
+    from nnfmu.fmu.reference_results import has_reference_results
+
+    if has_reference_results(fmu):
+        typer.echo(f"reference results: yes (FMI-LS-REF); verify with: nnfmu check {fmu}")
+    else:
+        typer.echo("reference results: none (the ONNX file carries no reference stimulus)")
+
+
+@app.command()
+def check(
+    fmu: Path = typer.Argument(..., help="FMU carrying reference results (FMI-LS-REF, extra/org.fmi-standard.fmi-ls-ref)."),
+    tolerance: Optional[float] = typer.Option(None, help="Allowed max error of each output as a fraction of its peak (default: the experiment's)."),
+) -> None:
+    """Replay the reference results an FMU carries with fmpy and report pass/fail per output (exit 1 on failure)."""
+    from nnfmu.fmu.check import CheckError, check_fmu, report_lines
+
+    try:
+        report = check_fmu(fmu, tolerance)
+    except CheckError as error:
+        _fail(error)
+    for line in report_lines(report):
+        typer.echo(line)
+    if not report.passed:
+        raise typer.Exit(code=1)
 
 
 @vehicle_app.command("build")
@@ -200,6 +263,7 @@ def vehicle_build(
     fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
     axle: str = typer.Option("front", help="Quarter car only: which corner's parameters, front or rear."),
     backend: str = typer.Option("native", help="native or pythonfmu."),
+    platforms: Optional[list[str]] = typer.Option(None, help=PLATFORMS_HELP),
 ) -> None:
     """Build a vehicle model into a co-simulation FMU with external component ports."""
     from nnfmu.fmu.errors import FmuBuildError
@@ -209,8 +273,10 @@ def vehicle_build(
     try:
         settings = VehicleBuildSettings(params_path=params, components={n: "reference" for n in _split(reference)}
                                         | {n: "stabilised" for n in _split(stabilise)},
-                                        sample_period=sample_period, fmi_version=fmi, axle=axle, backend=backend)
-        path = build_vehicle_fmu(model, out, settings)
+                                        sample_period=sample_period, fmi_version=fmi, axle=axle, backend=backend,
+                                        platforms=_platforms(platforms))
+        with _warnings_as_lines():
+            path = build_vehicle_fmu(model, out, settings)
     except (VehicleModelError, FmuBuildError) as error:
         _fail(error)
     typer.echo(f"FMU: {path}")
@@ -280,7 +346,8 @@ def loop(
     from nnfmu.loop.run import run_loop
 
     try:
-        report = run_loop(data, model, output, out, LoopSettings(max_effects=max_effects))
+        with _warnings_as_lines():
+            report = run_loop(data, model, output, out, LoopSettings(max_effects=max_effects))
     except (LoopError, DiagnosisError, DataError, FmuBuildError) as error:
         _fail(error)
     typer.echo(report.summary)

@@ -32,6 +32,7 @@ from nnfmu.fmu.pythonfmu import sampled_component
 from nnfmu.fmu.pythonfmu.errors import PythonFmuBuildError
 from nnfmu.fmu.pythonfmu.model_description_fix import DescriptionFix, fix_model_description
 from nnfmu.fmu.pythonfmu.runtimes import Runtime, runtime
+from nnfmu.fmu.reference_results import write_reference_results
 from nnfmu.fmu.variables import FmuVariables, fmu_variables
 
 RUNTIME_NOTE = ("pythonfmu backend: runs in the importing tool's Python 3 process, "
@@ -59,6 +60,7 @@ def build_pythonfmu(onnx_path: Path, options: BuildOptions) -> Path:
         view = ModelDescriptionView(identity, component, variables, tensor_dependencies(model))
         (tree / "modelDescription.xml").write_bytes(_model_description(tree / "resources", view, run))
         _copy_binaries(tree / "binaries", identifier, run)
+        write_reference_results(tree, model, component, variables)
         return package_fmu(tree, out)
 
 

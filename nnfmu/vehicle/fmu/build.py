@@ -98,5 +98,6 @@ def build_vehicle_fmu(model: str, out: Path, settings: VehicleBuildSettings | No
     with tempfile.TemporaryDirectory(prefix="nnfmu-vehicle-") as folder:
         onnx_path = Path(folder) / f"{graph.graph.name}.onnx"
         onnx_path.write_bytes(graph.SerializeToString())  # a private temporary folder: nothing to half-write
-        options = BuildOptions(out=Path(out), backend=settings.backend, fmi_version=settings.fmi_version)
+        options = BuildOptions(out=Path(out), backend=settings.backend, fmi_version=settings.fmi_version,
+                               platforms=settings.platforms)
         return build_fmu(onnx_path, options)

@@ -25,7 +25,8 @@ class VehicleBuildSettings:
     """`params_path` (None: the packaged mid-size sedan), `components` maps a component name ('damper',
     'damper_fl', 'bushing_fl_front', ...) to 'external' (force input port, the default), 'stabilised' (force input port
     with the reference element's change over a step applied, for stiff components) or 'reference' (built-in
-    element), `sample_period` [s] of the FMU's samples, `axle` of the quarter car, FMI version and backend.
+    element), `sample_period` [s] of the FMU's samples, `axle` of the quarter car, FMI version, backend and the
+    native backend's `platforms` (None: this machine's plus win64 when its cross compiler is installed).
     A stabilised port holds its reference from the start of each *sample*: sample at the communication step, or
     the stabilisation is renewed at every sample inside a step and mostly lost."""
 
@@ -35,6 +36,7 @@ class VehicleBuildSettings:
     fmi_version: FmiVersion = 2
     axle: Literal["front", "rear"] = "front"
     backend: Backend = "native"
+    platforms: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.sample_period) and self.sample_period > 0.0):
