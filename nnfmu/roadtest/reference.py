@@ -43,16 +43,17 @@ def actuator_inputs(system: str, drive: Measurement) -> dict[str, object]:
 
 
 def monolithic_reference(system: str, drive: Measurement, components: Mapping[str, str] | None = None,
-                         step: float = 1e-4) -> Reference:
+                         step: float = 1e-4, compiled: bool = True) -> Reference:
     """Solve `system` ('quarter-car' or 'full-vehicle') with truth laws on every external component under `drive`
     (`components` as for the vehicle FMU: the same ones built in); RK4 at `step` [s], outputs at the drive's sample
     period, from the state the vehicle FMU starts in (`initial_state`: the static equilibrium, or the design position
-    where external bushings carry the only stiffness of a motion) with the components at rest."""
+    where external bushings carry the only stiffness of a motion) with the components at rest. `compiled=False`
+    solves on the generic per-law path (`simulate_monolithic`), for cross-checks of the compiled kernel."""
     vehicle = vehicle_model(system, VehicleBuildSettings(components=dict(components or {})))
     forces = [p.name for p in vehicle.inputs if not p.name.startswith("actuator")]
     started = time.perf_counter()
     solved = simulate_monolithic(vehicle, truth_laws(forces), actuator_inputs(system, drive),
-                                 MonolithicSettings(sample_period=drive.sample_period, step=step),
+                                 MonolithicSettings(sample_period=drive.sample_period, step=step, compiled=compiled),
                                  x0=np.array(initial_state(vehicle)))
     seconds = time.perf_counter() - started
     units = {p.name: p.unit for p in vehicle.outputs + vehicle.inputs}
