@@ -80,8 +80,7 @@ def printed_resolution(cells: Sequence[str], values: np.ndarray) -> Resolution |
     exponent = np.floor(np.log10(np.where(magnitude > 0, magnitude, 1.0)))
     by_digits = np.where(magnitude > 0, 10.0 ** (exponent - significant + 1), 0.0)
     step = np.maximum(10.0**-decimals, by_digits)
-    last = step[-1] if step.size else 0.0
-    coarser_by_digits = step.size > 0 and last > 10.0**-decimals
+    coarser_by_digits = step.size > 0 and float(np.max(by_digits)) > 10.0**-decimals
     style = f"{significant} significant digits" if coarser_by_digits else f"{decimals} decimals"
     return Resolution(step=step, format=f"printed to {style}")
 
