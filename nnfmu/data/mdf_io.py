@@ -11,9 +11,9 @@ spacing at each stamp (7.6e-6 s between 64 and 128 s), which `timebase` accepts 
 
 A file asammdf cannot read is refused with one DataError; the traceback asammdf's destructor prints for an object
 whose constructor failed (asammdf issues #248, #354) is swallowed while the file is read, and asammdf's own log
-lines and debug dumps about the damage are held back. Before any samples are read, an MDF 4 file's record layout is checked (every
-channel inside its group's records, the data blocks as long as the records they must hold): asammdf's compiled
-reader trusts those numbers and crashes the process on a corrupt channel offset.
+lines and debug dumps about the damage are held back. Before any samples are read, an MDF 4 file's record layout
+is checked (every channel inside its group's records, the data blocks as long as the records they must hold):
+asammdf's compiled reader trusts those numbers and crashes the process on a corrupt channel offset.
 """
 
 from __future__ import annotations

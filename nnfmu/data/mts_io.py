@@ -126,8 +126,8 @@ def _is_values(line: str, delimiter: str) -> bool:
     return True
 
 
-def _blocks(lines: list[str], form: _Format, path: Path) -> tuple[list[_Block], str]:
-    """Split the lines after line 1 into acquisition blocks; returns them and the delimiter in use."""
+def _blocks(lines: list[str], form: _Format, path: Path) -> list[_Block]:
+    """Split the lines after line 1 into the acquisition blocks that hold rows of values."""
     delimiter = form.delimiter
     blocks: list[_Block] = []
     for number, line in enumerate(lines[1:], start=2):
@@ -154,7 +154,7 @@ def _blocks(lines: list[str], form: _Format, path: Path) -> tuple[list[_Block], 
             block.names, block.names_line = cells, number
         else:
             block.units, block.units_line = cells, number
-    return [b for b in blocks if b.rows], delimiter or "\t"
+    return [b for b in blocks if b.rows]
 
 
 def _check_headers(blocks: list[_Block], path: Path) -> tuple[list[str], list[str]]:
@@ -236,7 +236,7 @@ def read_mts(path: Path, channel_map: Mapping[str, str] | None = None) -> RawTab
     if not lines or not lines[0].startswith(SIGNATURE):
         raise DataError(f"{path}: not an MTS 793 export: the first line must start with {SIGNATURE!r}")
     form = _format(lines[0], path)
-    blocks, _ = _blocks(lines, form, path)
+    blocks = _blocks(lines, form, path)
     if not blocks:
         raise DataError(f"{path}: no rows of values after the channel names and units")
     names, file_units = _check_headers(blocks, path)

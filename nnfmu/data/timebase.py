@@ -15,7 +15,8 @@ Rounding to nearest is assumed; a controller that truncates is covered as far as
 A record whose stamps all lie within float64 noise of the line keeps them as stored. Otherwise `uniform_time` replaces
 them by the fitted base and notes in one line how far they strayed and which tolerance covered it. A stamp beyond its
 tolerance is refused, naming the sample: the first step that differs from the median step by more than its two
-stamps' tolerances (a gap or a jump), else the stamp farthest off the line (a clock whose rate drifts, or a stamp out of line).
+stamps' tolerances (a gap or a jump), else the stamp farthest off the line (a clock whose rate drifts, or a stamp
+out of line).
 """
 
 from __future__ import annotations
@@ -192,7 +193,8 @@ def check_uniform(time: np.ndarray, where: str, resolution: Resolution | None = 
     row = int(np.argmax(np.abs(fit.deviation) / fit.tolerance))
     raise DataError(
         f"{where}: time is not uniformly sampled at sample {row} (t = {_g(time[row])} s): the stamp lies "
-        f"{fit.deviation[row]:.3g} s off the least-squares uniform base t = {_g(fit.start)} s + k * {_g(fit.period)} s, "
+        f"{fit.deviation[row]:.3g} s off the least-squares uniform base t = {_g(fit.start)} s + k * "
+        f"{_g(fit.period)} s, "
         f"farther than {_tolerance_text(fit, row, resolution)}; {int(off.sum())} of {time.size} stamps lie beyond "
         f"their tolerance (a sampling clock that drifts, or stamps out of line)"
     )

@@ -62,7 +62,9 @@ QUANTITIES: dict[str, Quantity] = {
         Quantity(
             "force",
             "N",
-            _linear({"N": 1.0, "kN": 1e3, "daN": 10.0, "lbf": POUND_FORCE, "lb": POUND_FORCE, "kip": 1e3 * POUND_FORCE}),
+            _linear(
+                {"N": 1.0, "kN": 1e3, "daN": 10.0, "lbf": POUND_FORCE, "lb": POUND_FORCE, "kip": 1e3 * POUND_FORCE}
+            ),
         ),
         Quantity(
             "torque",

@@ -111,5 +111,5 @@ def test_float64_mdf_time_gets_only_the_jitter_tolerance(tmp_path):
     mdf.append([Signal(np.zeros(time.size), time, name="force", unit="N")])
     mdf.save(str(tmp_path / "f64.mf4"), overwrite=True)
     mdf.close()
-    with pytest.raises(DataError, match=r"f64\.mf4: time is not uniformly sampled at sample 1000 .*0\.001 of the period"):
+    with pytest.raises(DataError, match=r"f64\.mf4: time is not uniformly sampled at sample 1000 .*0\.001 of the"):
         load_measurement(tmp_path / "f64.mf4")
