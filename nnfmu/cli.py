@@ -87,6 +87,20 @@ def rig(
     typer.echo(f"data: {data_path}\ntruth (for evaluation only, never for training): {truth_path}")
 
 
+def _channel_map(items: Optional[list[str]]) -> dict[str, str]:
+    """`--map "FILE CHANNEL=name"` options as a channel map."""
+    from nnfmu.data import parse_channel_map
+
+    try:
+        return parse_channel_map(items or [])
+    except ValueError as error:
+        raise typer.BadParameter(f"--map: {error}") from None
+
+
+MAP_HELP = ("Rename a file channel to an nnfmu channel, e.g. --map \"Axial Force=force\" (repeat); "
+            "for MTS exports also picks the time axis (NAME=time).")
+
+
 def _int_list(items: Optional[list[str]], option: str) -> tuple[int, ...]:
     try:
         return tuple(int(v) for v in _split(items))
@@ -96,7 +110,7 @@ def _int_list(items: Optional[list[str]], option: str) -> tuple[int, ...]:
 
 @app.command()
 def train(
-    data: Path = typer.Argument(..., help="Rig data (CSV with `name [unit]` headers, or MDF4)."),
+    data: Path = typer.Argument(..., help="Rig data (CSV with `name [unit]` headers, MDF4, or an MTS 793 export)."),
     preset: str = typer.Option(..., help="damper-spline, damper-hysteresis, bushing-axial-force, bushing-radial-force, bushing-axial-torque or bushing-conical-torque."),
     out: Path = typer.Option(..., "--out", "-o", help="ONNX step graph to write."),
     output: Optional[str] = typer.Option(None, help="Output channel (default: the preset's, e.g. force)."),
@@ -111,6 +125,7 @@ def train(
     max_epochs: Optional[int] = typer.Option(None, help="Epoch limit (early stopping usually ends sooner)."),
     seed: int = typer.Option(0, help="Seed: the same seed gives the same network."),
     name: str = typer.Option("", help="Model name stored in the ONNX metadata (default: from the preset)."),
+    channel_map: Optional[list[str]] = typer.Option(None, "--map", help=MAP_HELP),
 ) -> None:
     """Train a component network on rig data and export it as a verified ONNX step graph."""
     from rich.console import Console
@@ -125,7 +140,8 @@ def train(
     request = TrainRequest(preset=preset, output=output, inputs=tuple(_split(inputs)),
                            delays=_int_list(delays, "--delays"), hidden=_int_list(hidden, "--hidden"),
                            recurrent=recurrent, thesis=thesis, restarts=restarts, seed=seed, max_epochs=max_epochs,
-                           select_inputs=select_inputs, optimizer=optimizer, name=name)
+                           select_inputs=select_inputs, optimizer=optimizer, name=name,
+                           channel_map=tuple(_channel_map(channel_map).items()))
     console = Console(markup=False)  # feature and channel names carry brackets: velocity[k]
     try:
         with Progress(console=console, transient=True) as bar:
@@ -154,6 +170,8 @@ def train(
     if len(outcome.trials) > 1:
         console.print("hidden size by validation MSE (scaled): " + ", ".join(
             f"{trial.hidden}: {trial.validation_mse:.3g}" for trial in outcome.trials))
+    for note in outcome.data_notes:
+        console.print(f"note: {note}")
     for warning in outcome.warnings:
         console.print(Text("warning: ", style="yellow") + Text(warning))
     console.print(f"ONNX: {outcome.path} (onnxruntime vs torch max relative error "
@@ -361,14 +379,16 @@ def loop(
 
 @data_app.command("check")
 def data_check(
-    path: Path = typer.Argument(..., help="CSV (`name [unit]` headers, `time [s]` first) or MDF4 file."),
+    path: Path = typer.Argument(..., help="CSV (`name [unit]` headers, `time [s]` first), MDF4 or MTS 793 export."),
     require: Optional[list[str]] = typer.Option(None, "--require", "-r", help="Channel that must be present (repeat)."),
+    channel_map: Optional[list[str]] = typer.Option(None, "--map", help=MAP_HELP),
 ) -> None:
     """Load a measurement, convert it to SI units and report its channels, or say exactly what is wrong."""
     from nnfmu.data import DataError, load_measurement
 
+    mapping = _channel_map(channel_map)
     try:
-        m = load_measurement(path, required=_split(require))
+        m = load_measurement(path, required=_split(require), channel_map=mapping)
     except DataError as error:
         _fail(error)
     typer.echo(f"{path}: {len(m)} samples, sample period {m.sample_period:.6g} s")
