@@ -10,6 +10,7 @@ message; the caller records it and the campaign goes on.
 from __future__ import annotations
 
 import atexit
+import re
 import shutil
 import tempfile
 import time
@@ -141,10 +142,10 @@ def score(result: Measurement, case: Case) -> tuple[ChannelRow, ...]:
 
 
 def _message(error: BaseException) -> str:
-    """The error as one message, the cache folder taken out of the paths it names."""
+    """The error as one message, the cache folder and hash taken out of the paths it names (the file's own name stays)."""
     text = f"{type(error).__name__}: {error}"
     if _cache is not None:
-        text = text.replace(str(_cache) + "/", "")
+        text = re.sub(re.escape(str(_cache)) + r"/[0-9a-f]{64}/", "", text)
     return text[:ERROR_CHARS]
 
 

@@ -66,6 +66,10 @@ class FileRef:
     sha256: str
     name: str
 
+    def identity(self) -> dict[str, str]:
+        """The content and the suffix (which tells the format); the name and folder do not change the result."""
+        return {"sha256": self.sha256, "suffix": Path(self.name).suffix.lower()}
+
 
 @dataclass(frozen=True)
 class EventSpec:
@@ -78,7 +82,7 @@ class EventSpec:
 
     def identity(self) -> dict[str, Any]:
         """What the event's cases depend on (its hash input): the name and the drive's content or settings."""
-        source = {"file": dataclasses.asdict(self.drive)} if self.drive else {"generator": dict(self.generator)}
+        source = {"file": self.drive.identity()} if self.drive else {"generator": dict(self.generator)}
         return {"name": self.name, **source}
 
 
@@ -107,7 +111,7 @@ class VariantSpec:
         """What the variant's cases depend on: the name, every element's FMU hash, connectors, parameters, wiring."""
         return {"name": self.name, "system": self.system_name, "start_time": self.start_time,
                 "stop_time": self.stop_time, "connections": [list(c) for c in self.connections],
-                "elements": [{"name": e.name, "fmu": dataclasses.asdict(e.fmu), "parameters": dict(e.parameters),
+                "elements": [{"name": e.name, "fmu": e.fmu.identity(), "parameters": dict(e.parameters),
                               "connectors": [list(c) for c in e.connectors]} for e in self.elements]}
 
 
