@@ -1,10 +1,10 @@
 """Where cases run: in this process one after another, or on Dask (a LocalCluster of worker processes, or an
 existing cluster by its scheduler address).
 
-On Dask, the files a case needs travel with the tasks: each FMU and drive file is scattered once as bytes (keyed by
-its content) and handed to the tasks that need it, so workers need the same nnfmu install but no shared folder.
-Cases are sent a window at a time (a few per worker thread, topped up as they finish), events outer, so a drive's
-bytes are released once its cases are done. Robustness is Dask's own: a worker that dies takes its tasks back to the
+On Dask, the files a case needs travel with its task as bytes (an FMU is some tens of kB), so workers need the same
+nnfmu install but no shared folder, and a task a dead worker held carries everything it needs to run elsewhere
+(data scattered to one worker would die with it). Cases are sent a window at a time (a few per worker thread,
+topped up as they finish), so the bytes in flight stay bounded. Robustness is Dask's own: a worker that dies takes its tasks back to the
 scheduler, which runs them elsewhere until `allowed-failures` deaths (set to 1 for the LocalCluster: a case is
 retried once), then reports KilledWorker, which is recorded as the case's failure; `retries=1` reruns a task that
 raised outside the case's own error handling. A lost scheduler stops the run (nothing is recorded as failed for it),
@@ -17,7 +17,6 @@ import logging
 import math
 import os
 import uuid
-from collections import Counter
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -99,8 +98,6 @@ def run_dask(client: Any, cases: Sequence[Case], blobs: Mapping[str, bytes | Pat
     from distributed import as_completed
 
     files = FileBytes(blobs)
-    uses = Counter(key for case in cases for key in case.blob_keys)
-    shared: dict[str, Any] = {}
     threads = max(1, sum(client.nthreads().values()))
     window = max(2, CASES_PER_THREAD * threads)
     run = uuid.uuid4().hex[:8]
@@ -112,10 +109,7 @@ def run_dask(client: Any, cases: Sequence[Case], blobs: Mapping[str, bytes | Pat
         case = next(queue, None)
         if case is None:
             return
-        for key in case.blob_keys:
-            if key not in shared:
-                shared[key] = client.scatter(files[key], hash=True)
-        future = client.submit(run_case, case, {key: shared[key] for key in case.blob_keys},
+        future = client.submit(run_case, case, {key: files[key] for key in case.blob_keys},
                                key=f"nnfmu-case-{case.key[:16]}-{run}", pure=False, retries=1)
         running[future] = case
         finished.add(future)
@@ -134,10 +128,6 @@ def run_dask(client: Any, cases: Sequence[Case], blobs: Mapping[str, bytes | Pat
             raise CampaignError(f"the Dask cluster lost case {case.event.name} x {case.variant.name} "
                                 f"({future.status}); run the campaign again to resume")
         future.release()
-        for key in case.blob_keys:
-            uses[key] -= 1
-            if uses[key] == 0:
-                shared.pop(key).release()
         on_outcome(case, outcome)
         submit_next()
 
