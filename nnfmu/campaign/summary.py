@@ -73,6 +73,11 @@ def digest(table: pa.Table, reference: str) -> Digest:
     return Digest(channels, variants, reference, dict(programme), worst, failures)
 
 
+def _plain(text: str) -> str:
+    """`text` for a tick or legend label, shown as it is (a `$` would start matplotlib's math text there)."""
+    return text.replace("$", r"\$")
+
+
 def _figure(width: float, height: float) -> Figure:
     figure = Figure(figsize=(width, height), dpi=100, layout="constrained")
     FigureCanvasAgg(figure)
@@ -92,9 +97,9 @@ def plot_programme(d: Digest, path: Path) -> None:
     x = np.arange(len(d.channels))
     for i, variant in enumerate(d.variants):
         values = [d.programme[c][variant] for c, _ in d.channels]
-        axes.bar(x + (i - (len(d.variants) - 1) / 2) * width, values, width, label=variant)
+        axes.bar(x + (i - (len(d.variants) - 1) / 2) * width, values, width, label=_plain(variant))
     axes.axhline(1.0, color="black", linewidth=0.8)
-    axes.set_xticks(x, [f"{c} [{u}]" for c, u in d.channels], rotation=20, ha="right")
+    axes.set_xticks(x, [_plain(f"{c} [{u}]") for c, u in d.channels], rotation=20, ha="right")
     axes.set_ylabel(f"programme pseudo-damage ratio vs {d.reference} [1]", parse_math=False)
     axes.set_xlabel("channel [unit]")
     axes.set_title("damage ratio per channel and variant (sum over events)", parse_math=False)
@@ -115,7 +120,7 @@ def plot_worst(d: Digest, path: Path) -> None:
         axes = figure.add_subplot(len(shown), 1, i + 1) if len(shown) > 1 else figure.add_subplot()
         cases = d.worst[channel][::-1]
         axes.barh(np.arange(len(cases)), [w.ratio for w in cases], color="tab:red")
-        axes.set_yticks(np.arange(len(cases)), [f"{w.event} / {w.variant}" for w in cases], fontsize="small")
+        axes.set_yticks(np.arange(len(cases)), [_plain(f"{w.event} / {w.variant}") for w in cases], fontsize="small")
         axes.axvline(1.0, color="black", linewidth=0.8)
         axes.set_xlabel(f"pseudo-damage ratio vs {d.reference} [1]", parse_math=False)
         axes.set_title(f"worst events: {channel} [{unit}]", parse_math=False)

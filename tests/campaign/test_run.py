@@ -110,3 +110,28 @@ def test_changed_inputs_rerun_only_their_cases_and_failed_cases_rerun_on_request
     assert (retried.skipped, retried.failed) == (4, 2)
     table = pq.read_table(tmp_path / "out" / "results.parquet")
     assert table.num_rows == 6 * 3 and set(table.column("variant").to_pylist()) == {"linear", "unstable", "firm"}
+
+
+def test_hostile_names_are_shown_as_they_are(quarter_car, tmp_path):
+    """Names with markup and math characters reach the table unchanged and the summary escaped."""
+    text = campaign_text(quarter_car, events=1).replace('name = "C-20"', 'name = "$x^{2}$ <b>pot</b>"')
+    text = text.replace('name = "firm"', 'name = "fi$rm & <i>"')
+    run = run_campaign(write_campaign(tmp_path, text), tmp_path / "out", workers=0)
+    assert run.ok == 2
+    rows = read_rows(tmp_path / "out")
+    assert {r["event"] for r in rows} == {"$x^{2}$ <b>pot</b>"} and "fi$rm & <i>" in {r["variant"] for r in rows}
+    summary = (tmp_path / "out" / "summary.html").read_text()
+    assert "<b>pot</b>" not in summary and "&lt;b&gt;pot&lt;/b&gt;" in summary
+    assert (tmp_path / "out" / "worst_events.png").stat().st_size > 0
+
+
+def test_the_batch_command_names_a_bad_key_and_exits_non_zero(quarter_car, tmp_path):
+    from typer.testing import CliRunner
+
+    from nnfmu.cli import app
+
+    text = campaign_text(quarter_car).replace("[coupling]\n", "[coupling]\nstep_size = 1e-3\n")
+    result = CliRunner().invoke(app, ["batch", str(write_campaign(tmp_path, text)), "--out", str(tmp_path / "out")])
+    assert result.exit_code == 2
+    assert "error:" in result.output and "step_size" in result.output
+    assert not (tmp_path / "out").exists()
