@@ -1,12 +1,15 @@
 """Campaign throughput on Dask: cases per hour serial vs a LocalCluster of 2 workers (parallel efficiency; target
 >= 85 %), the engine's overhead per case (1-worker LocalCluster vs serial), and one worker's RSS and open files after
-1000 quarter-car cases vs after 10 (target: growth <= 10 %). Also the FMU set-up cost per case that reusing instances
+1000 quarter-car cases vs after 10 (target: growth <= 10 %), beside the same for this process running them serially. Also the FMU set-up cost per case that reusing instances
 (fmi2Reset) would save. JSON lines, the summary last.
 
 Usage: python bench/batch.py [--cases 60] [--duration 10] [--memory-cases 1000] [--memory-duration 1]
 
 Every case is the quarter car with a linear damper FMU on a generated class C road (`nnfmu.campaign.quarter_car`).
 Cluster start-up and the workers' first imports are timed apart: each engine first runs a few warm-up cases.
+Beside the wall-clock rates, the CPU time of every process involved (client, scheduler, nannies, workers) per case:
+on a machine shared with other jobs the wall-clock efficiency measures the sharing, while serial CPU time over the
+2-worker run's CPU time is the efficiency the engine allows on 2 otherwise idle cores (all its overhead counted).
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ import os
 import statistics
 import tempfile
 import time
+from contextlib import nullcontext
 from pathlib import Path
 
 from nnfmu.campaign.cases import expand_cases
@@ -45,15 +49,30 @@ def cases_of(path: Path):
     return expand_cases(loaded), loaded.blobs
 
 
+def cpu_seconds() -> float:
+    """CPU time [s] of this process and all its descendants alive now (LocalCluster nannies and workers; the
+    LocalCluster's scheduler runs in this process)."""
+    import psutil
+
+    total = 0.0
+    for process in [psutil.Process()] + psutil.Process().children(recursive=True):
+        try:
+            times = process.cpu_times()
+            total += times.user + times.system
+        except psutil.NoSuchProcess:
+            pass
+    return total
+
+
 def timed_serial(path: Path, warm: Path) -> dict:
     walls: list[float] = []
     cases, blobs = cases_of(warm)
     run_serial(cases, blobs, lambda case, outcome: None)
     cases, blobs = cases_of(path)
-    started = time.perf_counter()
+    started, cpu = time.perf_counter(), cpu_seconds()
     run_serial(cases, blobs, lambda case, outcome: walls.append(outcome.wall_s))
-    wall = time.perf_counter() - started
-    return {"cases": len(cases), "wall_s": wall, "cases_per_hour": len(cases) / wall * 3600,
+    wall, cpu = time.perf_counter() - started, cpu_seconds() - cpu
+    return {"cases": len(cases), "wall_s": wall, "cpu_s": cpu, "cases_per_hour": len(cases) / wall * 3600,
             "median_case_s": statistics.median(walls)}
 
 
@@ -65,15 +84,16 @@ def timed_dask(path: Path, warm: Path, workers: int) -> dict:
         cases, blobs = cases_of(warm)
         run_dask(client, cases, blobs, lambda case, outcome: None)
         cases, blobs = cases_of(path)
-        started = time.perf_counter()
+        started, cpu = time.perf_counter(), cpu_seconds()
         run_dask(client, cases, blobs, lambda case, outcome: walls.append(outcome.wall_s))
-        wall = time.perf_counter() - started
-    return {"workers": workers, "cases": len(cases), "start_s": up, "wall_s": wall,
+        wall, cpu = time.perf_counter() - started, cpu_seconds() - cpu
+    return {"workers": workers, "cases": len(cases), "start_s": up, "wall_s": wall, "cpu_s": cpu,
             "cases_per_hour": len(cases) / wall * 3600, "median_case_s": statistics.median(walls)}
 
 
 def worker_state() -> dict:
-    """RSS [MB] and open file descriptors of the process this runs in (a Dask worker)."""
+    """RSS [MB], open file descriptors and memory-mapped regions (each loaded FMU library adds some) of the
+    process this runs in (a Dask worker)."""
     import psutil
 
     process = psutil.Process()
@@ -81,23 +101,31 @@ def worker_state() -> dict:
             "maps": sum(1 for _ in open(f"/proc/{os.getpid()}/maps"))}
 
 
-def memory(folder: Path, paths: dict[str, Path], total: int, duration: float) -> dict:
-    """One worker's state after 10 cases and after `total` cases."""
-    first = campaign(folder, paths, "memory-first", 5, duration, 1000)
-    rest = campaign(folder, paths, "memory-rest", (total - 10) // 2, duration, 2000)
-    with dask_client(None, 1) as (client, _):
-        cases, blobs = cases_of(first)
-        run_dask(client, cases, blobs, lambda case, outcome: None)
-        after_10 = next(iter(client.run(worker_state).values()))
-        cases, blobs = cases_of(rest)
-        failed: list[str] = []
-        started = time.perf_counter()
-        run_dask(client, cases, blobs, lambda case, outcome: outcome.status == "ok" or failed.append(outcome.error))
-        wall = time.perf_counter() - started
-        after_all = next(iter(client.run(worker_state).values()))
-    done = 10 + len(cases)
-    return {"cases": done, "failed": len(failed), "wall_s": wall, "after_10": after_10, f"after_{done}": after_all,
-            "rss_growth": after_all["rss_mb"] / after_10["rss_mb"] - 1.0}
+def memory(folder: Path, paths: dict[str, Path], total: int, duration: float, on_dask: bool,
+           checkpoints: int = 4) -> dict:
+    """The state of one Dask worker (or, `on_dask` False, of this process running the cases serially) after 10
+    cases, then after each of `checkpoints` equal blocks up to `total` cases."""
+    block = (total - 10) // checkpoints // 2  # events per block (x 2 variants)
+    seed = 1000 if on_dask else 100_000
+    states, failed, done = {}, [], 0
+    started = time.perf_counter()
+    with (dask_client(None, 1) if on_dask else nullcontext((None, None))) as (client, _):
+        for i, events in enumerate([5] + [block] * checkpoints):
+            cases, blobs = cases_of(campaign(folder, paths, f"memory-{on_dask}-{i}", events, duration, seed))
+            seed += events
+
+            def count(case, outcome) -> None:
+                if outcome.status != "ok":
+                    failed.append(outcome.error)
+
+            if on_dask:
+                run_dask(client, cases, blobs, count)
+            else:
+                run_serial(cases, blobs, count)
+            done += len(cases)
+            states[done] = next(iter(client.run(worker_state).values())) if on_dask else worker_state()
+    return {"cases": done, "failed": len(failed), "wall_s": time.perf_counter() - started, "states": states,
+            "rss_growth": states[done]["rss_mb"] / states[10]["rss_mb"] - 1.0}
 
 
 def fmu_setup(paths: dict[str, Path], repeats: int = 200) -> dict:
@@ -147,8 +175,10 @@ def main() -> None:
     print(json.dumps({"local_1": one}), flush=True)
     two = timed_dask(measured, warm, 2)
     print(json.dumps({"local_2": two}), flush=True)
-    rss = memory(folder, paths, args.memory_cases, args.memory_duration)
-    print(json.dumps({"memory": rss}), flush=True)
+    rss = memory(folder, paths, args.memory_cases, args.memory_duration, on_dask=True)
+    print(json.dumps({"memory_dask_worker": rss}), flush=True)
+    plain = memory(folder, paths, args.memory_cases, args.memory_duration, on_dask=False)
+    print(json.dumps({"memory_serial": plain}), flush=True)
     per_case_setup = setup["vehicle"]["instantiate_ms"] + setup["linear"]["instantiate_ms"]
     print(json.dumps({
         "cases": serial["cases"], "drive_s": args.duration, "cpu_count": os.cpu_count(),
@@ -156,15 +186,21 @@ def main() -> None:
         "serial_cases_per_hour": round(serial["cases_per_hour"]),
         "local_2_cases_per_hour": round(two["cases_per_hour"]),
         "parallel_efficiency": round(two["cases_per_hour"] / serial["cases_per_hour"] / 2, 3),
+        "cpu_s_per_case": {"serial": round(serial["cpu_s"] / serial["cases"], 4),
+                           "local_1": round(one["cpu_s"] / one["cases"], 4),
+                           "local_2": round(two["cpu_s"] / two["cases"], 4)},
+        "parallel_efficiency_by_cpu_time": round(serial["cpu_s"] / two["cpu_s"], 3),
         "engine_overhead_per_case_s": round((one["wall_s"] - serial["wall_s"]) / serial["cases"], 4),
         "local_cluster_start_s": {"1": round(one["start_s"], 2), "2": round(two["start_s"], 2)},
         "fmu_setup_per_case_ms": round(per_case_setup, 2),
         "fmu_setup_share_of_serial_case": round(per_case_setup / 1e3 / serial["median_case_s"], 3),
-        "rss_mb_after_10": round(rss["after_10"]["rss_mb"], 1),
-        f"rss_mb_after_{rss['cases']}": round(rss[f"after_{rss['cases']}"]["rss_mb"], 1),
-        "rss_growth": round(rss["rss_growth"], 4), "memory_cases_failed": rss["failed"],
-        "open_fds_after_10_and_all": [rss["after_10"]["open_fds"], rss[f"after_{rss['cases']}"]["open_fds"]],
-        "memory_maps_after_10_and_all": [rss["after_10"]["maps"], rss[f"after_{rss['cases']}"]["maps"]],
+        "worker_rss_mb_by_cases": {n: round(state["rss_mb"], 1) for n, state in rss["states"].items()},
+        "worker_open_fds_by_cases": {n: state["open_fds"] for n, state in rss["states"].items()},
+        "worker_memory_maps_by_cases": {n: state["maps"] for n, state in rss["states"].items()},
+        "rss_growth_10_to_last": round(rss["rss_growth"], 4), "memory_cases_failed": rss["failed"],
+        "serial_rss_mb_by_cases": {n: round(state["rss_mb"], 1) for n, state in plain["states"].items()},
+        "serial_open_fds_by_cases": {n: state["open_fds"] for n, state in plain["states"].items()},
+        "serial_rss_growth_10_to_last": round(plain["rss_growth"], 4),
     }))
 
 

@@ -28,6 +28,11 @@ from .errors import CampaignError
 from .execute import FAILED, CaseOutcome, run_case
 
 ALLOWED_FAILURES = 1  # worker deaths a case may be involved in before it is given up (LocalCluster)
+LOCAL_CONFIG = {
+    "distributed.scheduler.allowed-failures": ALLOWED_FAILURES,
+    # the statistical profiler keeps an hour of per-second stack trees in each worker: tens of MB over a campaign
+    "distributed.worker.profile.enabled": False,
+}
 CASES_PER_THREAD = 4  # cases in flight per worker thread
 WAIT_FOR_WORKERS = 60  # seconds to wait for a cluster without workers to get one
 OnOutcome = Callable[[Case, CaseOutcome], None]
@@ -142,7 +147,7 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator[tuple[An
     cluster = None
     try:
         if scheduler is None:
-            with dask.config.set({"distributed.scheduler.allowed-failures": ALLOWED_FAILURES}):
+            with dask.config.set(LOCAL_CONFIG):
                 cluster = LocalCluster(n_workers=workers or machine_workers(), threads_per_worker=1,
                                        processes=True, dashboard_address=None, silence_logs=logging.ERROR)
             client = Client(cluster)

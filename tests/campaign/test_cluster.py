@@ -109,7 +109,8 @@ def test_a_killed_workers_cases_finish_on_another(cluster, serial, tmp_path):
             held[:] = [k for k in client.processing().get(victim_address, ()) if "nnfmu-case" in str(k)]
             return bool(held)
 
-        _wait(victim_busy, RUN_TIMEOUT, "the victim worker to take a case")
+        _wait(lambda: victim_busy() or not runner.is_alive(), RUN_TIMEOUT, "the victim worker to take a case")
+        assert held, "the campaign finished before the victim worker took a case"
         victim.send_signal(signal.SIGKILL)
         runner.join(RUN_TIMEOUT)
         assert not runner.is_alive(), "the campaign did not finish after the worker was killed"
