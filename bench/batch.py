@@ -1,15 +1,15 @@
 """Campaign throughput on Dask: cases per hour serial vs a LocalCluster of 2 workers (parallel efficiency; target
->= 85 %), the engine's overhead per case (1-worker LocalCluster vs serial), and one worker's RSS and open files after
-1000 quarter-car cases vs after 10 (target: growth <= 10 %), beside the same for this process running them serially. Also the FMU set-up cost per case that reusing instances
-(fmi2Reset) would save. JSON lines, the summary last.
+>= 85 %), the engine's overhead per case (1-worker LocalCluster vs serial), and one worker's RSS and open files after 1000
+quarter-car cases vs after 10 (target: growth <= 10 %), beside the same for this process running them serially. Also
+the FMU set-up cost per case that reusing instances (fmi2Reset) would save. JSON lines, the summary last.
 
 Usage: python bench/batch.py [--cases 60] [--duration 10] [--memory-cases 1000] [--memory-duration 1]
 
 Every case is the quarter car with a linear damper FMU on a generated class C road (`nnfmu.campaign.quarter_car`).
-Cluster start-up and the workers' first imports are timed apart: each engine first runs a few warm-up cases.
-Beside the wall-clock rates, the CPU time of every process involved (client, scheduler, nannies, workers) per case:
-on a machine shared with other jobs the wall-clock efficiency measures the sharing, while serial CPU time over the
-2-worker run's CPU time is the efficiency the engine allows on 2 otherwise idle cores (all its overhead counted).
+Cluster start-up and the workers' first imports are timed apart: each engine first runs a few warm-up cases. Beside
+the wall-clock rates, the CPU time of every process involved (client, scheduler, nannies, workers) per case: on a
+machine shared with other jobs the wall-clock efficiency measures the sharing, while the CPU time shows what the
+engine costs (its background part, heartbeats and monitors, grows with the wall time, so load inflates it).
 """
 
 from __future__ import annotations
@@ -182,7 +182,8 @@ def main() -> None:
     per_case_setup = setup["vehicle"]["instantiate_ms"] + setup["linear"]["instantiate_ms"]
     print(json.dumps({
         "cases": serial["cases"], "drive_s": args.duration, "cpu_count": os.cpu_count(),
-        "load_average_at_start": [round(x, 2) for x in load], "load_average_at_end": [round(x, 2) for x in os.getloadavg()],
+        "load_average_at_start": [round(x, 2) for x in load],
+        "load_average_at_end": [round(x, 2) for x in os.getloadavg()],
         "serial_cases_per_hour": round(serial["cases_per_hour"]),
         "local_2_cases_per_hour": round(two["cases_per_hour"]),
         "parallel_efficiency": round(two["cases_per_hour"] / serial["cases_per_hour"] / 2, 3),

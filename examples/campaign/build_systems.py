@@ -1,6 +1,7 @@
 """Build the FMUs and the system the example campaign (`campaign.toml` beside this file) runs on, into `build/`.
 
-Usage: python examples/campaign/build_systems.py    (then: nnfmu batch examples/campaign/campaign.toml --out out/campaign)
+Usage: python examples/campaign/build_systems.py
+  then: nnfmu batch examples/campaign/campaign.toml --out out/campaign
 
 Everything comes from the shipped presets, no training: the default vehicle parameter file's quarter car, and linear
 dampers at the preset's front damping (2400 N.s/m, the reference valving) and at 0.7x and 1.4x of it. A recorded drive

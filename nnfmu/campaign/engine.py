@@ -1,12 +1,12 @@
-"""Where cases run: in this process one after another, or on Dask (a LocalCluster of worker processes, or an
-existing cluster by its scheduler address).
+"""Where cases run: in this process one after another, or on Dask (a LocalCluster of worker processes, or an existing
+cluster by its scheduler address).
 
 On Dask, the files a case needs travel with its task as bytes (an FMU is some tens of kB), so workers need the same
-nnfmu install but no shared folder, and a task a dead worker held carries everything it needs to run elsewhere
-(data scattered to one worker would die with it). Cases are sent a window at a time (a few per worker thread,
-topped up as they finish), so the bytes in flight stay bounded. Robustness is Dask's own: a worker that dies takes its tasks back to the
-scheduler, which runs them elsewhere until `allowed-failures` deaths (set to 1 for the LocalCluster: a case is
-retried once), then reports KilledWorker, which is recorded as the case's failure; `retries=1` reruns a task that
+nnfmu install but no shared folder, and a task a dead worker held carries everything it needs to run elsewhere (data
+scattered to one worker would die with it). Cases are sent a window at a time (a few per worker thread, topped up as
+they finish), so the bytes in flight stay bounded. Robustness is Dask's own: a worker that dies takes its tasks back
+to the scheduler, which runs them elsewhere until `allowed-failures` deaths (set to 1 for the LocalCluster: a case
+is retried once), then reports KilledWorker, which is recorded as the case's failure; `retries=1` reruns a task that
 raised outside the case's own error handling. A lost scheduler stops the run (nothing is recorded as failed for it),
 and a rerun resumes from the parts written.
 """

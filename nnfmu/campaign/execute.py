@@ -142,7 +142,7 @@ def score(result: Measurement, case: Case) -> tuple[ChannelRow, ...]:
 
 
 def _message(error: BaseException) -> str:
-    """The error as one message, the cache folder and hash taken out of the paths it names (the file's own name stays)."""
+    """The error as one message, the cache folder and hash taken out of the paths it names (the file's name stays)."""
     text = f"{type(error).__name__}: {error}"
     if _cache is not None:
         text = re.sub(re.escape(str(_cache)) + r"/[0-9a-f]{64}/", "", text)
