@@ -143,3 +143,12 @@ def test_a_killed_batch_command_resumes(cluster, serial, tmp_path):
     assert second.returncode == 0, second.stderr
     assert f"16 cases: 16 ok, 0 failed, {done} finished before" in second.stdout
     assert metrics_of(read_rows(out)) == metrics_of(rows)
+
+
+def test_the_default_engine_is_a_local_cluster_retrying_a_case_once(quarter_car, tmp_path):
+    path = write_campaign(tmp_path, campaign_text(quarter_car, events=1))
+    run = run_campaign(path, tmp_path / "out", workers=1)
+    assert (run.engine.kind, run.engine.workers, run.engine.allowed_failures) == ("local", 1, 1)
+    serial = run_campaign(path, tmp_path / "serial", workers=0)
+    assert (run.ok, serial.ok) == (2, 2)
+    assert metrics_of(read_rows(tmp_path / "out")) == metrics_of(read_rows(tmp_path / "serial"))
