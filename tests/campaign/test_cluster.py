@@ -20,7 +20,8 @@ from campaign_helpers import campaign_text, metrics_of, read_rows, write_campaig
 from nnfmu.campaign import run_campaign
 
 distributed = pytest.importorskip("distributed")
-DASK = str(Path(sys.executable).parent / "dask")
+SCHEDULER = [sys.executable, "-m", "distributed.cli.dask_scheduler"]  # what `dask scheduler` runs
+WORKER = [sys.executable, "-m", "distributed.cli.dask_worker"]  # what `dask worker` runs
 START_TIMEOUT = 60.0  # [s] for the scheduler and workers to come up
 RUN_TIMEOUT = 240.0  # [s] for a campaign on the cluster
 
@@ -45,7 +46,7 @@ def _stop(process: subprocess.Popen) -> None:
 
 
 def _start_worker(address: str, name: str, folder: Path) -> subprocess.Popen:
-    return subprocess.Popen([DASK, "worker", address, "--name", name, "--nthreads", "1", "--no-nanny",
+    return subprocess.Popen([*WORKER, address, "--name", name, "--nthreads", "1", "--no-nanny",
                              "--no-dashboard", "--local-directory", str(folder)],
                             env=_environment(), cwd=folder, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
@@ -55,7 +56,7 @@ def cluster(tmp_path_factory: pytest.TempPathFactory):
     """(scheduler address, client) of a scheduler with two single-threaded workers, all subprocesses."""
     folder = tmp_path_factory.mktemp("dask")
     scheduler_file = folder / "scheduler.json"
-    processes = [subprocess.Popen([DASK, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+    processes = [subprocess.Popen([*SCHEDULER, "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
                                    "--scheduler-file", str(scheduler_file)], env=_environment(), cwd=folder,
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
     client = None
@@ -127,7 +128,7 @@ def test_a_killed_batch_command_resumes(cluster, serial, tmp_path):
     path, rows = serial
     out = tmp_path / "out"
     command = [sys.executable, "-m", "nnfmu.cli", "batch", str(path), "--out", str(out), "--scheduler", address]
-    first = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    first = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
         _wait(lambda: len(list((out / "parts").glob("*.parquet"))) >= 3 if (out / "parts").is_dir() else False,
               RUN_TIMEOUT, "three finished cases")
