@@ -349,6 +349,30 @@ def cosim(
 
 
 @app.command()
+def batch(
+    campaign: Path = typer.Argument(..., help="Campaign file (TOML): events, variants, coupling settings, metrics."),
+    out: Path = typer.Option(..., "--out", "-o", help="Folder: results.parquet, campaign.json, summary.html, parts/."),
+    scheduler: Optional[str] = typer.Option(None, help="Address of an existing Dask scheduler, e.g. tcp://HOST:8786."),
+    workers: Optional[int] = typer.Option(None, help="LocalCluster worker processes (default: one per core); 0 runs the cases here, one after another."),
+    retry_failed: bool = typer.Option(False, help="Run the cases that failed in an earlier run into --out again."),
+) -> None:
+    """Run a road-test campaign (events x variants) on Dask into one Parquet table of pseudo-damage per channel."""
+    from nnfmu.campaign import CampaignError, run_campaign
+    from nnfmu.campaign.progress import CaseProgress
+
+    if workers is not None and workers < 0:
+        raise typer.BadParameter(f"--workers {workers}: give 0 (here, serially) or more")
+    try:
+        run = run_campaign(campaign, out, scheduler=scheduler, workers=workers, retry_failed=retry_failed,
+                           progress=CaseProgress())
+    except CampaignError as error:
+        _fail(error)
+    typer.echo(f"{run.cases} cases: {run.ok} ok, {run.failed} failed, {run.skipped} finished before "
+               f"({run.wall_s:.1f} s on {run.engine.kind})")
+    typer.echo(f"table: {run.table}\nsummary: {run.summary}\nrecord: {run.record}")
+
+
+@app.command()
 def loop(
     data: Path = typer.Argument(..., help="Measurement (CSV or MDF4) with the model's inputs and the output channel."),
     model: Path = typer.Option(..., help="nnfmu ONNX step graph to check and extend."),
