@@ -13,22 +13,22 @@ from nnfmu.data import Measurement
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.vehicle.fmu.build import build_vehicle_fmu
 from nnfmu.vehicle.fmu.settings import VehicleBuildSettings
-from nnfmu.vehicle.models import MonolithicSettings, LinearLaw, VehicleParameters, build_quarter_car, simulate_monolithic
+from nnfmu.vehicle.models import MonolithicSettings, LinearLaw, QuarterCarParameters, build_quarter_car, simulate_monolithic
 
 DURATION = float(sys.argv[1]) if len(sys.argv) > 1 else 5.0
 folder = Path(tempfile.mkdtemp(prefix="h14-bench-"))
 d4 = generate_drive(DriveSettings(duration=DURATION))
 x = d4["actuator_fl_displacement"]
-drive = derive_rates(Measurement(d4.time, {"actuator_displacement": x}, {"actuator_displacement": "m"}, "class C drive, fl"))
-drive = Measurement(drive.time, {k: drive[k] for k in ("actuator_displacement", "actuator_velocity")},
-                    {"actuator_displacement": "m", "actuator_velocity": "m/s"}, drive.source)
+drive = derive_rates(Measurement(d4.time, {"actuator_fl_displacement": x}, {"actuator_fl_displacement": "m"}, "class C drive, fl"))
+drive = Measurement(drive.time, {k: drive[k] for k in ("actuator_fl_displacement", "actuator_fl_velocity")},
+                    {"actuator_fl_displacement": "m", "actuator_fl_velocity": "m/s"}, drive.source)
 vehicle_fmu = build_vehicle_fmu("quarter-car", folder / "quarter_car.fmu", VehicleBuildSettings())
-onnx.save(linear_damper_graph(VehicleParameters.load().front_damper.damping), folder / "damper.onnx")
+onnx.save(linear_damper_graph(QuarterCarParameters.load().damper.damping), folder / "damper.onnx")
 damper_fmu = build_fmu(folder / "damper.onnx", BuildOptions(out=folder / "damper.fmu"))  # the front damper's linear reference
 ssd = write_ssd(connect_by_name("quarter car + damper", ("vehicle", vehicle_fmu), {"damper": damper_fmu}, folder,
                                 parameters={"damper": {"filter_cutoff": 0.0}}), folder / "SystemStructure.ssd")
-vehicle = build_quarter_car(VehicleParameters.load())
-damping = VehicleParameters.load().front_damper.damping
+vehicle = build_quarter_car(QuarterCarParameters.load())
+damping = QuarterCarParameters.load().damper.damping
 t0 = time.perf_counter()
 mono = simulate_monolithic(vehicle, {"damper_force": LinearLaw(0.0, damping)},
                            {k: drive[k] for k in drive.names}, MonolithicSettings(sample_period=drive.sample_period, step=5e-5))

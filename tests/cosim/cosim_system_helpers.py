@@ -23,13 +23,14 @@ from nnfmu.cosim.ssp import connect_by_name, write_ssd
 from nnfmu.data import Measurement
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.vehicle.models import VehicleParameters, build_quarter_car
+from nnfmu.vehicle.models import QuarterCarParameters, build_quarter_car
 
 OPSET = 17
 IR_VERSION = 8
 OUTPUTS = ("damper_displacement", "damper_velocity", "body_displacement", "spindle_displacement")
 DAMPING = 2400.0  # [N.s/m]
-DRIVE = ("actuator_displacement", "actuator_velocity")
+DRIVE = ("actuator_displacement", "actuator_velocity")  # the hand-made plant's drive inputs; the test drive's channels
+VEHICLE_DRIVE = ("actuator_fl_displacement", "actuator_fl_velocity")  # the quarter car's, whose matrices it takes
 NO_FILTER = {"filter_cutoff": 0.0}
 
 
@@ -77,13 +78,13 @@ class LinearPlant:
 
 def quarter_cars() -> tuple[LinearPlant, LinearPlant]:
     """(quarter car with the damper force as input, the same closed with F = c v inside the matrix)."""
-    vehicle = build_quarter_car(VehicleParameters.load())
+    vehicle = build_quarter_car(QuarterCarParameters.load())
     rows = [vehicle.output_index(n) for n in OUTPUTS]
-    cols = [vehicle.input_index(n) for n in (*DRIVE, "damper_force")]
+    cols = [vehicle.input_index(n) for n in (*VEHICLE_DRIVE, "damper_force")]
     a, b, c, d = vehicle.A, vehicle.B[:, cols], vehicle.C[rows], vehicle.D[rows][:, cols]
     units = {p.name: p.unit for p in vehicle.outputs + vehicle.inputs}
     open_loop = LinearPlant(a, b, vehicle.f, c, d, vehicle.e[rows],
-                            tuple((n, units[n]) for n in (*DRIVE, "damper_force")),
+                            tuple((n, units[v]) for n, v in zip((*DRIVE, "damper_force"), (*VEHICLE_DRIVE, "damper_force"))),
                             tuple((n, units[n]) for n in OUTPUTS))
     assert not np.any(d[:, 2]), "the compared outputs do not feed through the damper force"
     c_v = vehicle.C[vehicle.output_index("damper_velocity")]
