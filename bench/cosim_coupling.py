@@ -19,7 +19,8 @@ DURATION = float(sys.argv[1]) if len(sys.argv) > 1 else 5.0
 folder = Path(tempfile.mkdtemp(prefix="h14-bench-"))
 d4 = generate_drive(DriveSettings(duration=DURATION))
 x = d4["actuator_fl_displacement"]
-drive = derive_rates(Measurement(d4.time, {"actuator_fl_displacement": x}, {"actuator_fl_displacement": "m"}, "class C drive, fl"))
+drive = derive_rates(Measurement(d4.time, {"actuator_fl_displacement": x}, {"actuator_fl_displacement": "m"},
+                                 "class C drive, fl"))  # the quarter car stands on the fl post
 drive = Measurement(drive.time, {k: drive[k] for k in ("actuator_fl_displacement", "actuator_fl_velocity")},
                     {"actuator_fl_displacement": "m", "actuator_fl_velocity": "m/s"}, drive.source)
 vehicle_fmu = build_vehicle_fmu("quarter-car", folder / "quarter_car.fmu", VehicleBuildSettings())

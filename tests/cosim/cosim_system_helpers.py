@@ -84,7 +84,8 @@ def quarter_cars() -> tuple[LinearPlant, LinearPlant]:
     a, b, c, d = vehicle.A, vehicle.B[:, cols], vehicle.C[rows], vehicle.D[rows][:, cols]
     units = {p.name: p.unit for p in vehicle.outputs + vehicle.inputs}
     open_loop = LinearPlant(a, b, vehicle.f, c, d, vehicle.e[rows],
-                            tuple((n, units[v]) for n, v in zip((*DRIVE, "damper_force"), (*VEHICLE_DRIVE, "damper_force"))),
+                            tuple((n, units[v]) for n, v in zip((*DRIVE, "damper_force"),
+                                                                (*VEHICLE_DRIVE, "damper_force"))),
                             tuple((n, units[n]) for n in OUTPUTS))
     assert not np.any(d[:, 2]), "the compared outputs do not feed through the damper force"
     c_v = vehicle.C[vehicle.output_index("damper_velocity")]

@@ -4,6 +4,7 @@ linear damper builds, the motion ratio means what the file says, and bad files a
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import fields, replace
 from pathlib import Path
 
@@ -139,7 +140,8 @@ def test_the_step_graph_records_the_corner(tmp_path: Path) -> None:
          r"quarter_car\.spring_rate belongs to a full-vehicle parameter file.*wheel_rate"),
         (lambda t: t.replace("damper_motion_ratio = 0.8", "damper_motion_ratio = 0.8\nstrut_direction = [0, 0, 1]"),
          r"quarter_car\.strut_direction belongs to a full-vehicle parameter file"),
-        (lambda t: t + "\n[lca]\nmass = 4.5\n", r": lca belongs to a full-vehicle parameter file.*no lower control arm"),
+        (lambda t: t + "\n[lca]\nmass = 4.5\n",
+         r": lca belongs to a full-vehicle parameter file.*no lower control arm"),
         (lambda t: t.replace("[quarter_car]", "[body]\nmass = 1300.0\n\n[quarter_car]"),
          r": body belongs to a full-vehicle parameter file.*quarter_car\.sprung_mass"),
         (lambda t: t + "velocity = [-1.0, 1.0]\nforce = [-1000.0, 1000.0]\n",
@@ -153,7 +155,9 @@ def test_the_step_graph_records_the_corner(tmp_path: Path) -> None:
          r"missing key 'quarter_car\.damper'"),
     ],
 )
-def test_bad_quarter_car_files_are_refused_naming_file_and_key(tmp_path: Path, edit, message: str) -> None:  # noqa: ANN001
+def test_bad_quarter_car_files_are_refused_naming_file_and_key(
+    tmp_path: Path, edit: Callable[[str], str], message: str
+) -> None:
     path = _write(tmp_path, "bad.toml", edit(MINIMAL))
     with pytest.raises(ParameterError, match=message) as refused:
         QuarterCarParameters.load(path)
@@ -166,7 +170,7 @@ def test_file_shapes_and_corners_that_do_not_fit_are_refused(tmp_path: Path) -> 
         VehicleParameters.load(quarter)
     with pytest.raises(ParameterError, match=r"quarter\.toml: a quarter-car parameter file"):
         vehicle_model("full-vehicle", VehicleBuildSettings(params_path=quarter))
-    with pytest.raises(VehicleModelError, match=r"quarter\.toml: this quarter car stands on corner 'fr'.*'fl' was asked"):
+    with pytest.raises(VehicleModelError, match=r"quarter\.toml: this quarter car stands on corner 'fr'.*'fl' was"):
         QuarterCarParameters.load(quarter, corner="fl")
     assert QuarterCarParameters.load(quarter, corner="fr").corner == "fr"
     with pytest.raises(VehicleBuildError, match="only a quarter car stands on one corner"):

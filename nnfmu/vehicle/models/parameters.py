@@ -2,7 +2,8 @@
 
 Coordinates are the vehicle's (ISO 8855): origin at the sprung mass's centre of gravity in the design position,
 x forward, y left, z up, in metres. Geometry of the front suspension is given for the left side; the right side is
-its mirror image in y. Every value is SI (kg, m, N/m, N.s/m, N.m/rad, kg.m^2).
+its mirror image in y. Every value is SI (kg, m, N/m, N.s/m, N.m/rad, kg.m^2). A quarter-car file (a `[quarter_car]`
+table) is read by `quarter_car_parameters` with the same table reader.
 """
 
 from __future__ import annotations
@@ -45,6 +46,7 @@ class _Table:
         return self._key(key)
 
     def has(self, key: str) -> bool:
+        """Whether the table holds `key` (without marking it read)."""
         return key in self._data
 
     def _raw(self, key: str) -> Any:
@@ -72,6 +74,7 @@ class _Table:
         return float(value)
 
     def string(self, key: str) -> str:
+        """A text value such as a name (any string)."""
         value = self._raw(key)
         if not isinstance(value, str):
             raise ParameterError(f"{self._source}: {self._key(key)} = {value!r} must be a string")
