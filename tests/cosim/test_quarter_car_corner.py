@@ -66,6 +66,8 @@ def test_a_quarter_car_reads_its_own_corners_channels(front_right: tuple[Path, V
                 for corner, (x, v) in (("fl", fl), ("fr", fr))}
     got = result["body_displacement"]
     scale = np.max(np.abs(expected["fr"]))
+    # equal to round-off today (2e-14 of the peak); 2 % leaves room for how a master holds the drive over a step,
+    # against a 250 % difference had the fl post been read
     assert np.max(np.abs(got - expected["fr"])) < 0.02 * scale
     assert np.max(np.abs(got - expected["fl"])) > 0.5 * scale  # the fl post would move the body quite differently
     assert np.max(np.abs(swapped["body_displacement"] - expected["fl"])) < 0.02 * np.max(np.abs(expected["fl"]))
