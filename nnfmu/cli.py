@@ -226,10 +226,14 @@ def cosim(
     out: Path = typer.Option(..., "--out", "-o", help="Result file (.csv or .mf4), units in every channel."),
     step: float = typer.Option(1e-3, help="Communication step [s]."),
     stop: Optional[float] = typer.Option(None, help="Stop time [s] (default: the end of the drive file)."),
-    scheme: str = typer.Option("gauss-seidel", help="gauss-seidel (components first) or jacobi."),
-    extrapolate: bool = typer.Option(False, help="Extrapolate coupling inputs linearly over the step."),
+    scheme: str = typer.Option("gauss-seidel", help="gauss-seidel (one element after another) or jacobi."),
+    order: str = typer.Option("vehicle-first", help="Gauss-Seidel order: vehicle-first or components-first."),
+    extrapolate: bool = typer.Option(True, help="Extrapolate coupling inputs linearly over the step."),
+    refresh: bool = typer.Option(True, help="Give FMUs with feedthrough (vehicles) their inputs at the step end and "
+                                            "read their outputs again (accelerations see the forces there)."),
     iterations: int = typer.Option(0, help="Iterate each step up to N times with get/set FMU state (strong coupling)."),
-    master: str = typer.Option("fmpy", help="fmpy (this package's master) or libcosim (cross-check; Jacobi only)."),
+    master: str = typer.Option("fmpy", help="fmpy (this package's master) or libcosim (cross-check: only --scheme "
+                                            "jacobi --no-extrapolate --no-refresh, libcosim's own algorithm)."),
 ) -> None:
     """Co-simulate a vehicle FMU with component FMUs on a drive file."""
     from rich.progress import Progress
@@ -241,9 +245,9 @@ def cosim(
     from nnfmu.data import DataError
     from nnfmu.vehicle.drive import read_drive
 
-    settings = CosimSettings(step=step, stop_time=stop, scheme=scheme,
-                             extrapolation="linear" if extrapolate else "none", iterations=iterations)
     try:
+        settings = CosimSettings(step=step, stop_time=stop, scheme=scheme, order=order, refresh=refresh,
+                                 extrapolation="linear" if extrapolate else "none", iterations=iterations)
         if master == "libcosim":
             from nnfmu.cosim.libcosim_runner import run_libcosim
 

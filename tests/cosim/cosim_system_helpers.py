@@ -32,6 +32,10 @@ DAMPING = 2400.0  # [N.s/m]
 DRIVE = ("actuator_displacement", "actuator_velocity")  # the hand-made plant's drive inputs; the test drive's channels
 VEHICLE_DRIVE = ("actuator_fl_displacement", "actuator_fl_velocity")  # the quarter car's, whose matrices it takes
 NO_FILTER = {"filter_cutoff": 0.0}
+# The basic schemes these tests measure, named in full (the master's defaults are the one-pass accurate scheme):
+# plain Gauss-Seidel with the components first, and libcosim's algorithm (Jacobi, nothing estimated or refreshed).
+BASIC = {"order": "components-first", "extrapolation": "none"}
+LIBCOSIM = {"scheme": "jacobi", "extrapolation": "none", "refresh": False}
 
 
 def _double(name: str, shape: list[int]) -> onnx.ValueInfoProto:
@@ -166,11 +170,14 @@ def drive_signal(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return x, v
 
 
-def drive(duration: float, period: float) -> Measurement:
+def drive(duration: float, period: float, corner: str | None = None) -> Measurement:
+    """The test drive as the hand-made plant's channels (DRIVE), or as those of the post under `corner` (what the
+    vehicle package's quarter car on that corner reads)."""
     t = np.arange(round(duration / period) + 1) * period
     x, v = drive_signal(t)
-    return Measurement(time=t, channels={"actuator_displacement": x, "actuator_velocity": v},
-                       units={"actuator_displacement": "m", "actuator_velocity": "m/s"}, source="test drive")
+    names = DRIVE if corner is None else (f"actuator_{corner}_displacement", f"actuator_{corner}_velocity")
+    return Measurement(time=t, channels=dict(zip(names, (x, v))), units=dict(zip(names, ("m", "m/s"))),
+                       source="test drive")
 
 
 def reference(duration: float, h: float, mean_hold: bool) -> np.ndarray:

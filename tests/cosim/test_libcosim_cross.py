@@ -11,11 +11,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cosim_system_helpers import build, damper_graph, drive
+from cosim_system_helpers import LIBCOSIM, build, damper_graph, drive
 
 from nnfmu.cosim.master import CosimError, CosimSettings, cosimulate
 from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd
-from nnfmu.data import Measurement
 
 pytest.importorskip("libcosimpy.CosimExecution")
 from nnfmu.cosim.libcosim_runner import run_libcosim  # noqa: E402
@@ -29,7 +28,7 @@ def _relative(a: np.ndarray, b: np.ndarray) -> float:
 
 @pytest.mark.parametrize("h", [1e-3, 2e-3])
 def test_libcosim_equals_fmpy_jacobi(systems: dict[float, Path], h: float) -> None:
-    settings = CosimSettings(step=h, scheme="jacobi")
+    settings = CosimSettings(step=h, **LIBCOSIM)
     libcosim = run_libcosim(systems[h], DRIVE, settings).measurement
     with open_system(systems[h]) as system:
         fmpy = cosimulate(system, DRIVE, settings).measurement
@@ -43,10 +42,10 @@ def test_libcosim_equals_fmpy_jacobi(systems: dict[float, Path], h: float) -> No
 
 
 def test_libcosim_runner_refuses_other_schemes(systems: dict[float, Path]) -> None:
-    with pytest.raises(CosimError, match="Jacobi without extrapolation or iteration"):
+    with pytest.raises(CosimError, match="Jacobi without extrapolation, iteration or refresh"):
         run_libcosim(systems[1e-3], DRIVE, CosimSettings(step=1e-3))
     with pytest.raises(CosimError, match="whole nanoseconds"):
-        run_libcosim(systems[1e-3], DRIVE, CosimSettings(step=1.0000005e-3, scheme="jacobi", stop_time=0.2000001))
+        run_libcosim(systems[1e-3], DRIVE, CosimSettings(step=1.0000005e-3, stop_time=0.2000001, **LIBCOSIM))
 
 
 def test_libcosim_equals_fmpy_with_the_vehicle_packages_quarter_car(tmp_path: Path) -> None:
@@ -57,9 +56,8 @@ def test_libcosim_equals_fmpy_with_the_vehicle_packages_quarter_car(tmp_path: Pa
     system = connect_by_name("quarter car", ("vehicle", vehicle_fmu), {"damper": damper_fmu}, tmp_path,
                              parameters={"damper": {"filter_cutoff": 0.0}})
     ssd = write_ssd(system, tmp_path / "SystemStructure.ssd")
-    settings = CosimSettings(step=2e-3, scheme="jacobi")
-    fl = {f"actuator_fl_{q}": DRIVE[f"actuator_{q}"] for q in ("displacement", "velocity")}  # its corner's channels
-    front_left = Measurement(DRIVE.time, fl, {n: DRIVE.units[n.replace("fl_", "")] for n in fl}, "fl test drive")
+    settings = CosimSettings(step=2e-3, **LIBCOSIM)
+    front_left = drive(1.0, 0.5e-3, corner="fl")  # the channels of the post the quarter car stands on
     libcosim = run_libcosim(ssd, front_left, settings).measurement
     with open_system(ssd) as opened:
         fmpy = cosimulate(opened, front_left, settings).measurement

@@ -61,13 +61,12 @@ def test_a_quarter_car_reads_its_own_corners_channels(front_right: tuple[Path, V
     for name in result.names:  # the fl channels are not read at all
         np.testing.assert_array_equal(result[name], without_fl[name], err_msg=name)
     vehicle = vehicle_model("quarter-car", settings)
+    # the vehicle FMU interpolates its drive inputs over a step: the model's first-order-hold solution
     expected = {corner: simulate(vehicle, {"actuator_fr_displacement": x, "actuator_fr_velocity": v},
-                                 SimulationSettings(dt=H), x0=vehicle.equilibrium())["body_displacement"]
+                                 SimulationSettings(dt=H, hold="foh"), x0=vehicle.equilibrium())["body_displacement"]
                 for corner, (x, v) in (("fl", fl), ("fr", fr))}
     got = result["body_displacement"]
     scale = np.max(np.abs(expected["fr"]))
-    # equal to round-off today (2e-14 of the peak); 2 % leaves room for how a master holds the drive over a step,
-    # against a 250 % difference had the fl post been read
-    assert np.max(np.abs(got - expected["fr"])) < 0.02 * scale
+    assert np.max(np.abs(got - expected["fr"])) < 1e-9 * scale
     assert np.max(np.abs(got - expected["fl"])) > 0.5 * scale  # the fl post would move the body quite differently
-    assert np.max(np.abs(swapped["body_displacement"] - expected["fl"])) < 0.02 * np.max(np.abs(expected["fl"]))
+    assert np.max(np.abs(swapped["body_displacement"] - expected["fl"])) < 1e-9 * np.max(np.abs(expected["fl"]))

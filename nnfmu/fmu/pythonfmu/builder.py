@@ -42,6 +42,11 @@ def build_pythonfmu(onnx_path: Path, options: BuildOptions) -> Path:
     model = _load(Path(onnx_path))
     run = runtime(options.fmi_version)
     component = options.component_of(model, Path(onnx_path))
+    if component.interpolates_inputs:
+        raise PythonFmuBuildError(
+            f"{onnx_path}: {component.name!r} interpolates its inputs between samples (a vehicle), which the pythonfmu "
+            "runtimes cannot offer (no input derivatives, no evaluation of the latest sample when inputs are set "
+            "after a step); build it with the native backend")
     component.attach_to(model)  # the slave reads its ports from here, also for graphs from other tools
     identifier = c_identifier(component.name)
     variables = fmu_variables(component)

@@ -3,10 +3,12 @@
 The vehicle's exact discrete step becomes an ONNX step graph (`step_graph`) with a `Component` attached: input
 ports are the vehicle's inputs (actuator displacements and velocities, forces of external components), output ports
 its outputs, the state starts at the static equilibrium for zero actuator input, and the output filter is off (an
-exact model must not be low-passed). `nnfmu.fmu.build_fmu` turns it into an FMU like any trained component, so the
-FMU semantics (samples at t_start + k T, inputs held over a step, get/set FMU state) are those of docs/fmu.md: the
-inputs set before doStep(t, h) act over (t, t + h], the state at each sample in it is the exact zero-order-hold
-solution, and the outputs there see the inputs held over the step.
+exact model must not be low-passed). The component interpolates its inputs (`interval_starts`), and
+`nnfmu.fmu.build_fmu` turns it into a native FMU like any trained component, so the FMU semantics are those of
+docs/fmu.md: samples at t_start + k T; the inputs are linear between samples, from the values set at one sample's
+time to those set at the next; a sample in a step takes the inputs set before the step (plus their FMI 2 derivatives
+times the time into the step); inputs set at the latest sample's time make the FMU evaluate that sample again, so
+the outputs there (accelerations, tyre forces) follow the component forces set there.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ from ..models.ports import CORNERS
 from ..models.quarter_car import build_quarter_car
 from .errors import VehicleBuildError
 from .settings import MAX_SUBSTEP, MODELS, VehicleBuildSettings
-from .step_graph import FIRST_IN, FIRST_OUT, INPUTS, OUTPUTS, STATE_IN, STATE_OUT, discrete_step_graph
+from .step_graph import FIRST_IN, FIRST_OUT, INPUTS, INPUTS_START, OUTPUTS, STATE_IN, STATE_OUT, discrete_step_graph
 
 
 def vehicle_model(model: str, settings: VehicleBuildSettings) -> LinearVehicle:
@@ -67,6 +69,7 @@ def vehicle_component(discrete: DiscreteVehicle, model: str, settings: VehicleBu
         sample_period=discrete.dt,
         description=vehicle.description,
         filter_cutoff=0.0,
+        interval_starts={INPUTS: INPUTS_START},
         metadata={
             "producer": f"nnfmu {nnfmu.__version__} vehicle build",
             "model": model,
@@ -85,7 +88,7 @@ def vehicle_component(discrete: DiscreteVehicle, model: str, settings: VehicleBu
 def vehicle_step_graph(model: str, settings: VehicleBuildSettings) -> onnx.ModelProto:
     """The ONNX step graph of `model` at `settings.sample_period`, its `Component` attached."""
     vehicle = vehicle_model(model, settings)
-    discrete = vehicle.discretise(settings.sample_period, "zoh", MAX_SUBSTEP)
+    discrete = vehicle.discretise(settings.sample_period, "foh", MAX_SUBSTEP)
     graph = discrete_step_graph(discrete)
     vehicle_component(discrete, model, settings).attach_to(graph)
     return graph
