@@ -30,7 +30,7 @@ from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu, initial_state
-from nnfmu.vehicle.models import (LinearLaw, MonolithicSettings, VehicleParameters, build_quarter_car,
+from nnfmu.vehicle.models import (LinearLaw, MonolithicSettings, QuarterCarParameters, build_quarter_car,
                                   simulate_monolithic)
 
 STEPS = (0.5e-3, 1e-3, 2e-3)
@@ -44,13 +44,13 @@ CHANNELS = ("damper_force", "damper_velocity", "damper_displacement", "body_acce
 
 
 def quarter_car_drive(duration: float) -> Measurement:
-    """The front-left track of a class C drive as the quarter car's actuator displacement and velocity."""
+    """The front-left track of a class C drive: the displacement and velocity of the post the quarter car stands on."""
     four = generate_drive(DriveSettings(duration=duration + 0.01))
-    single = Measurement(four.time, {"actuator_displacement": four["actuator_fl_displacement"]},
-                         {"actuator_displacement": "m"}, "class C drive, front left")
+    single = Measurement(four.time, {"actuator_fl_displacement": four["actuator_fl_displacement"]},
+                         {"actuator_fl_displacement": "m"}, "class C drive, front left")
     rates = derive_rates(single)
-    return Measurement(rates.time, {k: rates[k] for k in ("actuator_displacement", "actuator_velocity")},
-                       {"actuator_displacement": "m", "actuator_velocity": "m/s"}, single.source)
+    return Measurement(rates.time, {k: rates[k] for k in ("actuator_fl_displacement", "actuator_fl_velocity")},
+                       {"actuator_fl_displacement": "m", "actuator_fl_velocity": "m/s"}, single.source)
 
 
 def errors(result: Measurement, reference: dict[str, np.ndarray], period: float) -> dict[str, dict[str, float]]:
@@ -70,8 +70,8 @@ def main() -> None:
     duration = float(sys.argv[1]) if len(sys.argv) > 1 else 5.0
     folder = Path(tempfile.mkdtemp(prefix="nnfmu-bench-coupling-"))
     drive = quarter_car_drive(duration)
-    params = VehicleParameters.load()
-    damping = params.front_damper.damping
+    params = QuarterCarParameters.load()  # the sedan's front-left corner
+    damping = params.damper.damping
     onnx.save(linear_damper_graph(damping), folder / "damper.onnx")
     damper = build_fmu(folder / "damper.onnx", BuildOptions(out=folder / "damper.fmu"))
     vehicle = build_quarter_car(params)

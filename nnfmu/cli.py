@@ -274,16 +274,19 @@ def check(
 def vehicle_build(
     model: str = typer.Argument(..., help="quarter-car or full-vehicle."),
     out: Path = typer.Option(..., "--out", "-o", help="FMU path to write."),
-    params: Optional[Path] = typer.Option(None, help="Vehicle parameter file (TOML, SI units); default: a mid-size car."),
+    params: Optional[Path] = typer.Option(None, help="Parameter file (TOML, SI units): a full-vehicle file (both models; default: the packaged mid-size sedan) or, for quarter-car, a quarter-car file (one with a quarter_car table, e.g. the packaged midsize_sedan_quarter_car_fl.toml)."),
     reference: Optional[list[str]] = typer.Option(None, help="Components to model inside the vehicle (linear bushing, spline damper), e.g. damper_fl,bushing_fl_front; the rest are ports."),
     stabilise: Optional[list[str]] = typer.Option(None, help="Ports to stabilise with their linear reference over each step (stiff bushings on a light arm), e.g. bushing_fl_front,bushing_fl_rear."),
     sample_period: float = typer.Option(1e-4, help="Internal sample period [s] of the exact discrete model."),
     fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
-    axle: str = typer.Option("front", help="Quarter car only: which corner's parameters, front or rear."),
+    corner: Optional[str] = typer.Option(None, help="Quarter car only: the corner it stands on, fl, fr, rl or rr; its actuator inputs read that corner's drive channels (default: a quarter-car file's own corner, fl of a full-vehicle file)."),
     backend: str = typer.Option("native", help="native or pythonfmu."),
     platforms: Optional[list[str]] = typer.Option(None, help=PLATFORMS_HELP),
 ) -> None:
-    """Build a vehicle model into a co-simulation FMU with external component ports."""
+    """Build a vehicle model into a co-simulation FMU with external component ports.
+
+    quarter-car takes a quarter-car file or a full-vehicle file (one corner derived); full-vehicle a full-vehicle file.
+    """
     from nnfmu.fmu.errors import FmuBuildError
     from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
     from nnfmu.vehicle.models.errors import VehicleModelError
@@ -291,7 +294,7 @@ def vehicle_build(
     try:
         settings = VehicleBuildSettings(params_path=params, components={n: "reference" for n in _split(reference)}
                                         | {n: "stabilised" for n in _split(stabilise)},
-                                        sample_period=sample_period, fmi_version=fmi, axle=axle, backend=backend,
+                                        sample_period=sample_period, fmi_version=fmi, corner=corner, backend=backend,
                                         platforms=_platforms(platforms))
         with _warnings_as_lines():
             path = build_vehicle_fmu(model, out, settings)

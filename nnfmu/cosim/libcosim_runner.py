@@ -66,7 +66,7 @@ def run_libcosim(ssd_path: str | os.PathLike[str], drive: Measurement, settings:
                 for name, i in index.items()}
         drive_names = [n for n, (_, causality) in refs[vehicle].items()
                        if causality == CosimVariableCausality.INPUT.value and (vehicle, n) not in driven]
-        inputs = DriveInputs(drive, drive_names, settings.corner)
+        inputs = DriveInputs(drive, drive_names)
         h = settings.step
         n_steps = step_count(0.0, stop, h) if stop is not None else whole_steps(0.0, inputs.end, h)
         channels = _channels(system, vehicle)

@@ -71,9 +71,9 @@ class CosimSettings:
     `scheme` 'gauss-seidel' (elements one after another in `order`) or 'jacobi' (all on the same values);
     `extrapolation` of coupling signals over a step, 'none' or 'linear'; `refresh`: give elements with feedthrough
     their inputs at t_{n+1} after the step and read their outputs again; `iterations`: most repeats of a step for
-    strong coupling (0: none), until the t_{n+1} values change by less than `tolerance` of their peak;
-    `corner` whose drive channels feed a quarter car's untagged actuator inputs. The defaults are the accurate
-    one-pass scheme of the module docstring.
+    strong coupling (0: none), until the t_{n+1} values change by less than `tolerance` of their peak. The defaults
+    are the accurate one-pass scheme of the module docstring. The vehicle's actuator inputs read the drive's channels
+    of the same names (a quarter car's name its corner).
     """
 
     step: float = 1e-3
@@ -85,7 +85,6 @@ class CosimSettings:
     refresh: bool = True
     iterations: int = 0
     tolerance: float = 1e-10
-    corner: str = "fl"
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.step) and self.step > 0):
@@ -188,7 +187,7 @@ class _System:
             driven = {(link.target, link.input) for link in self.links}
             vehicle = self.slaves[self.vehicle]
             self.drive_names = [n for n in vehicle.names("input") if (self.vehicle, n) not in driven]
-            self.drive = DriveInputs(drive, self.drive_names, settings.corner)
+            self.drive = DriveInputs(drive, self.drive_names)
             for name, slave in self.slaves.items():
                 free = [n for n in slave.names("input") if (name, n) not in driven and name != self.vehicle]
                 if free:

@@ -16,18 +16,18 @@ from pathlib import Path
 import numpy as np
 import onnx
 import pytest
-from cosim_system_helpers import BASIC, DAMPING, damper_graph, drive
+from cosim_system_helpers import BASIC, DAMPING, VEHICLE_DRIVE, damper_graph, drive
 
 from nnfmu.cosim.master import CosimSettings, cosimulate
 from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu, initial_state, vehicle_model
-from nnfmu.vehicle.models import SimulationSettings, VehicleParameters, build_quarter_car, simulate
+from nnfmu.vehicle.models import QuarterCarParameters, SimulationSettings, build_quarter_car, simulate
 
 DURATION = 1.0  # [s]
 STEPS = (2e-3, 1e-3, 0.5e-3)
-DRIVE = drive(DURATION, 0.5e-3)
+DRIVE = drive(DURATION, 0.5e-3, corner="fl")  # the quarter car stands on the fl post
 CHANNELS = ("damper_velocity", "damper_force", "body_acceleration", "spindle_acceleration")
 
 
@@ -47,11 +47,11 @@ def systems(tmp_path_factory: pytest.TempPathFactory) -> dict[float, Path]:
 
 def exact(h: float) -> dict[str, np.ndarray]:
     """The linear damper inside the vehicle, first-order hold on the drive samples at t_n = n h."""
-    params = VehicleParameters.load()
-    params = replace(params, front_damper=replace(params.front_damper, model="linear", damping=DAMPING))
+    params = QuarterCarParameters.load()
+    params = replace(params, damper=replace(params.damper, model="linear", damping=DAMPING))
     vehicle = build_quarter_car(params, {"damper": "reference"})
     stride = round(h / DRIVE.sample_period)
-    inputs = {name: DRIVE[name][::stride] for name in ("actuator_displacement", "actuator_velocity")}
+    inputs = {name: DRIVE[name][::stride] for name in VEHICLE_DRIVE}
     x0 = np.array(initial_state(vehicle_model("quarter-car", VehicleBuildSettings())))
     result = simulate(vehicle, inputs, SimulationSettings(dt=h, hold="foh"), x0=x0)
     return result | {"damper_force": DAMPING * result["damper_velocity"]}

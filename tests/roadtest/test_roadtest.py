@@ -83,7 +83,7 @@ def test_linear_damper_cosimulation_approaches_the_monolithic_solution(tmp_path:
     with open_system(ssd) as system:
         result = cosimulate(system, drive, CosimSettings(step=1e-4)).measurement
     model = vehicle_model("quarter-car", VehicleBuildSettings())
-    exact = simulate_monolithic(model, {"damper_force": LinearLaw(0.0, DAMPING)}, actuator_inputs("quarter-car", drive),
+    exact = simulate_monolithic(model, {"damper_force": LinearLaw(0.0, DAMPING)}, actuator_inputs(model, drive),
                                 MonolithicSettings(sample_period=drive.sample_period))
     for channel in ("damper_displacement", "damper_force"):
         cosim = np.interp(exact["time"], result.time, result[channel])

@@ -272,19 +272,19 @@ def test_get_and_set_state_repeat_a_step_exactly(quarter_car_fmus: dict[str, Pat
         outputs = [name for name in slave.names("output") if name != "extrapolating"]
         slave.enter_initialization(0.0)
         slave.exit_initialization()
-        slave.set_real(["actuator_displacement", "actuator_velocity"], [0.004, 0.3])
+        slave.set_real(["actuator_fl_displacement", "actuator_fl_velocity"], [0.004, 0.3])
         for m in range(20):
             slave.do_step(m * 1e-3, 1e-3)
         saved = slave.get_state()
-        slave.set_real(["actuator_displacement", "actuator_velocity"], [0.006, -0.2])
+        slave.set_real(["actuator_fl_displacement", "actuator_fl_velocity"], [0.006, -0.2])
         slave.do_step(20e-3, 1e-3)
         first = slave.get_real(outputs)
         slave.set_state(saved)
-        slave.set_real(["actuator_displacement", "actuator_velocity"], [-0.01, 0.1])  # a different guess first
+        slave.set_real(["actuator_fl_displacement", "actuator_fl_velocity"], [-0.01, 0.1])  # a different guess first
         slave.do_step(20e-3, 1e-3)
         other = slave.get_real(outputs)
         slave.set_state(saved)
-        slave.set_real(["actuator_displacement", "actuator_velocity"], [0.006, -0.2])
+        slave.set_real(["actuator_fl_displacement", "actuator_fl_velocity"], [0.006, -0.2])
         slave.do_step(20e-3, 1e-3)
         again = slave.get_real(outputs)
         slave.free_state(saved)

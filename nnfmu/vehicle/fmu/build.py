@@ -23,9 +23,10 @@ from nnfmu.component import Component, Port, StatePort
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 
-from ..models import DEFAULT_FILE, LinearVehicle, VehicleModelError, VehicleParameters
+from ..models import DEFAULT_FILE, LinearVehicle, QuarterCarParameters, VehicleModelError, VehicleParameters
 from ..models.full_vehicle import build_full_vehicle
 from ..models.linear import DiscreteVehicle
+from ..models.ports import CORNERS
 from ..models.quarter_car import build_quarter_car
 from .errors import VehicleBuildError
 from .settings import MAX_SUBSTEP, MODELS, VehicleBuildSettings
@@ -36,10 +37,12 @@ def vehicle_model(model: str, settings: VehicleBuildSettings) -> LinearVehicle:
     """The quarter car or full vehicle of `settings`' parameter file with its component choices."""
     if model not in MODELS:
         raise VehicleBuildError(f"unknown vehicle model {model!r}; choose one of {', '.join(MODELS)}")
-    params = VehicleParameters.load(settings.params_path or DEFAULT_FILE)
+    path = settings.params_path or DEFAULT_FILE
     if model == "quarter-car":
-        return build_quarter_car(params, settings.components, settings.axle)
-    return build_full_vehicle(params, settings.components)
+        return build_quarter_car(QuarterCarParameters.load(path, settings.corner), settings.components)
+    if settings.corner is not None:
+        raise VehicleBuildError(f"corner {settings.corner!r}: only a quarter car stands on one corner")
+    return build_full_vehicle(VehicleParameters.load(path), settings.components)
 
 
 def initial_state(vehicle: LinearVehicle) -> tuple[float, ...]:
@@ -72,6 +75,7 @@ def vehicle_component(discrete: DiscreteVehicle, model: str, settings: VehicleBu
             "model": model,
             "parameters": str(settings.params_path or DEFAULT_FILE),
             "components": settings.components,
+            "corners": [c for c in CORNERS if f"actuator_{c}_displacement" in vehicle.input_names],
             "external_force_inputs": external,
             "reference_dampers": vehicle.feedback_names,
             "hold": discrete.hold,
