@@ -18,6 +18,7 @@ from nnfmu.vehicle.models import (
     LinearLaw,
     LinearVehicle,
     MonolithicSettings,
+    QuarterCarParameters,
     VehicleModelError,
     VehicleParameters,
     build_full_vehicle,
@@ -103,7 +104,7 @@ def test_compiled_quarter_car_equals_the_generic_path(
 ) -> None:
     """The truth damper with its hysteresis state (valve inverse), without it (characteristic), with the temperature
     state and with gas force gives the same run on both paths."""
-    car = build_quarter_car(params)
+    car = build_quarter_car(QuarterCarParameters.from_vehicle(params))
     laws = {"damper_force": DamperTruthLaw(DamperTruth(DamperParams(), effects))}
     compiled, generic = _both_paths(car, laws, _posts(car, 0.5), car.equilibrium(), paths)
     _assert_equal_to_peak(compiled, generic)
@@ -149,7 +150,7 @@ class _SoftenedLaw(LinearLaw):
 
 
 def test_an_unknown_law_type_falls_back_to_the_generic_path(params: VehicleParameters, paths: PathCount) -> None:
-    car = build_quarter_car(params)
+    car = build_quarter_car(QuarterCarParameters.from_vehicle(params))
     inputs, x0 = _posts(car, 0.2), car.equilibrium()
     softened = simulate_monolithic(car, {"damper_force": _SoftenedLaw(0.0, 3000.0)}, inputs,
                                    MonolithicSettings(PERIOD), x0=x0)
@@ -163,7 +164,7 @@ def test_an_unknown_law_type_falls_back_to_the_generic_path(params: VehicleParam
 @pytest.mark.filterwarnings("ignore:invalid value:RuntimeWarning", "ignore:overflow:RuntimeWarning")
 def test_both_paths_report_divergence_at_the_same_time(params: VehicleParameters) -> None:
     """A damper port closed by a spring far too stiff for the step blows up on both paths, at the same sample."""
-    car = build_quarter_car(params)
+    car = build_quarter_car(QuarterCarParameters.from_vehicle(params))
     laws = {"damper_force": LinearLaw(1e12, 0.0)}
     messages = []
     for compiled in (True, False):
