@@ -63,6 +63,10 @@ class CosimError(ValueError):
     """The system or settings cannot be co-simulated; the message names the element, connector or setting."""
 
 
+class _Diverged(Exception):
+    """A coupling value grew past what a rate over one step can hold; the message names its source."""
+
+
 @dataclass(frozen=True)
 class CosimSettings:
     """Communication `step` [s]; `stop_time` [s] (None: the system's default experiment, else the last whole step
@@ -285,7 +289,10 @@ class _System:
                 n = len(element.sources)
                 element.slopes.values[:n] = (source[element.sources] - self.now[element.sources]) / h
                 element.slopes.values[n:] = (end - element.driven) / h
-                element.slopes.set()
+                try:
+                    element.slopes.set()
+                except FmiStatusError as error:
+                    raise self._diverged(element, source, h) or error from error
             return
         if element.vehicle and not self.settings.plain:
             element.coupled[:] = 0.5 * (self.now[element.sources] + source[element.sources])
@@ -295,6 +302,24 @@ class _System:
             if element.vehicle:
                 element.driven[:] = drive
         element.inputs.set()
+
+    def _diverged(self, element: _Element, source: np.ndarray, h: float) -> _Diverged | None:
+        """When a slope an element refused is not finite, the coupling values it came from, named by their source
+        (the element that diverged, not the one that refused its rate)."""
+        n = len(element.sources)
+        bad = [i for i in range(n) if not math.isfinite(element.slopes.values[i])]
+        if not bad:
+            return None
+        incoming = [link for link in self.links if link.target == element.name]
+        described = []
+        for i in bad:
+            link, slave = incoming[i], self.slaves[incoming[i].source]
+            unit = slave.unit(link.output)
+            described.append(f"{link.source} ({slave.path.name}) output {link.output} went from "
+                             f"{self.now[element.sources[i]]:.6g} to {source[element.sources[i]]:.6g} {unit} "
+                             f"over {h:g} s")
+        return _Diverged(f"the coupling diverged: {'; '.join(described)} (a rate that is not finite, refused by "
+                         f"{element.name})")
 
     def refresh(self, drive: np.ndarray) -> None:
         """Inputs at the current communication point for every element with feedthrough, then its outputs again."""
@@ -404,7 +429,7 @@ def cosimulate(system: SystemStructure, drive: Measurement, settings: CosimSetti
                     rows[n + 1] = parts.values
                     if progress is not None and ((n + 1) % every == 0 or n + 1 == n_steps):
                         progress(n + 1, n_steps)
-        except FmiStatusError as error:
+        except (FmiStatusError, _Diverged) as error:
             raise CosimError(f"system {system.name!r}, step from t = {t:.9g} s: {error}") from error
         elapsed = clock.perf_counter() - started
     finally:
