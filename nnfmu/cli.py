@@ -13,6 +13,8 @@ from typing import Optional
 
 import typer
 
+from nnfmu.out_paths import OutputPathError, check_output_file
+
 app = typer.Typer(no_args_is_help=True, add_completion=False,
                   help="Neural-network component models from rig data, shipped as FMI co-simulation FMUs.")
 data_app = typer.Typer(no_args_is_help=True, help="Inspect rig data files.")
@@ -65,7 +67,7 @@ def _warnings_as_lines() -> Iterator[None]:
 @app.command()
 def rig(
     kind: str = typer.Argument(..., help="Rig to simulate: damper (dyno) or bushing (four-channel rig)."),
-    out: Path = typer.Option(..., "--out", "-o", help="Data file (.csv or .mf4); the truth file goes beside it."),
+    out: str = typer.Option(..., "--out", "-o", help="Data file (.csv or .mf4); the truth file goes beside it."),
     sample_rate: float = typer.Option(1000.0, help="Sample rate [Hz]."),
     duration: Optional[float] = typer.Option(None, help="Record length [s] (default: damper 70, bushing 60)."),
     seed: int = typer.Option(0, help="Seed for excitation and sensor noise."),
@@ -81,7 +83,7 @@ def rig(
     options = RigOptions(sample_rate=sample_rate, duration=duration, seed=seed, noise=noise, effects=chosen,
                          excitation=excitation)
     try:
-        data_path, truth_path = write_rig(kind, out, options)
+        data_path, truth_path = write_rig(kind, check_output_file(out, []), options)
     except (ValueError, DataError) as error:
         _fail(error)
     typer.echo(f"data: {data_path}\ntruth (for evaluation only, never for training): {truth_path}")
@@ -112,7 +114,7 @@ def _int_list(items: Optional[list[str]], option: str) -> tuple[int, ...]:
 def train(
     data: Path = typer.Argument(..., help="Rig data (CSV with `name [unit]` headers, MDF4, or an MTS 793 export)."),
     preset: str = typer.Option(..., help="damper-spline, damper-hysteresis, bushing-axial-force, bushing-radial-force, bushing-axial-torque or bushing-conical-torque."),
-    out: Path = typer.Option(..., "--out", "-o", help="ONNX step graph to write."),
+    out: str = typer.Option(..., "--out", "-o", help="ONNX step graph to write."),
     output: Optional[str] = typer.Option(None, help="Output channel (default: the preset's, e.g. force)."),
     inputs: Optional[list[str]] = typer.Option(None, help="Input channels replacing the preset's (comma-separated or repeated)."),
     delays: Optional[list[str]] = typer.Option(None, help="Sample delays for every input, e.g. 0,1,2."),
@@ -147,7 +149,7 @@ def train(
     try:
         with Progress(console=console, transient=True) as bar:
             task = bar.add_task("training", total=1.0)
-            outcome = train_from_file(data, request, out,
+            outcome = train_from_file(data, request, check_output_file(out, [data]),
                                       lambda what, done: bar.update(task, description=what, completed=done))
     except (DataError, ExportError, ValueError) as error:
         _fail(error)
@@ -192,8 +194,11 @@ def demo(
     from nnfmu.demo import DemoSettings, run_demo
 
     console = Console(markup=False)  # diagnosis test names carry brackets: test[velocity]
-    with _warnings_as_lines():
-        summary = run_demo(out, DemoSettings(seed=seed, quick=quick), log=console.print)
+    try:
+        with _warnings_as_lines():
+            summary = run_demo(out, DemoSettings(seed=seed, quick=quick), log=console.print)
+    except OutputPathError as error:
+        _fail(error)
     table = Table(title="component FMUs replayed on held-out random rig records")
     for column in ("preset", "train [s]", "test-split NRMSE", "FMU NRMSE", "R²", "peak error", "pseudo-damage ratio"):
         table.add_column(column, justify="left" if column == "preset" else "right")
@@ -219,7 +224,7 @@ def demo(
 @app.command()
 def build(
     model: Path = typer.Argument(..., help="ONNX file: an nnfmu step graph, or any graph the backends support."),
-    out: Optional[Path] = typer.Option(None, "--out", "-o", help="FMU path (default: exported/NAME.fmu)."),
+    out: Optional[str] = typer.Option(None, "--out", "-o", help="FMU path (default: exported/NAME.fmu)."),
     backend: str = typer.Option("native", help="native (generated C, no Python at run time) or pythonfmu (onnxruntime)."),
     fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
     name: Optional[str] = typer.Option(None, help="Model name (default: from the ONNX metadata)."),
@@ -234,10 +239,11 @@ def build(
     from nnfmu.fmu.options import BuildOptions
 
     try:
+        target = None if out is None else check_output_file(out, [model])
         with _warnings_as_lines():
-            path = build_fmu(model, BuildOptions(out=out, backend=backend, fmi_version=fmi, name=name,
+            path = build_fmu(model, BuildOptions(out=target, backend=backend, fmi_version=fmi, name=name,
                                                  filter_cutoff=filter_cutoff, platforms=_platforms(platforms)))
-    except FmuBuildError as error:
+    except (FmuBuildError, OutputPathError) as error:
         _fail(error)
     typer.echo(f"FMU: {path}")
     _echo_reference_results(path)
@@ -274,7 +280,7 @@ def check(
 @vehicle_app.command("build")
 def vehicle_build(
     model: str = typer.Argument(..., help="quarter-car or full-vehicle."),
-    out: Path = typer.Option(..., "--out", "-o", help="FMU path to write."),
+    out: str = typer.Option(..., "--out", "-o", help="FMU path to write."),
     params: Optional[Path] = typer.Option(None, help="Parameter file (TOML, SI units): a full-vehicle file (both models; default: the packaged mid-size sedan) or, for quarter-car, a quarter-car file (one with a quarter_car table, e.g. the packaged midsize_sedan_quarter_car_fl.toml)."),
     reference: Optional[list[str]] = typer.Option(None, help="Components to model inside the vehicle (linear bushing, spline damper), e.g. damper_fl,bushing_fl_front; the rest are ports."),
     stabilise: Optional[list[str]] = typer.Option(None, help="Ports to stabilise with their linear reference over each step (stiff bushings on a light arm), e.g. bushing_fl_front,bushing_fl_rear."),
@@ -298,8 +304,8 @@ def vehicle_build(
                                         sample_period=sample_period, fmi_version=fmi, corner=corner, backend=backend,
                                         platforms=_platforms(platforms))
         with _warnings_as_lines():
-            path = build_vehicle_fmu(model, out, settings)
-    except (VehicleModelError, FmuBuildError) as error:
+            path = build_vehicle_fmu(model, check_output_file(out, [params] if params else []), settings)
+    except (VehicleModelError, FmuBuildError, OutputPathError) as error:
         _fail(error)
     typer.echo(f"FMU: {path}")
 
@@ -308,7 +314,7 @@ def vehicle_build(
 def cosim(
     system: Path = typer.Argument(..., help="System: SystemStructure.ssd, its folder, or an .ssp archive."),
     drive: Path = typer.Option(..., help="Drive file with the actuator channels (.csv, .mf4, .rsp, .drv, .tim)."),
-    out: Path = typer.Option(..., "--out", "-o", help="Result file (.csv or .mf4), units in every channel."),
+    out: str = typer.Option(..., "--out", "-o", help="Result file (.csv or .mf4), units in every channel."),
     step: float = typer.Option(1e-3, help="Communication step [s]."),
     stop: Optional[float] = typer.Option(None, help="Stop time [s] (default: the end of the drive file)."),
     scheme: str = typer.Option("gauss-seidel", help="gauss-seidel (one element after another) or jacobi."),
@@ -331,17 +337,18 @@ def cosim(
     from nnfmu.vehicle.drive import read_drive
 
     try:
+        target = check_output_file(out, [system, drive])
         settings = CosimSettings(step=step, stop_time=stop, scheme=scheme, order=order, refresh=refresh,
                                  extrapolation="linear" if extrapolate else "none", iterations=iterations)
         if master == "libcosim":
             from nnfmu.cosim.libcosim_runner import run_libcosim
 
             result = run_libcosim(system, read_drive(drive), settings)
-            save_result(result, out)
+            save_result(result, target)
         elif master == "fmpy":
             with Progress(transient=True) as bar:
                 task = bar.add_task("co-simulation", total=None)
-                result = run_cosim(system, drive, settings, out,
+                result = run_cosim(system, drive, settings, target,
                                    progress=lambda done, total: bar.update(task, completed=done, total=total))
         else:
             raise CosimError(f"unknown master {master!r}; use fmpy or libcosim")
@@ -394,7 +401,7 @@ def loop(
     try:
         with _warnings_as_lines():
             report = run_loop(data, model, output, out, LoopSettings(max_effects=max_effects))
-    except (LoopError, DiagnosisError, DataError, FmuBuildError) as error:
+    except (LoopError, DiagnosisError, DataError, FmuBuildError, OutputPathError) as error:
         _fail(error)
     typer.echo(report.summary)
     typer.echo(f"effects added: {', '.join(report.effects_added) or 'none'}")
@@ -441,7 +448,7 @@ def _event_fields(spec: str, option: str, names: tuple[str, ...]) -> dict[str, o
 
 @drive_app.command("generate")
 def drive_generate(
-    out: Path = typer.Option(..., "--out", "-o", help="Drive file: .csv, .mf4, or RPC III (.rsp, .drv, .tim)."),
+    out: str = typer.Option(..., "--out", "-o", help="Drive file: .csv, .mf4, or RPC III (.rsp, .drv, .tim)."),
     road_class: str = typer.Option("C", "--class", help="ISO 8608 road class, A (best) to H."),
     speed: float = typer.Option(20.0, help="Vehicle speed [m/s]."),
     duration: float = typer.Option(50.0, help="Length of the drive [s]."),
@@ -467,8 +474,9 @@ def drive_generate(
                              wheelbase=wheelbase, track_width=track_width, coherence=coherence,
                              highpass=highpass or None, lowpass=lowpass or None, seed=seed, events=tuple(events))
     try:
-        path = write_drive(generate_drive(settings), out, rpc_data_type=rpc_data_type)
-    except (DriveError, DataError) as error:
+        target = check_output_file(out, [])
+        path = write_drive(generate_drive(settings), target, rpc_data_type=rpc_data_type)
+    except (DriveError, DataError, OutputPathError) as error:
         _fail(error)
     typer.echo(f"drive file: {path}")
 
@@ -476,7 +484,7 @@ def drive_generate(
 @drive_app.command("convert")
 def drive_convert(
     source: Path = typer.Argument(..., help="Drive file to read (.csv, .mf4, .rsp, .drv, .tim)."),
-    target: Path = typer.Argument(..., help="Drive file to write; the format follows the suffix."),
+    target: str = typer.Argument(..., help="Drive file to write; the format follows the suffix."),
     rpc_data_type: str = typer.Option("int16", help="RPC III sample type: int16 or float32."),
 ) -> None:
     """Convert a drive file between CSV, MDF4 and RPC III, keeping channel names and units."""
@@ -484,8 +492,9 @@ def drive_convert(
     from nnfmu.vehicle.drive import DriveError, read_drive, write_drive
 
     try:
-        path = write_drive(read_drive(source), target, rpc_data_type=rpc_data_type)
-    except (DriveError, DataError) as error:
+        path = write_drive(read_drive(source), check_output_file(target, [source], "TARGET"),
+                           rpc_data_type=rpc_data_type)
+    except (DriveError, DataError, OutputPathError) as error:
         _fail(error)
     typer.echo(f"drive file: {path}")
 

@@ -33,6 +33,7 @@ from nnfmu.loop.loop_settings import LoopSettings
 from nnfmu.loop.run import LoopReport, run_loop
 from nnfmu.models import TrainSettings, get_preset, train_model
 from nnfmu.models.workflow import TrainRequest, train_from_file
+from nnfmu.out_paths import check_output_dir, mark_output_dir
 from nnfmu.roadtest import RoadTestSettings, SystemRun, run_road_test
 from nnfmu.validate import ValidationSettings, compare, write_report
 
@@ -146,7 +147,9 @@ def run_demo(out: str | Path, settings: DemoSettings = DemoSettings(), log: Call
     """Run every stage into `out` (rig/, models/, fmu/, report/, road_test/, loop/, summary.json); return what it
     measured."""
     started = time.perf_counter()
-    out = Path(out)
+    out = check_output_dir(out, "demo")
+    out.mkdir(parents=True, exist_ok=True)
+    mark_output_dir(out, "demo")
     comparisons = []
     results: list[ModelResult] = []
     for rig, presets in PRESETS_BY_RIG.items():

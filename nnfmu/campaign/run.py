@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Protocol
 
 import nnfmu
+from nnfmu.out_paths import OutputPathError, check_output_dir, mark_output_dir
 
 from .cases import Case, expand_cases
 from .engine import EngineInfo, dask_client, run_dask, run_serial
@@ -58,8 +59,12 @@ def run_campaign(campaign_file: str | Path, out: str | Path, scheduler: str | No
     (None: one per core), or here one case after another when `workers` is 0. Cases with a part in `out` are skipped
     (failed ones too, unless `retry_failed`)."""
     campaign = read_campaign(campaign_file)
-    out = Path(out)
+    try:
+        out = check_output_dir(out, "batch", [campaign_file])
+    except OutputPathError as error:
+        raise CampaignError(str(error)) from None
     out.mkdir(parents=True, exist_ok=True)
+    mark_output_dir(out, "batch")
     cases = expand_cases(campaign)
     done = finished(out, cases, retry_failed)
     todo = [case for case in cases if case.key not in done]

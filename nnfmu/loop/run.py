@@ -24,6 +24,7 @@ from nnfmu.data import DataError, Measurement, check_measurement, load_measureme
 from nnfmu.export import export_onnx
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
+from nnfmu.out_paths import check_output_dir, mark_output_dir
 from nnfmu.models.features import FeatureSpec
 from nnfmu.models.trained import TrainedModel
 from nnfmu.validate import ValidationSettings, channel_metrics
@@ -213,7 +214,8 @@ class _Stage:
 
 
 def _replace_dir(staging: Path, out_dir: Path) -> None:
-    """Put `staging` in place of `out_dir` (an earlier result there is removed only after the new one is in)."""
+    """Put `staging` in place of `out_dir` (an earlier loop result there, checked by `check_output_dir`, is removed
+    only after the new one is in)."""
     old = None
     if out_dir.exists():
         old = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.old-", dir=out_dir.parent))
@@ -232,8 +234,11 @@ def run_loop(
 ) -> LoopReport:
     """Close the loop on `data` (a rig file or a Measurement) for the ONNX model at `model_path` predicting `output`;
     write every iteration's ONNX and FMU, report.json, report.html and plots into `out_dir`. LoopError for bad input
-    (missing channel, other sample rate, too short a record); nothing is written then."""
-    model_path, out_dir = Path(model_path), Path(out_dir)
+    (missing channel, other sample rate, too short a record), OutputPathError for an `out_dir` that holds an input
+    or files nnfmu did not write there as a loop result; nothing is written then."""
+    model_path = Path(model_path)
+    inputs = [model_path] if isinstance(data, Measurement) else [model_path, Path(data)]
+    out_dir = check_output_dir(out_dir, "loop", inputs)
     model, component = load_onnx_model(model_path)
     m = _load(data)
     _check(m, model, model_path, output, settings)
@@ -332,6 +337,7 @@ def run_loop(
             diagnoses=diagnoses,
         )
         write_loop_report(staging, report, m, rows, first_prediction, predicted, steps)
+        mark_output_dir(staging, "loop")
         _replace_dir(staging, out_dir)
     finally:
         if staging.exists():

@@ -9,6 +9,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from nnfmu.data import load_measurement
+from nnfmu.out_paths import check_output_dir, mark_output_dir
 from nnfmu.validate.compare import ChannelComparison, ValidationSettings, common_channels, compare
 from nnfmu.validate.report import SUMMARY_FILE, write_report
 
@@ -38,8 +39,10 @@ def validate_files(result_path: str | os.PathLike[str], reference_path: str | os
                    channels: Sequence[str] | None, out_dir: str | os.PathLike[str],
                    settings: ValidationSettings | None = None) -> ValidationReport:
     """Compare `channels` (default: every channel both files hold) of a result CSV/MDF4 with a reference and write
-    the report into `out_dir`. Bad files, missing channels and unit mismatches raise `DataError` naming them."""
+    the report into `out_dir`. Bad files, missing channels and unit mismatches raise `DataError` naming them; an
+    `out_dir` that is a file, holds an input or files nnfmu did not write as a report raises OutputPathError."""
     settings = settings or ValidationSettings()
+    out_dir = check_output_dir(out_dir, "validate", [result_path, reference_path])
     result = load_measurement(result_path)
     reference = load_measurement(reference_path)
     chosen = list(channels) if channels else common_channels(result, reference)
@@ -52,4 +55,5 @@ def validate_files(result_path: str | os.PathLike[str], reference_path: str | os
     }
     title = f"Validation of {Path(result_path).name} against {Path(reference_path).name}"
     index = write_report(comparisons, out_dir, title, context)
+    mark_output_dir(out_dir, "validate")
     return ValidationReport(comparisons=comparisons, index_html=index, summary_json=index.parent / SUMMARY_FILE)

@@ -32,6 +32,7 @@ from nnfmu.loop.trials import (SIGNIFICANT, TRIAL_TIE, _best_trial, _partner_riv
 from nnfmu.loop.warm_start import Retrained
 from nnfmu.models import Architecture, TrainSettings, get_preset, train_model
 from nnfmu.models.features import Difference, FeatureSpec, SmoothSign
+from nnfmu.out_paths import MARKER
 from plain_master import plain_replay
 
 # Rig sensors at half their default noise: a 5 N rms load cell (0.05 % of its 10 kN range) and a 1 mm/s velocity
@@ -368,6 +369,7 @@ def test_a_failed_run_leaves_an_earlier_result_untouched(models, tmp_path):
     out = tmp_path / "loop"
     out.mkdir()
     (out / "report.json").write_text("earlier")
+    (out / MARKER).write_text("loop\n")  # an earlier loop result, which a successful run would replace
     with pytest.raises(LoopError, match="not in the data"):
         run_loop(without(record(FULL), "velocity"), first_model(FULL, "history", str(models)), "force", out, SETTINGS)
     assert (out / "report.json").read_text() == "earlier"

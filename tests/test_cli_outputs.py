@@ -1,0 +1,126 @@
+"""`--out` of every command: nnfmu never deletes or replaces what it did not write, and a bad output path is one
+`error:` line naming it, with the inputs untouched."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from nnfmu.cli import app
+from nnfmu.out_paths import MARKER
+
+runner = CliRunner()
+
+
+def invoke(*args: object):
+    return runner.invoke(app, [str(a) for a in args])
+
+
+def snapshot(folder: Path) -> dict[str, bytes]:
+    """Every file below `folder` with its bytes."""
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+@pytest.fixture(scope="module")
+def work(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A user's folder: a dyno record, a small model trained on it, and an unrelated file."""
+    folder = tmp_path_factory.mktemp("mywork")
+    made = invoke("rig", "damper", "--out", folder / "dyno.csv", "--duration", "20", "--seed", "2",
+                  "--excitation", "random")
+    assert made.exit_code == 0, made.output
+    (folder / "dyno.truth.json").unlink()
+    trained = invoke("train", folder / "dyno.csv", "--preset", "damper-spline", "--out", folder / "model.onnx",
+                     "--max-epochs", "5", "--restarts", "1", "--hidden", "3")
+    assert trained.exit_code == 0, trained.output
+    (folder / "notes.txt").write_text("my unrelated notes\n")
+    return folder
+
+
+def refused(result, path: object) -> None:
+    """One `error:` line naming `path`, exit status 2, no traceback."""
+    assert result.exit_code == 2, result.output
+    assert result.exception is None or isinstance(result.exception, SystemExit), result.exception
+    assert "error:" in result.output and str(path) in result.output, result.output
+
+
+def test_loop_refuses_a_folder_holding_its_inputs_and_deletes_nothing(work: Path) -> None:
+    before = snapshot(work)
+    result = invoke("loop", work / "dyno.csv", "--model", work / "model.onnx", "--out", work, "--max-effects", "0")
+    refused(result, work)
+    assert "input" in result.output
+    assert snapshot(work) == before
+
+
+def test_loop_refuses_the_current_folder(work: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(work)
+    before = snapshot(work)
+    result = invoke("loop", "dyno.csv", "--model", "model.onnx", "--out", ".", "--max-effects", "0")
+    refused(result, "--out .")
+    assert snapshot(work) == before
+    assert not [p for p in work.parent.iterdir() if ".old-" in p.name or ".staging-" in p.name]
+
+
+def test_loop_refuses_a_foreign_folder_and_replaces_its_own_earlier_result(work: Path, tmp_path: Path) -> None:
+    foreign = tmp_path / "someone"
+    foreign.mkdir()
+    (foreign / "thesis.tex").write_text("do not lose me")
+    result = invoke("loop", work / "dyno.csv", "--model", work / "model.onnx", "--out", foreign, "--max-effects", "0")
+    refused(result, foreign)
+    assert "not empty" in result.output and (foreign / "thesis.tex").read_text() == "do not lose me"
+    ours = tmp_path / "loop"
+    for _ in range(2):  # the second run replaces the first one's folder: nnfmu wrote it
+        ok = invoke("loop", work / "dyno.csv", "--model", work / "model.onnx", "--out", ours, "--max-effects", "0")
+        assert ok.exit_code == 0, ok.output
+        assert (ours / "report.json").exists() and (ours / MARKER).read_text().strip() == "loop"
+    (ours / MARKER).write_text("validate\n")  # another command's result is not the loop's to replace
+    other = invoke("loop", work / "dyno.csv", "--model", work / "model.onnx", "--out", ours, "--max-effects", "0")
+    refused(other, ours)
+    assert (ours / "report.json").exists()
+
+
+def test_build_train_cosim_and_convert_refuse_to_overwrite_their_input(work: Path, tmp_path: Path) -> None:
+    before = snapshot(work)
+    refused(invoke("build", work / "model.onnx", "--out", work / "model.onnx"), work / "model.onnx")
+    refused(invoke("train", work / "dyno.csv", "--preset", "damper-spline", "--out", work / "dyno.csv",
+                   "--max-epochs", "1"), work / "dyno.csv")
+    ssd = tmp_path / "SystemStructure.ssd"
+    ssd.write_text("<not read: the output is checked first/>")
+    drive = work / "dyno.csv"
+    refused(invoke("cosim", ssd, "--drive", drive, "--out", drive), drive)
+    refused(invoke("cosim", ssd, "--drive", drive, "--out", ssd), ssd)
+    refused(invoke("drive", "convert", drive, drive), drive)
+    os.link(work / "model.onnx", tmp_path / "hardlink.onnx")  # another name of the same file is the same input
+    refused(invoke("build", work / "model.onnx", "--out", tmp_path / "hardlink.onnx"), tmp_path / "hardlink.onnx")
+    assert snapshot(work) == before
+
+
+def test_a_file_output_that_is_a_folder_empty_or_under_a_file_is_refused(work: Path, tmp_path: Path) -> None:
+    folder = tmp_path / "existing"
+    folder.mkdir()
+    refused(invoke("build", work / "model.onnx", "--out", folder), folder)
+    result = invoke("build", work / "model.onnx", "--out", "")
+    assert result.exit_code == 2 and "error: --out is empty" in result.output, result.output
+    under = tmp_path / "plain.txt"
+    under.write_text("a file")
+    refused(invoke("build", work / "model.onnx", "--out", under / "x.fmu"), under)
+    slash = f"{tmp_path / 'newdir'}/"
+    refused(invoke("build", work / "model.onnx", "--out", slash), slash)
+    refused(invoke("drive", "generate", "--out", slash, "--duration", "1"), slash)
+    assert not (tmp_path / "newdir").exists()
+    assert under.read_text() == "a file" and not any(folder.iterdir())
+
+
+def test_validate_refuses_an_existing_file_and_a_foreign_folder(work: Path, tmp_path: Path) -> None:
+    target = tmp_path / "report.html"
+    target.write_text("someone's page")
+    refused(invoke("validate", work / "dyno.csv", work / "dyno.csv", "--out", target), target)
+    assert target.read_text() == "someone's page"
+    refused(invoke("validate", work / "dyno.csv", work / "dyno.csv", "--out", work), work)
+    report = tmp_path / "report"
+    for _ in range(2):
+        ok = invoke("validate", work / "dyno.csv", work / "dyno.csv", "--out", report, "-c", "force")
+        assert ok.exit_code == 0, ok.output
+    assert (report / MARKER).read_text().strip() == "validate"
