@@ -58,7 +58,9 @@ def run_libcosim(ssd_path: str | os.PathLike[str], drive: Measurement, settings:
         vehicle = find_vehicle(system)
         driven = {(c.end_element, c.end_connector) for c in system.connections}
         log_output_level(CosimLogLevel.ERROR)
-        execution = CosimExecution.from_ssp_file(str(path), step_size=h_ns)
+        # the system file open_system read and checked: for an .ssp the extracted copy, never the archive itself,
+        # which libcosim would extract again without open_system's checks
+        execution = CosimExecution.from_ssp_file(str(system.path), step_size=h_ns)
         if execution.num_slaves() != len(system.elements):
             raise CosimError(f"{path}: libcosim could not load the system")
         index = {e.name: execution.slave_index_from_instance_name(e.name) for e in system.elements}

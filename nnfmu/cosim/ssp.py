@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..atomic import atomic_path
+from .ssp_archive import ArchiveError, confined_source, extract_ssp
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -73,7 +74,8 @@ class Connection:
 
 @dataclass
 class SystemStructure:
-    """A system of FMUs; `base` is the folder the elements' `source` paths are relative to."""
+    """A system of FMUs; `base` is the folder the elements' `source` paths are relative to, `path` the `.ssd` file
+    it was read from (None for a system built in memory)."""
 
     name: str
     elements: list[Element]
@@ -81,6 +83,7 @@ class SystemStructure:
     base: Path = Path(".")
     start_time: float = 0.0
     stop_time: float | None = None
+    path: Path | None = None
 
     def element(self, name: str) -> Element:
         for element in self.elements:
@@ -217,7 +220,7 @@ def read_ssd(path: str | os.PathLike[str], base: Path | None = None) -> SystemSt
     system = SystemStructure(
         name=root.get("name") or sys_el.get("name") or path.stem,
         elements=elements, connections=connections,
-        base=path.parent if base is None else base, start_time=start, stop_time=stop,
+        base=path.parent if base is None else base, start_time=start, stop_time=stop, path=path,
     )
     _check_structure(system, path)
     return system
@@ -275,7 +278,9 @@ def check_against_fmus(system: SystemStructure) -> None:
 
 @contextmanager
 def open_system(path: str | os.PathLike[str]) -> Iterator[SystemStructure]:
-    """The system of an `.ssd` file, a folder holding `SystemStructure.ssd`, or an `.ssp` zip (extracted meanwhile)."""
+    """The system of an `.ssd` file, a folder holding `SystemStructure.ssd`, or an `.ssp` zip (extracted meanwhile,
+    once, refusing members that leave the folder or unpack too large, and element sources outside the archive; the
+    system's `path` and `base` then lie in the extracted folder, which is what every master must load)."""
     path = Path(path)
     if path.is_dir():
         path = path / SSD_NAME
@@ -286,14 +291,20 @@ def open_system(path: str | os.PathLike[str]) -> Iterator[SystemStructure]:
         return
     with tempfile.TemporaryDirectory(prefix="nnfmu-ssp-") as folder:
         try:
-            with zipfile.ZipFile(path) as archive:
-                archive.extractall(folder)
+            extract_ssp(path, Path(folder))
+        except ArchiveError as error:
+            raise SspError(str(error)) from None
         except (OSError, zipfile.BadZipFile) as error:
             raise SspError(f"{path}: cannot open the SSP archive: {error}") from None
         ssd = Path(folder) / SSD_NAME
         if not ssd.is_file():
             raise SspError(f"{path}: the archive holds no {SSD_NAME}")
         system = read_ssd(ssd)
+        for element in system.elements:
+            try:
+                confined_source(element.source, system.base, f"{path}: element {element.name!r}")
+            except ArchiveError as error:
+                raise SspError(str(error)) from None
         check_against_fmus(system)
         yield system
 

@@ -7,6 +7,7 @@ tolerance, which shows the comparison can fail.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -64,3 +65,30 @@ def test_libcosim_equals_fmpy_with_the_vehicle_packages_quarter_car(tmp_path: Pa
     assert "body_acceleration" in fmpy.names and np.ptp(fmpy["damper_velocity"]) > 0.0
     for name in fmpy.names:
         assert _relative(libcosim[name], fmpy[name]) <= 1e-6, name
+
+
+def test_libcosim_loads_the_checked_extracted_system_never_the_archive(
+        systems: dict[float, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """libcosim would extract an .ssp again without nnfmu's checks (zip-slip): it must get the extracted copy."""
+    import zipfile
+
+    from libcosimpy.CosimExecution import CosimExecution
+
+    archive = tmp_path / "system.ssp"
+    with open_system(systems[1e-3]) as system, zipfile.ZipFile(archive, "w") as zf:
+        inside = replace(system, elements=[replace(e, source=f"resources/{e.name}.fmu") for e in system.elements])
+        zf.write(write_ssd(inside, tmp_path / "SystemStructure.ssd"), "SystemStructure.ssd")
+        for element in system.elements:
+            zf.write(system.fmu_path(element), f"resources/{element.name}.fmu")
+    loaded = []
+    original = CosimExecution.from_ssp_file.__func__
+
+    def recording(cls, path: str, step_size=None):
+        loaded.append(Path(path))
+        return original(cls, path, step_size)
+
+    monkeypatch.setattr(CosimExecution, "from_ssp_file", classmethod(recording))
+    result = run_libcosim(archive, DRIVE, CosimSettings(step=1e-3, stop_time=0.1, **LIBCOSIM))
+    assert result.steps == 100
+    assert loaded and loaded[0].name == "SystemStructure.ssd" and loaded[0] != archive
+    assert loaded[0].parent.name.startswith("nnfmu-ssp-") and not loaded[0].exists()  # extracted, since removed

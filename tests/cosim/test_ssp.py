@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import re
 import xml.etree.ElementTree as ET
 import zipfile
 from dataclasses import replace
@@ -9,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from nnfmu.cosim import ssp_archive
 from nnfmu.cosim.ssp import (
     SSD, Connection, Connector, Element, SspError, SystemStructure, check_against_fmus, open_system, read_ssd,
     write_ssd,
@@ -102,3 +105,66 @@ def test_ssp_archive_opens_with_fmus_inside(systems: dict[float, Path], tmp_path
         assert opened.fmu_path("vehicle").is_file()
         folder = opened.base
     assert not folder.exists()  # the extracted archive is removed afterwards
+
+
+def _archive(systems: dict[float, Path], target: Path, sources: dict[str, str] | None = None,
+             extra: dict[str, bytes] | None = None, compression: int = zipfile.ZIP_DEFLATED) -> Path:
+    """An .ssp of the 1 ms system with its FMUs under resources/, element sources replaced by `sources` (element ->
+    source) and the `extra` members added as they are named."""
+    with open_system(systems[1e-3]) as system:
+        inside = replace(system, elements=[replace(e, source=(sources or {}).get(e.name, f"resources/{e.name}.fmu"))
+                                           for e in system.elements])
+        ssd = write_ssd(inside, target.parent / f"{target.stem}.ssd")
+        with zipfile.ZipFile(target, "w", compression) as zf:
+            zf.write(ssd, "SystemStructure.ssd")
+            for element in system.elements:
+                zf.write(system.fmu_path(element), f"resources/{element.name}.fmu")
+            for name, data in (extra or {}).items():
+                zf.writestr(name, data)
+    return target
+
+
+@pytest.mark.parametrize("member", ["../../../../../../../../tmp/{}/escaped", "/tmp/{}/escaped",
+                                    "resources/../../{}", "C:/{}", "resources\\..\\..\\{}"])
+def test_an_archive_member_outside_its_folder_is_refused_before_anything_is_written(
+        systems: dict[float, Path], tmp_path: Path, member: str) -> None:
+    unique = tmp_path.name + "-zip-slip"
+    name = member.format(unique)
+    archive = _archive(systems, tmp_path / "system.ssp", extra={name: b"payload"})
+    with pytest.raises(SspError, match=rf"system\.ssp: member {re.escape(repr(name))} .*refusing"):
+        with open_system(archive):
+            pass
+    assert not (Path("/tmp") / unique).exists()
+
+
+def test_a_zip_bomb_and_an_archive_too_large_are_refused(systems: dict[float, Path], tmp_path: Path,
+                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+    bomb = _archive(systems, tmp_path / "bomb.ssp", extra={"resources/zeros.bin": bytes(4 * 1024 * 1024)})
+    with pytest.raises(SspError, match=r"member 'resources/zeros\.bin' inflates \d+-fold .* limit"):
+        with open_system(bomb):
+            pass
+    monkeypatch.setattr(ssp_archive, "MAX_TOTAL_BYTES", 1024 * 1024)  # the FMUs alone are below it
+    large = _archive(systems, tmp_path / "large.ssp", extra={"resources/noise.bin": os.urandom(1024 * 1024)},
+                     compression=zipfile.ZIP_STORED)
+    with pytest.raises(SspError, match=r"unpack to more than the limit of 1048576 bytes"):
+        with open_system(large):
+            pass
+
+
+def test_element_sources_outside_the_archive_are_refused_naming_element_and_source(
+        systems: dict[float, Path], tmp_path: Path) -> None:
+    with open_system(systems[1e-3]) as system:
+        outside = str(system.fmu_path("damper").resolve())  # an FMU that exists, outside the archive
+    for source in (outside, "../" * 12 + outside.lstrip("/"), "resources/../../damper.fmu", f"file://{outside}"):
+        archive = _archive(systems, tmp_path / "system.ssp", sources={"damper": source})
+        with pytest.raises(SspError, match=rf"element 'damper': source {re.escape(repr(source))} .*only use FMUs "
+                                           r"inside itself"):
+            with open_system(archive):
+                pass
+
+
+def test_a_checked_archive_opens_from_its_extracted_folder(systems: dict[float, Path], tmp_path: Path) -> None:
+    archive = _archive(systems, tmp_path / "system.ssp")
+    with open_system(archive) as system:
+        assert system.path == system.base / "SystemStructure.ssd" and system.path.is_file()
+        assert all(system.base.resolve() in system.fmu_path(e).resolve().parents for e in system.elements)
