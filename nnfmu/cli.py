@@ -5,6 +5,8 @@ Imports of the working stages happen inside the commands, so `nnfmu build` never
 
 from __future__ import annotations
 
+import signal
+import threading
 import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -25,6 +27,18 @@ drive_app = typer.Typer(no_args_is_help=True, help="Drive files for a four-post 
 app.add_typer(drive_app, name="drive")
 PLATFORMS_HELP = ("Binaries of the native backend, comma-separated: linux64, win64 (default: linux64, plus win64 when "
                   "the MinGW-w64 cross compiler x86_64-w64-mingw32-gcc is installed).")
+
+
+def _interrupt(signum: int, frame: object) -> None:
+    """Turn SIGTERM into the KeyboardInterrupt of Ctrl-C, so the same cleanup runs (temporary files and folders)."""
+    raise KeyboardInterrupt(f"signal {signum}")
+
+
+@app.callback()
+def _on_start() -> None:
+    """Handle SIGTERM as SIGINT for every command (a scheduler's, a container's or kill's stop signal)."""
+    if threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
+        signal.signal(signal.SIGTERM, _interrupt)
 
 
 def _fail(error: Exception) -> None:
