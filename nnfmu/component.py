@@ -123,20 +123,25 @@ class Component:
         return json.dumps(self.to_dict(), sort_keys=True, allow_nan=False)
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> "Component":
-        version = d.get("format_version", FORMAT_VERSION)
+    def from_dict(cls, d: Any) -> "Component":
+        """The component of a decoded description; ValueError naming the field when one has the wrong type (the
+        description may come from any ONNX file)."""
+        d = _mapping(d, "the description")
+        version = _typed(d, "format_version", int, "the description", FORMAT_VERSION)
         if version > FORMAT_VERSION:
             raise ValueError(f"component description format {version} is newer than this nnfmu ({FORMAT_VERSION})")
+        name = _typed(d, "name", str, "the description")
+        where = f"component {name!r}"
         return cls(
-            name=d["name"],
-            inputs=[Port(**p) for p in d["inputs"]],
-            outputs=[Port(**p) for p in d["outputs"]],
-            states=[StatePort(s["input"], s["output"], tuple(s["initial"]), s.get("description", "")) for s in d.get("states", [])],
-            sample_period=d.get("sample_period"),
-            description=d.get("description", ""),
-            metadata=d.get("metadata", {}),
-            filter_cutoff=float(d.get("filter_cutoff", DEFAULT_FILTER_CUTOFF_HZ)),
-            interval_starts=dict(d.get("interval_starts", {})),
+            name=name,
+            inputs=[_port(p, f"{where}, input {i}") for i, p in enumerate(_typed(d, "inputs", list, where))],
+            outputs=[_port(p, f"{where}, output {i}") for i, p in enumerate(_typed(d, "outputs", list, where))],
+            states=[_state(s, f"{where}, state {i}") for i, s in enumerate(_typed(d, "states", list, where, []))],
+            sample_period=d.get("sample_period"),  # checked with its range in __post_init__
+            description=_typed(d, "description", str, where, ""),
+            metadata=_typed(d, "metadata", dict, where, {}),
+            filter_cutoff=float(_typed(d, "filter_cutoff", NUMBER, where, DEFAULT_FILTER_CUTOFF_HZ)),
+            interval_starts=_string_map(_typed(d, "interval_starts", dict, where, {}), f"{where}, interval_starts"),
         )
 
     def attach_to(self, model: onnx.ModelProto) -> None:
@@ -151,11 +156,73 @@ class Component:
         """Read the description of an ONNX model: nnfmu's metadata if present, else a generic one from the graph."""
         for prop in model.metadata_props:
             if prop.key == METADATA_KEY:
-                component = cls.from_dict(json.loads(prop.value))
+                try:
+                    decoded = json.loads(prop.value)
+                except RecursionError:
+                    raise ValueError(f"metadata {METADATA_KEY!r} is nested too deeply to be a component "
+                                     "description") from None
+                component = cls.from_dict(decoded)
                 if name:
                     component.name = name
                 return component
         return generic_component(model, name or model.graph.name or "model")
+
+
+NUMBER = (int, float)
+_MISSING = object()
+
+
+def _typed(d: dict[str, Any], key: str, kind: type | tuple[type, ...], where: str, default: Any = _MISSING) -> Any:
+    """`d[key]` when it is of `kind` (a bool is no number), `default` when absent (None allowed where it is the
+    default); ValueError naming the field otherwise."""
+    if key not in d or (d[key] is None and default is None):
+        if default is _MISSING:
+            raise ValueError(f"{where}: {key!r} is missing")
+        return default
+    value = d[key]
+    if isinstance(value, bool) and kind is not bool or not isinstance(value, kind):
+        names = " or ".join(k.__name__ for k in (kind if isinstance(kind, tuple) else (kind,)))
+        raise ValueError(f"{where}: {key!r} is {type(value).__name__} {repr(value)[:60]}, expected {names}")
+    return value
+
+
+def _mapping(value: Any, where: str) -> dict[str, Any]:
+    if not isinstance(value, dict):
+        raise ValueError(f"{where} is a JSON {type(value).__name__}, expected an object")
+    return value
+
+
+def _string_map(value: dict[str, Any], where: str) -> dict[str, str]:
+    for key, item in value.items():
+        if not isinstance(item, str):
+            raise ValueError(f"{where}: {key!r} maps to {type(item).__name__} {repr(item)[:60]}, expected str")
+    return dict(value)
+
+
+def _port(value: Any, where: str) -> Port:
+    """A Port from its JSON object, every field of its type."""
+    d = _mapping(value, where)
+    unknown = sorted(set(d) - {"name", "unit", "description", "tensor", "index", "min", "max"})
+    if unknown:
+        raise ValueError(f"{where}: unknown field(s) {', '.join(map(repr, unknown))}")
+    port = Port(name=_typed(d, "name", str, where), unit=_typed(d, "unit", str, where, ""),
+                description=_typed(d, "description", str, where, ""), tensor=_typed(d, "tensor", str, where, ""),
+                index=_typed(d, "index", int, where, 0), min=_typed(d, "min", NUMBER, where, None),
+                max=_typed(d, "max", NUMBER, where, None))
+    if port.index < 0:
+        raise ValueError(f"{where}: index {port.index} is negative")
+    return port
+
+
+def _state(value: Any, where: str) -> StatePort:
+    """A StatePort from its JSON object, every field of its type."""
+    d = _mapping(value, where)
+    initial = _typed(d, "initial", list, where)
+    for x in initial:
+        if isinstance(x, bool) or not isinstance(x, NUMBER):
+            raise ValueError(f"{where}: initial value {repr(x)[:60]} is not a number")
+    return StatePort(_typed(d, "input", str, where), _typed(d, "output", str, where), tuple(initial),
+                     _typed(d, "description", str, where, ""))
 
 
 def _static_size(value_info: onnx.ValueInfoProto) -> int:

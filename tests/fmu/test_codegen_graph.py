@@ -197,6 +197,31 @@ def test_unsupported_op_among_supported_ones_is_named() -> None:
         generate_c(model)
 
 
+
+def _graph(nodes: list, opset: int = 17) -> onnx.ModelProto:
+    x = helper.make_tensor_value_info("x", TensorProto.FLOAT, [1])
+    y = helper.make_tensor_value_info("y", TensorProto.FLOAT, [1])
+    return helper.make_model(helper.make_graph(nodes, "g", [x], [y]), opset_imports=[helper.make_opsetid("", opset)])
+
+
+@pytest.mark.parametrize("opset", [99, 0])
+def test_an_operator_set_onnx_does_not_know_is_refused(opset: int) -> None:
+    """An operator set from the future (or none) gives its operators unknown meanings: refused, not guessed."""
+    with pytest.raises(UnsupportedGraphError, match=rf"operator set {opset}; .* knows sets 1 to \d+"):
+        generate_c(_graph([helper.make_node("Relu", ["x"], ["y"])], opset))
+
+
+@pytest.mark.parametrize(("nodes", "tensor"), [
+    ([helper.make_node("Relu", ["x"], ["t"], name="a"), helper.make_node("Neg", ["x"], ["t"], name="b"),
+      helper.make_node("Identity", ["t"], ["y"])], "t"),
+    ([helper.make_node("Relu", ["x"], ["x"], name="b"), helper.make_node("Identity", ["x"], ["y"])], "x"),
+    ([helper.make_node("Relu", ["x"], ["y"], name="a"), helper.make_node("Neg", ["x"], ["y"], name="b")], "y"),
+], ids=["intermediate", "graph input", "graph output"])
+def test_a_tensor_written_twice_is_refused_before_the_compiler(nodes: list, tensor: str) -> None:
+    with pytest.raises(UnsupportedGraphError, match=rf"node 'b' .*tensor '{tensor}' is written twice"):
+        generate_c(_graph(nodes))
+
+
 HARNESS = r"""
 #include <stdio.h>
 #include "graph.h"

@@ -40,6 +40,7 @@ def analyse(model: onnx.ModelProto) -> StaticGraph:
         model = onnx.inliner.inline_local_functions(model)
     opset = _default_opset(model)
     graph = model.graph
+    _check_single_assignment(graph)
     tensors: dict[str, Tensor] = {}
     for initializer in graph.initializer:
         tensors[initializer.name] = constant(initializer.name, numpy_helper.to_array(initializer))
@@ -60,10 +61,30 @@ def analyse(model: onnx.ModelProto) -> StaticGraph:
 
 
 def _default_opset(model: onnx.ModelProto) -> int:
+    """The default operator set's version, one the installed onnx knows (a newer one's operators may mean anything)."""
     for entry in model.opset_import:
         if entry.domain in ("", "ai.onnx"):
+            newest = onnx.defs.onnx_opset_version()
+            if not 1 <= entry.version <= newest:
+                raise UnsupportedGraphError(f"the model imports ONNX operator set {entry.version}; the installed onnx "
+                                            f"knows sets 1 to {newest}")
             return entry.version
     raise UnsupportedGraphError("the model imports no version of the default ONNX operator set")
+
+
+def _check_single_assignment(graph: onnx.GraphProto) -> None:
+    """Each tensor is written once (ONNX graphs are in SSA form): by a graph input, an initializer or one node."""
+    writer = {value.name: "a graph input" for value in graph.input}
+    writer |= {initializer.name: "an initializer" for initializer in graph.initializer}
+    for node in graph.node:
+        for name in node.output:
+            if not name:
+                continue
+            if name in writer:
+                raise UnsupportedGraphError(f"tensor {name!r} is written twice (first by {writer[name]}); an ONNX "
+                                            "graph assigns each tensor once", op_type=node.op_type,
+                                            node_name=node.name)
+            writer[name] = f"node {node.name or '(unnamed)'!r} (op {node.op_type})"
 
 
 def _graph_input(value: onnx.ValueInfoProto) -> Tensor:
