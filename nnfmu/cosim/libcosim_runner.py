@@ -18,7 +18,7 @@ import numpy as np
 
 from ..data import Measurement
 from .drive_inputs import DriveInputs
-from .master import CosimError, CosimSettings, find_vehicle, step_count, whole_steps
+from .master import CosimError, CosimSettings, find_vehicle, result_table, step_count, whole_steps
 from .results import CosimResult
 from .ssp import SystemStructure, open_system
 
@@ -72,6 +72,7 @@ def run_libcosim(ssd_path: str | os.PathLike[str], drive: Measurement, settings:
         h = settings.step
         n_steps = step_count(0.0, stop, h) if stop is not None else whole_steps(0.0, inputs.end, h)
         channels = _channels(system, vehicle)
+        rows = result_table(n_steps, len(channels))  # refuses a result too large before libcosim buffers it too
         drive_refs = [refs[vehicle][n][0] for n in drive_names]
         manipulator = CosimManipulator.create_override()
         last = CosimObserver.create_last_value()
@@ -83,7 +84,6 @@ def run_libcosim(ssd_path: str | os.PathLike[str], drive: Measurement, settings:
             series.start_time_series(index[element], refs[element][output][0], CosimVariableType.REAL)
         for ref, value in zip(drive_refs, inputs.at(0.0)):
             execution.real_initial_value(index[vehicle], ref, float(value))
-        rows = np.empty((n_steps + 1, len(channels)))
         for n in range(n_steps):
             if drive_refs:
                 manipulator.slave_real_values(index[vehicle], drive_refs,

@@ -61,6 +61,7 @@ STEP_COUNT_TOLERANCE = 1e-9  # relative mismatch allowed between (stop - start) 
 INNER_LOOPS = ("auto", "c", "python")
 DRIVE_BLOCK = 4096  # steps whose drive inputs are interpolated at once (bounds the table's memory on long runs)
 Progress = Callable[[int, int], None]  # (steps done, steps in all)
+MAX_RESULT_BYTES = 2 * 1024**3  # the result table a run holds in memory: one float64 per step and channel
 
 
 class CosimError(ValueError):
@@ -124,6 +125,16 @@ def step_count(start: float, stop: float, step: float) -> int:
         raise CosimError(f"the span {start:.9g} s to {stop:.9g} s is not a whole, positive number of "
                          f"{step:.9g} s steps ({exact:.9g})")
     return n
+
+
+def result_table(n_steps: int, channels: int) -> np.ndarray:
+    """An empty table for the values at t_0..t_N of `channels` outputs; CosimError naming the limit when it would
+    exceed MAX_RESULT_BYTES (a tiny step over a long span), before anything is allocated or run."""
+    size = (n_steps + 1) * max(channels, 1) * 8
+    if size > MAX_RESULT_BYTES:
+        raise CosimError(f"{n_steps} steps of {channels} channels make a result of {size / 1024**3:.3g} GiB, more than "
+                         f"the limit of {MAX_RESULT_BYTES / 1024**3:g} GiB; choose a larger step or an earlier stop")
+    return np.empty((n_steps + 1, channels))
 
 
 def whole_steps(start: float, end: float, step: float) -> int:
@@ -443,7 +454,7 @@ def cosimulate(system: SystemStructure, drive: Measurement, settings: CosimSetti
         n_steps = step_count(t0, stop, h) if stop is not None else whole_steps(t0, parts.drive.end, h)
         parts.drive.at(t0 + n_steps * h)  # a drive that ends early fails here, before the run
         channels = parts.channels()
-        rows = np.empty((n_steps + 1, len(channels)))
+        rows = result_table(n_steps, len(channels))
         parts.initialise(t0, parts.drive.at(t0))
         rows[0] = parts.values
         loop = _compiled_loop(parts, settings)

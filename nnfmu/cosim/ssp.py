@@ -10,6 +10,7 @@ name round-trips.
 
 from __future__ import annotations
 
+import math
 import os
 import tempfile
 import xml.etree.ElementTree as ET
@@ -152,10 +153,14 @@ def _required(node: ET.Element, attribute: str, where: str) -> str:
 
 
 def _float(text: str, where: str) -> float:
+    """A finite number: FMUs refuse NaN and infinite values, and a time must be one."""
     try:
-        return float(text)
+        value = float(text)
     except ValueError:
         raise SspError(f"{where}: {text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise SspError(f"{where}: {text!r} is not a finite number")
+    return value
 
 
 def _read_element(node: ET.Element, path: Path) -> Element:

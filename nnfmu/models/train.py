@@ -29,6 +29,8 @@ Progress = Callable[[str, float], None]
 
 # Levenberg–Marquardt solves a (weights x weights) system per epoch; above this many weights Adam is cheaper.
 LM_MAX_WEIGHTS = 400
+# Hidden units per layer at most: component networks have tens; a batch of activations is samples x hidden floats
+MAX_HIDDEN = 1024
 
 
 @dataclass(frozen=True)
@@ -44,6 +46,9 @@ class Architecture:
         hidden = tuple(self.hidden)
         if not hidden or any(isinstance(h, bool) or not isinstance(h, (int, np.integer)) or h < 1 for h in hidden):
             raise ValueError(f"hidden sizes must be integers >= 1, got {self.hidden!r}")
+        if max(hidden) > MAX_HIDDEN:
+            raise ValueError(f"hidden size {max(hidden)} is more than the limit of {MAX_HIDDEN} units (component "
+                             f"networks need tens)")
         object.__setattr__(self, "hidden", tuple(sorted(set(int(h) for h in hidden))))
 
 

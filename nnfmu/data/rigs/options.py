@@ -20,6 +20,7 @@ DEFAULT_EFFECTS: dict[str, tuple[str, ...]] = {
 }
 DEFAULT_DURATION: dict[str, float] = {"damper": 70.0, "bushing": 60.0}  # s
 MIN_SAMPLE_RATE = 100.0  # Hz: the drives reach 40 Hz, and the recorder has no anti-alias filter
+MAX_SAMPLES = 10_000_000  # per record (2.8 h at 1 kHz): a rig run holds a dozen arrays of this length in memory
 
 
 @dataclass(frozen=True)
@@ -83,6 +84,9 @@ def check_options(kind: str, options: RigOptions) -> None:
         raise ValueError(
             f"duration {duration!r} s gives fewer than 16 samples at {options.sample_rate:g} Hz; choose a longer one"
         )
+    if duration * options.sample_rate > MAX_SAMPLES:
+        raise ValueError(f"duration {duration:g} s at {options.sample_rate:g} Hz gives {duration * options.sample_rate:.4g} "
+                         f"samples, more than the limit of {MAX_SAMPLES} per record; record in shorter parts")
     if not (math.isfinite(options.noise) and options.noise >= 0):
         raise ValueError(f"noise must be a non-negative multiplier of realistic sensor noise, got {options.noise!r}")
     if not isinstance(options.seed, int) or options.seed < 0:

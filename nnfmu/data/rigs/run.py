@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import json
+from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from ...atomic import atomic_path
+from ..errors import DataError
 from ..measurement import Measurement
 from ..save import save_measurement
 from .bushing import BushingParams
@@ -17,7 +20,7 @@ from .damper_rig import UNITS as DAMPER_UNITS
 from .damper_rig import DamperDyno, run_damper_dyno
 from .options import RigOptions, check_options, resolve_duration, resolve_effects
 from .parameters import describe
-from .truth import build_truth, truth_path, write_truth
+from .truth import build_truth, truth_path, truth_text
 
 
 @dataclass
@@ -63,8 +66,23 @@ def _check_params(params: object, expected: type) -> None:
 
 
 def write_rig(kind: str, out: Path, options: RigOptions) -> tuple[Path, Path]:
-    """Simulate and write the data (CSV or MDF4 by the suffix of `out`) and `<out without suffix>.truth.json`."""
+    """Simulate and write the data (CSV or MDF4 by the suffix of `out`) and `<out without suffix>.truth.json`.
+
+    Both files or neither: the truth goes to its temporary file before the data is written, and is renamed into
+    place after it, so a truth file that cannot be written leaves an earlier record as it was (DataError)."""
     out = Path(out)
     run = simulate_rig(kind, options)
-    data = save_measurement(run.measurement, out)
-    return data, write_truth(run.truth, truth_path(out))
+    truth = truth_path(out)
+    if truth.is_dir():
+        raise DataError(f"{truth}: is a folder, so the rig's truth file cannot be written there")
+    with ExitStack() as stack:
+        try:
+            staged = stack.enter_context(atomic_path(truth))
+            staged.write_text(truth_text(run.truth), encoding="utf-8")
+        except OSError as error:
+            raise DataError(f"{truth}: cannot write the rig's truth file: {error.strerror or error}") from None
+        try:
+            data = save_measurement(run.measurement, out)
+        except OSError as error:
+            raise DataError(f"{out}: cannot write the rig data: {error.strerror or error}") from None
+    return data, truth

@@ -9,7 +9,6 @@ from pathlib import Path
 from typing import Any
 
 from ... import __version__
-from ...atomic import write_text_atomic
 from .options import RigOptions
 
 TRUTH_SUFFIX = ".truth.json"
@@ -41,7 +40,7 @@ def build_truth(
     }
 
 
-def write_truth(truth: dict[str, Any], path: Path) -> Path:
-    """Write the truth as JSON (atomically) and return the path."""
-    write_text_atomic(path, json.dumps(truth, indent=2, allow_nan=False) + "\n")
-    return path
+def truth_text(truth: dict[str, Any]) -> str:
+    """The truth as the JSON text of its file."""
+    return json.dumps(truth, indent=2, allow_nan=False) + "\n"
+

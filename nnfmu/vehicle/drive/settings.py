@@ -13,6 +13,7 @@ ROAD_CLASSES = ("A", "B", "C", "D", "E", "F", "G", "H")
 COHERENCE_MODELS = ("isotropic", "independent", "identical")
 POSITIVE_SETTINGS = {"speed": "m/s", "duration": "s", "sample_rate": "Hz", "wheelbase": "m", "track_width": "m"}
 MIN_SAMPLES = 16  # the fewest samples nnfmu's measurement checks accept
+MAX_SAMPLES = 10_000_000  # drive plus wheelbase delay (2.8 h at 1 kHz): the road loop is twice that, in FFTs
 
 
 @dataclass(frozen=True)
@@ -63,6 +64,13 @@ class DriveSettings:
             raise DriveError(f"unknown ISO 8608 road class {self.road_class!r}; classes are {', '.join(ROAD_CLASSES)}")
         for name, unit in POSITIVE_SETTINGS.items():
             _positive(name, getattr(self, name), unit)
+        span = (self.duration + self.axle_delay) * self.sample_rate  # samples the road loop must hold
+        if span > MAX_SAMPLES:
+            raise DriveError(
+                f"duration {self.duration:g} s plus the rear axle's delay {self.axle_delay:g} s at "
+                f"{self.sample_rate:g} Hz gives {span:.4g} samples, more than the limit of {MAX_SAMPLES}; "
+                f"generate shorter drives"
+            )
         if self.samples < MIN_SAMPLES:
             raise DriveError(
                 f"duration {self.duration:g} s at {self.sample_rate:g} Hz gives {self.samples} samples, "
