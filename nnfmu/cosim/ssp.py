@@ -256,9 +256,11 @@ def _check_structure(system: SystemStructure, path: Path) -> None:
 
 
 def check_against_fmus(system: SystemStructure) -> None:
-    """Every element's FMU exists and has each declared connector as a Real variable of the same causality."""
+    """Every element's FMU exists and has each declared connector as a Real variable of the same causality, and
+    every connection joins variables of the same unit where both declare one (the master converts nothing)."""
     from fmpy import read_model_description
 
+    units: dict[tuple[str, str], str] = {}
     for element in system.elements:
         fmu = system.fmu_path(element)
         if not fmu.is_file():
@@ -279,6 +281,20 @@ def check_against_fmus(system: SystemStructure) -> None:
             if variable.causality != kind:
                 raise SspError(f"system {system.name!r}: element {element.name!r}: connector {name!r} is declared "
                                f"{kind} but is {variable.causality} in {fmu.name}")
+            units[(element.name, name)] = variable.unit or (variable.declaredType.unit if variable.declaredType
+                                                            else None) or ""
+    _check_units(system, units)
+
+
+def _check_units(system: SystemStructure, units: Mapping[tuple[str, str], str]) -> None:
+    """SspError naming the connection and both units when its ends declare different units."""
+    from nnfmu.data.units import normalise_unit
+
+    for c in system.connections:
+        start, end = units.get((c.start_element, c.start_connector), ""), units.get((c.end_element, c.end_connector), "")
+        if start and end and normalise_unit(start) != normalise_unit(end):
+            raise SspError(f"system {system.name!r}: connection {c}: the output is in {start!r}, the input in "
+                           f"{end!r}; connect variables of the same unit")
 
 
 @contextmanager

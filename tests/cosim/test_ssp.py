@@ -168,3 +168,17 @@ def test_a_checked_archive_opens_from_its_extracted_folder(systems: dict[float, 
     with open_system(archive) as system:
         assert system.path == system.base / "SystemStructure.ssd" and system.path.is_file()
         assert all(system.base.resolve() in system.fmu_path(e).resolve().parents for e in system.elements)
+
+
+def test_a_connection_between_different_units_is_refused_naming_both(systems: dict[float, Path],
+                                                                      tmp_path: Path) -> None:
+    """The master passes values as they are: a force in N fed to a velocity input in m/s is a wiring mistake."""
+    with open_system(systems[1e-3]) as system:
+        wired = [c if str(c) != "vehicle.damper_velocity -> damper.velocity"
+                 else Connection("damper", "force", "damper", "velocity") for c in system.connections]
+        assert wired != system.connections
+        ssd = write_ssd(replace(system, connections=wired), systems[1e-3].parent / "miswired.ssd")
+    with pytest.raises(SspError, match=r"connection damper\.force -> damper\.velocity: the output is in 'N', the "
+                                       r"input in 'm/s'"):
+        with open_system(ssd):
+            pass
