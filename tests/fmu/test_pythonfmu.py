@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 import subprocess
 import sys
+import time
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
@@ -184,6 +185,37 @@ def test_non_finite_input_is_refused_with_an_error_status_and_a_logged_message(d
     assert any("velocity" in m and repr(bad) in m for m in inst.logged(ERROR))
     assert inst.get_real(["velocity"])[0] == 0.2  # the refused value never reached the graph
     assert inst.step(T, T, 0.1) == pytest.approx(ref.step(T, T, 0.1), rel=1e-12, abs=1e-12)
+    inst.close()
+
+
+class Uninitialised(Instance):
+    """An instance left in the state instantiation leaves it: never initialised."""
+
+    def initialise(self, cutoff: float, gain: float, velocity: float, start: float = 0.0) -> None:
+        pass
+
+
+def test_a_step_before_initialisation_is_refused(damper):
+    _, fmu = damper
+    inst = Uninitialised(fmu, "early")
+    with pytest.raises(FMICallException) as refused:
+        inst.do_step(0.0, T)
+    assert refused.value.status == DISCARD
+    assert any("not initialised" in m for m in inst.logged(ERROR)), inst.messages
+    inst.close()
+
+
+@pytest.mark.parametrize("h", [1e308, float("inf"), 1e3])
+def test_a_step_of_too_many_samples_is_refused_at_once_naming_the_limit(damper, h):
+    onnx_path, fmu = damper
+    inst, ref = Instance(fmu, "long"), Reference(onnx_path)
+    started = time.perf_counter()
+    with pytest.raises(FMICallException) as refused:
+        inst.do_step(0.0, h)
+    assert time.perf_counter() - started < 1.0
+    assert refused.value.status == DISCARD
+    assert any("more than the 100000 one step may evaluate" in m for m in inst.logged(ERROR)), inst.messages
+    assert inst.step(0.0, T, 0.2) == pytest.approx(ref.step(0.0, T, 0.2), rel=1e-12, abs=1e-12)  # nothing changed
     inst.close()
 
 

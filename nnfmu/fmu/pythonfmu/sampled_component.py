@@ -24,6 +24,8 @@ COMPONENT_KEY = "nnfmu.component"
 MODEL_FILE = "model.onnx"
 VARIABLES_FILE = "variables.json"
 REACHED = 1e-6  # a sample time within REACHED * period of the step end counts as reached
+# one doStep's work is bounded (each sample is an onnxruntime call of some microseconds): more samples are refused
+MAX_SAMPLES_PER_STEP = 100_000
 _ORT_DTYPES = {"tensor(double)": np.float64, "tensor(float)": np.float32}  # graph input types the slave feeds
 
 LOG_CATEGORIES = {  # the FMI log categories of the messages reported here, for the slaves' model descriptions
@@ -171,6 +173,10 @@ class SampledComponent:
     def step(self, current_time: float, step_size: float) -> bool:
         """Evaluate every sample t_k with current_time < t_k <= current_time + step_size; False refuses the step.
         Without a start time (FMI 3), the first step's communication point is the start time."""
+        if self._sample < 0:
+            self._report(f"doStep at t = {current_time!r} s refused: the FMU is not initialised (call "
+                         "exitInitializationMode first)", "error")
+            return False
         if self._refused:
             self._report(f"doStep at t = {current_time!r} s refused: {'; '.join(self._refused.values())}", "error")
             return False
@@ -186,6 +192,12 @@ class SampledComponent:
             self._evaluate(step_size, end)
         else:
             t_start = self._t_start if self._t_start is not None else 0.0
+            due = (end - t_start) / self._period + REACHED - self._sample
+            if not due <= MAX_SAMPLES_PER_STEP:  # also for an infinite or NaN count
+                self._report(f"doStep({current_time!r}, {step_size!r}) refused: it spans {due:.4g} samples of "
+                             f"{self._period!r} s, more than the {MAX_SAMPLES_PER_STEP} one step may evaluate; take "
+                             "shorter steps", "error")
+                return False
             while t_start + (self._sample + 1) * self._period <= end + REACHED * self._period:
                 self._evaluate(self._period, t_start + (self._sample + 1) * self._period)
         self._time = end
