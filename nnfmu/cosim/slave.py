@@ -27,7 +27,8 @@ _FMI2_LOGGER: object | None = None  # the ctypes logger, made on first use
 def _route_fmi2_message(env, instance_name, status, category, message) -> None:  # noqa: ANN001 (ctypes callback)
     sink = _FMI2_SINKS.get(env or 0)
     if sink is not None:
-        sink.append((status, category.decode(errors="replace"), message.decode(errors="replace")))
+        # pythonfmu logs its fatal errors with a NULL category
+        sink.append((status, (category or b"").decode(errors="replace"), (message or b"").decode(errors="replace")))
 
 
 def _fmi2_logger() -> object:

@@ -4,6 +4,7 @@ FMI 3's own tests are in test_pythonfmu3.py."""
 
 from __future__ import annotations
 
+import json
 import math
 import subprocess
 import sys
@@ -32,6 +33,7 @@ from nnfmu.fmu.variables import fmu_variables
 from native_fmu_helpers import hostile_graph
 from pythonfmu_helpers import (DISCARD, ERROR, T, VMAX, WARNING, Instance, Reference, build, delay_damper_graph,
                               native_description, unzip)
+
 
 @pytest.fixture(params=[2, 3], ids=["fmi2", "fmi3"])
 def damper(request: pytest.FixtureRequest, pythonfmu_dampers) -> tuple[Path, Path]:
@@ -185,6 +187,49 @@ def test_non_finite_input_is_refused_with_an_error_status_and_a_logged_message(d
     assert any("velocity" in m and repr(bad) in m for m in inst.logged(ERROR))
     assert inst.get_real(["velocity"])[0] == 0.2  # the refused value never reached the graph
     assert inst.step(T, T, 0.1) == pytest.approx(ref.step(T, T, 0.1), rel=1e-12, abs=1e-12)
+    inst.close()
+
+
+@pytest.mark.parametrize(("field", "forged", "named"), [
+    ("inputs", [0.1, 0.2, 0.3], "'inputs' holds 3 values, expected 1"),
+    ("inputs", ["fast"], "'inputs' holds 'fast'"),
+    ("time", "soon", "'time' is 'soon'"),
+    ("sample", -7, "'sample' is -7"),
+    ("parameters", {"output_gain": 1.0}, "'parameters' names"),
+    ("refused", None, "'refused' is missing"),
+    ("bytes", b"garbage", "its bytes are no JSON object"),
+    ("bytes", b"[1, 2]", "its bytes are no JSON object (a JSON list)"),
+])
+def test_a_forged_or_garbage_state_is_refused_naming_the_field_and_the_instance_recovers(damper, field, forged,
+                                                                                       named):
+    """pythonfmu makes any exception in these calls fatal (and then corrupts its heap freeing the instance), so the
+    state is refused in the FMU: error logged, own state kept, steps refused until a valid state is set."""
+    onnx_path, fmu = damper
+    inst, ref = Instance(fmu, "forged"), Reference(onnx_path)
+    assert inst.step(0.0, T, 0.1) == pytest.approx(ref.step(0.0, T, 0.1), rel=1e-12, abs=1e-12)
+    two = inst.fmi_version == 2
+    good = inst.fmu.getFMUstate() if two else inst.fmu.getFMUState()
+    data = bytes(inst.fmu.serializeFMUstate(good) if two else inst.fmu.serializeFMUState(good))
+    if field != "bytes":
+        state = json.loads(data)
+        if forged is None:
+            del state[field]
+        else:
+            state[field] = forged
+        data = json.dumps(state).encode()
+    else:
+        data = forged
+    bad = inst.fmu.deSerializeFMUstate(data) if two else inst.fmu.deserializeFMUState(data)
+    inst.set_state(bad)
+    assert any(named in m for m in inst.logged(ERROR)), inst.messages
+    with pytest.raises(FMICallException) as refused:
+        inst.do_step(T, T)
+    assert refused.value.status == DISCARD
+    assert any("doStep" in m and named in m for m in inst.logged(ERROR)), inst.messages
+    inst.set_state(good)  # a valid state ends the refusal
+    assert inst.step(T, T, 0.3) == pytest.approx(ref.step(T, T, 0.3), rel=1e-12, abs=1e-12)
+    inst.free_state(bad)
+    inst.free_state(good)
     inst.close()
 
 

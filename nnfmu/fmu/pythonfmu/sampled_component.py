@@ -26,6 +26,10 @@ VARIABLES_FILE = "variables.json"
 REACHED = 1e-6  # a sample time within REACHED * period of the step end counts as reached
 # one doStep's work is bounded (each sample is an onnxruntime call of some microseconds): more samples are refused
 MAX_SAMPLES_PER_STEP = 100_000
+STATE_KEY = "FMU state"  # the entry of the refused values a refused FMU state makes
+UNREADABLE = "unreadable"  # the one field of what `from_bytes` returns for bytes that are no JSON object
+STATE_FIELDS = ("inputs", "raw", "outputs", "parameters", "graph_state", "outside", "refused", "extrapolating",
+                "t_start", "time", "sample")
 _ORT_DTYPES = {"tensor(double)": np.float64, "tensor(float)": np.float32}  # graph input types the slave feeds
 
 LOG_CATEGORIES = {  # the FMI log categories of the messages reported here, for the slaves' model descriptions
@@ -35,6 +39,11 @@ LOG_CATEGORIES = {  # the FMI log categories of the messages reported here, for 
 
 Severity = Literal["warning", "error"]
 Report = Callable[[str, Severity], None]  # how a slave passes a message to its FMI logger
+
+
+def _finite(value: Any) -> bool:
+    """A finite JSON number (a bool is none)."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
 def _session(model: Path) -> ort.InferenceSession:
@@ -254,7 +263,17 @@ class SampledComponent:
         }
 
     def restore(self, state: dict[str, Any]) -> None:
-        """Continue from a state `save` returned (in this or another instance of the same FMU)."""
+        """Continue from a state `save` returned (in this or another instance of the same FMU). A state this FMU
+        could not continue from (garbage, forged, or another FMU's) is reported naming the field and refused: the
+        instance keeps its own state and refuses to step until a valid state is set. (The runtimes give these
+        calls no error status: an exception would be fatal, and pythonfmu corrupts its heap freeing such an
+        instance.)"""
+        try:
+            self._check_state(state)
+        except ValueError as error:
+            self._report(str(error), "error")
+            self._refused[STATE_KEY] = str(error)
+            return
         self._inputs[:] = state["inputs"]
         self._raw[:] = state["raw"]
         self._outputs[:] = state["outputs"]
@@ -267,13 +286,63 @@ class SampledComponent:
         self._time = float(state["time"])
         self._sample = int(state["sample"])
 
+    def _check_state(self, state: Any) -> None:
+        """ValueError naming the first field of a deserialised state that does not fit this FMU."""
+        def refuse(reason: str) -> None:
+            raise ValueError(f"FMU state refused: {reason}")
+
+        if not isinstance(state, dict):
+            refuse(f"it is a JSON {type(state).__name__}, expected an object")
+        if UNREADABLE in state:
+            refuse(f"its bytes are no JSON object ({state[UNREADABLE]})")
+        for key in STATE_FIELDS:
+            if key not in state:
+                refuse(f"{key!r} is missing")
+        sizes = {"inputs": len(self._in_ports), "raw": len(self._out_ports), "outputs": len(self._out_ports),
+                 "outside": len(self._in_ports)}
+        for key, size in sizes.items():
+            values = state[key]
+            if not isinstance(values, list) or len(values) != size:
+                refuse(f"{key!r} holds {len(values) if isinstance(values, list) else repr(values)} values, "
+                       f"expected {size}")
+            for value in values:
+                if not (isinstance(value, bool) if key == "outside" else _finite(value)):
+                    refuse(f"{key!r} holds {value!r}")
+        for key, expected in (("parameters", {k: 1 for k in self._parameters}),
+                              ("graph_state", {k: len(v) for k, v in self._graph_state.items()})):
+            given = state[key]
+            if not isinstance(given, dict) or set(given) != set(expected):
+                refuse(f"{key!r} names {sorted(given) if isinstance(given, dict) else repr(given)}, expected "
+                       f"{sorted(expected)}")
+            for name, value in given.items():
+                values = value if key == "graph_state" else [value]
+                if not isinstance(values, list) or len(values) != expected[name] or not all(map(_finite, values)):
+                    refuse(f"{key!r}: {name!r} is {value!r}")
+        if not isinstance(state["refused"], dict) or not all(isinstance(v, str) for v in state["refused"].values()):
+            refuse(f"'refused' is {state['refused']!r}")
+        if not isinstance(state["extrapolating"], bool):
+            refuse(f"'extrapolating' is {state['extrapolating']!r}")
+        if state["t_start"] is not None and not _finite(state["t_start"]):
+            refuse(f"'t_start' is {state['t_start']!r}")
+        if not _finite(state["time"]):
+            refuse(f"'time' is {state['time']!r}")
+        sample = state["sample"]
+        if isinstance(sample, bool) or not isinstance(sample, int) or sample < -1:
+            refuse(f"'sample' is {sample!r}")
+
     @staticmethod
     def to_bytes(state: dict[str, Any]) -> bytes:
         return json.dumps(state, allow_nan=False).encode("utf-8")
 
     @staticmethod
     def from_bytes(data: bytes) -> dict[str, Any]:
-        return json.loads(data.decode("utf-8"))
+        """The state in `data`; bytes that are no JSON object give a state naming why, which `restore` refuses (an
+        exception here would be fatal)."""
+        try:
+            state = json.loads(bytes(data).decode("utf-8"))
+        except (ValueError, RecursionError) as error:
+            return {UNREADABLE: str(error)[:200]}
+        return state if isinstance(state, dict) else {UNREADABLE: f"a JSON {type(state).__name__}"}
 
 
 class SlaveBridge:
