@@ -51,7 +51,10 @@ class FmuSlave:
     def __init__(self, path: str | Path, instance_name: str = "instance", logging_on: bool = False) -> None:
         from fmpy import extract, read_model_description
 
+        from nnfmu.safe_zip import check_zip
+
         self.path = Path(path)
+        check_zip(self.path)  # ArchiveError for a zip bomb or a member climbing out, before fmpy reads or extracts
         self.instance_name = instance_name
         self.description = read_model_description(str(self.path))
         self.fmi_version = 3 if self.description.fmiVersion.startswith("3") else 2

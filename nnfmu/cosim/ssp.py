@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..atomic import atomic_path
-from .ssp_archive import ArchiveError, confined_source, extract_ssp
+from ..safe_zip import ArchiveError, check_zip, confined_source, extract_zip
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
@@ -266,6 +266,7 @@ def check_against_fmus(system: SystemStructure) -> None:
         if not fmu.is_file():
             raise SspError(f"system {system.name!r}: element {element.name!r}: FMU {fmu} not found")
         try:
+            check_zip(fmu)  # a zip bomb or a member climbing out, before fmpy reads or extracts anything
             variables = {v.name: v for v in read_model_description(str(fmu)).modelVariables}
         except Exception as error:  # fmpy raises plain exceptions for broken archives and XML
             raise SspError(f"system {system.name!r}: element {element.name!r}: cannot read {fmu}: {error}") from None
@@ -291,7 +292,8 @@ def _check_units(system: SystemStructure, units: Mapping[tuple[str, str], str]) 
     from nnfmu.data.units import normalise_unit
 
     for c in system.connections:
-        start, end = units.get((c.start_element, c.start_connector), ""), units.get((c.end_element, c.end_connector), "")
+        start = units.get((c.start_element, c.start_connector), "")
+        end = units.get((c.end_element, c.end_connector), "")
         if start and end and normalise_unit(start) != normalise_unit(end):
             raise SspError(f"system {system.name!r}: connection {c}: the output is in {start!r}, the input in "
                            f"{end!r}; connect variables of the same unit")
@@ -312,7 +314,7 @@ def open_system(path: str | os.PathLike[str]) -> Iterator[SystemStructure]:
         return
     with tempfile.TemporaryDirectory(prefix="nnfmu-ssp-") as folder:
         try:
-            extract_ssp(path, Path(folder))
+            extract_zip(path, Path(folder))
         except ArchiveError as error:
             raise SspError(str(error)) from None
         except (OSError, zipfile.BadZipFile) as error:

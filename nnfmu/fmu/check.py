@@ -28,6 +28,7 @@ import numpy as np
 from fmpy import read_model_description, simulate_fmu
 
 from nnfmu.fmu.reference_results import EXPERIMENTS_TYPE, LS_FOLDER, MANIFEST
+from nnfmu.safe_zip import ArchiveError, check_members, extract_zip
 
 DEFAULT_TOLERANCE = 1e-6
 CHECKSUMS = {"SHA3-224": hashlib.sha3_224, "SHA3-256": hashlib.sha3_256, "SHA3-384": hashlib.sha3_384,
@@ -129,7 +130,10 @@ class _Archive:
     def __init__(self, path: Path) -> None:
         try:
             with zipfile.ZipFile(path) as archive:
-                self.files = {info.filename: archive.read(info) for info in archive.infolist() if not info.is_dir()}
+                members = check_members(archive, path)  # an FMU from elsewhere may be a zip bomb or climb out
+                self.files = {info.filename: archive.read(info) for info in members if not info.is_dir()}
+        except ArchiveError as err:
+            raise CheckError(str(err)) from None
         except (OSError, zipfile.BadZipFile) as err:
             raise CheckError(f"{path}: not a readable FMU (zip archive): {err}") from err
         self.path = path
@@ -298,8 +302,7 @@ def check_fmu(path: str | Path, tolerance: float | None = None) -> CheckReport:
         raise CheckError(f"{path}: {MANIFEST_PATH} lists no experiment")
     report = CheckReport(path, checksum_errors)
     with tempfile.TemporaryDirectory(prefix="nnfmu-check-") as folder:
-        with zipfile.ZipFile(path) as fmu:
-            fmu.extractall(folder)
+        extract_zip(path, Path(folder))  # its members were checked when it was read
         for experiment in experiments:
             report.experiments.append(_run(folder, experiment, archive, tolerance))
     return report

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from nnfmu.cosim import ssp_archive
+from nnfmu import safe_zip
 from nnfmu.cosim.ssp import (
     SSD, Connection, Connector, Element, SspError, SystemStructure, check_against_fmus, open_system, read_ssd,
     write_ssd,
@@ -143,7 +143,7 @@ def test_a_zip_bomb_and_an_archive_too_large_are_refused(systems: dict[float, Pa
     with pytest.raises(SspError, match=r"member 'resources/zeros\.bin' inflates \d+-fold .* limit"):
         with open_system(bomb):
             pass
-    monkeypatch.setattr(ssp_archive, "MAX_TOTAL_BYTES", 1024 * 1024)  # the FMUs alone are below it
+    monkeypatch.setattr(safe_zip, "MAX_TOTAL_BYTES", 1024 * 1024)  # the FMUs alone are below it
     large = _archive(systems, tmp_path / "large.ssp", extra={"resources/noise.bin": os.urandom(1024 * 1024)},
                      compression=zipfile.ZIP_STORED)
     with pytest.raises(SspError, match=r"unpack to more than the limit of 1048576 bytes"):
@@ -180,5 +180,21 @@ def test_a_connection_between_different_units_is_refused_naming_both(systems: di
         ssd = write_ssd(replace(system, connections=wired), systems[1e-3].parent / "miswired.ssd")
     with pytest.raises(SspError, match=r"connection damper\.force -> damper\.velocity: the output is in 'N', the "
                                        r"input in 'm/s'"):
+        with open_system(ssd):
+            pass
+
+
+def test_an_element_fmu_that_is_a_zip_bomb_is_refused_before_fmpy_reads_it(systems: dict[float, Path],
+                                                                          tmp_path: Path) -> None:
+    with open_system(systems[1e-3]) as system:
+        bomb = tmp_path / "bomb.fmu"
+        with zipfile.ZipFile(system.fmu_path("damper")) as source, zipfile.ZipFile(bomb, "w",
+                                                                                     zipfile.ZIP_DEFLATED) as out:
+            for name in source.namelist():
+                out.writestr(name, source.read(name))
+            out.writestr("resources/zeros.bin", bytes(4 * 1024 * 1024))
+        elements = [replace(e, source=str(bomb)) if e.name == "damper" else e for e in system.elements]
+        ssd = write_ssd(replace(system, elements=elements), systems[1e-3].parent / "bomb.ssd")
+    with pytest.raises(SspError, match=r"element 'damper': cannot read .*bomb\.fmu: .*'resources/zeros\.bin' inflates"):
         with open_system(ssd):
             pass

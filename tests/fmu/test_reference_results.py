@@ -187,6 +187,16 @@ def test_tampered_reference_file_fails_its_checksum(network, tmp_path):
                                                             "match the manifest"]
 
 
+@pytest.mark.parametrize(("member", "data", "message"), [
+    ("resources/zeros.bin", bytes(4 * 1024 * 1024), r"member 'resources/zeros\.bin' inflates \d+-fold"),
+    ("../../escaped.txt", b"x", r"member '\.\./\.\./escaped\.txt' climbs out"),
+])
+def test_an_fmu_that_is_a_zip_bomb_or_climbs_out_is_refused_before_reading(network, tmp_path, member, data, message):
+    hostile = _replace(network["fmi3"], {member: data}, tmp_path / "hostile.fmu")
+    with pytest.raises(CheckError, match=message):
+        check_fmu(hostile)
+
+
 def test_graph_without_stimulus_gets_no_reference_results(delay_fmus):
     assert not any(n.startswith(LS_FOLDER) for n in zipfile.ZipFile(delay_fmus[2]).namelist())
 

@@ -84,9 +84,10 @@ def check_options(kind: str, options: RigOptions) -> None:
         raise ValueError(
             f"duration {duration!r} s gives fewer than 16 samples at {options.sample_rate:g} Hz; choose a longer one"
         )
-    if duration * options.sample_rate > MAX_SAMPLES:
-        raise ValueError(f"duration {duration:g} s at {options.sample_rate:g} Hz gives {duration * options.sample_rate:.4g} "
-                         f"samples, more than the limit of {MAX_SAMPLES} per record; record in shorter parts")
+    samples = duration * options.sample_rate
+    if samples > MAX_SAMPLES:
+        raise ValueError(f"duration {duration:g} s at {options.sample_rate:g} Hz gives {samples:.4g} samples, more "
+                         f"than the limit of {MAX_SAMPLES} per record; record in shorter parts")
     if not (math.isfinite(options.noise) and options.noise >= 0):
         raise ValueError(f"noise must be a non-negative multiplier of realistic sensor noise, got {options.noise!r}")
     if not isinstance(options.seed, int) or options.seed < 0:

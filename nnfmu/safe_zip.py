@@ -1,8 +1,8 @@
-"""Extract an `.ssp` archive once, safely, and keep its FMU sources inside it.
+"""Open zip archives from elsewhere (`.ssp` systems, FMUs) safely, and keep paths named inside them inside them.
 
-An archive from elsewhere may name members outside the extraction folder (`../../x`, `/etc/x`: zip-slip), inflate a
-megabyte into gigabytes (a zip bomb), or point its elements' `source` at FMUs anywhere on disk (an FMU is native
-code). Every member is checked before anything is written, and the extracted folder is what every master loads.
+An archive may name members outside the extraction folder (`../../x`, `/etc/x`: zip-slip), inflate a megabyte into
+gigabytes (a zip bomb), or point an SSP element's `source` at FMUs anywhere on disk (an FMU is native code). Every
+member is checked before anything is read or written.
 """
 
 from __future__ import annotations
@@ -13,14 +13,15 @@ import zipfile
 from pathlib import Path, PurePosixPath
 
 MAX_TOTAL_BYTES = 256 * 1024 * 1024  # uncompressed size of all members: FMUs of a few MB each fit hundreds of times
-MAX_MEMBERS = 10_000
+MAX_MEMBERS = 10_000  # an FMU or a system has tens
 MAX_RATIO = 100.0  # uncompressed / compressed size of a member above RATIO_FLOOR: XML and FMUs stay far below
 RATIO_FLOOR = 1024 * 1024  # [bytes] smaller members may compress as well as they like
 _SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*:")  # a URI scheme or a Windows drive letter
 
 
 class ArchiveError(ValueError):
-    """An archive member or element source that would reach outside the system, or an archive too large to unpack."""
+    """An archive member or a path named inside the archive that would reach outside it, or an archive too large to
+    unpack."""
 
 
 def _unsafe(name: str) -> str | None:
@@ -34,11 +35,11 @@ def _unsafe(name: str) -> str | None:
     return None
 
 
-def _check_members(archive: zipfile.ZipFile, path: Path) -> list[zipfile.ZipInfo]:
+def check_members(archive: zipfile.ZipFile, path: Path) -> list[zipfile.ZipInfo]:
     """Every member once its name, its size and its compression ratio are within bounds."""
     members = archive.infolist()
     if len(members) > MAX_MEMBERS:
-        raise ArchiveError(f"{path}: {len(members)} members, more than the {MAX_MEMBERS} an SSP archive may hold")
+        raise ArchiveError(f"{path}: {len(members)} members, more than the {MAX_MEMBERS} an archive may hold")
     total = 0
     for member in members:
         why = _unsafe(member.filename)
@@ -55,11 +56,19 @@ def _check_members(archive: zipfile.ZipFile, path: Path) -> list[zipfile.ZipInfo
     return members
 
 
-def extract_ssp(path: Path, folder: Path) -> None:
-    """Extract the `.ssp` at `path` into the empty `folder`; ArchiveError naming the member when one is unsafe."""
+def check_zip(path: Path) -> None:
+    """ArchiveError naming the member when the zip archive at `path` (an FMU) holds one that is unsafe to read or
+    extract; zipfile's own errors for a file that is no zip archive."""
+    with zipfile.ZipFile(path) as archive:
+        check_members(archive, path)
+
+
+def extract_zip(path: Path, folder: Path) -> None:
+    """Extract the zip archive at `path` into the empty `folder`; ArchiveError naming the member when one is
+    unsafe, before anything is written."""
     root = folder.resolve()
     with zipfile.ZipFile(path) as archive:
-        for member in _check_members(archive, path):
+        for member in check_members(archive, path):
             target = (root / member.filename).resolve()
             if root not in target.parents:
                 raise ArchiveError(f"{path}: member {member.filename!r} would be written outside the archive's "
