@@ -165,6 +165,7 @@ def demo(
     out: Path = typer.Option(Path("demo-out"), "--out", "-o", help="Folder for everything the demo writes."),
     seed: int = typer.Option(0, help="Seed of the rig records and the training."),
     quick: bool = typer.Option(False, help="Short records and training: checks every stage runs, not results to quote."),
+    lab_bushings: bool = typer.Option(False, "--lab-bushings", help="Road test with the bushing networks of the lab record instead of ones trained on a vehicle-derived rig record."),
 ) -> None:
     """Run the pipeline end to end on built-in data: rig data, networks, ONNX, FMUs, replay, road test, loop."""
     from rich.console import Console
@@ -173,7 +174,7 @@ def demo(
     from nnfmu.demo import DemoSettings, run_demo
 
     console = Console(markup=False)  # diagnosis test names carry brackets: test[velocity]
-    summary = run_demo(out, DemoSettings(seed=seed, quick=quick), log=console.print)
+    summary = run_demo(out, DemoSettings(seed=seed, quick=quick, vehicle_bushings=not lab_bushings), log=console.print)
     table = Table(title="component FMUs replayed on held-out random rig records")
     for column in ("preset", "train [s]", "test-split NRMSE", "FMU NRMSE", "R²", "peak error", "pseudo-damage ratio"):
         table.add_column(column, justify="left" if column == "preset" else "right")

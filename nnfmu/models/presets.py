@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from nnfmu.models.features import Derived, Difference, FeatureSpec, Highpass, SmoothSign, Tap
+from nnfmu.models.features import Derived, Difference, FeatureSpec, Highpass, SmoothSign, Stop, Tap
 from nnfmu.models.train import Architecture, TrainSettings
 
 # Hidden sizes tried by default after the thesis's size (chosen by validation error).
@@ -37,6 +37,11 @@ VALVE_KNEE_VELOCITY = 0.1
 # Rate scale [rad/s] of the conical channel's friction-sign feature: its friction is a larger share of its torque
 # than in the other channels (a stiff, small-angle channel), ~2 % of the peak rate of a front LCA bushing's rig drive.
 CONICAL_FRICTION_RATE = 0.05
+# Radii [rad] of the conical channel's stop operators (Prandtl elements, the Jenkins elements of Berg's friction in
+# the feature space): around the friction's x2 of ~2 mrad and the ±3-5 mrad a four-poster tilts a front LCA bushing,
+# where the friction is half the torque and depends on the motion since the last reversal (Masing), not on the rate's
+# sign; on the lab record's ±50 mrad they saturate into friction-sign features.
+CONICAL_STOP_RADII = (0.5e-3, 1.5e-3, 4.5e-3)
 
 
 @dataclass(frozen=True)
@@ -118,7 +123,8 @@ PRESETS: dict[str, Preset] = {
         _preset(
             "bushing-conical-torque", "bushing conical torque from conical rotation and rate (thesis 4-7-1 with delays)",
             ("conical_rotation", "conical_angular_velocity"), "conical_torque", (0, 1), 7,
-            (*memory_bank("conical_rotation"), SmoothSign("conical_angular_velocity", scale=CONICAL_FRICTION_RATE)),
+            (*memory_bank("conical_rotation"), SmoothSign("conical_angular_velocity", scale=CONICAL_FRICTION_RATE),
+             *(Stop("conical_rotation", radius=r) for r in CONICAL_STOP_RADII)),
         ),
     )
 }

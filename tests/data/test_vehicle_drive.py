@@ -86,7 +86,19 @@ def test_drive_peaks_exceed_the_source_by_the_margin_on_each_side(source: Measur
         assert min(above, below) == pytest.approx(1.3, rel=1e-9), key  # the side that needs most sets the scale
         assert max(above, below) >= 1.3 - 1e-9, key
         assert design.working_point == pytest.approx(simulated.mean)
-        assert abs(x[0]) < 1e-3 * np.ptp(x) and abs(x[-1]) < 1e-3 * np.ptp(x)  # faded in and out from rest
+
+
+def test_drive_starts_where_the_vehicle_starts_the_bushing_or_at_rest(source: Measurement, drive) -> None:
+    at_rest = design_vehicle_drive(source, [ELEMENT], RATE, int(10 * RATE), seed=3, design=DriveDesign(settled=False))
+    for key in SOURCE:
+        x, initial = drive.motions[key].x, source[f"{ELEMENT}_{BUSHING_CHANNELS[key].position}"][0]
+        assert drive.channels[key].start == initial
+        # settled at the car's static deflection, where the reference relaxes the bushing's friction
+        assert abs(x[0] - initial) < 1e-3 * np.ptp(x) and abs(x[-1] - initial) < 1e-3 * np.ptp(x)
+        y = at_rest.motions[key].x
+        assert abs(y[0]) < 1e-3 * np.ptp(y) and abs(y[-1]) < 1e-3 * np.ptp(y)
+        middle = slice(len(x) // 3, 2 * len(x) // 3)
+        assert np.mean(x[middle]) == pytest.approx(drive.channels[key].working_point, abs=0.2 * np.std(x))
 
 
 def test_drive_rates_are_the_positions_derivatives(drive) -> None:

@@ -6,8 +6,15 @@ channel (axial, radial, axial rotation, conical rotation) the design takes the s
 bushing elements of a result file (e.g. `bushing_fl_front_radial_displacement`), estimates its PSD about its mean
 (Welch, then smoothed over a fraction of an octave; the elements' PSDs averaged), keeps it inside the rig
 controller's band, synthesises a random-phase multisine with that PSD (`random_motion`) and scales it about the
-simulated working point (the mean, held as a faded-in preload) so that its excursions above and below reach at least
-`margin` times the simulated ones on each side: the side that needs more sets the scale, the other exceeds by more.
+simulated working point (the mean) so that its excursions above and below reach at least `margin` times the simulated
+ones on each side: the side that needs more sets the scale, the other exceeds by more.
+
+Where the record starts matters because the bushing's friction remembers it: Jenkins elements that never slip over
+the motion act as springs anchored where the bushing was last relaxed. The vehicle reference starts every bushing
+relaxed at its static deflection (the first sample of the result, the same for every drive), so by default the rig
+record starts there too (the specimen mounted and settled at the car's static deflection) and moves to the working
+point over the fade; a drive faded in from zero deflection leaves the non-slipping elements anchored at zero, which
+on the front LCA bushing's radial channel shifted the force by ~13 N (rms 31 N) along a held-out car motion.
 """
 
 from __future__ import annotations
@@ -33,13 +40,15 @@ class DriveDesign:
     """How a vehicle-derived drive is designed: `margin` [1] over the simulated excursions on each side of the
     working point; `band` [Hz] the rig controller's pass band (the lab drive's 0.5-40 Hz); `fade` [s] at each end;
     `fit_sensors`: size every transducer's range to the test (else the rig's default transducers); `headroom` [1]:
-    full scale over the test's peak when sizing."""
+    full scale over the test's peak when sizing; `settled`: the record starts at the first element's initial
+    deflection in the result (its static deflection), else at zero deflection."""
 
     margin: float = 1.2
     band: tuple[float, float] = (0.5, 40.0)
     fade: float = 0.5
     fit_sensors: bool = True
     headroom: float = 1.25
+    settled: bool = True
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.margin) and self.margin >= 1.0):
@@ -116,6 +125,7 @@ class ChannelDesign:
     unit: str
     simulated: dict[str, Extremes]
     share_outside_band: float
+    start: float
     working_point: float
     target_low: float
     target_high: float
@@ -126,7 +136,7 @@ class ChannelDesign:
         return {"channel": self.key, "unit": self.unit,
                 "simulated": {element: asdict(e) for element, e in self.simulated.items()},
                 "simulated_variance_outside_band": self.share_outside_band,
-                "working_point": self.working_point, "target_low": self.target_low, "target_high": self.target_high,
+                "start": self.start, "working_point": self.working_point, "target_low": self.target_low, "target_high": self.target_high,
                 "designed": asdict(self.designed), "designed_rms_over_simulated_rms": self.rms_over_simulated}
 
 
@@ -146,9 +156,11 @@ class VehicleDrive:
             "source": self.source,
             "elements": list(self.elements),
             "design": asdict(self.design) | {"band": list(self.design.band)},
-            "peak_control": "random part scaled about the working point (the simulated mean, a faded preload) so "
-                            "that its excursions above and below reach at least margin x the simulated ones; the "
-                            "side that needs more sets the scale",
+            "start": "settled at the simulated initial deflection (the car's static position), then faded to the "
+                     "working point" if self.design.settled else "at rest (zero deflection), faded to the working point",
+            "peak_control": "random part scaled about the working point (the simulated mean) so that its excursions "
+                            "above and below reach at least margin x the simulated ones; the side that needs more "
+                            "sets the scale",
             "combination": "all channels driven at once, each with its own random phases (independent): every "
                            "network sees its own channel only, so each gets the whole record",
             "channels": {key: c.to_dict() for key, c in self.channels.items()},
@@ -191,14 +203,16 @@ def _channel(source: Measurement, elements: Sequence[str], key: str, rate: float
     target_low = min(s.mean + design.margin * (s.min - s.mean) for s in stats.values())
     scale = max((target_high - centre) / float(np.max(unit_motion.x)),
                 (centre - target_low) / -float(np.min(unit_motion.x)))
-    working_point = preload(centre, rate, n, min(design.fade, n / rate / 4))
+    start = float(simulated[elements[0]][0]) if design.settled else 0.0
+    shift = preload(centre - start, rate, n, min(design.fade, n / rate / 4))
+    working_point = Motion(start + shift.x, shift.v, shift.a)
     random_part = unit_motion.scaled(scale)
     motion = Motion(working_point.x + random_part.x, working_point.v + random_part.v, working_point.a + random_part.a)
     designed = Extremes.of(motion.x)
     simulated_rms = max(s.rms for s in stats.values())
     return motion, ChannelDesign(
         key=key, unit=CHANNELS[key].position_unit, simulated=stats, share_outside_band=1.0 - band_share,
-        working_point=centre, target_low=target_low, target_high=target_high, designed=designed,
+        start=start, working_point=centre, target_low=target_low, target_high=target_high, designed=designed,
         rms_over_simulated=designed.rms / simulated_rms if simulated_rms > 0 else float("inf"))
 
 
