@@ -8,9 +8,12 @@ or smoothed copy of another (nearly collinear after scaling), which a net can on
 opposite weights (the thesis's limit is |weight| <~ 10). Bushings: the same input channels plus a bank of
 first-order high-pass filters of the position, one time constant per decade (1, 10, 100 ms): c·highpass(x, tau) is
 the force of a Maxwell branch, so the bank is the memory of a generalised Maxwell (Prony-series) material, which a
-one-sample delay line at 1 kHz cannot hold. Damper hysteresis: velocity, its backward differences over 2 and 8 samples
-(valve lag, acceleration) instead of the thesis's single delay, and the seal friction's smoothed sign. Damper
-spline: velocity, the seal friction's smoothed sign and the valve's blow-off knee as tanh(v/0.1 m/s).
+one-sample delay line at 1 kHz cannot hold. The conical torque adds stop operators of the rotation (Prandtl elements,
+the feature-space form of the friction's Jenkins elements): at the few mrad a four-poster tilts a front LCA bushing its
+friction is half the torque and follows the motion since the last reversal. Damper hysteresis: velocity, its
+backward differences over 2 and 8 samples (valve lag, acceleration) instead of the thesis's single delay, and the
+seal friction's smoothed sign. Damper spline: velocity, the seal friction's smoothed sign and the valve's blow-off
+knee as tanh(v/0.1 m/s).
 """
 
 from __future__ import annotations
