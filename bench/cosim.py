@@ -3,7 +3,7 @@
 Usage: python bench/cosim.py [MODELS_DIR] [DURATION_S] [REPEATS]
 Systems as the road test builds them (`nnfmu.roadtest.systems`): the quarter car with a damper network (2 FMUs) and
 the full vehicle with four damper networks and its four front LCA bushing networks on stabilised ports (9 FMUs), the
-vehicle FMU sampled at the communication step, plain Gauss-Seidel, network output filters off. MODELS_DIR holds
+vehicle FMU sampled at the communication step, plain Gauss-Seidel, network FMUs at their default parameters (output filter off). MODELS_DIR holds
 <preset>.onnx of the two damper and four bushing presets; without it, the presets are trained in a temporary folder on
 short rig records with short training (the networks' size and graph are the presets', their accuracy is not quoted).
 Preparation (training, FMU builds) is not timed. Timed: the whole `cosimulate` call (instantiation, initialisation,
@@ -113,10 +113,10 @@ def main() -> None:
         fmus = build_component_fmus(models, work / "fmu", with_bushing=True)
         drive = generate_drive(DriveSettings(duration=duration + STEP))
         ssds = {system: write_system(system, build_vehicle(system, work / "fmu", STEP), fmus.dampers[DAMPER],
-                                     fmus.bushing if bushing_elements(system) else None, work / system, 0.0)
+                                     fmus.bushing if bushing_elements(system) else None, work / system)
                 for system in ("quarter-car", "full-vehicle")}
         linear = write_system("full-vehicle", linear_bushing_vehicle(work / "fmu"), fmus.dampers[DAMPER], None,
-                              work / "full-vehicle-linear-bushings", 0.0)
+                              work / "full-vehicle-linear-bushings")
         log(f"prepared in {time.perf_counter() - prepared:.1f} s")
         load = os.getloadavg()[0]  # other work on the machine slows the timed runs
         records, results = {}, {}
@@ -137,7 +137,7 @@ def main() -> None:
         "full_vehicle_stability": boundedness(results["full-vehicle"], yardstick),
         "systems": records,
         "setup": {"scheme": "gauss-seidel, plain", "vehicle_sample_period_s": STEP, "damper_network": DAMPER,
-                  "bushings": "network FMUs on stabilised vehicle ports", "network_output_filter": "off",
+                  "bushings": "network FMUs on stabilised vehicle ports", "network_output_filter": "FMU default (off)",
                   "models": sys.argv[1] if len(sys.argv) > 1 else "quick-trained (bench)",
                   "cpus": os.cpu_count(), "load_average_1min_before_runs": round(load, 2), "python": platform.python_version(), "machine": platform.machine()},
     }, allow_nan=False))

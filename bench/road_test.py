@@ -5,9 +5,13 @@ MODELS_DIR holds <preset>.onnx for the two damper and four bushing presets (e.g.
 does not exist they are trained there first on default rig records with the presets' default settings. With
 `--bushings vehicle` (the default, as in `nnfmu demo`) the road test's bushing networks are instead trained on a rig
 record derived from the vehicle's own bushing deflections on another drive seed (`train_vehicle_bushings`, in
-OUT_DIR/vehicle_bushing); `lab` keeps MODELS_DIR's. Prints one JSON document: run times, the thesis comparison per
-system and damper network, the bushing networks along the reference motion, and the largest use of each network
-input's training envelope.
+OUT_DIR/vehicle_bushing); `lab` keeps MODELS_DIR's. DURATION_S (default 50) shortens both systems' drives (20 s
+finishes in minutes on 2 cores). The co-simulations run the master and the FMUs at their defaults. Progress goes to
+stderr; the last stdout line is one JSON object: run times, which record the bushing networks were trained on,
+`realtime_factor_full_vehicle` (simulated seconds per wall second of the full vehicle with the hysteresis damper
+networks), the error `budget` (per system, channel and damper model: nrmse_total, nrmse_network, nrmse_coupling,
+damage_ratio; see nnfmu/roadtest/budget.py), the thesis comparison, and the largest use of each network input's
+training envelope.
 """
 
 from __future__ import annotations
@@ -70,16 +74,19 @@ def main() -> None:
     envelope = {}
     for system in summary["systems"]:
         for e in system["envelope"]:
-            key = f"{system['system']}: {e['run']}: {e['port']}"
+            key = f"{system['system']}: {e['run']}: {e['element']}.{e['port']}"
             envelope[key] = max(envelope.get(key, 0.0), e["range_used"] or 0.0)
+    full = next((s for s in summary["systems"] if s["system"] == "full-vehicle"), None)
     print(json.dumps({
         "duration_s": duration, "training_s": round(train_seconds, 1), "road_test_s": round(result.seconds, 1),
         "bushing_networks": bushing_networks,
+        "realtime_factor_full_vehicle": round(full["duration_s"] / full["seconds"]["damper-hysteresis"], 2)
+        if full else None,
+        "budget": [row for s in summary["systems"] for row in s["budget"]],
         "reports": {k: str(v) for k, v in result.reports().items()},
-        "systems": [{k: s[k] for k in ("system", "seconds", "thesis_table", "bushing_networks_on_reference_motion")}
-                    for s in summary["systems"]],
+        "systems": [{k: s[k] for k in ("system", "seconds", "thesis_table")} for s in summary["systems"]],
         "largest_envelope_use": envelope,
-    }, indent=2))
+    }, allow_nan=False))
 
 
 if __name__ == "__main__":

@@ -5,6 +5,9 @@ Imports of the working stages happen inside the commands, so `nnfmu build` never
 
 from __future__ import annotations
 
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Optional
 
@@ -18,6 +21,8 @@ vehicle_app = typer.Typer(no_args_is_help=True, help="Vehicle models for the vir
 app.add_typer(vehicle_app, name="vehicle")
 drive_app = typer.Typer(no_args_is_help=True, help="Drive files for a four-post road test simulator.")
 app.add_typer(drive_app, name="drive")
+PLATFORMS_HELP = ("Binaries of the native backend, comma-separated: linux64, win64 (default: linux64, plus win64 when "
+                  "the MinGW-w64 cross compiler x86_64-w64-mingw32-gcc is installed).")
 
 
 def _fail(error: Exception) -> None:
@@ -29,6 +34,32 @@ def _fail(error: Exception) -> None:
 def _split(items: Optional[list[str]]) -> list[str]:
     """Accept repeated options and comma-separated lists alike."""
     return [n.strip() for item in items or [] for n in item.split(",") if n.strip()]
+
+
+def _platforms(items: Optional[list[str]]) -> Optional[tuple[str, ...]]:
+    """`--platforms linux64,win64` as a tuple; None (the default choice) when not given."""
+    return tuple(_split(items)) if items else None
+
+
+@contextmanager
+def _warnings_as_lines() -> Iterator[None]:
+    """Print each distinct build warning (a platform left out) raised inside the block as one `warning: ...` line on
+    stderr; other warnings pass on as Python shows them."""
+    from nnfmu.fmu.errors import PlatformSkippedWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PlatformSkippedWarning)
+        try:
+            yield
+        finally:
+            lines = []
+            for w in caught:
+                if issubclass(w.category, PlatformSkippedWarning):
+                    lines.append(str(w.message))
+                else:
+                    warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+            for message in dict.fromkeys(lines):
+                typer.echo(f"warning: {message}", err=True)
 
 
 @app.command()
@@ -87,6 +118,20 @@ def _vehicle_rig(kind: str, source: Optional[Path], elements: list[str], out: Pa
     return write_vehicle_rig(source, elements, out, options, design)
 
 
+def _channel_map(items: Optional[list[str]]) -> dict[str, str]:
+    """`--map "FILE CHANNEL=name"` options as a channel map."""
+    from nnfmu.data import parse_channel_map
+
+    try:
+        return parse_channel_map(items or [])
+    except ValueError as error:
+        raise typer.BadParameter(f"--map: {error}") from None
+
+
+MAP_HELP = ("Rename a file channel to an nnfmu channel, e.g. --map \"Axial Force=force\" (repeat); "
+            "for MTS exports also picks the time axis (NAME=time).")
+
+
 def _int_list(items: Optional[list[str]], option: str) -> tuple[int, ...]:
     try:
         return tuple(int(v) for v in _split(items))
@@ -96,7 +141,7 @@ def _int_list(items: Optional[list[str]], option: str) -> tuple[int, ...]:
 
 @app.command()
 def train(
-    data: Path = typer.Argument(..., help="Rig data (CSV with `name [unit]` headers, or MDF4)."),
+    data: Path = typer.Argument(..., help="Rig data (CSV with `name [unit]` headers, MDF4, or an MTS 793 export)."),
     preset: str = typer.Option(..., help="damper-spline, damper-hysteresis, bushing-axial-force, bushing-radial-force, bushing-axial-torque or bushing-conical-torque."),
     out: Path = typer.Option(..., "--out", "-o", help="ONNX step graph to write."),
     output: Optional[str] = typer.Option(None, help="Output channel (default: the preset's, e.g. force)."),
@@ -111,6 +156,7 @@ def train(
     max_epochs: Optional[int] = typer.Option(None, help="Epoch limit (early stopping usually ends sooner)."),
     seed: int = typer.Option(0, help="Seed: the same seed gives the same network."),
     name: str = typer.Option("", help="Model name stored in the ONNX metadata (default: from the preset)."),
+    channel_map: Optional[list[str]] = typer.Option(None, "--map", help=MAP_HELP),
 ) -> None:
     """Train a component network on rig data and export it as a verified ONNX step graph."""
     from rich.console import Console
@@ -125,7 +171,8 @@ def train(
     request = TrainRequest(preset=preset, output=output, inputs=tuple(_split(inputs)),
                            delays=_int_list(delays, "--delays"), hidden=_int_list(hidden, "--hidden"),
                            recurrent=recurrent, thesis=thesis, restarts=restarts, seed=seed, max_epochs=max_epochs,
-                           select_inputs=select_inputs, optimizer=optimizer, name=name)
+                           select_inputs=select_inputs, optimizer=optimizer, name=name,
+                           channel_map=tuple(_channel_map(channel_map).items()))
     console = Console(markup=False)  # feature and channel names carry brackets: velocity[k]
     try:
         with Progress(console=console, transient=True) as bar:
@@ -154,6 +201,8 @@ def train(
     if len(outcome.trials) > 1:
         console.print("hidden size by validation MSE (scaled): " + ", ".join(
             f"{trial.hidden}: {trial.validation_mse:.3g}" for trial in outcome.trials))
+    for note in outcome.data_notes:
+        console.print(f"note: {note}")
     for warning in outcome.warnings:
         console.print(Text("warning: ", style="yellow") + Text(warning))
     console.print(f"ONNX: {outcome.path} (onnxruntime vs torch max relative error "
@@ -174,7 +223,9 @@ def demo(
     from nnfmu.demo import DemoSettings, run_demo
 
     console = Console(markup=False)  # diagnosis test names carry brackets: test[velocity]
-    summary = run_demo(out, DemoSettings(seed=seed, quick=quick, vehicle_bushings=not lab_bushings), log=console.print)
+    with _warnings_as_lines():
+        summary = run_demo(out, DemoSettings(seed=seed, quick=quick, vehicle_bushings=not lab_bushings),
+                           log=console.print)
     table = Table(title="component FMUs replayed on held-out random rig records")
     for column in ("preset", "train [s]", "test-split NRMSE", "FMU NRMSE", "R²", "peak error", "pseudo-damage ratio"):
         table.add_column(column, justify="left" if column == "preset" else "right")
@@ -204,6 +255,10 @@ def build(
     backend: str = typer.Option("native", help="native (generated C, no Python at run time) or pythonfmu (onnxruntime)."),
     fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
     name: Optional[str] = typer.Option(None, help="Model name (default: from the ONNX metadata)."),
+    filter_cutoff: Optional[float] = typer.Option(
+        None, help="Start value [Hz] of the FMU's output low-pass (default: the model's, 0 = off; the thesis used 100 "
+                   "for stability of a stiff coupling, at a large cost in accuracy: docs/fmu.md)."),
+    platforms: Optional[list[str]] = typer.Option(None, help=PLATFORMS_HELP),
 ) -> None:
     """Build a standalone FMI co-simulation FMU from an ONNX model."""
     from nnfmu.fmu.build import build_fmu
@@ -211,25 +266,60 @@ def build(
     from nnfmu.fmu.options import BuildOptions
 
     try:
-        path = build_fmu(model, BuildOptions(out=out, backend=backend, fmi_version=fmi, name=name))
+        with _warnings_as_lines():
+            path = build_fmu(model, BuildOptions(out=out, backend=backend, fmi_version=fmi, name=name,
+                                                 filter_cutoff=filter_cutoff, platforms=_platforms(platforms)))
     except FmuBuildError as error:
         _fail(error)
     typer.echo(f"FMU: {path}")
+    _echo_reference_results(path)
+
+
+def _echo_reference_results(fmu: Path) -> None:
+    """Say whether the FMU carries reference results and how to check them."""
+    from nnfmu.fmu.reference_results import has_reference_results
+
+    if has_reference_results(fmu):
+        typer.echo(f"reference results: yes (FMI-LS-REF); verify with: nnfmu check {fmu}")
+    else:
+        typer.echo("reference results: none (the ONNX file carries no reference stimulus)")
+
+
+@app.command()
+def check(
+    fmu: Path = typer.Argument(..., help="FMU carrying reference results (FMI-LS-REF, extra/org.fmi-standard.fmi-ls-ref)."),
+    tolerance: Optional[float] = typer.Option(None, help="Allowed max error of each output as a fraction of its peak (default: the experiment's)."),
+) -> None:
+    """Replay the reference results an FMU carries with fmpy and report pass/fail per output (exit 1 on failure)."""
+    from nnfmu.fmu.check import CheckError, check_fmu, report_lines
+
+    try:
+        report = check_fmu(fmu, tolerance)
+    except CheckError as error:
+        _fail(error)
+    for line in report_lines(report):
+        typer.echo(line)
+    if not report.passed:
+        raise typer.Exit(code=1)
 
 
 @vehicle_app.command("build")
 def vehicle_build(
     model: str = typer.Argument(..., help="quarter-car or full-vehicle."),
     out: Path = typer.Option(..., "--out", "-o", help="FMU path to write."),
-    params: Optional[Path] = typer.Option(None, help="Vehicle parameter file (TOML, SI units); default: a mid-size car."),
+    params: Optional[Path] = typer.Option(None, help="Parameter file (TOML, SI units): a full-vehicle file (both models; default: the packaged mid-size sedan) or, for quarter-car, a quarter-car file (one with a quarter_car table, e.g. the packaged midsize_sedan_quarter_car_fl.toml)."),
     reference: Optional[list[str]] = typer.Option(None, help="Components to model inside the vehicle (linear bushing, spline damper), e.g. damper_fl,bushing_fl_front; the rest are ports."),
     stabilise: Optional[list[str]] = typer.Option(None, help="Ports to stabilise with their linear reference over each step (stiff bushings on a light arm), e.g. bushing_fl_front,bushing_fl_rear."),
     sample_period: float = typer.Option(1e-4, help="Internal sample period [s] of the exact discrete model."),
     fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
-    axle: str = typer.Option("front", help="Quarter car only: which corner's parameters, front or rear."),
+    corner: Optional[str] = typer.Option(None, help="Quarter car only: the corner it stands on, fl, fr, rl or rr; its actuator inputs read that corner's drive channels (default: a quarter-car file's own corner, fl of a full-vehicle file)."),
     backend: str = typer.Option("native", help="native or pythonfmu."),
+    platforms: Optional[list[str]] = typer.Option(None, help=PLATFORMS_HELP),
 ) -> None:
-    """Build a vehicle model into a co-simulation FMU with external component ports."""
+    """Build a vehicle model into a co-simulation FMU with external component ports.
+
+    quarter-car takes a quarter-car file or a full-vehicle file (one corner derived); full-vehicle a full-vehicle file.
+    """
     from nnfmu.fmu.errors import FmuBuildError
     from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
     from nnfmu.vehicle.models.errors import VehicleModelError
@@ -237,8 +327,10 @@ def vehicle_build(
     try:
         settings = VehicleBuildSettings(params_path=params, components={n: "reference" for n in _split(reference)}
                                         | {n: "stabilised" for n in _split(stabilise)},
-                                        sample_period=sample_period, fmi_version=fmi, axle=axle, backend=backend)
-        path = build_vehicle_fmu(model, out, settings)
+                                        sample_period=sample_period, fmi_version=fmi, corner=corner, backend=backend,
+                                        platforms=_platforms(platforms))
+        with _warnings_as_lines():
+            path = build_vehicle_fmu(model, out, settings)
     except (VehicleModelError, FmuBuildError) as error:
         _fail(error)
     typer.echo(f"FMU: {path}")
@@ -251,10 +343,14 @@ def cosim(
     out: Path = typer.Option(..., "--out", "-o", help="Result file (.csv or .mf4), units in every channel."),
     step: float = typer.Option(1e-3, help="Communication step [s]."),
     stop: Optional[float] = typer.Option(None, help="Stop time [s] (default: the end of the drive file)."),
-    scheme: str = typer.Option("gauss-seidel", help="gauss-seidel (components first) or jacobi."),
-    extrapolate: bool = typer.Option(False, help="Extrapolate coupling inputs linearly over the step."),
+    scheme: str = typer.Option("gauss-seidel", help="gauss-seidel (one element after another) or jacobi."),
+    order: str = typer.Option("vehicle-first", help="Gauss-Seidel order: vehicle-first or components-first."),
+    extrapolate: bool = typer.Option(True, help="Extrapolate coupling inputs linearly over the step."),
+    refresh: bool = typer.Option(True, help="Give FMUs with feedthrough (vehicles) their inputs at the step end and "
+                                            "read their outputs again (accelerations see the forces there)."),
     iterations: int = typer.Option(0, help="Iterate each step up to N times with get/set FMU state (strong coupling)."),
-    master: str = typer.Option("fmpy", help="fmpy (this package's master) or libcosim (cross-check; Jacobi only)."),
+    master: str = typer.Option("fmpy", help="fmpy (this package's master) or libcosim (cross-check: only --scheme "
+                                            "jacobi --no-extrapolate --no-refresh, libcosim's own algorithm)."),
 ) -> None:
     """Co-simulate a vehicle FMU with component FMUs on a drive file."""
     from rich.progress import Progress
@@ -266,9 +362,9 @@ def cosim(
     from nnfmu.data import DataError
     from nnfmu.vehicle.drive import read_drive
 
-    settings = CosimSettings(step=step, stop_time=stop, scheme=scheme,
-                             extrapolation="linear" if extrapolate else "none", iterations=iterations)
     try:
+        settings = CosimSettings(step=step, stop_time=stop, scheme=scheme, order=order, refresh=refresh,
+                                 extrapolation="linear" if extrapolate else "none", iterations=iterations)
         if master == "libcosim":
             from nnfmu.cosim.libcosim_runner import run_libcosim
 
@@ -289,6 +385,30 @@ def cosim(
 
 
 @app.command()
+def batch(
+    campaign: Path = typer.Argument(..., help="Campaign file (TOML): events, variants, coupling settings, metrics."),
+    out: Path = typer.Option(..., "--out", "-o", help="Folder: results.parquet, campaign.json, summary.html, parts/."),
+    scheduler: Optional[str] = typer.Option(None, help="Address of an existing Dask scheduler, e.g. tcp://HOST:8786."),
+    workers: Optional[int] = typer.Option(None, help="LocalCluster worker processes (default: one per core); 0 runs the cases here, one after another."),
+    retry_failed: bool = typer.Option(False, help="Run the cases that failed in an earlier run into --out again."),
+) -> None:
+    """Run a road-test campaign (events x variants) on Dask into one Parquet table of pseudo-damage per channel."""
+    from nnfmu.campaign import CampaignError, run_campaign
+    from nnfmu.campaign.progress import CaseProgress
+
+    if workers is not None and workers < 0:
+        raise typer.BadParameter(f"--workers {workers}: give 0 (here, serially) or more")
+    try:
+        run = run_campaign(campaign, out, scheduler=scheduler, workers=workers, retry_failed=retry_failed,
+                           progress=CaseProgress())
+    except CampaignError as error:
+        _fail(error)
+    typer.echo(f"{run.cases} cases: {run.ok} ok, {run.failed} failed, {run.skipped} finished before "
+               f"({run.wall_s:.1f} s on {run.engine.kind})")
+    typer.echo(f"table: {run.table}\nsummary: {run.summary}\nrecord: {run.record}")
+
+
+@app.command()
 def loop(
     data: Path = typer.Argument(..., help="Measurement (CSV or MDF4) with the model's inputs and the output channel."),
     model: Path = typer.Option(..., help="nnfmu ONNX step graph to check and extend."),
@@ -304,7 +424,8 @@ def loop(
     from nnfmu.loop.run import run_loop
 
     try:
-        report = run_loop(data, model, output, out, LoopSettings(max_effects=max_effects))
+        with _warnings_as_lines():
+            report = run_loop(data, model, output, out, LoopSettings(max_effects=max_effects))
     except (LoopError, DiagnosisError, DataError, FmuBuildError) as error:
         _fail(error)
     typer.echo(report.summary)
@@ -318,14 +439,16 @@ def loop(
 
 @data_app.command("check")
 def data_check(
-    path: Path = typer.Argument(..., help="CSV (`name [unit]` headers, `time [s]` first) or MDF4 file."),
+    path: Path = typer.Argument(..., help="CSV (`name [unit]` headers, `time [s]` first), MDF4 or MTS 793 export."),
     require: Optional[list[str]] = typer.Option(None, "--require", "-r", help="Channel that must be present (repeat)."),
+    channel_map: Optional[list[str]] = typer.Option(None, "--map", help=MAP_HELP),
 ) -> None:
     """Load a measurement, convert it to SI units and report its channels, or say exactly what is wrong."""
     from nnfmu.data import DataError, load_measurement
 
+    mapping = _channel_map(channel_map)
     try:
-        m = load_measurement(path, required=_split(require))
+        m = load_measurement(path, required=_split(require), channel_map=mapping)
     except DataError as error:
         _fail(error)
     typer.echo(f"{path}: {len(m)} samples, sample period {m.sample_period:.6g} s")

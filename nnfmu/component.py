@@ -20,7 +20,9 @@ import onnx
 
 METADATA_KEY = "nnfmu.component"
 FORMAT_VERSION = 1
-DEFAULT_FILTER_CUTOFF_HZ = 100.0  # the thesis's output low-pass on a trained network
+# Sample periods a component may have [s]: shorter ones would make an FMU evaluate billions of samples per second.
+SAMPLE_PERIOD_RANGE = (1e-9, 1e4)
+DEFAULT_FILTER_CUTOFF_HZ = 0.0  # off: an FMU computes its model; the thesis's 100 Hz is an option (docs/fmu.md)
 
 
 @dataclass(frozen=True)
@@ -65,8 +67,11 @@ class Component:
     """Everything a consumer of a step graph needs besides the graph itself.
 
     `sample_period` [s] is the period the model was trained at; `None` marks a stateless graph from another tool,
-    which an FMU evaluates once per communication step. `filter_cutoff` [Hz] is the start value of the FMU's output
-    low-pass (0: off, as for an exact model that must not be filtered). `metadata` holds provenance: nnfmu version,
+    which an FMU evaluates once per communication step. `interval_starts` maps each input tensor to the graph input
+    that takes its value at the start of a sample's interval: such a component (a vehicle, solved exactly between
+    samples) has its inputs interpolated linearly between samples by the FMU (docs/fmu.md); empty: inputs are
+    sampled (a network). `filter_cutoff` [Hz] is the start value of the FMU's output
+    low-pass (0: off, the default: what the FMU reports is the model itself). `metadata` holds provenance: nnfmu version,
     training data hash, feature spec, training settings and metrics.
     """
 
@@ -78,12 +83,32 @@ class Component:
     description: str = ""
     metadata: dict[str, Any] = field(default_factory=dict)
     filter_cutoff: float = DEFAULT_FILTER_CUTOFF_HZ
+    interval_starts: dict[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.filter_cutoff) and self.filter_cutoff >= 0.0):
             raise ValueError(
                 f"component {self.name!r}: filter_cutoff {self.filter_cutoff!r} Hz must be a finite number >= 0"
             )
+        period = self.sample_period
+        if period is not None:
+            low, high = SAMPLE_PERIOD_RANGE
+            if isinstance(period, bool) or not isinstance(period, (int, float)) or not low <= period <= high:
+                raise ValueError(f"component {self.name!r}: sample period {period!r} s must be a number from {low:g} "
+                                 f"to {high:g} s")
+            self.sample_period = float(period)
+        if self.interval_starts:
+            tensors = {p.tensor for p in self.inputs}
+            if set(self.interval_starts) != tensors:
+                raise ValueError(f"component {self.name!r}: interval_starts names {sorted(self.interval_starts)}, "
+                                 f"but the input tensors are {sorted(tensors)}; name each input tensor once")
+            if self.sample_period is None:
+                raise ValueError(f"component {self.name!r}: interpolated inputs need a sample period")
+
+    @property
+    def interpolates_inputs(self) -> bool:
+        """True when the FMU interpolates the inputs linearly between samples (see `interval_starts`)."""
+        return bool(self.interval_starts)
 
     @property
     def state_size(self) -> int:
@@ -111,6 +136,7 @@ class Component:
             description=d.get("description", ""),
             metadata=d.get("metadata", {}),
             filter_cutoff=float(d.get("filter_cutoff", DEFAULT_FILTER_CUTOFF_HZ)),
+            interval_starts=dict(d.get("interval_starts", {})),
         )
 
     def attach_to(self, model: onnx.ModelProto) -> None:

@@ -58,7 +58,9 @@ def test_train_build_and_validate_chain(dyno: Path, tmp_path: Path) -> None:
     fmu = tmp_path / "damper.fmu"
     built = invoke("build", onnx_path, "--out", fmu)
     assert built.exit_code == 0, built.output
-    assert fmu.exists()
+    assert fmu.exists() and "reference results: yes" in built.output
+    checked = invoke("check", fmu)  # the trained network's FMU replays its held-out test inputs
+    assert checked.exit_code == 0 and "force: max error" in checked.output, checked.output
     report = invoke("validate", dyno, dyno, "--channels", "force", "--out", tmp_path / "report")
     assert report.exit_code == 0, report.output
     assert "NRMSE 0" in report.output and (tmp_path / "report" / "index.html").exists()
@@ -81,7 +83,8 @@ def _vehicle_cosim_and_loop_chain(dyno: Path, onnx_path: Path, damper_fmu: Path,
     results = {}
     for master in ("fmpy", "libcosim"):
         out = tmp_path / f"{master}.csv"
-        run = invoke("cosim", ssd, "--drive", drive, "--out", out, "--scheme", "jacobi", "--master", master)
+        run = invoke("cosim", ssd, "--drive", drive, "--out", out, "--scheme", "jacobi", "--no-extrapolate",
+                     "--no-refresh", "--master", master)
         assert run.exit_code == 0, run.output
         results[master] = load_measurement(out)
     assert "damper_force" in results["fmpy"].names and results["fmpy"].units["damper_force"] == "N"
@@ -94,6 +97,32 @@ def _vehicle_cosim_and_loop_chain(dyno: Path, onnx_path: Path, damper_fmu: Path,
     assert "effects added: none" in loop.output and (tmp_path / "loop" / "report.json").exists()
     refused = invoke("loop", drive, "--model", onnx_path, "--out", tmp_path / "refused")
     assert refused.exit_code != 0 and "velocity" in refused.output and not (tmp_path / "refused").exists()
+
+
+def test_vehicle_build_takes_a_quarter_car_file_and_refuses_what_does_not_fit(tmp_path: Path) -> None:
+    """The packaged quarter-car file builds a quarter car on its own corner; a different corner, or a full vehicle from
+    it, is refused naming the file, and no FMU is left."""
+    from fmpy import read_model_description
+
+    from nnfmu.vehicle.models.parameters import DEFAULTS_DIR
+
+    quarter = DEFAULTS_DIR / "midsize_sedan_quarter_car_fl.toml"
+    out = tmp_path / "qc.fmu"
+    built = invoke("vehicle", "build", "quarter-car", "--params", quarter, "--out", out, "--sample-period", "1e-3")
+    assert built.exit_code == 0, built.output
+    description = read_model_description(str(out))
+    assert "(fl corner)" in description.description
+    inputs = [v.name for v in description.modelVariables if v.causality == "input"]
+    assert inputs == ["actuator_fl_displacement", "actuator_fl_velocity", "damper_force"]
+    for args, message in ((("quarter-car", "--corner", "fr"), "stands on corner 'fl'"),
+                          (("full-vehicle",), "a quarter-car parameter file"),
+                          (("quarter-car", "--corner", "left"), "corner 'left'")):
+        refused = invoke("vehicle", "build", *args, "--params", quarter, "--out", tmp_path / "no.fmu")
+        assert refused.exit_code != 0 and message in refused.output, refused.output
+        assert str(quarter) in refused.output or "left" in message
+        assert not (tmp_path / "no.fmu").exists()
+    helped = invoke("vehicle", "build", "--help")
+    assert "quarter-car file" in " ".join(helped.output.split()), helped.output
 
 
 def test_build_failure_exits_nonzero_without_fmu(tmp_path: Path) -> None:

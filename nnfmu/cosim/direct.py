@@ -23,6 +23,7 @@ _DOUBLES = POINTER(c_double)
 _REFERENCES = POINTER(c_uint32)  # fmi2ValueReference (unsigned int) and fmi3ValueReference (uint32_t)
 _TRANSFER2 = CFUNCTYPE(c_int, c_void_p, _REFERENCES, c_size_t, _DOUBLES)
 _TRANSFER3 = CFUNCTYPE(c_int, c_void_p, _REFERENCES, c_size_t, _DOUBLES, c_size_t)
+_SLOPES2 = CFUNCTYPE(c_int, c_void_p, _REFERENCES, c_size_t, POINTER(c_int), _DOUBLES)
 _DO_STEP2 = CFUNCTYPE(c_int, c_void_p, c_double, c_double, c_int)
 _DO_STEP3 = CFUNCTYPE(c_int, c_void_p, c_double, c_double, c_bool, POINTER(c_bool), POINTER(c_bool),
                       POINTER(c_bool), _DOUBLES)
@@ -79,6 +80,28 @@ class RealBlock:
         status = self._get(*self._args)
         if status > WARNING:
             raise FmiStatusError(self.slave, f"{self._get_name}({', '.join(self.names)})", status)
+
+
+class SlopeBlock:
+    """FMI 2 input derivatives of `names` (order 1: each input's slope over the coming step) from the float64 array
+    `values`, set with one direct call of fmi2SetRealInputDerivatives."""
+
+    def __init__(self, slave: FmuSlave, names: Sequence[str]) -> None:
+        if not slave.takes_input_slopes:
+            raise ValueError(f"{slave.instance_name}: the FMU cannot interpolate its inputs (canInterpolateInputs)")
+        n = len(names)
+        self.slave = slave
+        self.names = list(names)
+        self.values = np.zeros(n)
+        self._references = (c_uint32 * n)(*slave.value_references(self.names))
+        self._orders = (c_int * n)(*([1] * n))
+        self._call = _SLOPES2(("fmi2SetRealInputDerivatives", slave.fmu.dll))
+        self._args = (slave.fmu.component, self._references, n, self._orders, self.values.ctypes.data_as(_DOUBLES))
+
+    def set(self) -> None:
+        status = self._call(*self._args)
+        if status > WARNING:
+            raise FmiStatusError(self.slave, f"fmi2SetRealInputDerivatives({', '.join(self.names)})", status)
 
 
 class Stepper:

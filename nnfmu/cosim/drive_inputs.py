@@ -1,10 +1,10 @@
 """Feed a vehicle's actuator inputs from a drive file: by channel name, rates derived, values at any master time.
 
-A vehicle input `actuator_fl_displacement` reads the drive channel of the same name. A quarter car's untagged
-input (`actuator_displacement`) reads the same-named channel, else the chosen corner's (`actuator_fl_displacement`).
-A rate the drive lacks (`..._velocity`) is differentiated from its displacement with the data package's
-Savitzky-Golay filter (`derive_rates`). Between drive samples the values are interpolated linearly, so the master's
-communication step need not equal the drive's sample period.
+A vehicle input `actuator_fl_displacement` reads the drive channel of the same name, and only that: a quarter car
+names its inputs after the corner it stands on, so it reads its own corner's channels with no special case. A rate
+the drive lacks (`..._velocity`) is differentiated from its displacement with the data package's Savitzky-Golay
+filter (`derive_rates`). Between drive samples the values are interpolated linearly, so the master's communication
+step need not equal the drive's sample period.
 """
 
 from __future__ import annotations
@@ -23,32 +23,20 @@ class DriveInputError(ValueError):
     """The drive cannot feed the vehicle: a missing channel or a time outside the drive; names file and channel."""
 
 
-def _channel_for(name: str, drive: Measurement, corner: str) -> str | None:
-    if name in drive:
-        return name
-    if name.startswith("actuator_"):
-        tagged = f"actuator_{corner}_{name[len('actuator_'):]}"
-        if tagged in drive:
-            return tagged
-    return None
-
-
 class DriveInputs:
     """Values of the vehicle inputs `names` from `drive` at master times; `at(t)` returns them in that order."""
 
-    def __init__(self, drive: Measurement, names: Sequence[str], corner: str = "fl") -> None:
-        needs_rates = any(_channel_for(n, drive, corner) is None for n in names)
-        source = derive_rates(drive) if needs_rates else drive
-        missing = [n for n in names if _channel_for(n, source, corner) is None]
+    def __init__(self, drive: Measurement, names: Sequence[str]) -> None:
+        source = derive_rates(drive) if any(n not in drive for n in names) else drive
+        missing = [n for n in names if n not in source]
         if missing:
             raise DriveInputError(
                 f"{drive.source}: no channel for the vehicle input(s) {', '.join(map(repr, missing))} "
-                f"(the drive has: {', '.join(drive.names)}; a quarter car also reads the {corner!r} corner's channel)"
+                f"(the drive has: {', '.join(drive.names)})"
             )
         self.names = list(names)
-        self.channels = [_channel_for(n, source, corner) for n in names]
         self.time = np.asarray(source.time, dtype=float)
-        self._columns = [np.ascontiguousarray(source[c], dtype=float) for c in self.channels]
+        self._columns = [np.ascontiguousarray(source[n], dtype=float) for n in self.names]
         self.source = drive.source
         self._slack = TIME_TOLERANCE * drive.sample_period
 

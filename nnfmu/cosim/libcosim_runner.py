@@ -1,8 +1,8 @@
 """Run the same SSP system in libcosim (libcosimpy), a second, independent master, to cross-check fmpy's results.
 
 libcosim's fixed-step algorithm steps every FMU from t_n on the values transferred after the previous step, so it is
-a Jacobi scheme without extrapolation or iteration; the fmpy master with `scheme="jacobi"` and the plain settings is
-the same scheme, and only that combination is accepted here. libcosim counts time in integer nanoseconds, so the
+a Jacobi scheme without extrapolation, iteration or refresh; the fmpy master with `scheme="jacobi"`, the plain
+settings and `refresh=False` is the same scheme, and only that combination is accepted here. libcosim counts time in integer nanoseconds, so the
 step must be a whole number of nanoseconds; it logs every call at its default level, so its output level is set to
 errors only. The drive inputs are set through an override manipulator before each step, as the fmpy master sets
 them, and the outputs are read from a last-value observer after each step (row n + 1 belongs to t_{n+1}); row 0 is
@@ -34,10 +34,10 @@ def _nanoseconds(seconds: float, what: str) -> int:
 
 
 def _check_settings(settings: CosimSettings) -> None:
-    if settings.scheme != "jacobi" or not settings.plain:
-        raise CosimError("libcosim's fixed-step algorithm is Jacobi without extrapolation or iteration; got "
+    if settings.scheme != "jacobi" or not settings.plain or settings.refresh:
+        raise CosimError("libcosim's fixed-step algorithm is Jacobi without extrapolation, iteration or refresh; got "
                          f"scheme {settings.scheme!r}, extrapolation {settings.extrapolation!r}, "
-                         f"iterations {settings.iterations}")
+                         f"iterations {settings.iterations}, refresh {settings.refresh}")
     if settings.start_time != 0.0:
         raise CosimError(f"libcosim's SSP executions start at t = 0, not {settings.start_time!r} s")
 
@@ -66,7 +66,7 @@ def run_libcosim(ssd_path: str | os.PathLike[str], drive: Measurement, settings:
                 for name, i in index.items()}
         drive_names = [n for n, (_, causality) in refs[vehicle].items()
                        if causality == CosimVariableCausality.INPUT.value and (vehicle, n) not in driven]
-        inputs = DriveInputs(drive, drive_names, settings.corner)
+        inputs = DriveInputs(drive, drive_names)
         h = settings.step
         n_steps = step_count(0.0, stop, h) if stop is not None else whole_steps(0.0, inputs.end, h)
         channels = _channels(system, vehicle)

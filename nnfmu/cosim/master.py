@@ -1,29 +1,37 @@
 """Fixed-step co-simulation master on fmpy: one vehicle FMU, component FMUs, drive-file inputs, SSP wiring.
 
 Time is counted in whole steps: t_n = t0 + n h, so 10 s at 1 ms is exactly 10 000 steps and the last sample is
-labelled 10.0 s. Outputs read after doStep(t_n, h) belong to t_{n+1} and are labelled so.
+labelled 10.0 s. Outputs read after the step from t_n belong to t_{n+1} and are labelled so.
 
-How inputs are set before doStep(t_n, h), for a coupling signal y (an output wired to an input):
-- y_n is its value at t_n; its value at t_{n+1} is estimated as y_n ('none'), 2 y_n - y_{n-1} ('linear'
-  extrapolation), or found by iteration (below). Under Gauss-Seidel an element stepped later in the order uses the
-  fresh t_{n+1} values of the elements stepped before it instead of the estimate; under Jacobi all step on estimates.
-- A component FMU samples at the step end (an nnfmu component maps the inputs at its sample time to the outputs
-  then), so its inputs get the t_{n+1} value.
-- The vehicle holds its inputs over the step (zero-order hold into an exact discretisation), so it gets the mean of
-  the t_n and t_{n+1} values, the second-order estimate of the step's mean; in the plain scheme (no extrapolation,
-  no iteration) it gets the latest value, as any standard master does. Drive inputs follow the same rule with their
-  t_{n+1} value known.
-- Iterative coupling (`iterations` > 0): every FMU state is saved at t_n; the step is repeated from the saved states
-  with the t_{n+1} values of the last pass until they change by less than `tolerance` (relative to the signal's
-  peak so far) or `iterations` repeats are spent. Its fixed point holds the vehicle's coupling forces at the mean of
-  their values at both step ends (trapezoidal rule), so its error falls with h^2, that of the explicit schemes with h.
-- A component's outputs after the step are labelled t_{n+1} but were computed from the inputs it was given: in the
-  plain schemes that is the t_n value, so a stateless component's output lags one step; iterated, it is t_{n+1}'s.
-  Likewise a vehicle output that feeds through an input (an acceleration) sees the input held over the step.
+Two kinds of FMU, told apart by their model description:
+- sampled (nnfmu's networks, most FMUs): the inputs set before doStep(t_n, h) hold over the step; an nnfmu network
+  samples at the step end, mapping them to its outputs there. Its outputs change only in doStep.
+- with feedthrough at communication points (ModelStructure: outputs depending on inputs; nnfmu's vehicles): the
+  inputs are the values at t_n, ramping over the step to the values set at t_{n+1} (FMI 2 `canInterpolateInputs`:
+  the slope over the step may be given before it), and outputs at t_{n+1} follow the inputs set there (docs/fmu.md).
+
+One step from t_n, for a coupling signal y (an output wired to an input) with value y_n at t_n:
+1. The elements step one after another in `order` (Gauss-Seidel) or all on the same values (Jacobi). A sampled
+   element gets, for each input, the freshest value: the t_{n+1} output of an element stepped before it in this
+   pass, else y_n (plain) or its estimate for t_{n+1}, 2 y_n - y_{n-1} ('linear' extrapolation); a sampled vehicle
+   (no feedthrough) holds its inputs over the step, so it gets the mean of y_n and that estimate instead. An element
+   with feedthrough already holds its t_n inputs (set in the previous step's refresh) and, where it can interpolate
+   and the scheme is not plain, gets their slopes over the step: (estimate - y_n) / h, the drive's exactly.
+2. Refresh (`refresh`, the default): every element with feedthrough gets its inputs at t_{n+1} (all fresh now: the
+   components' outputs, the drive at t_{n+1}) and its outputs are read again, so a vehicle's accelerations see the
+   damper force of t_{n+1}, and its state follows the force ramping from t_n to t_{n+1} (trapezoidal rule).
+Iterative coupling (`iterations` > 0): every FMU state is saved at t_n; the step is repeated from the saved states
+with the t_{n+1} values of the last pass as the estimate until they change by less than `tolerance` (relative to the
+signal's peak so far) or `iterations` repeats are spent.
+
+The default (vehicle first, linear extrapolation, refresh) makes one pass per step: the vehicle steps on the damper
+force extrapolated linearly, the components sample at t_{n+1} on its motion, and the refresh gives the vehicle their
+forces at t_{n+1}: second order in h for motions, forces and accelerations (bench/cosim_coupling.py).
 
 Cost: per element and pass, one FMI call sets all its inputs, one steps it and one reads all its Real outputs into
-the result row (`direct`, buffers and value references prepared once); the drive is interpolated for blocks of steps
-at once. The master's own work is then a few microseconds per element and step (bench/cosim.py).
+the result row (`direct`, buffers and value references prepared once); the refresh adds one set and one get per
+element with feedthrough; the drive is interpolated for blocks of steps at once. The master's own work is then a
+few microseconds per element and step (bench/cosim.py).
 """
 
 from __future__ import annotations
@@ -37,7 +45,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..data import Measurement
-from .direct import FmiStatusError, RealBlock, Stepper
+from .direct import FmiStatusError, RealBlock, SlopeBlock, Stepper
 from .drive_inputs import DriveInputs
 from .results import CosimResult
 from .slave import FmuSlave
@@ -61,20 +69,22 @@ class CosimSettings:
     within the drive).
 
     `scheme` 'gauss-seidel' (elements one after another in `order`) or 'jacobi' (all on the same values);
-    `extrapolation` of coupling signals over a step, 'none' or 'linear'; `iterations`: most repeats of a step for
-    strong coupling (0: none), until the t_{n+1} values change by less than `tolerance` of their peak;
-    `corner` whose drive channels feed a quarter car's untagged actuator inputs.
+    `extrapolation` of coupling signals over a step, 'none' or 'linear'; `refresh`: give elements with feedthrough
+    their inputs at t_{n+1} after the step and read their outputs again; `iterations`: most repeats of a step for
+    strong coupling (0: none), until the t_{n+1} values change by less than `tolerance` of their peak. The defaults
+    are the accurate one-pass scheme of the module docstring. The vehicle's actuator inputs read the drive's channels
+    of the same names (a quarter car's name its corner).
     """
 
     step: float = 1e-3
     stop_time: float | None = None
     start_time: float = 0.0
     scheme: str = "gauss-seidel"
-    order: str = "components-first"
-    extrapolation: str = "none"
+    order: str = "vehicle-first"
+    extrapolation: str = "linear"
+    refresh: bool = True
     iterations: int = 0
     tolerance: float = 1e-10
-    corner: str = "fl"
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.step) and self.step > 0):
@@ -90,6 +100,7 @@ class CosimSettings:
 
     @property
     def plain(self) -> bool:
+        """No estimate of the step's end: every input takes the latest value (what a basic master does)."""
         return self.extrapolation == "none" and self.iterations == 0
 
 
@@ -139,13 +150,17 @@ def find_vehicle(system: SystemStructure) -> str:
 class _Element:
     """One element's transfers in a step, prepared once: its coupling inputs gathered from the values row at
     `sources` into `coupled`, the drive's values into `driven` (the vehicle only), one set of all its inputs, one
-    doStep, one get of all its Real outputs into `span` of the values row."""
+    doStep, one get of all its Real outputs into `span` of the values row. An element with `feedthrough` is set its
+    inputs at t_{n+1} after the step (refresh); `slopes` (FMI 2, inputs interpolated) takes their slopes over it."""
 
+    name: str
     vehicle: bool
+    feedthrough: bool
     sources: np.ndarray
     coupled: np.ndarray
     driven: np.ndarray
     inputs: RealBlock | None
+    slopes: SlopeBlock | None
     outputs: RealBlock
     stepper: Stepper
     span: slice
@@ -161,7 +176,6 @@ class _System:
 
     def __init__(self, system: SystemStructure, drive: Measurement, settings: CosimSettings) -> None:
         self.settings = settings
-        self.plain = settings.plain
         self.vehicle = find_vehicle(system)
         self.links = [_Link(c.start_element, c.start_connector, c.end_element, c.end_connector)
                       for c in system.connections]
@@ -173,7 +187,7 @@ class _System:
             driven = {(link.target, link.input) for link in self.links}
             vehicle = self.slaves[self.vehicle]
             self.drive_names = [n for n in vehicle.names("input") if (self.vehicle, n) not in driven]
-            self.drive = DriveInputs(drive, self.drive_names, settings.corner)
+            self.drive = DriveInputs(drive, self.drive_names)
             for name, slave in self.slaves.items():
                 free = [n for n in slave.names("input") if (name, n) not in driven and name != self.vehicle]
                 if free:
@@ -189,6 +203,7 @@ class _System:
         order = components + [self.vehicle] if settings.order == "components-first" else [self.vehicle] + components
         ordered = [self.elements[name] for name in order]
         self.groups = [[element] for element in ordered] if settings.scheme == "gauss-seidel" else [ordered]
+        self.refreshed = [e for e in ordered if e.feedthrough and e.inputs is not None] if settings.refresh else []
         self.now = self.values.copy()
         self.before = self.values.copy()
         self.peak = np.zeros(len(self.links))
@@ -214,9 +229,10 @@ class _System:
             inputs = RealBlock(slave, names) if names else None
             buffer = inputs.values if inputs is not None else np.zeros(0)
             elements[name] = _Element(
-                vehicle=is_vehicle,
+                name=name, vehicle=is_vehicle, feedthrough=slave.feedthrough,
                 sources=np.array([position[(link.source, link.output)] for link in incoming], dtype=np.intp),
                 coupled=buffer[:len(incoming)], driven=buffer[len(incoming):], inputs=inputs,
+                slopes=SlopeBlock(slave, names) if names and slave.feedthrough and slave.takes_input_slopes else None,
                 outputs=RealBlock(slave, self.outputs[name], self.values[spans[name]]), stepper=Stepper(slave),
                 span=spans[name],
             )
@@ -226,15 +242,15 @@ class _System:
         for slave in self.slaves.values():
             slave.close()
 
-    def initialise(self, t0: float) -> None:
+    def initialise(self, t0: float, drive: np.ndarray) -> None:
         """Initialisation mode: parameters, drive inputs at t0, outputs passed to inputs until settled; then every
-        output is read into the values row."""
+        output is read into the values row, and the elements with feedthrough get their inputs at t0 once more."""
         for name, slave in self.slaves.items():
             slave.enter_initialization(t0)
             if self.parameters[name]:
                 slave.set_real(list(self.parameters[name]), list(self.parameters[name].values()))
         if self.drive_names:
-            self.slaves[self.vehicle].set_real(self.drive_names, self.drive.at(t0))
+            self.slaves[self.vehicle].set_real(self.drive_names, drive)
         for _ in range(len(self.slaves)):
             for link in self.links:
                 self.slaves[link.target].set_real([link.input], self.slaves[link.source].get_real([link.output]))
@@ -242,6 +258,7 @@ class _System:
             slave.exit_initialization()
         for element in self.elements.values():
             element.outputs.get()
+        self.refresh(drive)
         self.now = self.values.copy()
         self.before = self.now.copy()
         self.peak = np.abs(self.now[self.link_positions])
@@ -251,54 +268,85 @@ class _System:
             return 2.0 * self.now - self.before
         return self.now.copy()
 
-    def exchange(self, t: float, h: float, source: np.ndarray, drive: np.ndarray, fresh: np.ndarray | None) -> None:
-        """One pass over the groups: set each element's inputs from `source` (the vehicle's coupling inputs as the
-        mean of `now` and `source` unless the scheme is plain; its drive inputs `drive`), step the group, read its
-        outputs into the values row (and into `fresh`, if given, for the elements stepped later in the pass)."""
-        mean = not self.plain
-        for group in self.groups:
-            for element in group:
-                if element.inputs is None:
-                    continue
-                if mean and element.vehicle:
-                    element.coupled[:] = 0.5 * (self.now[element.sources] + source[element.sources])
-                else:
-                    source.take(element.sources, out=element.coupled)
+    def _set_inputs(self, element: _Element, source: np.ndarray, drive: np.ndarray, end: np.ndarray, h: float) -> None:
+        """Before an element's step: a sampled element's inputs from `source` (a sampled vehicle: the mean of t_n
+        and `source`, and the drive's mean, unless the scheme is plain); an element with feedthrough has its inputs at
+        t_n (set by the refresh, else here) and gets their slopes toward `source` and toward the drive's value `end`
+        at t_{n+1}."""
+        if element.inputs is None:
+            return
+        if element.feedthrough:
+            if not self.refreshed:  # its inputs at t_n are not set yet
+                self.now.take(element.sources, out=element.coupled)
                 if element.vehicle:
                     element.driven[:] = drive
                 element.inputs.set()
+            if element.slopes is not None and not self.settings.plain:
+                n = len(element.sources)
+                element.slopes.values[:n] = (source[element.sources] - self.now[element.sources]) / h
+                element.slopes.values[n:] = (end - element.driven) / h
+                element.slopes.set()
+            return
+        if element.vehicle and not self.settings.plain:
+            element.coupled[:] = 0.5 * (self.now[element.sources] + source[element.sources])
+            element.driven[:] = 0.5 * (drive + end)
+        else:
+            source.take(element.sources, out=element.coupled)
+            if element.vehicle:
+                element.driven[:] = drive
+        element.inputs.set()
+
+    def refresh(self, drive: np.ndarray) -> None:
+        """Inputs at the current communication point for every element with feedthrough, then its outputs again."""
+        for element in self.refreshed:
+            self.values.take(element.sources, out=element.coupled)
+            if element.vehicle:
+                element.driven[:] = drive
+            element.inputs.set()
+            element.outputs.get()
+
+    def exchange(self, t: float, h: float, source: np.ndarray, drive: np.ndarray, end: np.ndarray,
+                 fresh: np.ndarray | None) -> None:
+        """One pass over the groups: set each element's inputs (`source`: the coupling values to use; `drive` and
+        `end`: the drive at t_n and t_{n+1}), step the group, read its outputs into the values row (and into `fresh`,
+        if given, for the elements stepped later in the pass); then the refresh at t_{n+1}."""
+        for group in self.groups:
+            for element in group:
+                self._set_inputs(element, source, drive, end, h)
             for element in group:
                 element.stepper.step(t, h)
             for element in group:
                 element.outputs.get()
                 if fresh is not None:
                     fresh[element.span] = self.values[element.span]
+        self.refresh(end)
 
-    def step(self, t: float, h: float, first: bool, drive: np.ndarray) -> tuple[int, bool]:
-        """One communication step from t with the vehicle's drive inputs `drive`; returns (passes taken, whether the
-        fixed point was reached). The plain schemes exchange on the values row itself: an element stepped later in
-        a Gauss-Seidel pass finds the fresh outputs of those before it there, a Jacobi group sets all before any
-        output changes."""
-        if self.plain:
-            self.exchange(t, h, self.values, drive, None)
-            return 1, True
+    def step(self, t: float, h: float, first: bool, drive: np.ndarray, end: np.ndarray) -> tuple[int, bool]:
+        """One communication step from t with the drive `drive` at t and `end` at t + h; returns (passes taken,
+        whether the fixed point was reached). The plain schemes exchange on the values row itself: an element stepped
+        later in a Gauss-Seidel pass finds the fresh outputs of those before it there, a Jacobi group sets all before
+        any output changes."""
         settings = self.settings
         gauss_seidel = settings.scheme == "gauss-seidel"
+        if settings.plain:
+            self.exchange(t, h, self.values, drive, end, None)
+            self.before, self.now = self.now, self.values.copy()
+            return 1, True
         states = {name: slave.get_state() for name, slave in self.slaves.items()} if settings.iterations else {}
-        end = self.estimate(first)
+        estimate = self.estimate(first)
         converged, passes = settings.iterations == 0, 0
         try:
             for repeat in range(settings.iterations + 1):
                 if repeat:
                     for name, state in states.items():
                         self.slaves[name].set_state(state)
-                used = end
+                used = estimate
                 fresh = used.copy() if gauss_seidel else None
-                self.exchange(t, h, fresh if fresh is not None else used, drive, fresh)
+                self.exchange(t, h, fresh if fresh is not None else used, drive, end, fresh)
                 passes += 1
-                end = self.values.copy()
+                estimate = self.values.copy()
                 if settings.iterations:
-                    new, old = end[self.link_positions], used[self.link_positions]
+                    new, old = estimate[self.link_positions], used[self.link_positions]
                     scale = np.maximum(np.maximum(self.peak, np.abs(new)), np.finfo(float).tiny)
                     if np.all(np.abs(new - old) <= settings.tolerance * scale):
                         converged = True
@@ -306,8 +354,8 @@ class _System:
         finally:
             for name, state in states.items():
                 self.slaves[name].free_state(state)
-        self.before, self.now = self.now, end
-        self.peak = np.maximum(self.peak, np.abs(end[self.link_positions]))
+        self.before, self.now = self.now, self.values.copy()
+        self.peak = np.maximum(self.peak, np.abs(self.now[self.link_positions]))
         return passes, converged
 
     def channels(self) -> list[tuple[str, str]]:
@@ -338,7 +386,7 @@ def cosimulate(system: SystemStructure, drive: Measurement, settings: CosimSetti
         parts.drive.at(t0 + n_steps * h)  # a drive that ends early fails here, before the run
         channels = parts.channels()
         rows = np.empty((n_steps + 1, len(channels)))
-        parts.initialise(t0)
+        parts.initialise(t0, parts.drive.at(t0))
         rows[0] = parts.values
         passes = unconverged = 0
         every = max(1, n_steps // 200)
@@ -348,10 +396,9 @@ def cosimulate(system: SystemStructure, drive: Measurement, settings: CosimSetti
             for first in range(0, n_steps, DRIVE_BLOCK):
                 last = min(first + DRIVE_BLOCK, n_steps)
                 block = parts.drive.table(t0 + np.arange(first, last + 1) * h)  # drive at t_first .. t_last
-                held = block[:-1] if settings.plain else 0.5 * (block[:-1] + block[1:])
                 for n in range(first, last):
                     t = t0 + n * h
-                    taken, converged = parts.step(t, h, n == 0, held[n - first])
+                    taken, converged = parts.step(t, h, n == 0, block[n - first], block[n - first + 1])
                     passes += taken
                     unconverged += not converged
                     rows[n + 1] = parts.values

@@ -24,10 +24,16 @@ class ReplayError(ValueError):
 
 @dataclass(frozen=True)
 class ReplaySettings:
-    """filter_cutoff [Hz]: the FMU's output low-pass (0: the raw network); output_gain [1]."""
+    """Parameters set before initialisation: filter_cutoff [Hz] (the output low-pass, 0: off) and output_gain [1];
+    None keeps the FMU's start value, so a replay at the defaults sees what any plain master gets."""
 
-    filter_cutoff: float = 0.0
-    output_gain: float = 1.0
+    filter_cutoff: float | None = None
+    output_gain: float | None = None
+
+    def parameters(self) -> dict[str, float]:
+        """The parameters to set, by name (those left at None are not set)."""
+        chosen = {"filter_cutoff": self.filter_cutoff, "output_gain": self.output_gain}
+        return {name: float(value) for name, value in chosen.items() if value is not None}
 
 
 def replay_fmu(fmu_path: str | Path, measurement: Measurement, settings: ReplaySettings = ReplaySettings()) -> Measurement:
@@ -49,7 +55,9 @@ def replay_fmu(fmu_path: str | Path, measurement: Measurement, settings: ReplayS
         result = np.empty((len(measurement), len(outputs)))
         t0 = float(measurement.time[0])
         slave.enter_initialization(t0)
-        slave.set_real(["filter_cutoff", "output_gain"], [settings.filter_cutoff, settings.output_gain])
+        parameters = settings.parameters()
+        if parameters:
+            slave.set_real(list(parameters), list(parameters.values()))
         slave.set_real(inputs, values[0])
         slave.exit_initialization()
         result[0] = slave.get_real(outputs)

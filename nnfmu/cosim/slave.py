@@ -86,6 +86,17 @@ class FmuSlave:
     def _log3(self, env, status, category, message) -> None:  # noqa: ANN001 (ctypes callback)
         self.messages.append((status, category.decode(errors="replace"), message.decode(errors="replace")))
 
+    @property
+    def takes_input_slopes(self) -> bool:
+        """FMI 2 `canInterpolateInputs`: the FMU accepts its inputs' time derivatives for the coming step."""
+        return self.fmi_version == 2 and bool(self.description.coSimulation.canInterpolateInputs)
+
+    @property
+    def feedthrough(self) -> bool:
+        """Some output depends on an input at a communication point (ModelStructure), so inputs set after a step
+        change the outputs there."""
+        return any(output.dependencies for output in self.description.outputs)
+
     def names(self, causality: str) -> list[str]:
         """Names of the variables with the given causality ("input", "output", "parameter", ...)."""
         return [v.name for v in self.description.modelVariables if v.causality == causality]

@@ -1,5 +1,6 @@
-"""Rig data: load CSV/MDF measurements into SI units, check them, derive missing rates, save them."""
+"""Rig data: load CSV/MDF/MTS 793 measurements into SI units, check them, derive missing rates, save them."""
 
+from .channel_map import parse_channel_map
 from .checks import check_measurement
 from .derive import derive_rates
 from .errors import DataError
@@ -14,6 +15,7 @@ __all__ = [
     "check_measurement",
     "derive_rates",
     "load_measurement",
+    "parse_channel_map",
     "save_measurement",
     "to_si",
 ]

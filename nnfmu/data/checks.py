@@ -8,20 +8,25 @@ import numpy as np
 
 from .errors import DataError
 from .measurement import Measurement
+from .timebase import Resolution, check_uniform
 from .units import SI_UNITS, channel_quantity
 
-TIME_JITTER = 1e-3  # largest accepted deviation of one time step from the period, relative to the period
 MIN_TEMPERATURE = 150.0  # K; rig temperatures lie far above (-123 degC), a value below is degC or degF labelled K
 
 
 def check_measurement(
-    m: Measurement, required: Sequence[str] = (), min_samples: int = 16, source: str | None = None
+    m: Measurement,
+    required: Sequence[str] = (),
+    min_samples: int = 16,
+    source: str | None = None,
+    time_resolution: Resolution | None = None,
 ) -> None:
     """Raise DataError naming `source` (default `m.source`) and the channel/sample at fault, else return None.
 
     In order: shapes and SI units of every channel, the `required` channels, at least `min_samples` samples,
-    finite values, a strictly increasing time axis whose steps deviate from the period by at most TIME_JITTER of
-    it, and temperatures of at least MIN_TEMPERATURE.
+    finite values, a strictly increasing time axis that lies on a uniform base within tolerance (sampling jitter,
+    and the stamps' `time_resolution` in s where a file stored them rounded; see `timebase`), and temperatures of
+    at least MIN_TEMPERATURE.
     """
     where = source if source is not None else m.source
     _check_layout(m, where)
@@ -29,7 +34,7 @@ def check_measurement(
     if len(m.time) < min_samples:
         raise DataError(f"{where}: {len(m.time)} samples, at least {min_samples} needed")
     _check_finite(m, where)
-    _check_time(m.time, where)
+    check_uniform(m.time, where, time_resolution)
     _check_temperatures(m, where)
 
 
@@ -88,27 +93,6 @@ def _check_finite(m: Measurement, where: str) -> None:
                 f"{where}: channel {name!r} has {count} non-finite value(s), the first {_g(values[row])} "
                 f"at sample {row} (t = {_g(m.time[row])} s)"
             )
-
-
-def _check_time(time: np.ndarray, where: str) -> None:
-    steps = np.diff(np.asarray(time, dtype=float))
-    if steps.size == 0:
-        return
-    not_increasing = np.flatnonzero(steps <= 0)
-    if not_increasing.size:
-        row = int(not_increasing[0]) + 1
-        raise DataError(
-            f"{where}: time does not increase at sample {row}: t = {_g(time[row - 1])} s then {_g(time[row])} s"
-        )
-    period = float(np.median(steps))
-    jitter = np.abs(steps - period)
-    off = np.flatnonzero(jitter > TIME_JITTER * period)
-    if off.size:
-        row = int(off[0]) + 1
-        raise DataError(
-            f"{where}: time is not uniformly sampled at sample {row} (t = {_g(time[row])} s): the step from the "
-            f"previous sample is {_g(steps[row - 1])} s, the period {_g(period)} s (tolerance {TIME_JITTER:g} of it)"
-        )
 
 
 def _check_temperatures(m: Measurement, where: str) -> None:

@@ -1,49 +1,88 @@
-"""Load a rig measurement from CSV or MDF, in SI units, checked, with the rates the rig did not measure derived."""
+"""Load a rig measurement from CSV, MDF or an MTS 793 export, in SI units, checked, on a uniform time base, with the
+rates the rig did not measure derived."""
 
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
+from .channel_map import rename_channels
 from .checks import check_measurement
 from .csv_io import read_csv
 from .derive import derive_rates
 from .errors import DataError
 from .mdf_io import read_mdf
 from .measurement import Measurement
+from .mts_io import is_mts_export, read_mts
 from .raw import RawTable
+from .timebase import Resolution, uniform_time
 from .units import to_si
 
 READERS: dict[str, Callable[[Path], RawTable]] = {".csv": read_csv, ".mf4": read_mdf, ".mdf": read_mdf}
+MTS_SUFFIXES = (".dat", ".txt")  # read only as MTS 793 exports; a `.csv` starting `MTS793|` is one too
 
 
-def to_measurement(raw: RawTable, source: str) -> Measurement:
-    """Convert every channel of a file's table to SI (see `units.to_si`) as a `Measurement` from `source`."""
+def to_measurement(raw: RawTable, source: str) -> tuple[Measurement, Resolution | None]:
+    """Convert every channel of a file's table to SI (see `units.to_si`) as a `Measurement` from `source`, with the
+    resolution of its time stamps in s."""
     time, _ = to_si(raw.time, raw.time_unit, "time", source)
+    resolution = None
+    if raw.time_resolution is not None:
+        scale = float(to_si([1.0], raw.time_unit, "time", source)[0][0])
+        resolution = raw.time_resolution.scaled(scale)
     channels = {}
     units = {}
     for name, values in raw.channels.items():
         channels[name], units[name] = to_si(values, raw.units[name], name, source)
-    return Measurement(time=time, channels=channels, units=units, source=source)
+    measurement = Measurement(time=time, channels=channels, units=units, source=source, notes=dict(raw.notes))
+    return measurement, resolution
+
+
+def read_table(path: Path, channel_map: Mapping[str, str] | None = None) -> RawTable:
+    """The file's table as stored, read by content (an MTS 793 export) or suffix, renamed by `channel_map`."""
+    suffix = path.suffix.lower()
+    known = [*READERS, *MTS_SUFFIXES]
+    if suffix not in known:
+        raise DataError(f"{path}: unknown file type {path.suffix!r}; nnfmu reads {', '.join(known)} (MTS 793 export)")
+    if not path.is_file():
+        raise DataError(f"{path}: no such file")
+    if is_mts_export(path):
+        return read_mts(path, channel_map)
+    if suffix in MTS_SUFFIXES:
+        raise DataError(f"{path}: a {suffix} file is read as an MTS 793 export, whose first line starts 'MTS793|'")
+    raw = READERS[suffix](path)
+    return rename_channels(raw, channel_map, str(path)) if channel_map else raw
+
+
+def _check_mapped(m: Measurement, required: Sequence[str]) -> None:
+    """For a file whose channel names were mapped: name the missing required channels with the file's channels."""
+    missing = [name for name in required if name not in m.channels]
+    if missing and "channels" in m.notes:
+        raise DataError(
+            f"{m.source}: missing required channel(s) {', '.join(map(repr, missing))}; {m.notes['channels']}; name "
+            f"the file channel that holds it with a channel map, e.g. --map 'NAME={missing[0]}'"
+        )
 
 
 def load_measurement(
-    path: str | os.PathLike[str], required: Sequence[str] = (), min_samples: int = 16
+    path: str | os.PathLike[str],
+    required: Sequence[str] = (),
+    min_samples: int = 16,
+    channel_map: Mapping[str, str] | None = None,
 ) -> Measurement:
-    """Read a `.csv`, `.mf4` or `.mdf` rig file as a checked `Measurement` in SI units.
+    """Read a `.csv`, `.mf4`/`.mdf` or MTS 793 export (`.dat`/`.txt`) rig file as a checked `Measurement` in SI units.
 
-    Missing rates are derived (`derive_rates`), then the `required` channels must exist. Every problem (unknown
-    file type, header, unit, NaN, time axis, missing channel, too few samples) raises DataError naming the file.
+    `channel_map` renames file channels to nnfmu's names ({"Axial Force": "force"}; see `channel_map`). Stamps that
+    are uniform within their printed resolution or the sampling jitter are replaced by the least-squares uniform base,
+    said in `notes["time"]` (see `timebase`). Missing rates are derived (`derive_rates`), then the `required`
+    channels must exist. Every problem (unknown file type, header, unit, NaN, time axis, missing channel, too few
+    samples) raises DataError naming the file.
     """
     path = Path(path)
-    reader = READERS.get(path.suffix.lower())
-    if reader is None:
-        raise DataError(f"{path}: unknown file type {path.suffix!r}; nnfmu reads {', '.join(READERS)}")
-    if not path.is_file():
-        raise DataError(f"{path}: no such file")
-    measurement = to_measurement(reader(path), str(path))
-    check_measurement(measurement, min_samples=min_samples)
-    measurement = derive_rates(measurement)
+    measurement, resolution = to_measurement(read_table(path, channel_map), str(path))
+    check_measurement(measurement, min_samples=min_samples, time_resolution=resolution)
+    measurement = derive_rates(uniform_time(measurement, resolution))
+    _check_mapped(measurement, required)
     check_measurement(measurement, required=required, min_samples=min_samples)
     return measurement

@@ -2,14 +2,17 @@
 
 A channel's quantity comes from its *base name*: the longest `_`-separated tail of the name that is a known base
 (`displacement`, `velocity`, `acceleration`, `force`, `torque`, `rotation`, `angle`, `angular_velocity`,
-`angular_acceleration`, `temperature`, `pressure`, `time`), compared case-insensitively; whatever precedes it is the
-direction prefix (`axial_`, `conical_`, `front_left_damper_`, ...). A channel whose name has no known base keeps any
-known unit and is converted by that unit's own quantity (`supply [bar]` -> Pa, `stroke [mm]` -> m, `gain [-]` -> 1).
+`angular_acceleration`, `temperature`, `pressure`, `mass`, `time`), compared case-insensitively; whatever precedes it
+is the direction prefix (`axial_`, `conical_`, `front_left_damper_`, ...). A unit is read as the channel's quantity
+says: `g` is a gram for a `mass` channel and standard gravity for an `acceleration` channel, `lb` a pound-mass or a
+pound-force. A channel whose name has no known base keeps any known unit and is converted by that unit's own quantity
+(`supply [bar]` -> Pa, `stroke [mm]` -> m, `gain [-]` -> 1); a unit of several quantities (AMBIGUOUS_UNITS: `g`, `lb`)
+is refused there, since nothing tells which is meant.
 
 Unit spellings are case-sensitive (`K` is kelvin, `kN` is kilonewton); before lookup surrounding whitespace is
 stripped, spaces around `/` and `^` are dropped, `*`, `·` and other inner spaces become `.` (so `N*m`, `N m`, `N·m`
 all read as `N.m`), `²` becomes `^2` and `µ`/`μ` become `u`. SI unit strings: m, m/s, m/s^2, N, N.m, rad, rad/s,
-rad/s^2, K, s, Pa, 1.
+rad/s^2, K, s, Pa, kg, 1.
 """
 
 from __future__ import annotations
@@ -25,7 +28,8 @@ from .errors import DataError
 G_STANDARD = 9.80665  # m/s^2 per g, by definition
 INCH = 0.0254  # m, by definition
 FOOT = 0.3048  # m, by definition
-POUND_FORCE = 4.4482216152605  # N, = 0.45359237 kg * G_STANDARD
+POUND_MASS = 0.45359237  # kg, by definition
+POUND_FORCE = POUND_MASS * G_STANDARD  # N
 ZERO_CELSIUS = 273.15  # K
 
 
@@ -58,7 +62,9 @@ QUANTITIES: dict[str, Quantity] = {
         Quantity(
             "force",
             "N",
-            _linear({"N": 1.0, "kN": 1e3, "daN": 10.0, "lbf": POUND_FORCE, "kip": 1e3 * POUND_FORCE}),
+            _linear(
+                {"N": 1.0, "kN": 1e3, "daN": 10.0, "lbf": POUND_FORCE, "lb": POUND_FORCE, "kip": 1e3 * POUND_FORCE}
+            ),
         ),
         Quantity(
             "torque",
@@ -112,6 +118,7 @@ QUANTITIES: dict[str, Quantity] = {
                 {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "bar": 1e5, "mbar": 1e2, "psi": POUND_FORCE / INCH**2}
             ),
         ),
+        Quantity("mass", "kg", _linear({"kg": 1.0, "g": 1e-3, "mg": 1e-6, "lbm": POUND_MASS, "lb": POUND_MASS})),
         Quantity("dimensionless", "1", _linear({"1": 1.0, "-": 1.0})),
     )
 }
@@ -129,12 +136,25 @@ CHANNEL_BASES: dict[str, str] = {
     "angular_acceleration": "angular_acceleration",
     "temperature": "temperature",
     "pressure": "pressure",
+    "mass": "mass",
     "time": "time",
 }
 
 SI_UNITS: frozenset[str] = frozenset(q.si for q in QUANTITIES.values())
 
-_UNIT_QUANTITY: dict[str, Quantity] = {spelling: q for q in QUANTITIES.values() for spelling in q.units}
+
+def _owners() -> dict[str, tuple[Quantity, ...]]:
+    """Every unit spelling -> the quantities that accept it (two for `g` and `lb`)."""
+    owners: dict[str, tuple[Quantity, ...]] = {}
+    for quantity in QUANTITIES.values():
+        for spelling in quantity.units:
+            owners[spelling] = (*owners.get(spelling, ()), quantity)
+    return owners
+
+
+_UNIT_QUANTITIES = _owners()
+AMBIGUOUS_UNITS: frozenset[str] = frozenset(s for s, owners in _UNIT_QUANTITIES.items() if len(owners) > 1)
+
 _AROUND_DIVISION = re.compile(r"\s*([/^])\s*")
 _PRODUCT = re.compile(r"\s*[*·]\s*|\s+")
 
@@ -143,6 +163,11 @@ def normalise_unit(unit: str) -> str:
     """The lookup spelling of a unit text (see the module docstring): `' N * m '` -> `'N.m'`, `'m/s²'` -> `'m/s^2'`."""
     text = unit.strip().replace("²", "^2").replace("µ", "u").replace("μ", "u")
     return _PRODUCT.sub(".", _AROUND_DIVISION.sub(r"\1", text))
+
+
+def unit_quantities(unit: str) -> tuple[Quantity, ...]:
+    """The quantities a unit text belongs to: one, two for `g` and `lb`, none for a unit nnfmu does not know."""
+    return _UNIT_QUANTITIES.get(normalise_unit(unit), ())
 
 
 def base_name(channel: str) -> str | None:
@@ -171,23 +196,39 @@ def _all_units() -> str:
     return "; ".join(f"{q.name}: {q.listing()}" for q in QUANTITIES.values())
 
 
+def _a(quantity: Quantity) -> str:
+    """The quantity's name with its article: 'a force', 'an acceleration'."""
+    return f"{'an' if quantity.name[0] in 'aeiou' else 'a'} {quantity.name}"
+
+
+def _quantity_names(quantities: tuple[Quantity, ...]) -> str:
+    return " or ".join(_a(q) for q in quantities)
+
+
 def to_si(values: np.ndarray, unit: str, channel: str, source: str | None = None) -> tuple[np.ndarray, str]:
     """Convert a channel's values from `unit` to SI; return (new float64 array, SI unit string).
 
     The channel name fixes the quantity (see the module docstring), and the unit must belong to it (`force [m]` is
-    an error); a channel with an unknown name is converted by the unit's own quantity. `source` (a file) prefixes
-    error messages. Raises DataError for an unknown unit or a unit of another quantity.
+    an error); a channel with an unknown name is converted by the unit's own quantity, unless the unit belongs to
+    several (`mystery [g]`). `source` (a file) prefixes error messages. Raises DataError for an unknown, ambiguous or
+    wrong unit.
     """
     where = f"{source}: " if source else ""
     spelling = normalise_unit(unit)
-    of_unit = _UNIT_QUANTITY.get(spelling)
-    quantity = channel_quantity(channel) or of_unit
+    of_unit = _UNIT_QUANTITIES.get(spelling, ())
+    quantity = channel_quantity(channel)
+    if quantity is None and len(of_unit) > 1:
+        raise DataError(
+            f"{where}channel {channel!r}: unit {unit!r} is {_quantity_names(of_unit)}, and the name {channel!r} does "
+            f"not say which; name the channel after its quantity (e.g. '{channel}_{of_unit[0].name}')"
+        )
+    quantity = quantity or (of_unit[0] if of_unit else None)
     if quantity is None:
         raise DataError(f"{where}channel {channel!r}: unknown unit {unit!r}; known units are {_all_units()}")
     if spelling not in quantity.units:
-        if of_unit is not None:
+        if of_unit:
             raise DataError(
-                f"{where}channel {channel!r} is a {quantity.name} but its unit {unit!r} is a {of_unit.name}; "
+                f"{where}channel {channel!r} is {_a(quantity)} but its unit {unit!r} is {_quantity_names(of_unit)}; "
                 f"{quantity.name} units are {quantity.listing()}"
             )
         raise DataError(

@@ -16,6 +16,7 @@ from nnfmu.export.metadata import build_component
 from nnfmu.export.step_graph import build_step_graph, network_sizes, state_layout
 from nnfmu.export.verify import envelope_signal, verify_step_graph
 from nnfmu.models.trained import TrainedModel
+from nnfmu.reference_stimulus import REFERENCE_SAMPLES, ReferenceStimulus
 
 
 @dataclass(frozen=True)
@@ -53,7 +54,9 @@ def export_onnx(
     """Write `model`'s step graph to `path` after checking onnxruntime reproduces `model.predict` (relative error <= 1e-6).
 
     `verify_on` is the test split's input channels; without it the check runs on random samples inside the training
-    envelope. Nothing is written if any check fails (ExportError, or onnx's ValidationError for a malformed graph).
+    envelope. The first samples of the checked inputs go into the metadata as the reference stimulus `nnfmu build`
+    turns into the FMU's reference results. Nothing is written if any check fails (ExportError, or onnx's
+    ValidationError for a malformed graph).
     """
     name = name or f"{model.spec.output}_model"
     component = build_component(model, name, description or f"{model.spec.output} of a component, learnt from rig data by nnfmu")
@@ -67,6 +70,11 @@ def export_onnx(
     else:
         channels, source = verify_on, "given channels"
     error, samples = verify_step_graph(onnx_model, model, channels)
+    names = [p.name for p in component.inputs]
+    n = min(REFERENCE_SAMPLES, len(channels[names[0]]))
+    what = "the input data" if verify_on is not None else "the random inputs inside the training envelope"
+    ReferenceStimulus.take(channels, names, f"the first {n} samples of {what} the export was verified on",
+                           n).attach_to(onnx_model)
     path = Path(path)
     with atomic_path(path) as tmp:
         onnx.save(onnx_model, tmp)

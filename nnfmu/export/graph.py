@@ -18,7 +18,7 @@ OPSET = 17
 # onnx 1.23 writes IR 11 by default; IR 8 is what opset 17 was released with and every onnxruntime >= 1.14 loads.
 IR_VERSION = 8
 ALLOWED_OPS = frozenset(
-    {"Gemm", "MatMul", "Add", "Sub", "Mul", "Div", "Tanh", "Relu", "Concat", "Slice", "Gather", "Reshape",
+    {"Gemm", "MatMul", "Add", "Sub", "Mul", "Div", "Tanh", "Relu", "Sqrt", "Concat", "Slice", "Gather", "Reshape",
      "Identity", "Constant", "GRU"}
 )
 

@@ -5,6 +5,7 @@ part's outputs (names must not clash), and carries one state vector `state` [n] 
 parts' states in order: each part reads its slice (Slice, then Reshape to the part's own state shape) and the parts'
 next states are concatenated into `state_next`. Every other tensor of part i is renamed `part{i}_<name>`, so the
 parts cannot collide. The parts run side by side on the same sample clock, so their sample periods must agree.
+The parts' reference stimuli (if every part has one) become the merged graph's (`merge_stimuli`).
 Needs only onnx and `nnfmu.component` (no torch).
 """
 
@@ -20,6 +21,7 @@ from onnx import TensorProto, helper, numpy_helper
 from nnfmu.component import Component, Port, StatePort
 from nnfmu.export.errors import ExportError
 from nnfmu.export.graph import IR_VERSION, OPSET
+from nnfmu.reference_stimulus import ReferenceStimulus, merge_stimuli
 
 STATE = "state"
 STATE_NEXT = "state_next"
@@ -206,8 +208,18 @@ def merge_step_graphs(models: Sequence[onnx.ModelProto], name: str, description:
         metadata={"merged_from": [{"name": c.name, "description": c.description, "metadata": c.metadata}
                                   for c in components], "state_layout": layout},
     ).attach_to(merged)
+    stimulus = merge_stimuli([_stimulus(m, i) for i, m in enumerate(models)])
+    if stimulus is not None:
+        stimulus.attach_to(merged)
     onnx.checker.check_model(merged, full_check=True)
     return merged
+
+
+def _stimulus(model: onnx.ModelProto, index: int) -> ReferenceStimulus | None:
+    try:
+        return ReferenceStimulus.from_onnx(model)
+    except ValueError as err:
+        raise MergeError(f"graph {index} ({model.graph.name!r}): {err}") from err
 
 
 def _port_shape(models: Sequence[onnx.ModelProto], components: Sequence[Component], tensor: str,

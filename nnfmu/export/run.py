@@ -35,6 +35,8 @@ def run_step_graph(source: str | os.PathLike[str] | onnx.ModelProto, channels: d
     """Evaluate the graph once per sample over `channels` (input port name -> (n,)), starting from the initial state.
 
     Returns output port name -> (n,). The state output of sample k is fed back as the state input of sample k+1.
+    A component that interpolates its inputs gets each sample's interval start from the sample before (sample 0:
+    its own inputs), as its FMU does when the inputs are set at every sample's time.
     """
     model = _load(source)
     component = Component.from_onnx(model)
@@ -58,6 +60,8 @@ def run_step_graph(source: str | os.PathLike[str] | onnx.ModelProto, channels: d
     for k in range(n):
         for port in component.inputs:
             feeds[port.tensor].flat[port.index] = arrays[port.name][k]
+            if component.interpolates_inputs:
+                feeds[component.interval_starts[port.tensor]].flat[port.index] = arrays[port.name][max(k - 1, 0)]
         values = dict(zip(output_names, session.run(output_names, {**feeds, **state})))
         for port in component.outputs:
             results[port.name][k] = values[port.tensor].flat[port.index]

@@ -9,3 +9,7 @@ class FmuBuildError(Exception):
 
 class CompilerError(FmuBuildError):
     """The C compiler is missing or rejected the FMU's sources (its output is in the message)."""
+
+
+class PlatformSkippedWarning(UserWarning):
+    """A default build left out a platform whose compiler is missing (the FMU still has this machine's binary)."""

@@ -2,9 +2,10 @@
 
 The XML comes from jinja2 templates in `templates/` with autoescaping on, so any name or description from an ONNX
 file is escaped; control characters XML cannot carry are dropped. Units are de-duplicated into `UnitDefinitions`
-with SI base-unit exponents for the units nnfmu uses. The `ModelStructure` follows docs/architecture.md: at a
-communication point no output depends on an input (outputs change only in doStep), and at initialisation every
-output depends on the inputs its graph tensor is computed from and on `output_gain`.
+with SI base-unit exponents for the units nnfmu uses. The `ModelStructure` follows docs/fmu.md: at a communication
+point an output of a sampled FMU depends on no input (outputs change only in doStep), while an interpolating FMU's
+outputs depend on the inputs their graph tensor is computed from (inputs set there are the latest sample's); at
+initialisation every output depends on those inputs and on `output_gain`.
 """
 
 from __future__ import annotations
@@ -173,16 +174,32 @@ class ModelDescriptionView:
         """FMI 2 `index`: 1-based position in ModelVariables."""
         return 1 + [x.value_reference for x in self.variables].index(v.value_reference)
 
+    @property
+    def interpolates_inputs(self) -> bool:
+        return self.component.interpolates_inputs
+
     def initial_dependencies(self, v: FmuVariable) -> str:
         """Knowns an output depends on at initialisation: FMI 2 indices or FMI 3 value references, ascending."""
+        knowns = self._input_sources(v)
+        if v.value_reference != self.fmu_variables.extrapolating.value_reference:
+            knowns.append(self.fmu_variables.output_gain)
+        return self._keys(knowns)
+
+    def step_dependencies(self, v: FmuVariable) -> str:
+        """Inputs an output depends on at a communication point: none for a sampled FMU (its outputs change only in
+        doStep), its graph sources for an interpolating one (inputs set there are the latest sample's)."""
+        return self._keys(self._input_sources(v)) if self.interpolates_inputs else ""
+
+    def _input_sources(self, v: FmuVariable) -> list[FmuVariable]:
+        """The inputs output `v` is computed from (for `extrapolating`: those with a training envelope)."""
         fv = self.fmu_variables
         if v.value_reference == fv.extrapolating.value_reference:
-            knowns = [x for x in fv.inputs if self._has_envelope(x)]
-        else:
-            tensor = self.component.outputs[v.port_index].tensor
-            sources = self.dependencies.get(tensor, set())
-            knowns = [x for x in fv.inputs if self.component.inputs[x.port_index].tensor in sources]
-            knowns.append(fv.output_gain)
+            return [x for x in fv.inputs if self._has_envelope(x)]
+        sources = self.dependencies.get(self.component.outputs[v.port_index].tensor, set())
+        return [x for x in fv.inputs if self.component.inputs[x.port_index].tensor in sources]
+
+    def _keys(self, knowns: list[FmuVariable]) -> str:
+        """FMI 2 indices or FMI 3 value references of `knowns`, ascending, space-separated."""
         keys = sorted(self.index(x) if self.identity.fmi_version == 2 else x.value_reference for x in knowns)
         return " ".join(str(k) for k in keys)
 

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from nnfmu.atomic import staging_dir
-from nnfmu.cosim.replay import ReplaySettings, replay_fmu
+from nnfmu.cosim.replay import replay_fmu
 from nnfmu.data import DataError, Measurement, check_measurement, load_measurement
 from nnfmu.export import export_onnx
 from nnfmu.fmu.build import build_fmu
@@ -198,7 +198,7 @@ class _Stage:
         return out
 
     def replay(self, fmu_path: Path, output: str) -> np.ndarray:
-        return np.asarray(replay_fmu(fmu_path, self.m, ReplaySettings(filter_cutoff=0.0))[output], dtype=float)
+        return np.asarray(replay_fmu(fmu_path, self.m)[output], dtype=float)
 
     def export(self, model: TrainedModel, k: int, effect: str) -> Path:
         path = self.staging / f"model_{k}.onnx"

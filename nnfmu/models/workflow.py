@@ -24,7 +24,8 @@ class TrainRequest:
     output: output channel; inputs/delays: replace the preset's input taps (delays apply to every input); hidden: one
     size, or several to choose among by validation error; thesis: the thesis's inputs, delays and fixed hidden size
     instead of nnfmu's default (high-pass memory bank, hidden size by validation); recurrent: GRU instead of the MLP; select_inputs: choose the
-    inputs by sensitivity analysis (overrides the preset's and `inputs`); optimizer: auto, lm, adam or lbfgs.
+    inputs by sensitivity analysis (overrides the preset's and `inputs`); optimizer: auto, lm, adam or lbfgs;
+    channel_map: (file channel, nnfmu name) pairs passed to `load_measurement`.
     """
 
     preset: str
@@ -40,11 +41,13 @@ class TrainRequest:
     select_inputs: bool = False
     optimizer: str | None = None
     name: str = ""
+    channel_map: tuple[tuple[str, str], ...] = ()
 
 
 @dataclass
 class TrainOutcome:
-    """Result of one `train` run: the written model, its metrics per split, export check, input ranking, timing."""
+    """Result of one `train` run: the written model, its metrics per split, export check, input ranking, timing,
+    and the notes the loader left on the data (time base, channel names, derived rates)."""
 
     path: Path
     model: TrainedModel
@@ -54,6 +57,7 @@ class TrainOutcome:
     selection: SelectionResult | None
     warnings: list[str]
     seconds: float
+    data_notes: list[str]
 
 
 def resolve(request: TrainRequest) -> tuple[Preset, Architecture, TrainSettings]:
@@ -94,13 +98,15 @@ def train_from_file(
     spec = custom_spec(preset.thesis_spec if request.thesis else preset.spec, request.output, request.inputs, request.delays)
     selection = None
     if request.select_inputs:
-        measurement = load_measurement(data, required=[spec.output])
+        measurement = load_measurement(data, required=[spec.output], channel_map=dict(request.channel_map))
         selection_settings = SelectionSettings(training=replace(settings, restarts=min(settings.restarts, 2)))
         selection = select_inputs(measurement, spec.output, selection_settings, _stage(progress, 0.0, 0.5))
         spec = selection.spec
         progress = _stage(progress, 0.5, 1.0)
     else:
-        measurement = load_measurement(data, required=[*spec.channels, spec.output])
+        measurement = load_measurement(
+            data, required=[*spec.channels, spec.output], channel_map=dict(request.channel_map)
+        )
     result = train_model(measurement, spec, architecture, settings, progress)
     block = max(result.splits.test, key=lambda part: part.stop - part.start)
     test = measurement.slice(block.start, block.stop)
@@ -121,4 +127,5 @@ def train_from_file(
         selection=selection,
         warnings=result.warnings,
         seconds=time.perf_counter() - started,
+        data_notes=list(measurement.notes.values()),
     )

@@ -28,7 +28,7 @@ from nnfmu.vehicle.drive import DriveSettings, generate_drive, write_drive
 
 from .envelope import Excursion, excursion
 from .reference import monolithic_reference
-from .runs import RoadTestSettings, _bushing_replay, _bushing_truth
+from .runs import RoadTestSettings, _open_loop, _ports
 from .systems import BUSHING_MODELS, RoadTestError, bushing_elements, bushing_onnx, vehicle_components
 
 SYSTEM = "full-vehicle"
@@ -104,7 +104,8 @@ def train_vehicle_bushings(out: str | Path, road: RoadTestSettings, settings: Bu
 @dataclass
 class BushingReplay:
     """Bushing networks replayed open loop along a reference's bushing motions: per element, the comparison with
-    the truth physics per channel; and every network input's use of its training envelope on every bushing."""
+    the reference's truth-physics forces per channel; and every network input's use of its training envelope on
+    every bushing."""
 
     comparisons: dict[str, list[ChannelComparison]]
     excursions: list[Excursion]
@@ -113,15 +114,15 @@ class BushingReplay:
 def replay_bushing_networks(models: Mapping[str, Path], reference: Measurement, elements: Sequence[str],
                             folder: Path) -> BushingReplay:
     """The four bushing networks merged and built as the road test does (`folder`/lca-bushing.onnx/.fmu), replayed
-    along each of `elements`' motion in `reference` and compared with the bushing truth physics along it (the road
-    test's open-loop check), and every front LCA bushing's motion against the networks' envelope."""
+    along each of `elements`' motion in `reference` and compared with the reference's forces and torques of that
+    bushing (the truth physics; the road test budget's `nrmse_network`), and every front LCA bushing's motion against
+    the networks' envelope."""
     merged = bushing_onnx(models, Path(folder) / "lca-bushing.onnx")
     fmu = build_fmu(merged, BuildOptions(out=Path(folder) / "lca-bushing.fmu"))
-    comparisons = {}
-    for element in elements:
-        truth = _bushing_truth(reference, element)
-        comparisons[element] = compare(_bushing_replay(fmu, reference, element), truth, truth.names,
-                                       ValidationSettings())
+    outputs = list(_ports(fmu, "output"))
+    comparisons = {element: compare(_open_loop(fmu, reference, element), reference,
+                                    [f"{element}_{name}" for name in outputs], ValidationSettings())
+                   for element in elements}
     ports = Component.from_onnx(onnx.load(merged)).inputs
     excursions = [excursion("reference", name, port, reference[f"{name}_{port.name}"])
                   for name in bushing_elements(SYSTEM) for port in ports]

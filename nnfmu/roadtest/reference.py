@@ -17,9 +17,7 @@ import numpy as np
 from nnfmu.data import Measurement
 from nnfmu.data.derive import derive_rates
 from nnfmu.vehicle.fmu import VehicleBuildSettings, initial_state, vehicle_model
-from nnfmu.vehicle.models import MonolithicSettings, simulate_monolithic, truth_laws
-
-QUARTER_CAR_CORNER = "fl"  # the drive channel under the quarter car (the master's default corner)
+from nnfmu.vehicle.models import LinearVehicle, MonolithicSettings, simulate_monolithic, truth_laws
 
 
 @dataclass(frozen=True)
@@ -30,29 +28,25 @@ class Reference:
     seconds: float
 
 
-def actuator_inputs(system: str, drive: Measurement) -> dict[str, object]:
-    """Actuator displacement and velocity arrays of `system`'s vehicle from the drive (rates derived)."""
+def actuator_inputs(vehicle: LinearVehicle, drive: Measurement) -> dict[str, object]:
+    """Arrays of `vehicle`'s actuator inputs from the drive channels of the same names (rates derived), as the
+    co-simulation master binds them (a quarter car's inputs name its corner)."""
     rates = derive_rates(drive)
-    corners = [QUARTER_CAR_CORNER] if system == "quarter-car" else ["fl", "fr", "rl", "rr"]
-    inputs: dict[str, object] = {}
-    for corner in corners:
-        port = "actuator_" if system == "quarter-car" else f"actuator_{corner}_"
-        inputs[f"{port}displacement"] = rates[f"actuator_{corner}_displacement"]
-        inputs[f"{port}velocity"] = rates[f"actuator_{corner}_velocity"]
-    return inputs
+    return {p.name: rates[p.name] for p in vehicle.inputs if p.name.startswith("actuator_")}
 
 
 def monolithic_reference(system: str, drive: Measurement, components: Mapping[str, str] | None = None,
-                         step: float = 1e-4) -> Reference:
+                         step: float = 1e-4, compiled: bool = True) -> Reference:
     """Solve `system` ('quarter-car' or 'full-vehicle') with truth laws on every external component under `drive`
     (`components` as for the vehicle FMU: the same ones built in); RK4 at `step` [s], outputs at the drive's sample
     period, from the state the vehicle FMU starts in (`initial_state`: the static equilibrium, or the design position
-    where external bushings carry the only stiffness of a motion) with the components at rest."""
+    where external bushings carry the only stiffness of a motion) with the components at rest. `compiled=False`
+    solves on the generic per-law path (`simulate_monolithic`), for cross-checks of the compiled kernel."""
     vehicle = vehicle_model(system, VehicleBuildSettings(components=dict(components or {})))
     forces = [p.name for p in vehicle.inputs if not p.name.startswith("actuator")]
     started = time.perf_counter()
-    solved = simulate_monolithic(vehicle, truth_laws(forces), actuator_inputs(system, drive),
-                                 MonolithicSettings(sample_period=drive.sample_period, step=step),
+    solved = simulate_monolithic(vehicle, truth_laws(forces), actuator_inputs(vehicle, drive),
+                                 MonolithicSettings(sample_period=drive.sample_period, step=step, compiled=compiled),
                                  x0=np.array(initial_state(vehicle)))
     seconds = time.perf_counter() - started
     units = {p.name: p.unit for p in vehicle.outputs + vehicle.inputs}

@@ -2,11 +2,11 @@
 
 drive file (ISO 8608 road) -> component and vehicle FMUs -> SSP systems -> co-simulation with the spline and with the
 hysteresis damper network (the full vehicle with its four front LCA bushing networks in the loop as well, coupled
-through the vehicle's stabilised ports, see `systems`) -> monolithic reference (truth physics in every network's
-place) -> validation report per system with the thesis comparison table -> `road_test.json`. The bushing networks are
-also replayed open loop along the reference's motion of one bushing and compared with the bushing truth physics along
-the same motion, which separates the networks' own error from what the coupling adds, and every bushing's motion is
-checked against the networks' training envelope.
+through the vehicle's stabilised ports, see `systems`), and with the truth physics as FMUs in the networks' place ->
+monolithic reference (truth physics, no coupling) -> the error budget per channel (`budget`: total, the networks'
+own share, the coupling's share, damage ratio), validation report per system with the thesis comparison table ->
+`road_test.json`. Every network's input is checked against its training envelope along the reference's motion and
+the co-simulations'. The co-simulations use the master's defaults and the FMUs theirs: what a user gets.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import onnx
+from fmpy import read_model_description
 
 from nnfmu.atomic import write_text_atomic
 from nnfmu.component import Component
@@ -27,41 +28,42 @@ from nnfmu.cosim.master import CosimSettings, cosimulate
 from nnfmu.cosim.replay import replay_fmu
 from nnfmu.cosim.ssp import open_system
 from nnfmu.data import Measurement, save_measurement
-from nnfmu.data.rigs import BUSHING_CHANNELS, BushingChannelTruth, BushingParams
 from nnfmu.validate import ChannelComparison, ValidationSettings, compare, write_report
 from nnfmu.vehicle.drive import DriveSettings, generate_drive, write_drive
 
+from .budget import BudgetRow, budget_rows
 from .envelope import Excursion, excursion
 from .reference import Reference, monolithic_reference
 from .report import write_system_report
 from .systems import (
-    DAMPER_MODELS, RoadTestError, ComponentFmus, bushing_elements, build_component_fmus, build_vehicle,
-    check_models, damper_elements, vehicle_components, write_system,
+    DAMPER_MODELS, RoadTestError, ComponentFmus, bushing_elements, build_component_fmus, build_truth_fmus,
+    build_vehicle, check_models, damper_elements, vehicle_components, write_system,
 )
 from .thesis import ThesisRow, thesis_row
 
 COMPARED = {
     "quarter-car": ("damper_force", "damper_displacement", "damper_velocity", "body_acceleration",
-                    "spindle_vertical_force"),
+                    "spindle_acceleration", "spindle_vertical_force"),
     "full-vehicle": ("damper_fl_force", "damper_fl_displacement", "damper_rl_force", "lca_fl_angle", "body_heave",
-                     "body_pitch", "spindle_fl_vertical_force", "bushing_fl_front_axial_displacement",
-                     "bushing_fl_front_radial_displacement", "bushing_fl_front_radial_force",
+                     "body_pitch", "body_acceleration_fl", "spindle_fl_acceleration", "spindle_fl_vertical_force",
+                     "bushing_fl_front_axial_displacement", "bushing_fl_front_radial_displacement",
+                     "bushing_fl_front_axial_force", "bushing_fl_front_radial_force", "bushing_fl_front_axial_torque",
                      "bushing_fl_front_conical_torque"),
 }
-REPLAYED_BUSHING = "bushing_fl_front"  # whose networks are compared with the truth; all four are envelope-checked
+TRUTH = "truth physics"  # the co-simulation with the truth laws as FMUs in the networks' place
 Log = Callable[[str], None]
 
 
 @dataclass(frozen=True)
 class SystemRun:
     """How one system runs: `duration` [s] of drive, communication `step` [s], coupling `iterations` (0: plain
-    Gauss-Seidel), network output low-pass `filter_cutoff` [Hz] (0: off, the raw networks), `channels` compared
+    Gauss-Seidel), network output low-pass `filter_cutoff` [Hz] (None: the FMUs' default, off; 0: off), `channels` compared
     with the reference (empty: the system's default set, `COMPARED`)."""
 
     duration: float
     step: float = 1e-3
     iterations: int = 0
-    filter_cutoff: float = 0.0
+    filter_cutoff: float | None = None
     channels: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
@@ -90,21 +92,22 @@ class RoadTestSettings:
 
 @dataclass
 class SystemResult:
-    """One system's outcome: its SSP files, report, thesis table, envelope check, run times [s]."""
+    """One system's outcome: its SSP files, report, thesis table, error budget, envelope check, run times [s] and
+    the simulated duration [s]."""
 
     system: str
     ssds: dict[str, Path]
     report: Path
     rows: list[ThesisRow]
-    bushing_rows: list[ThesisRow]
+    budget: list[BudgetRow]
     excursions: list[Excursion]
     seconds: dict[str, float]
+    duration: float
 
     def to_dict(self) -> dict[str, object]:
         return {"system": self.system, "ssds": {k: str(v) for k, v in self.ssds.items()}, "report": str(self.report),
-                "seconds": {k: round(v, 2) for k, v in self.seconds.items()},
-                "thesis_table": [r.to_dict() for r in self.rows],
-                "bushing_networks_on_reference_motion": [r.to_dict() for r in self.bushing_rows],
+                "duration_s": self.duration, "seconds": {k: round(v, 2) for k, v in self.seconds.items()},
+                "thesis_table": [r.to_dict() for r in self.rows], "budget": [r.to_dict() for r in self.budget],
                 "envelope": [e.to_dict() for e in self.excursions]}
 
 
@@ -143,7 +146,8 @@ def _settings(window: tuple[float, float], span: float) -> ValidationSettings:
 def _cosim(ssd: Path, drive: Measurement, run: SystemRun) -> tuple[Measurement, float]:
     started = time.perf_counter()
     with open_system(ssd) as system:
-        result = cosimulate(system, drive, CosimSettings(step=run.step, iterations=run.iterations, tolerance=1e-6))
+        settings = CosimSettings(step=run.step, iterations=run.iterations, tolerance=1e-6)
+        result = cosimulate(system, drive, settings)
     return result.measurement, time.perf_counter() - started
 
 
@@ -151,53 +155,60 @@ def _network_ports(models: Mapping[str, Path], name: str) -> Component:
     return Component.from_onnx(onnx.load(Path(models[name])))
 
 
-def _damper_excursions(run_name: str, system: str, component: Component, m: Measurement) -> list[Excursion]:
-    return [excursion(run_name, element, port, m[f"{element}_{port.name}"])
-            for element in damper_elements(system) for port in component.inputs]
+def _excursions(run_name: str, elements: list[str], component: Component, m: Measurement) -> list[Excursion]:
+    return [excursion(run_name, element, port, m[f"{element}_{port.name}"]) for element in elements
+            for port in component.inputs]
 
 
-def _bushing_truth(reference: Measurement, element: str) -> Measurement:
-    """Forces of the bushing truth physics (rig defaults) along the reference's motion of bushing `element`."""
-    params = BushingParams()
-    channels, units = {}, {}
-    for key, ch in BUSHING_CHANNELS.items():
-        force, _ = BushingChannelTruth(getattr(params, key)).simulate(reference.sample_period,
-                                                                       reference[f"{element}_{ch.position}"])
-        channels[f"{element}_{ch.force}"] = force
-        units[f"{element}_{ch.force}"] = ch.force_unit
-    return Measurement(reference.time, channels, units, source=f"bushing truth physics along {reference.source}")
+def _ports(fmu: Path, causality: str) -> dict[str, str]:
+    """Real variables of `fmu` with `causality`, name -> unit."""
+    return {v.name: v.unit or "" for v in read_model_description(str(fmu)).modelVariables
+            if v.causality == causality and v.type in ("Real", "Float64")}
 
 
-def _bushing_replay(bushing_fmu: Path, reference: Measurement, element: str) -> Measurement:
-    """The merged bushing FMU (filter off) replayed along the reference's motion of bushing `element`."""
-    inputs = Component.from_onnx(onnx.load(bushing_fmu.with_suffix(".onnx"))).inputs
-    motion = Measurement(reference.time, {p.name: reference[f"{element}_{p.name}"] for p in inputs},
-                         {p.name: p.unit for p in inputs}, source=f"{element} motion in {reference.source}")
-    replayed = replay_fmu(bushing_fmu, motion)
+def _open_loop(fmu: Path, reference: Measurement, element: str) -> Measurement:
+    """The FMU of `element` replayed along the reference's motion of that element (its inputs `element_<input>`);
+    outputs named `element_<output>`."""
+    inputs = _ports(fmu, "input")
+    motion = Measurement(reference.time, {name: reference[f"{element}_{name}"] for name in inputs}, inputs,
+                         source=f"{element} motion in {reference.source}")
+    replayed = replay_fmu(fmu, motion)
     return Measurement(replayed.time, {f"{element}_{k}": v for k, v in replayed.channels.items()},
                        {f"{element}_{k}": u for k, u in replayed.units.items()},
-                       source=f"{bushing_fmu.name} replayed on the {element} motion")
+                       source=f"{fmu.name} replayed on the {element} motion")
 
 
-def _bushing_checks(system: str, bushing_fmu: Path, ref: Measurement, validation: ValidationSettings,
-                    excursions: list[Excursion]) -> list[ChannelComparison]:
-    """Every front LCA bushing's reference motion against the networks' envelope (appended to `excursions`), and
-    the networks replayed along REPLAYED_BUSHING's motion compared with the truth physics along it."""
-    component = Component.from_onnx(onnx.load(bushing_fmu.with_suffix(".onnx")))
-    for element in bushing_elements(system):
-        excursions.extend(excursion("reference", element, port, ref[f"{element}_{port.name}"])
-                          for port in component.inputs)
-    truth = _bushing_truth(ref, REPLAYED_BUSHING)
-    return compare(_bushing_replay(bushing_fmu, ref, REPLAYED_BUSHING), truth, truth.names, validation)
+def _network_errors(system: str, model: str, fmus: ComponentFmus, ref: Measurement, cosim: Measurement,
+                    truth: Measurement, channels: list[str], validation: ValidationSettings
+                    ) -> dict[str, ChannelComparison]:
+    """Each channel's network error (`budget`): a network's output replayed open loop along the reference motion of
+    its element against the reference, else the network co-simulation against the truth co-simulation."""
+    networks = {element: fmus.dampers[model] for element in damper_elements(system)}
+    networks |= {element: fmus.bushing for element in bushing_elements(system) if fmus.bushing is not None}
+    found: dict[str, ChannelComparison] = {}
+    for element, fmu in networks.items():
+        outputs = _ports(fmu, "output")
+        mine = [c for c in channels if c.startswith(f"{element}_") and c.removeprefix(f"{element}_") in outputs]
+        if mine:
+            found |= {c.name: c for c in compare(_open_loop(fmu, ref, element), ref, mine, validation)}
+    rest = [c for c in channels if c not in found]
+    found |= {c.name: c for c in compare(cosim, truth, rest, validation)} if rest else {}
+    return found
 
 
-def _run_system(system: str, run: SystemRun, models: Mapping[str, Path], fmus: ComponentFmus, drive: Measurement,
-                settings: RoadTestSettings, out: Path, log: Log) -> SystemResult:
-    """One system: FMUs and SSDs, reference, both damper networks co-simulated and compared, bushing checks, report."""
+def _run_system(system: str, run: SystemRun, models: Mapping[str, Path], fmus: ComponentFmus, truth: ComponentFmus,
+                drive: Measurement, settings: RoadTestSettings, out: Path, log: Log) -> SystemResult:
+    """One system: FMUs and SSDs, reference, both damper networks and the truth physics co-simulated and compared,
+    the error budget, the envelope checks, the report."""
     drive = _stretch(drive, run.duration)
     vehicle = build_vehicle(system, out / "fmu", run.step)
-    ssds = {model: write_system(system, vehicle, fmus.dampers[model], fmus.bushing if bushing_elements(system) else None,
-                                out / "systems" / system / model, run.filter_cutoff) for model in DAMPER_MODELS}
+    bushings = bool(bushing_elements(system))
+    parts = {model: (fmus.dampers[model], fmus.bushing) for model in DAMPER_MODELS}
+    parts[TRUTH] = (truth.dampers["truth"], truth.bushing)
+    ssds = {model: write_system(system, vehicle, damper, bushing if bushings else None,
+                                out / "systems" / system / model.replace(" ", "-"),
+                                run.filter_cutoff if model != TRUTH else None)
+            for model, (damper, bushing) in parts.items()}
     seconds: dict[str, float] = {}
     log(f"{system}: monolithic reference over {run.duration:g} s (truth physics, RK4 at {settings.reference_step:g} s)")
     reference: Reference = monolithic_reference(system, drive, vehicle_components(system), settings.reference_step)
@@ -206,34 +217,34 @@ def _run_system(system: str, run: SystemRun, models: Mapping[str, Path], fmus: C
     validation = _settings(settings.window, float(ref.time[-1] - ref.time[0]))
     results_dir = out / "results" / system
     save_measurement(ref, results_dir / "reference.csv")
-    rows: list[ThesisRow] = []
-    excursions: list[Excursion] = []
+    channels = list(run.channels or COMPARED[system])
+    cosims: dict[str, Measurement] = {}
     comparisons: dict[str, list[ChannelComparison]] = {}
-    for model in DAMPER_MODELS:
+    excursions: list[Excursion] = []
+    for model in ssds:
         result, seconds[model] = _cosim(ssds[model], drive, run)
         log(f"{system} with {model}: co-simulated {run.duration:g} s at {run.step:g} s in {seconds[model]:.1f} s")
-        channels = list(run.channels or COMPARED[system])
-        on_ref = _on_reference(result, ref, channels, f"{system} co-simulation with {model}")
-        save_measurement(on_ref, results_dir / f"{model}.csv")
-        comparisons[model] = compare(on_ref, ref, channels, validation)
-        rows.extend(thesis_row(c, model) for c in comparisons[model])
-        excursions.extend(_damper_excursions(f"co-simulation with {model}", system,
-                                             _network_ports(models, model), result))
-    order = list(run.channels or COMPARED[system])
-    rows.sort(key=lambda row: (order.index(row.channel), DAMPER_MODELS.index(row.model)))  # side by side per channel
-    excursions.extend(_damper_excursions("reference", system, _network_ports(models, DAMPER_MODELS[0]), ref))
-    bushing_rows: list[ThesisRow] = []
-    if bushing_elements(system) and fmus.bushing is not None:
-        comparisons["bushing networks"] = _bushing_checks(system, fmus.bushing, ref, validation, excursions)
-        bushing_rows = [thesis_row(c, "bushing networks") for c in comparisons["bushing networks"]]
+        cosims[model] = _on_reference(result, ref, channels, f"{system} co-simulation with {model}")
+        save_measurement(cosims[model], results_dir / f"{model.replace(' ', '-')}.csv")
+        comparisons[model] = compare(cosims[model], ref, channels, validation)
+        if model != TRUTH:
+            excursions.extend(_excursions(f"co-simulation with {model}", damper_elements(system),
+                                          _network_ports(models, model), result))
+    rows = [thesis_row(c, model) for model in DAMPER_MODELS for c in comparisons[model]]
+    rows.sort(key=lambda row: (channels.index(row.channel), DAMPER_MODELS.index(row.model)))  # side by side
+    budget = [row for model in DAMPER_MODELS for row in budget_rows(
+        system, model, comparisons[model], comparisons[TRUTH],
+        _network_errors(system, model, fmus, ref, cosims[model], cosims[TRUTH], channels, validation))]
+    excursions.extend(_excursions("reference", damper_elements(system), _network_ports(models, DAMPER_MODELS[0]), ref))
+    if bushings and fmus.bushing is not None:
+        excursions.extend(_excursions("reference", bushing_elements(system), Component.from_onnx(
+            onnx.load(fmus.bushing.with_suffix(".onnx"))), ref))
     report_dir = out / "report" / system
-    model_reports = {}
-    for model, chosen in comparisons.items():
-        title = (f"{system}: {model} vs the monolithic reference" if model in DAMPER_MODELS else
-                 f"{system}: {REPLAYED_BUSHING} networks vs truth physics along the reference motion")
-        model_reports[model] = write_report(chosen, report_dir / model.replace(" ", "-"), title,
-                                            {"system": system, "drive": drive.source})
-    outcome = SystemResult(system, ssds, report_dir / "index.html", rows, bushing_rows, excursions, seconds)
+    model_reports = {model: write_report(chosen, report_dir / model.replace(" ", "-"),
+                                         f"{system}: {model} vs the monolithic reference",
+                                         {"system": system, "drive": drive.source})
+                     for model, chosen in comparisons.items()}
+    outcome = SystemResult(system, ssds, report_dir / "index.html", rows, budget, excursions, seconds, run.duration)
     write_system_report(outcome.to_dict(), _context(system, run, settings, drive), model_reports, outcome.report)
     return outcome
 
@@ -242,12 +253,17 @@ def _context(system: str, run: SystemRun, settings: RoadTestSettings, drive: Mea
     return {
         "system": system,
         "drive": f"{drive.source}, {run.duration:g} s at {settings.sample_rate:g} Hz",
-        "co-simulation": f"fmpy Gauss-Seidel, step {run.step:g} s, iterations {run.iterations}, network output "
-                         f"filter {run.filter_cutoff:g} Hz (0 = off); vehicle FMU exact at {run.step:g} s",
+        "co-simulation": f"fmpy master at its defaults (Gauss-Seidel, vehicle first, linear extrapolation, refresh "
+                         f"at every communication point), step {run.step:g} s, iterations {run.iterations}, network "
+                         f"output filter {'the FMU default (off)' if run.filter_cutoff is None else f'{run.filter_cutoff:g} Hz'}"
+                         f"; vehicle FMU exact at {run.step:g} s, inputs interpolated",
         "reference": f"monolithic RK4 at {settings.reference_step:g} s, rig truth physics in every network's place",
         "front LCA bushings": "networks in the loop through stabilised ports (the vehicle holds only each network's "
-                              "deviation from the linear bushing over a step); also replayed open loop along the "
-                              "reference motion" if system == "full-vehicle" else "none (quarter car)",
+                              "deviation from the linear bushing over a step)" if system == "full-vehicle"
+                              else "none (quarter car)",
+        "error budget": "total: network FMUs in the co-simulation; network: a network replayed open loop along the "
+                        "reference motion of its element (vehicle channels: network vs truth co-simulation); "
+                        "coupling: truth-physics FMUs in the same co-simulation; all against the reference",
     }
 
 
@@ -270,9 +286,12 @@ def run_road_test(out: str | Path, models: Mapping[str, str | Path], settings: R
     drive_path = write_drive(drive, out / "drive.csv")
     log(f"drive file {drive_path}: ISO 8608 class {settings.road_class} at {settings.speed:g} m/s")
     fmus = build_component_fmus(models, out / "fmu", "full-vehicle" in runs)
+    period = _network_ports(models, DAMPER_MODELS[0]).sample_period
+    truth = build_truth_fmus(out / "fmu", period if period is not None else min(r.step for r in runs.values()),
+                             "full-vehicle" in runs)
     outcome = RoadTestResult(out=out, drive=drive_path)
     for system, run in runs.items():
-        outcome.systems.append(_run_system(system, run, models, fmus, drive, settings, out, log))
+        outcome.systems.append(_run_system(system, run, models, fmus, truth, drive, settings, out, log))
     outcome.seconds = time.perf_counter() - started
     outcome.summary = out / "road_test.json"
     write_text_atomic(outcome.summary, json.dumps(

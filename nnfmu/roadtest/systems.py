@@ -21,13 +21,17 @@ import onnx
 
 from nnfmu.atomic import atomic_path
 from nnfmu.cosim.ssp import connect_by_name, write_ssd
+from nnfmu.data.rigs import BUSHING_CHANNELS
 from nnfmu.export.merge import merge_step_graphs
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
+from nnfmu.vehicle.models import truth_laws
 from nnfmu.vehicle.models.components import STABILISED
 from nnfmu.vehicle.models.full_vehicle import FRONT_CORNERS
 from nnfmu.vehicle.models.ports import CORNERS
+
+from .truth_graphs import bushing_truth_graph, damper_truth_graph
 
 SYSTEMS = ("quarter-car", "full-vehicle")
 DAMPER_MODELS = ("damper-spline", "damper-hysteresis")
@@ -89,6 +93,23 @@ def build_component_fmus(models: Mapping[str, Path], out: Path, with_bushing: bo
     return ComponentFmus(dampers, bushing)
 
 
+def build_truth_fmus(out: Path, sample_period: float, with_bushing: bool) -> ComponentFmus:
+    """Native FMUs of the truth physics the monolithic reference closes the vehicle with (`truth_laws`), sampled at
+    the networks' `sample_period` [s]: the damper as `dampers["truth"]`, and the bushing (all four channels)."""
+    forces = ["damper_force"] + [f"bushing_{channel.force}" for channel in BUSHING_CHANNELS.values()]
+    laws = truth_laws(forces)
+    graphs = {"truth-damper": damper_truth_graph(laws["damper_force"].truth, sample_period)}
+    if with_bushing:
+        truths = {key: laws[f"bushing_{channel.force}"].truth for key, channel in BUSHING_CHANNELS.items()}
+        graphs["truth-bushing"] = bushing_truth_graph(truths, sample_period)
+    built = {}
+    for name, graph in graphs.items():
+        with atomic_path(out / f"{name}.onnx") as tmp:
+            onnx.save(graph, tmp)
+        built[name] = build_fmu(out / f"{name}.onnx", BuildOptions(out=out / f"{name}.fmu"))
+    return ComponentFmus({"truth": built["truth-damper"]}, built.get("truth-bushing"))
+
+
 def vehicle_components(system: str) -> dict[str, str]:
     """Component choices of the road-test vehicle: dampers external, front LCA bushings stabilised."""
     return {name: STABILISED for name in bushing_elements(system)}
@@ -102,13 +123,14 @@ def build_vehicle(system: str, out: Path, step: float) -> Path:
 
 
 def write_system(system: str, vehicle_fmu: Path, damper_fmu: Path, bushing_fmu: Path | None, folder: Path,
-                 filter_cutoff: float) -> Path:
+                 filter_cutoff: float | None = None) -> Path:
     """`folder/SystemStructure.ssd` joining the vehicle, its damper networks and (if `bushing_fmu` is given) its
-    front LCA bushing FMUs by name; each network FMU's output low-pass set to `filter_cutoff` [Hz] (0: off)."""
+    front LCA bushing FMUs by name; each network FMU's output low-pass set to `filter_cutoff` [Hz] (0: off; None: the
+    FMUs' own default, nothing set)."""
     components = {name: damper_fmu for name in damper_elements(system)}
     if bushing_fmu is not None:
         components |= {name: bushing_fmu for name in bushing_elements(system)}
-    parameters = {name: {"filter_cutoff": filter_cutoff} for name in components}
+    parameters = {name: {"filter_cutoff": filter_cutoff} for name in components} if filter_cutoff is not None else {}
     folder.mkdir(parents=True, exist_ok=True)
     label = f"{system} with {damper_fmu.stem}" + (" and LCA bushing networks" if bushing_fmu is not None else "")
     structure = connect_by_name(label, ("vehicle", vehicle_fmu), components, folder, parameters)

@@ -9,6 +9,7 @@
 #define READABLE (NN_INITIALIZATION | NN_STEPPING | NN_TERMINATED | NN_FAILED)
 #define SETTABLE (NN_INSTANTIATED | NN_INITIALIZATION | NN_STEPPING)
 #define STATEFUL (NN_INSTANTIATED | NN_INITIALIZATION | NN_STEPPING | NN_TERMINATED)
+#define RESTORABLE (STATEFUL | NN_FAILED) /* FMI allows rolling back to a saved state after an error */
 
 static void log_fmi2(const void *instance, NNStatus status, const char *category, const char *message) {
     const NNInstance *self = (const NNInstance *)instance;
@@ -162,7 +163,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
-    NNInstance *instance = checked(c, "fmi2SetFMUstate", STATEFUL);
+    NNInstance *instance = checked(c, "fmi2SetFMUstate", RESTORABLE);
     if (!instance || !nn_check_array(instance, "fmi2SetFMUstate", FMUstate, 1, "FMUstate")) return fmi2Error;
     return (fmi2Status)nn_state_restore(instance, (const NNModelData *)FMUstate);
 }
@@ -206,7 +207,11 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                        const fmi2Integer order[], const fmi2Real value[]) {
-    return unsupported(c, "fmi2SetRealInputDerivatives (canInterpolateInputs is false)", vr, nvr, order, value);
+    NNInstance *instance = checked(c, "fmi2SetRealInputDerivatives", SETTABLE);
+    if (!instance || !nn_check_array(instance, "fmi2SetRealInputDerivatives", vr, nvr, "vr") ||
+        !nn_check_array(instance, "fmi2SetRealInputDerivatives", order, nvr, "order") ||
+        !nn_check_array(instance, "fmi2SetRealInputDerivatives", value, nvr, "value")) return fmi2Error;
+    return (fmi2Status)nn_set_input_slopes(instance, vr, nvr, order, value);
 }
 
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,

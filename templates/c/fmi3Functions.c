@@ -9,6 +9,7 @@
 #define READABLE (NN_INITIALIZATION | NN_STEPPING | NN_TERMINATED | NN_FAILED)
 #define SETTABLE (NN_INSTANTIATED | NN_INITIALIZATION | NN_STEPPING)
 #define STATEFUL (NN_INSTANTIATED | NN_INITIALIZATION | NN_STEPPING | NN_TERMINATED)
+#define RESTORABLE (STATEFUL | NN_FAILED) /* FMI allows rolling back to a saved state after an error */
 
 static void log_fmi3(const void *instance, NNStatus status, const char *category, const char *message) {
     const NNInstance *self = (const NNInstance *)instance;
@@ -257,7 +258,7 @@ fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
 }
 
 fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState) {
-    NNInstance *self = checked(instance, "fmi3SetFMUState", STATEFUL);
+    NNInstance *self = checked(instance, "fmi3SetFMUState", RESTORABLE);
     if (!self || !nn_check_array(self, "fmi3SetFMUState", FMUState, 1, "FMUState")) return fmi3Error;
     return (fmi3Status)nn_state_restore(self, (const NNModelData *)FMUState);
 }

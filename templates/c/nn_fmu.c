@@ -1,9 +1,18 @@
 /* nn_fmu.c: instance life cycle, logging, variable access, fixed-rate sampling and FMU state of an nnfmu FMU.
  *
- * Time: sample k falls at t_start + k*T (k counted with an integer). doStep(t, h) evaluates, in order, every sample
- * with t < t_k <= t + h (within 1e-6*T), with the inputs set before the call; outputs hold the latest sample.
- * Sample 0 is evaluated when initialisation ends. A graph without a sample period (NN_HAS_SAMPLE_PERIOD 0) is
- * evaluated once at the end of every step. The network is never evaluated when a variable is read.
+ * Time: sample k falls at t_start + k*T, k counted with an integer and compared with the time elapsed since t_start
+ * (the sum of the step sizes), never with absolute time, so a large t_start loses no sample. doStep(t, h) evaluates,
+ * in order, every sample with t < t_k <= t + h (within 1e-6*T); outputs hold the latest sample. Sample 0 is
+ * evaluated when initialisation ends. A graph without a sample period (NN_HAS_SAMPLE_PERIOD 0) is evaluated once at
+ * the end of every step. One doStep evaluates at most NN_MAX_SAMPLES_PER_STEP samples.
+ *
+ * Inputs: a sampled FMU (NN_INTERPOLATES_INPUTS 0) gives every sample of a step the inputs set before the call and
+ * never evaluates its network when a variable is read. An interpolating FMU (a vehicle) sees each input as linear
+ * between samples: a sample's interval ramps from the inputs of the sample before to its own; a sample in a step gets
+ * the inputs set before the call plus, on FMI 2, their derivatives times the time from the step's start; inputs set
+ * at the time of the latest sample become that sample's inputs, and it is evaluated again (before its outputs are
+ * read or the next step is taken), so outputs at a communication point follow the inputs set there; without such a
+ * set it keeps the inputs of its step.
  */
 #define NN_CONFIG_TABLES
 #include "nn_fmu.h"
@@ -20,6 +29,8 @@
 #define NN_TOKEN_FIELD 64
 #define NN_SAMPLE_TOLERANCE 1e-6   /* a sample time within this fraction of T of the step end counts as reached */
 #define NN_TIME_TOLERANCE 1e-9     /* relative mismatch allowed between doStep's time and the FMU's time */
+#define NN_MAX_SAMPLES_PER_STEP 1000000ULL /* one doStep's work is bounded: more samples are refused */
+#define NN_TIME_CONSISTENCY 1e-6   /* how far a state's time may differ from its start time plus elapsed time (relative) */
 
 /* The token must fit the fixed field of the serialised state's header. */
 typedef char nn_token_fits_header[(sizeof(NN_INSTANTIATION_TOKEN) <= NN_TOKEN_FIELD) ? 1 : -1];
@@ -146,10 +157,8 @@ void nn_free(NNInstance *instance) {
 /* 1 if `vr` lies in [first, first + count); a function so that empty ranges raise no compiler warnings. */
 static int in_range(unsigned vr, unsigned first, unsigned count) { return vr >= first && vr - first < count; }
 
-/* Time of sample k [s]; only meaningful for a graph with a sample period. */
-static double sample_time(const NNModelData *d, uint64_t k) {
-    return d->start_time + (double)k * NN_SAMPLE_PERIOD;
-}
+/* Time of sample k after t_start [s]; only meaningful for a graph with a sample period. */
+static double sample_offset(uint64_t k) { return (double)k * NN_SAMPLE_PERIOD; }
 
 /* a in y_k = y_{k-1} + a (g u_k - y_{k-1}); a cut-off of 0 turns the filter off (a = 1). */
 static double filter_coefficient(double cutoff, double period) {
@@ -157,29 +166,28 @@ static double filter_coefficient(double cutoff, double period) {
     return 1.0 - exp(-2.0 * NN_PI * cutoff * period);
 }
 
-/* Evaluate the next sample from the current inputs and state. With `commit` the state, the sample counter and the
- * envelope flags advance (a real sample); without it only outputs are refreshed (preview in Initialization Mode). */
-static NNStatus evaluate(NNInstance *instance, double period, int commit) {
+/* Evaluate the next sample with the inputs `knot` (for an interpolating FMU: its interval starts at `start`) and
+ * the current state. With `commit` the state, the sample counter and the envelope flags advance (a real sample; the
+ * values before it are kept to evaluate it again); without it only outputs are refreshed (preview in Initialization
+ * Mode). `warn` logs inputs that leave the training envelope. */
+static NNStatus evaluate(NNInstance *instance, const double *start, const double *knot, double period, int commit,
+                         int warn) {
     NNModelData *d = &instance->data;
     const unsigned long long k = (unsigned long long)d->samples_done;
     double a;
+    double output[NN_OUTPUT_CAPACITY];
     int i;
     int extrapolating = 0;
 
     memset(instance->graph_in, 0, sizeof instance->graph_in);
-    for (i = 0; i < NN_N_INPUTS; i++) instance->graph_in[nn_input_graph_index[i]] = d->input[i];
+    for (i = 0; i < NN_N_INPUTS; i++) instance->graph_in[nn_input_graph_index[i]] = knot[i];
+    if (NN_INTERPOLATES_INPUTS) {
+        for (i = 0; i < NN_N_INPUTS; i++) instance->graph_in[nn_input_start_graph_index[i]] = start[i];
+    }
     for (i = 0; i < NN_N_STATE; i++) instance->graph_in[nn_state_graph_input[i]] = d->state[i];
     if (nn_graph_run(instance->graph_in, instance->graph_out) != 0) {
         nn_log(instance, NN_ERROR, NN_LOG_ERROR, "the network failed to evaluate sample %llu", k);
         return NN_ERROR;
-    }
-    for (i = 0; i < NN_N_OUTPUTS; i++) {
-        double value = instance->graph_out[nn_output_graph_index[i]];
-        if (!isfinite(value)) {
-            nn_log(instance, NN_ERROR, NN_LOG_ERROR, "output '%s' of sample %llu is %g; the sample is discarded",
-                   nn_output_names[i], k, value);
-            return NN_ERROR;
-        }
     }
     for (i = 0; i < NN_N_STATE; i++) {
         double value = instance->graph_out[nn_state_graph_output[i]];
@@ -189,28 +197,42 @@ static NNStatus evaluate(NNInstance *instance, double period, int commit) {
             return NN_ERROR;
         }
     }
+    a = filter_coefficient(d->filter_cutoff, period);
+    for (i = 0; i < NN_N_OUTPUTS; i++) {
+        double raw = instance->graph_out[nn_output_graph_index[i]];
+        double target = d->output_gain * raw;
+        output[i] = (d->samples_done == 0) ? target : d->output[i] + a * (target - d->output[i]);
+        if (!isfinite(output[i])) {
+            nn_log(instance, NN_ERROR, NN_LOG_ERROR, "output '%s' of sample %llu is %g (network %g, output_gain %g); "
+                   "the sample is discarded", nn_output_names[i], k, output[i], raw, d->output_gain);
+            return NN_ERROR;
+        }
+    }
 
+    if (commit) {
+        memcpy(d->state_before, d->state, sizeof d->state);
+        memcpy(d->output_before, d->output, sizeof d->output);
+        memcpy(d->outside_before, d->outside, sizeof d->outside);
+        memcpy(d->knot_before, d->samples_done == 0 ? knot : d->knot, sizeof d->knot);
+        memcpy(d->knot, knot, sizeof d->knot);
+    }
     for (i = 0; i < NN_N_INPUTS; i++) {
-        int outside = d->input[i] < nn_input_min[i] || d->input[i] > nn_input_max[i];
-        if (commit && outside && !d->outside[i]) {
+        int outside = knot[i] < nn_input_min[i] || knot[i] > nn_input_max[i];
+        if (commit && warn && outside && !d->outside[i]) {
             nn_log(instance, NN_WARNING, NN_LOG_WARNING,
                    "sample %llu: input '%s' = %g %s lies outside the training envelope [%g, %g]; "
-                   "the output is extrapolated", k, nn_input_names[i], d->input[i], nn_input_units[i],
+                   "the output is extrapolated", k, nn_input_names[i], knot[i], nn_input_units[i],
                    nn_input_min[i], nn_input_max[i]);
         }
         if (commit) d->outside[i] = outside;
         extrapolating |= outside;
     }
     d->extrapolating = extrapolating;
-
-    a = filter_coefficient(d->filter_cutoff, period);
-    for (i = 0; i < NN_N_OUTPUTS; i++) {
-        double target = d->output_gain * instance->graph_out[nn_output_graph_index[i]];
-        d->output[i] = (d->samples_done == 0) ? target : d->output[i] + a * (target - d->output[i]);
-    }
+    memcpy(d->output, output, sizeof output);
     if (commit) {
         for (i = 0; i < NN_N_STATE; i++) d->state[i] = instance->graph_out[nn_state_graph_output[i]];
         d->samples_done++;
+        d->inputs_set = 0;
     }
     return NN_OK;
 }
@@ -219,8 +241,32 @@ static NNStatus evaluate(NNInstance *instance, double period, int commit) {
 static NNStatus refresh_preview(NNInstance *instance) {
     NNStatus status;
     if (instance->mode != NN_INITIALIZATION || !instance->preview_stale) return NN_OK;
-    status = evaluate(instance, NN_SAMPLE_PERIOD, 0);
+    status = evaluate(instance, instance->data.input, instance->data.input, NN_SAMPLE_PERIOD, 0, 0);
     if (status == NN_OK) instance->preview_stale = 0;
+    return status;
+}
+
+/* An interpolating FMU's latest sample, when it falls on the current communication point and inputs set there since
+ * it was evaluated differ from those it was evaluated with, is evaluated again with them (its interval now ramps to
+ * them). Without such a set the sample keeps its inputs (those set before its step, plus the slopes given). */
+static NNStatus settle_latest_sample(NNInstance *instance) {
+    NNModelData *d = &instance->data;
+    NNStatus status;
+    if (!NN_INTERPOLATES_INPUTS || instance->mode != NN_STEPPING || d->samples_done == 0 || !d->inputs_set) {
+        return NN_OK;
+    }
+    if (fabs(sample_offset(d->samples_done - 1) - d->elapsed) > NN_SAMPLE_TOLERANCE * NN_SAMPLE_PERIOD) return NN_OK;
+    if (memcmp(d->input, d->knot, sizeof d->input) == 0) {
+        d->inputs_set = 0;
+        return NN_OK;
+    }
+    memcpy(d->state, d->state_before, sizeof d->state);
+    memcpy(d->output, d->output_before, sizeof d->output);
+    memcpy(d->outside, d->outside_before, sizeof d->outside);
+    memcpy(d->knot, d->knot_before, sizeof d->knot);
+    d->samples_done--;
+    status = evaluate(instance, d->knot, d->input, NN_SAMPLE_PERIOD, 1, 1);
+    if (status != NN_OK) instance->mode = NN_FAILED;
     return status;
 }
 
@@ -232,14 +278,18 @@ NNStatus nn_get_real(NNInstance *instance, unsigned vr, double *value) {
     }
     if (in_range(vr, NN_VR_FIRST_OUTPUT, NN_N_OUTPUTS)) {
         NNStatus status = refresh_preview(instance);
+        if (status == NN_OK) status = settle_latest_sample(instance);
         *value = d->output[vr - NN_VR_FIRST_OUTPUT];
         return status;
     }
     switch (vr) {
     case NN_VR_FILTER_CUTOFF: *value = d->filter_cutoff; return NN_OK;
     case NN_VR_OUTPUT_GAIN: *value = d->output_gain; return NN_OK;
-    case NN_VR_TIME: *value = d->time; return NN_OK;
     default: break;
+    }
+    if (NN_HAS_TIME_VARIABLE && vr == NN_VR_TIME) {
+        *value = d->time;
+        return NN_OK;
     }
     return nn_refuse_type(instance, "GetReal", "Real", vr);
 }
@@ -279,6 +329,7 @@ NNStatus nn_set_real(NNInstance *instance, unsigned vr, double value) {
             return NN_ERROR;
         }
         d->input[i] = value;
+        d->inputs_set = 1;
         instance->preview_stale = 1;
         return NN_OK;
     }
@@ -306,9 +357,41 @@ NNStatus nn_set_reals(NNInstance *instance, const unsigned vr[], size_t n, const
     return NN_OK;
 }
 
+NNStatus nn_set_input_slopes(NNInstance *instance, const unsigned vr[], size_t n, const int order[],
+                             const double value[]) {
+    NNModelData *d = &instance->data;
+    size_t i;
+    if (!NN_INTERPOLATES_INPUTS) {
+        nn_log(instance, NN_ERROR, NN_LOG_ERROR, "SetRealInputDerivatives: %s samples its inputs and cannot "
+               "interpolate them (canInterpolateInputs is false)", NN_MODEL_IDENTIFIER);
+        return NN_ERROR;
+    }
+    for (i = 0; i < n; i++) {
+        if (!in_range(vr[i], NN_VR_FIRST_INPUT, NN_N_INPUTS)) {
+            nn_log(instance, NN_ERROR, NN_LOG_ERROR, "SetRealInputDerivatives: value reference %u is not an input",
+                   vr[i]);
+            return NN_ERROR;
+        }
+        if (order[i] != 1) {
+            nn_log(instance, NN_ERROR, NN_LOG_ERROR, "SetRealInputDerivatives: input '%s': derivative order %d "
+                   "refused (inputs are interpolated linearly: order 1 only)",
+                   nn_input_names[vr[i] - NN_VR_FIRST_INPUT], order[i]);
+            return NN_ERROR;
+        }
+        if (!isfinite(value[i])) {
+            nn_log(instance, NN_ERROR, NN_LOG_ERROR, "SetRealInputDerivatives: input '%s': derivative %g refused, "
+                   "it must be finite", nn_input_names[vr[i] - NN_VR_FIRST_INPUT], value[i]);
+            return NN_ERROR;
+        }
+    }
+    for (i = 0; i < n; i++) d->input_slope[vr[i] - NN_VR_FIRST_INPUT] = value[i];
+    return NN_OK;
+}
+
 NNStatus nn_get_boolean(NNInstance *instance, unsigned vr, int *value) {
     if (vr == NN_VR_EXTRAPOLATING) {
         NNStatus status = refresh_preview(instance);
+        if (status == NN_OK) status = settle_latest_sample(instance);
         *value = instance->data.extrapolating;
         return status;
     }
@@ -328,13 +411,14 @@ NNStatus nn_enter_initialization(NNInstance *instance, double start_time) {
     }
     instance->data.start_time = start_time;
     instance->data.time = start_time;
+    instance->data.elapsed = 0.0;
     instance->mode = NN_INITIALIZATION;
     instance->preview_stale = 1;
     return NN_OK;
 }
 
 NNStatus nn_exit_initialization(NNInstance *instance) {
-    NNStatus status = evaluate(instance, NN_SAMPLE_PERIOD, 1);
+    NNStatus status = evaluate(instance, instance->data.input, instance->data.input, NN_SAMPLE_PERIOD, 1, 1);
     if (status != NN_OK) {
         instance->mode = NN_FAILED;
         return status;
@@ -344,9 +428,33 @@ NNStatus nn_exit_initialization(NNInstance *instance) {
     return NN_OK;
 }
 
+/* Number of samples due in a step that ends `elapsed_end` seconds after t_start. */
+static uint64_t samples_due(const NNModelData *d, double elapsed_end) {
+    double last = floor(elapsed_end / NN_SAMPLE_PERIOD + NN_SAMPLE_TOLERANCE);
+    if (!(last + 1.0 > (double)d->samples_done)) return 0;
+    if (last + 1.0 - (double)d->samples_done > (double)NN_MAX_SAMPLES_PER_STEP) return NN_MAX_SAMPLES_PER_STEP + 1;
+    return (uint64_t)(last + 1.0) - d->samples_done;
+}
+
+/* Evaluate the sample that ends the step `elapsed_end` after t_start with the inputs set before it (plus their
+ * slopes over the time from the step's start, for an interpolating FMU). */
+static NNStatus step_samples(NNInstance *instance, uint64_t count, double step_start) {
+    NNModelData *d = &instance->data;
+    double knot[NN_INPUT_CAPACITY];
+    NNStatus status = NN_OK;
+    uint64_t j;
+    int i;
+    for (j = 0; j < count && status == NN_OK; j++) {
+        const double ahead = sample_offset(d->samples_done) - step_start;
+        for (i = 0; i < NN_N_INPUTS; i++) knot[i] = d->input[i] + (NN_INTERPOLATES_INPUTS ? ahead * d->input_slope[i] : 0.0);
+        status = evaluate(instance, d->knot, knot, NN_SAMPLE_PERIOD, 1, 1);
+    }
+    return status;
+}
+
 NNStatus nn_do_step(NNInstance *instance, double current_time, double step_size) {
     NNModelData *d = &instance->data;
-    double end_time;
+    double elapsed_end;
     NNStatus status = NN_OK;
     if (!isfinite(current_time) || !isfinite(step_size) || step_size < 0.0) {
         nn_log(instance, NN_ERROR, NN_LOG_ERROR, "DoStep(t = %g s, h = %g s) refused: t must be finite and h >= 0",
@@ -358,20 +466,27 @@ NNStatus nn_do_step(NNInstance *instance, double current_time, double step_size)
                "FMU's time %.17g s", current_time, d->time);
         return NN_ERROR;
     }
-    end_time = current_time + step_size;
+    elapsed_end = d->elapsed + step_size;
     if (NN_HAS_SAMPLE_PERIOD) {
-        while (status == NN_OK &&
-               sample_time(d, d->samples_done) <= end_time + NN_SAMPLE_TOLERANCE * NN_SAMPLE_PERIOD) {
-            status = evaluate(instance, NN_SAMPLE_PERIOD, 1);
+        uint64_t due = samples_due(d, elapsed_end);
+        if (due > NN_MAX_SAMPLES_PER_STEP) {
+            nn_log(instance, NN_ERROR, NN_LOG_ERROR, "DoStep(t = %g s, h = %g s) refused: it spans %.6g samples of "
+                   "%g s, more than the %llu one step may evaluate; take shorter steps", current_time, step_size,
+                   step_size / NN_SAMPLE_PERIOD, NN_SAMPLE_PERIOD, (unsigned long long)NN_MAX_SAMPLES_PER_STEP);
+            return NN_ERROR;
         }
+        status = settle_latest_sample(instance);
+        if (status == NN_OK) status = step_samples(instance, due, d->elapsed);
     } else {
-        status = evaluate(instance, step_size, 1);
+        status = evaluate(instance, d->knot, d->input, step_size, 1, 1);
     }
     if (status != NN_OK) {
         instance->mode = NN_FAILED;
         return status;
     }
-    d->time = end_time;
+    memset(d->input_slope, 0, sizeof d->input_slope);
+    d->elapsed = elapsed_end;
+    d->time = current_time + step_size;
     return NN_OK;
 }
 
@@ -381,6 +496,7 @@ NNStatus nn_state_save(NNInstance *instance, void **state) {
         nn_log(instance, NN_ERROR, NN_LOG_ERROR, "out of memory while saving the FMU state");
         return NN_ERROR;
     }
+    instance->data.mode = (int)instance->mode;
     memcpy(*state, &instance->data, sizeof(NNModelData));
     return NN_OK;
 }
@@ -393,10 +509,56 @@ void nn_state_free(void **state) {
 
 NNStatus nn_state_restore(NNInstance *instance, const NNModelData *state) {
     memcpy(&instance->data, state, sizeof *state);
+    instance->mode = (NNMode)state->mode; /* also the way back from an error: FMI allows rolling back to a state */
     instance->preview_stale = 1;
     nn_log(instance, NN_OK, NN_LOG_EVENTS, "FMU state restored to t = %.17g s (%llu samples done)",
            instance->data.time, (unsigned long long)instance->data.samples_done);
     return NN_OK;
+}
+
+/* 1 if every value of `n` doubles is finite. */
+static int all_finite(const double *values, size_t n) {
+    size_t i;
+    for (i = 0; i < n; i++) {
+        if (!isfinite(values[i])) return 0;
+    }
+    return 1;
+}
+
+/* 1 if a deserialised state could have been saved by this FMU: a known mode, finite values, a sample counter that
+ * matches its time; else logs which field is wrong and returns 0. */
+static int plausible_state(const NNInstance *instance, const NNModelData *s) {
+    const char *wrong = NULL;
+    const int modes = NN_INSTANTIATED | NN_INITIALIZATION | NN_STEPPING | NN_TERMINATED;
+    int i;
+    if (!(s->mode & modes) || (s->mode & (s->mode - 1))) wrong = "mode";
+    else if (!isfinite(s->time) || !isfinite(s->start_time) || !isfinite(s->elapsed) || s->elapsed < 0.0 ||
+             fabs(s->time - (s->start_time + s->elapsed)) > NN_TIME_CONSISTENCY * fmax(1.0, fabs(s->time))) {
+        wrong = "time";
+    }
+    else if (!isfinite(s->filter_cutoff) || s->filter_cutoff < 0.0) wrong = "filter_cutoff";
+    else if (!isfinite(s->output_gain)) wrong = "output_gain";
+    else if (!all_finite(s->input, NN_INPUT_CAPACITY) || !all_finite(s->input_slope, NN_INPUT_CAPACITY) ||
+             !all_finite(s->knot, NN_INPUT_CAPACITY) || !all_finite(s->knot_before, NN_INPUT_CAPACITY)) wrong = "inputs";
+    else if (!all_finite(s->output, NN_OUTPUT_CAPACITY) || !all_finite(s->output_before, NN_OUTPUT_CAPACITY)) {
+        wrong = "outputs";
+    } else if (!all_finite(s->state, NN_STATE_CAPACITY) || !all_finite(s->state_before, NN_STATE_CAPACITY)) {
+        wrong = "network state";
+    } else if ((s->extrapolating & ~1) != 0 || (s->inputs_set & ~1) != 0) {
+        wrong = "flags";
+    } else if (s->mode == NN_INSTANTIATED || s->mode == NN_INITIALIZATION) {
+        if (s->samples_done != 0) wrong = "sample counter";
+    } else if (NN_HAS_SAMPLE_PERIOD) {
+        double expected = floor(s->elapsed / NN_SAMPLE_PERIOD + NN_SAMPLE_TOLERANCE) + 1.0;
+        if ((double)s->samples_done != expected) wrong = "sample counter";
+    }
+    for (i = 0; !wrong && i < NN_INPUT_CAPACITY; i++) {
+        if ((s->outside[i] & ~1) != 0 || (s->outside_before[i] & ~1) != 0) wrong = "envelope flags";
+    }
+    if (!wrong) return 1;
+    nn_log(instance, NN_ERROR, NN_LOG_ERROR, "DeserializeFMUstate: the state's %s is not one this FMU can have "
+           "(time %g s, %llu samples done); refused", wrong, s->time, (unsigned long long)s->samples_done);
+    return 0;
 }
 
 size_t nn_serialized_size(void) { return sizeof(NNStateHeader) + sizeof(NNModelData); }
@@ -441,6 +603,10 @@ NNStatus nn_deserialize(const NNInstance *instance, const unsigned char *buffer,
         return NN_ERROR;
     }
     memcpy(copy, buffer + sizeof header, sizeof *copy);
+    if (!plausible_state(instance, copy)) {
+        free(copy);
+        return NN_ERROR;
+    }
     free(*state);
     *state = copy;
     return NN_OK;

@@ -31,18 +31,31 @@ typedef enum {
 /* Log categories; their names (nn_category_name) are listed in modelDescription.xml. */
 typedef enum { NN_LOG_EVENTS = 0, NN_LOG_WARNING = 1, NN_LOG_ERROR = 2, NN_N_CATEGORIES = 3 } NNCategory;
 
-/* Everything that evolves during a simulation; an FMU state is a copy of this struct. */
+/* Everything that evolves during a simulation; an FMU state is a copy of this struct.
+ *
+ * The `*_before` fields keep what held before the latest sample, so that an FMU whose inputs are interpolated
+ * (NN_INTERPOLATES_INPUTS) can evaluate its latest sample again when the master sets new inputs at that sample's
+ * time (docs/fmu.md). */
 typedef struct {
-    double input[NN_INPUT_CAPACITY];
-    double output[NN_OUTPUT_CAPACITY];   /* filtered, gained outputs of the latest sample */
-    double state[NN_STATE_CAPACITY];     /* graph state (delay line, recurrent state) before the next sample */
-    int outside[NN_INPUT_CAPACITY];      /* per input: the latest sample lay outside the training envelope */
-    int extrapolating;                   /* any input of the latest sample outside the training envelope */
-    double filter_cutoff;                /* [Hz], 0 = filter off */
-    double output_gain;                  /* [1] */
-    double start_time;                   /* [s] t_start: sample k falls at t_start + k*T */
-    double time;                         /* [s] current communication point */
-    uint64_t samples_done;               /* samples evaluated so far; the next one has index samples_done */
+    double input[NN_INPUT_CAPACITY];          /* values set by the master */
+    double input_slope[NN_INPUT_CAPACITY];    /* [unit/s] FMI 2 input derivatives for the coming step (else 0) */
+    double knot[NN_INPUT_CAPACITY];           /* inputs of the latest sample (the end of its interval) */
+    double knot_before[NN_INPUT_CAPACITY];    /* inputs of the sample before it (the start of that interval) */
+    double output[NN_OUTPUT_CAPACITY];        /* filtered, gained outputs of the latest sample */
+    double output_before[NN_OUTPUT_CAPACITY];
+    double state[NN_STATE_CAPACITY];          /* graph state (delay line, recurrent state) before the next sample */
+    double state_before[NN_STATE_CAPACITY];   /* graph state before the latest sample */
+    int outside[NN_INPUT_CAPACITY];           /* per input: the latest sample lay outside the training envelope */
+    int outside_before[NN_INPUT_CAPACITY];
+    int extrapolating;                        /* any input of the latest sample outside the training envelope */
+    int inputs_set;                           /* an input was set since the latest sample was evaluated */
+    int mode;                                 /* the NNMode the state was saved in */
+    double filter_cutoff;                     /* [Hz], 0 = filter off */
+    double output_gain;                       /* [1] */
+    double start_time;                        /* [s] t_start: sample k falls at t_start + k*T */
+    double time;                              /* [s] current communication point */
+    double elapsed;                           /* [s] time since t_start, the sum of the step sizes */
+    uint64_t samples_done;                    /* samples evaluated so far; the next one has index samples_done */
 } NNModelData;
 
 /* Hands a formatted message to the FMI-version-specific logger callback kept by the glue. */
@@ -88,6 +101,9 @@ NNStatus nn_set_real(NNInstance *instance, unsigned vr, double value);
 NNStatus nn_get_reals(NNInstance *instance, const unsigned vr[], size_t n, double value[]);
 NNStatus nn_set_reals(NNInstance *instance, const unsigned vr[], size_t n, const double value[]);
 NNStatus nn_get_boolean(NNInstance *instance, unsigned vr, int *value);
+/* FMI 2 input derivatives of order 1 (the slope of each input over the coming step), for interpolating FMUs. */
+NNStatus nn_set_input_slopes(NNInstance *instance, const unsigned vr[], size_t n, const int order[],
+                             const double value[]);
 NNStatus nn_refuse_type(const NNInstance *instance, const char *function, const char *type, unsigned vr);
 
 NNStatus nn_enter_initialization(NNInstance *instance, double start_time);

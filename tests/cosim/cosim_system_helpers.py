@@ -23,14 +23,19 @@ from nnfmu.cosim.ssp import connect_by_name, write_ssd
 from nnfmu.data import Measurement
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.vehicle.models import VehicleParameters, build_quarter_car
+from nnfmu.vehicle.models import QuarterCarParameters, build_quarter_car
 
 OPSET = 17
 IR_VERSION = 8
 OUTPUTS = ("damper_displacement", "damper_velocity", "body_displacement", "spindle_displacement")
 DAMPING = 2400.0  # [N.s/m]
-DRIVE = ("actuator_displacement", "actuator_velocity")
+DRIVE = ("actuator_displacement", "actuator_velocity")  # the hand-made plant's drive inputs; the test drive's channels
+VEHICLE_DRIVE = ("actuator_fl_displacement", "actuator_fl_velocity")  # the quarter car's, whose matrices it takes
 NO_FILTER = {"filter_cutoff": 0.0}
+# The basic schemes these tests measure, named in full (the master's defaults are the one-pass accurate scheme):
+# plain Gauss-Seidel with the components first, and libcosim's algorithm (Jacobi, nothing estimated or refreshed).
+BASIC = {"order": "components-first", "extrapolation": "none"}
+LIBCOSIM = {"scheme": "jacobi", "extrapolation": "none", "refresh": False}
 
 
 def _double(name: str, shape: list[int]) -> onnx.ValueInfoProto:
@@ -77,13 +82,14 @@ class LinearPlant:
 
 def quarter_cars() -> tuple[LinearPlant, LinearPlant]:
     """(quarter car with the damper force as input, the same closed with F = c v inside the matrix)."""
-    vehicle = build_quarter_car(VehicleParameters.load())
+    vehicle = build_quarter_car(QuarterCarParameters.load())
     rows = [vehicle.output_index(n) for n in OUTPUTS]
-    cols = [vehicle.input_index(n) for n in (*DRIVE, "damper_force")]
+    cols = [vehicle.input_index(n) for n in (*VEHICLE_DRIVE, "damper_force")]
     a, b, c, d = vehicle.A, vehicle.B[:, cols], vehicle.C[rows], vehicle.D[rows][:, cols]
     units = {p.name: p.unit for p in vehicle.outputs + vehicle.inputs}
     open_loop = LinearPlant(a, b, vehicle.f, c, d, vehicle.e[rows],
-                            tuple((n, units[n]) for n in (*DRIVE, "damper_force")),
+                            tuple((n, units[v]) for n, v in zip((*DRIVE, "damper_force"),
+                                                                (*VEHICLE_DRIVE, "damper_force"))),
                             tuple((n, units[n]) for n in OUTPUTS))
     assert not np.any(d[:, 2]), "the compared outputs do not feed through the damper force"
     c_v = vehicle.C[vehicle.output_index("damper_velocity")]
@@ -164,11 +170,14 @@ def drive_signal(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return x, v
 
 
-def drive(duration: float, period: float) -> Measurement:
+def drive(duration: float, period: float, corner: str | None = None) -> Measurement:
+    """The test drive as the hand-made plant's channels (DRIVE), or as those of the post under `corner` (what the
+    vehicle package's quarter car on that corner reads)."""
     t = np.arange(round(duration / period) + 1) * period
     x, v = drive_signal(t)
-    return Measurement(time=t, channels={"actuator_displacement": x, "actuator_velocity": v},
-                       units={"actuator_displacement": "m", "actuator_velocity": "m/s"}, source="test drive")
+    names = DRIVE if corner is None else (f"actuator_{corner}_displacement", f"actuator_{corner}_velocity")
+    return Measurement(time=t, channels=dict(zip(names, (x, v))), units=dict(zip(names, ("m", "m/s"))),
+                       source="test drive")
 
 
 def reference(duration: float, h: float, mean_hold: bool) -> np.ndarray:

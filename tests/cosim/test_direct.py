@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cosim_system_helpers import drive, plant_step_graph, quarter_cars
+from cosim_system_helpers import BASIC, drive, plant_step_graph, quarter_cars
 
 from nnfmu.cosim.direct import FmiStatusError, RealBlock, Stepper
 from nnfmu.cosim.drive_inputs import DriveInputs
@@ -115,7 +115,7 @@ def _fmpy_gauss_seidel(ssd: Path, stop: float) -> dict[str, np.ndarray]:
 def test_the_master_reproduces_a_step_by_step_fmpy_loop_bit_for_bit(systems: dict[float, Path]) -> None:
     expected = _fmpy_gauss_seidel(systems[H], 0.5)
     with open_system(systems[H]) as system:
-        result = cosimulate(system, DRIVE, CosimSettings(step=H, stop_time=0.5)).measurement
+        result = cosimulate(system, DRIVE, CosimSettings(step=H, stop_time=0.5, **BASIC)).measurement
     assert set(result.names) == set(expected)
     for name in result.names:
         np.testing.assert_array_equal(result[name], expected[name], err_msg=name)
@@ -127,4 +127,4 @@ def test_a_failing_fmu_stops_the_run_naming_element_and_time(systems: dict[float
     with open_system(systems[H]) as system:
         with pytest.raises(CosimError, match=r"step from t = 0\.25 s: vehicle \(quarter_car.fmu\): fmi2SetReal.*"
                                              r"returned Error: input 'actuator_velocity' set to nan"):
-            cosimulate(system, bad, CosimSettings(step=H, stop_time=0.5))
+            cosimulate(system, bad, CosimSettings(step=H, stop_time=0.5, **BASIC))

@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 import onnx
 import pytest
-from cosim_system_helpers import NO_FILTER, damper_graph, drive, peak_error, plant_step_graph, quarter_cars, reference
+from cosim_system_helpers import (BASIC, NO_FILTER, damper_graph, drive, peak_error, plant_step_graph, quarter_cars,
+                                  reference)
 
 from nnfmu.cosim.drive_inputs import DriveInputError
 from nnfmu.cosim.master import CosimError, CosimSettings, cosimulate, run_cosim, step_count
@@ -38,10 +39,10 @@ def _error(systems: dict[float, Path], h: float, settings: CosimSettings) -> flo
 def errors(systems: dict[float, Path]) -> dict[str, list[float]]:
     """Relative peak error of the damper velocity for each scheme at 2, 1 and 0.5 ms."""
     schemes = {
-        "gauss-seidel": {},
-        "jacobi": {"scheme": "jacobi"},
-        "linear": {"extrapolation": "linear"},
-        "iterative": {"iterations": 30, "tolerance": 1e-12},
+        "gauss-seidel": BASIC,
+        "jacobi": BASIC | {"scheme": "jacobi"},
+        "linear": BASIC | {"extrapolation": "linear"},
+        "iterative": BASIC | {"iterations": 30, "tolerance": 1e-12},
     }
     return {name: [_error(systems, h, CosimSettings(step=h, **kw)) for h in (2e-3, 1e-3, 0.5e-3)]
             for name, kw in schemes.items()}
@@ -66,8 +67,8 @@ def test_iterative_coupling_is_ten_times_better_than_gauss_seidel_at_1ms(errors:
 
 
 def test_jacobi_iterations_reach_the_same_fixed_point(systems: dict[float, Path]) -> None:
-    gauss_seidel = _error(systems, 1e-3, CosimSettings(step=1e-3, iterations=30, tolerance=1e-12))
-    jacobi = _error(systems, 1e-3, CosimSettings(step=1e-3, scheme="jacobi", iterations=60, tolerance=1e-12))
+    gauss_seidel = _error(systems, 1e-3, CosimSettings(step=1e-3, iterations=30, tolerance=1e-12, **BASIC))
+    jacobi = _error(systems, 1e-3, CosimSettings(step=1e-3, iterations=60, tolerance=1e-12, **BASIC | {"scheme": "jacobi"}))
     assert jacobi == pytest.approx(gauss_seidel, rel=1e-6)
 
 
@@ -88,16 +89,16 @@ def test_steps_are_counted_in_integers_and_labelled_with_their_time(systems: dic
     assert seen[-1] == (10_000, 10_000) and len(seen) <= 201
 
 
-def test_quarter_car_reads_a_corner_channel_and_derives_the_velocity(systems: dict[float, Path]) -> None:
-    four_post = Measurement(time=DRIVE.time, channels={"actuator_fl_displacement": DRIVE["actuator_displacement"]},
-                            units={"actuator_fl_displacement": "m"}, source="four-post drive")
+def test_vehicle_inputs_read_their_own_channels_and_derive_the_velocity(systems: dict[float, Path]) -> None:
+    no_rate = Measurement(time=DRIVE.time, channels={"actuator_displacement": DRIVE["actuator_displacement"]},
+                          units={"actuator_displacement": "m"}, source="displacement-only drive")
     settings = CosimSettings(step=1e-3)
     with open_system(systems[1e-3]) as system:
-        derived = cosimulate(system, four_post, settings).measurement
+        derived = cosimulate(system, no_rate, settings).measurement
         exact = cosimulate(system, DRIVE, settings).measurement
-        with pytest.raises(DriveInputError, match=r"'actuator_displacement'.*the drive has: actuator_rr_displacement"):
-            cosimulate(system, Measurement(DRIVE.time, {"actuator_rr_displacement": DRIVE["actuator_displacement"]},
-                                           {"actuator_rr_displacement": "m"}), settings)
+        with pytest.raises(DriveInputError, match=r"'actuator_displacement'.*the drive has: actuator_fl_displacement"):
+            cosimulate(system, Measurement(DRIVE.time, {"actuator_fl_displacement": DRIVE["actuator_displacement"]},
+                                           {"actuator_fl_displacement": "m"}), settings)
     v = exact["damper_velocity"]
     assert np.max(np.abs(derived["damper_velocity"] - v)) < 1e-3 * np.max(np.abs(v))  # Savitzky-Golay rate
 

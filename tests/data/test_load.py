@@ -1,5 +1,8 @@
 """Loading CSV/MDF rig files: conversion to SI, exact round trips, and an error naming the file for each fault."""
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 from asammdf import MDF, Signal
@@ -291,3 +294,75 @@ def test_check_names_the_given_source_and_missing_unit():
     with pytest.raises(DataError, match=r"^damper rig simulator: channel 'force' has no unit$"):
         check_measurement(m, source="damper rig simulator")
     check_measurement(_measurement(), required=("force", "temperature"))
+
+
+def test_mass_in_grams_is_a_mass_not_an_acceleration(tmp_path):
+    rows = [[i / RATE, 500.0, 1.0] for i in range(N)]
+    m = load_measurement(_write_csv(tmp_path / "mass.csv", "time [s],mass [g],body_acceleration [g]", rows))
+    np.testing.assert_allclose(m["mass"], 0.5, rtol=1e-15)
+    assert m.units["mass"] == "kg"
+    np.testing.assert_allclose(m["body_acceleration"], 9.80665, rtol=1e-15)
+    with pytest.raises(DataError, match=r"channel 'payload': unit 'g' is an acceleration or a mass, and the name"):
+        load_measurement(_write_csv(tmp_path / "which.csv", "time [s],payload [g]", [r[:2] for r in rows]))
+
+
+def test_same_channel_in_two_spellings_is_refused_naming_both_columns(tmp_path):
+    path = _write_csv(tmp_path / "twice.csv", "time [s],force [N],Force [kN]", _rows())
+    with pytest.raises(
+        DataError,
+        match=r"twice\.csv: column\(s\) 'force' appear more than once: column 2 'force \[N\]' and column 3 "
+        r"'Force \[kN\]' name the same channel",
+    ):
+        load_measurement(path)
+
+
+def test_megabyte_header_cell_is_refused_before_the_file_is_read(tmp_path):
+    path = _write_csv(tmp_path / "huge.csv", "time [s]," + "x" * 1_000_000 + " [N]", _rows(columns=1))
+    with pytest.raises(DataError, match=r"huge\.csv: the header line is longer than 65536 characters"):
+        load_measurement(path)
+
+
+def test_channel_map_renames_csv_channels(tmp_path):
+    path = _write_csv(tmp_path / "lab.csv", "time [s],stroke [mm],load [kN]", _rows())
+    m = load_measurement(path, required=("force", "velocity"), channel_map={"Stroke": "displacement", "load": "force"})
+    assert m.names[:2] == ["displacement", "force"]
+    assert m.notes["channels"] == "channels renamed by the channel map: 'stroke' -> displacement, 'load' -> force"
+    with pytest.raises(DataError, match=r"lab\.csv: after the channel map, 'stroke' and 'load' would both be"):
+        load_measurement(path, channel_map={"load": "stroke"})
+
+
+def test_mdf_channels_differing_only_in_case_are_refused(tmp_path):
+    t = np.arange(N) / RATE
+    path = _write_mdf(tmp_path / "case.mf4", [(t, [("force", "N", np.zeros(N))]), (t, [("Force", "kN", np.ones(N))])])
+    with pytest.raises(DataError, match=r"case\.mf4: channel 'force' \(group 0\) and channel 'Force' \(group 1\) name"):
+        load_measurement(path)
+
+
+def _corrupt_channel_offset(path):
+    """Overwrite the byte offset of channel 'force' in its MDF 4 CN block (asammdf's reader trusts it)."""
+    with MDF(str(path)) as mdf:
+        force = next(c for c in mdf.groups[0].channels if c.name == "force")
+        address, offset = force.address, force.byte_offset
+    data = bytearray(path.read_bytes())
+    links = int.from_bytes(data[address + 16 : address + 24], "little")
+    field = address + 24 + 8 * links + 4  # cn_type, sync_type, data_type, bit_offset, then the uint32 byte offset
+    assert int.from_bytes(data[field : field + 4], "little") == offset
+    data[field : field + 4] = (1_577_058_312).to_bytes(4, "little")
+    path.write_bytes(bytes(data))
+
+
+@pytest.mark.parametrize("damage", ["truncated", "channel offset"])
+def test_corrupt_mdf_gives_only_the_error_line_on_the_command_line(tmp_path, damage):
+    path = save_measurement(_measurement(), tmp_path / "rig.mf4")
+    if damage == "truncated":
+        path.write_bytes(path.read_bytes()[:200])
+    else:
+        _corrupt_channel_offset(path)
+    result = subprocess.run(
+        [sys.executable, "-c", "from nnfmu.cli import app; app()", "data", "check", str(path)],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert result.returncode == 2, result.stderr  # a crash in asammdf's compiled reader ends with -11 (SIGSEGV)
+    assert result.stdout == ""
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: {path}: not a readable MDF file: "), result.stderr

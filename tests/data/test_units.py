@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from nnfmu.data import DataError, to_si
-from nnfmu.data.units import QUANTITIES, base_name, normalise_unit
+from nnfmu.data.units import AMBIGUOUS_UNITS, QUANTITIES, base_name, normalise_unit
 
 LBF = 0.45359237 * 9.80665  # N: one pound mass under standard gravity, both exact by definition
 
@@ -42,6 +42,10 @@ LBF = 0.45359237 * 9.80665  # N: one pound mass under standard gravity, both exa
         ("gas_pressure", "bar", [2.0], [2e5], "Pa"),
         ("supply", "psi", [1.0], [LBF / 0.0254**2], "Pa"),
         ("stroke", "mm", [3.0], [3e-3], "m"),
+        ("mass", "g", [500.0], [0.5], "kg"),
+        ("payload_mass", "lb", [1.0], [0.45359237], "kg"),
+        ("force", "lb", [1.0], [LBF], "N"),
+        ("body_acceleration", "g", [1.0], [9.80665], "m/s^2"),
     ],
 )
 def test_to_si_matches_hand_values(channel, unit, values, expected, si):
@@ -57,9 +61,17 @@ def test_si_values_pass_unchanged_bit_for_bit():
     assert converted is not values
 
 
-def test_every_unit_spelling_belongs_to_one_quantity():
+def test_only_gram_and_pound_belong_to_two_quantities():
     spellings = [s for q in QUANTITIES.values() for s in q.units]
-    assert len(spellings) == len(set(spellings))
+    shared = {s for s in spellings if spellings.count(s) > 1}
+    assert shared == AMBIGUOUS_UNITS == {"g", "lb"}
+    assert all(spellings.count(s) == 2 for s in shared)
+
+
+@pytest.mark.parametrize(("unit", "quantities"), [("g", "an acceleration or a mass"), ("lb", "a force or a mass")])
+def test_ambiguous_unit_of_unknown_channel_is_refused(unit, quantities):
+    with pytest.raises(DataError, match=rf"rig\.csv: channel 'payload': unit '{unit}' is {quantities}, and the name"):
+        to_si(np.ones(3), unit, "payload", source="rig.csv")
 
 
 @pytest.mark.parametrize(

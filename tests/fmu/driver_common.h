@@ -1,13 +1,26 @@
-/* driver_common.h: what fmi2_driver.c and fmi3_driver.c share: counting unexpected statuses, looking up FMI
- * functions in the binary, and opening the binary named on the command line "BINARY.so TOKEN N_INPUTS N_OUTPUTS".
+/* driver_common.h: what fmi2_driver.c and fmi3_driver.c share: counting unexpected statuses, loading the FMU's
+ * binary (dlopen on POSIX, LoadLibrary on Windows), opening the binary named on the command line
+ * "BINARY TOKEN N_INPUTS N_OUTPUTS" and printing outputs for the cross-platform comparison.
  * Included by exactly one source file per driver program, so its static definitions are the program's own.
  */
 #ifndef DRIVER_COMMON_H
 #define DRIVER_COMMON_H
 
-#include <dlfcn.h>
 #include <stdio.h>
 #include <stdlib.h>
+
+#ifdef _WIN32
+#include <windows.h>
+typedef HMODULE library_t;
+/* GetProcAddress returns a generic function pointer; going through void (*)(void) is the cast C allows. */
+#define LOAD(name) name##TYPE *name = (name##TYPE *)(void (*)(void))GetProcAddress(lib, #name)
+#define close_library(lib) FreeLibrary(lib)
+#else
+#include <dlfcn.h>
+typedef void *library_t;
+#define LOAD(name) name##TYPE *name = (name##TYPE *)dlsym(lib, #name)
+#define close_library(lib) dlclose(lib)
+#endif
 
 static int failures = 0;
 
@@ -21,12 +34,10 @@ static int failures = 0;
         }                                                                                            \
     } while (0)
 
-#define LOAD(name) name##TYPE *name = (name##TYPE *)dlsym(lib, #name)
-
 /* The binary opened from the command line with the counts of inputs and outputs (at most 16 each), or NULL with
  * *code set to the exit code: 2 for bad arguments, 3 when the binary does not load. */
-static void *open_binary(int argc, char **argv, int *n_in, int *n_out, int *code) {
-    void *lib;
+static library_t open_binary(int argc, char **argv, int *n_in, int *n_out, int *code) {
+    library_t lib;
     if (argc != 5) {
         *code = 2;
         return NULL;
@@ -37,12 +48,23 @@ static void *open_binary(int argc, char **argv, int *n_in, int *n_out, int *code
         *code = 2;
         return NULL;
     }
+#ifdef _WIN32
+    lib = LoadLibraryA(argv[1]);
+    if (!lib) fprintf(stderr, "LoadLibrary(%s) failed: error %lu\n", argv[1], (unsigned long)GetLastError());
+#else
     lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
-    if (!lib) {
-        fprintf(stderr, "%s\n", dlerror());
-        *code = 3;
-    }
+    if (!lib) fprintf(stderr, "%s\n", dlerror());
+#endif
+    if (!lib) *code = 3;
     return lib;
+}
+
+/* One stdout line "TAG K y0 y1 ...", every value with 17 significant digits (enough to round-trip a double). */
+static void print_outputs(const char *tag, int k, const double *out, int n_out) {
+    int i;
+    printf("%s %d", tag, k);
+    for (i = 0; i < n_out; i++) printf(" %.17g", out[i]);
+    printf("\n");
 }
 
 #endif /* DRIVER_COMMON_H */

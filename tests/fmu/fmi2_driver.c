@@ -1,9 +1,10 @@
 /* fmi2_driver.c: a minimal FMI 2.0 co-simulation master for test_memcheck.py, run under valgrind.
  *
- * Usage: fmi2_driver BINARY.so GUID N_INPUTS N_OUTPUTS
+ * Usage: fmi2_driver BINARY GUID N_INPUTS N_OUTPUTS   (BINARY: the .so on POSIX, the .dll on Windows)
  * Exercises every path of the glue: a wrong GUID, two instances, initialisation, many steps with changing step
  * sizes, outputs and flags read, FMU state get/set/serialise/deserialise/free, a refused NaN input, a refused call,
  * reset and re-initialisation, termination and freeing. Exits 0 only if every status is the one expected.
+ * Prints the outputs after every step (stdout), so runs of one FMU's binaries on two platforms can be compared.
  */
 #include <math.h>
 #include <stdarg.h>
@@ -27,7 +28,7 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
 #define EXPECT(call, expected) EXPECT_STATUS(fmi2Status, call, expected)
 
 int main(int argc, char **argv) {
-    void *lib;
+    library_t lib;
     fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
     fmi2Component a, b;
     fmi2ValueReference in_vr[16], out_vr[16], flag_vr;
@@ -90,6 +91,7 @@ int main(int argc, char **argv) {
             EXPECT(fmi2DoStep(b, t, h, fmi2True), fmi2OK);
             t += h;
             EXPECT(fmi2GetReal(a, out_vr, (size_t)n_out, out), fmi2OK);
+            print_outputs("step", k, out, n_out);
             EXPECT(fmi2GetBoolean(a, &flag_vr, 1, &flag), fmi2OK);
             if (k == 1000) EXPECT(fmi2GetFMUstate(a, &state), fmi2OK);
         }
@@ -104,6 +106,8 @@ int main(int argc, char **argv) {
         free(buffer);
         EXPECT(fmi2SetFMUstate(a, restored), fmi2OK);
         EXPECT(fmi2DoStep(a, t, 1e-3, fmi2True), fmi2OK);
+        EXPECT(fmi2GetReal(a, out_vr, (size_t)n_out, out), fmi2OK);
+        print_outputs("restored", 0, out, n_out);
         EXPECT(fmi2FreeFMUstate(a, &state), fmi2OK);
         EXPECT(fmi2FreeFMUstate(a, &restored), fmi2OK);
 
@@ -120,7 +124,7 @@ int main(int argc, char **argv) {
         fmi2FreeInstance(a);
         fmi2FreeInstance(b);
     }
-    dlclose(lib);
+    close_library(lib);
     fprintf(stderr, "%d unexpected statuses\n", failures);
     return failures == 0 ? 0 : 1;
 }

@@ -1,9 +1,10 @@
 /* fmi3_driver.c: a minimal FMI 3.0 co-simulation master for test_memcheck.py, run under valgrind or sanitizers.
  *
- * Usage: fmi3_driver BINARY.so TOKEN N_INPUTS N_OUTPUTS
+ * Usage: fmi3_driver BINARY TOKEN N_INPUTS N_OUTPUTS   (BINARY: the .so on POSIX, the .dll on Windows)
  * The FMI 3 counterpart of fmi2_driver.c: wrong token, two instances, initialisation, steps of changing size,
  * outputs, flag and time read, FMU state get/set/serialise/deserialise/free, refused NaN input and refused calls,
  * unsupported functions, reset, termination and freeing. Exits 0 only if every status is the one expected.
+ * Prints the outputs after every step (stdout), so runs of one FMU's binaries on two platforms can be compared.
  */
 #include <math.h>
 #include <stdio.h>
@@ -20,7 +21,7 @@ static void logger(fmi3InstanceEnvironment env, fmi3Status status, fmi3String ca
 #define EXPECT(call, expected) EXPECT_STATUS(fmi3Status, call, expected)
 
 int main(int argc, char **argv) {
-    void *lib;
+    library_t lib;
     fmi3Instance a, b;
     fmi3ValueReference in_vr[16], out_vr[16], flag_vr, time_vr;
     fmi3Float64 in[16], out[16], now = 0.0, last = 0.0;
@@ -87,6 +88,7 @@ int main(int argc, char **argv) {
             EXPECT(fmi3DoStep(b, now, h, fmi3True, &event, &terminate, &early, &last), fmi3OK);
             now += h;
             EXPECT(fmi3GetFloat64(a, out_vr, (size_t)n_out, out, (size_t)n_out), fmi3OK);
+            print_outputs("step", k, out, n_out);
             EXPECT(fmi3GetBoolean(a, &flag_vr, 1, &flag, 1), fmi3OK);
             if (k == 1000) EXPECT(fmi3GetFMUState(a, &state), fmi3OK);
         }
@@ -104,6 +106,8 @@ int main(int argc, char **argv) {
         free(buffer);
         EXPECT(fmi3SetFMUState(a, restored), fmi3OK);
         EXPECT(fmi3DoStep(a, now, 1e-3, fmi3True, &event, &terminate, &early, &last), fmi3OK);
+        EXPECT(fmi3GetFloat64(a, out_vr, (size_t)n_out, out, (size_t)n_out), fmi3OK);
+        print_outputs("restored", 0, out, n_out);
         EXPECT(fmi3FreeFMUState(a, &state), fmi3OK);
         EXPECT(fmi3FreeFMUState(a, &restored), fmi3OK);
 
@@ -120,7 +124,7 @@ int main(int argc, char **argv) {
         fmi3FreeInstance(a);
         fmi3FreeInstance(b);
     }
-    dlclose(lib);
+    close_library(lib);
     fprintf(stderr, "%d unexpected statuses\n", failures);
     return failures == 0 ? 0 : 1;
 }

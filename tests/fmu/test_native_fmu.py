@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import onnx
 import pytest
+from fmpy import read_model_description
 from onnx import helper
 
 from native_fmu_helpers import SAMPLE_PERIOD, Reference, delay_step_graph, generic_graph, hostile_graph
@@ -33,10 +34,36 @@ def reference() -> Reference:
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
-def test_10000_steps_match_onnxruntime_with_filter(delay_fmus, open_fmu, reference, fmi):
+def test_10000_steps_match_onnxruntime_with_the_thesis_filter(delay_fmus, open_fmu, reference, fmi):
     inputs = random_inputs(10_001, seed=fmi)
-    got = open_fmu(delay_fmus[fmi]).simulate(inputs, T)
+    got = open_fmu(delay_fmus[fmi]).simulate(inputs, T, parameters={"filter_cutoff": 100.0})
     np.testing.assert_allclose(got, reference.simulate(inputs, T, cutoff=100.0), rtol=RTOL, atol=ATOL)
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_at_default_parameters_the_fmu_is_its_graph(delay_fmus, generic_onnx, open_fmu, reference, tmp_path, fmi):
+    """What a plain master gets: no parameter set, every output within 1e-12 of its peak of onnxruntime's graph."""
+    def assert_within_1e12_of_peak(got: np.ndarray, expected: np.ndarray) -> None:
+        error = np.max(np.abs(got - expected), axis=0) / np.max(np.abs(expected), axis=0)
+        assert np.all(error <= 1e-12), error
+
+    inputs = random_inputs(2_001, seed=20 + fmi)
+    assert_within_1e12_of_peak(open_fmu(delay_fmus[fmi]).simulate(inputs, T), reference.simulate(inputs, T))
+    foreign = build_fmu(generic_onnx, BuildOptions(out=tmp_path / "foreign.fmu", fmi_version=fmi))
+    values = np.random.default_rng(fmi).uniform(-1, 1, (1_000, 3))
+    assert_within_1e12_of_peak(open_fmu(foreign).simulate(values, 1e-3),
+                               Reference(generic_graph()).simulate(values, 1e-3))
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_build_option_sets_the_filter_start_value(delay_onnx, open_fmu, reference, tmp_path, fmi):
+    path = build_fmu(delay_onnx, BuildOptions(out=tmp_path / "filtered.fmu", fmi_version=fmi, filter_cutoff=100.0))
+    assert float({v.name: v.start for v in read_model_description(str(path)).modelVariables}["filter_cutoff"]) == 100
+    inputs = random_inputs(500, seed=3)
+    np.testing.assert_allclose(open_fmu(path).simulate(inputs, T), reference.simulate(inputs, T, cutoff=100.0),
+                               rtol=RTOL, atol=ATOL)
+    with pytest.raises(FmuBuildError, match="filter cut-off"):
+        BuildOptions(filter_cutoff=-1.0)
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
@@ -52,9 +79,9 @@ def test_communication_step_other_than_sample_period(delay_fmus, open_fmu, refer
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
-def test_reading_outputs_never_advances_the_state(delay_fmus, open_fmu, reference, fmi):
+def test_reading_outputs_never_advances_the_state(filtered_fmus, open_fmu, reference, fmi):
     inputs = random_inputs(300, seed=5)
-    slave = open_fmu(delay_fmus[fmi])
+    slave = open_fmu(filtered_fmus[fmi])
     slave.initialize(inputs[0])
     rows = [slave.outputs_now()]
     for n in range(1, len(inputs)):
@@ -101,9 +128,9 @@ def test_rollback_with_get_set_and_serialised_state(delay_fmus, open_fmu, fmi):
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
-def test_reset_clears_delay_line_and_filter(delay_fmus, open_fmu, reference, fmi):
+def test_reset_clears_delay_line_and_filter(filtered_fmus, open_fmu, reference, fmi):
     inputs = random_inputs(200, seed=8)
-    slave = open_fmu(delay_fmus[fmi])
+    slave = open_fmu(filtered_fmus[fmi])
     slave.simulate(random_inputs(100, seed=99), T)
     slave.fmu.reset()
     np.testing.assert_allclose(slave.simulate(inputs, T), reference.simulate(inputs, T, cutoff=100.0),
@@ -111,8 +138,8 @@ def test_reset_clears_delay_line_and_filter(delay_fmus, open_fmu, reference, fmi
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
-def test_instances_in_one_process_are_independent(delay_fmus, open_fmu, reference, fmi):
-    a, b = open_fmu(delay_fmus[fmi], "a"), open_fmu(delay_fmus[fmi], "b")
+def test_instances_in_one_process_are_independent(filtered_fmus, open_fmu, reference, fmi):
+    a, b = open_fmu(filtered_fmus[fmi], "a"), open_fmu(filtered_fmus[fmi], "b")
     ua, ub = random_inputs(400, seed=21), random_inputs(400, seed=22)
     a.initialize(ua[0])
     b.initialize(ub[0])
@@ -129,8 +156,8 @@ def test_instances_in_one_process_are_independent(delay_fmus, open_fmu, referenc
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
-def test_extrapolating_flag_and_one_warning_per_excursion(delay_fmus, open_fmu, reference, fmi):
-    slave = open_fmu(delay_fmus[fmi])
+def test_extrapolating_flag_and_one_warning_per_excursion(filtered_fmus, open_fmu, reference, fmi):
+    slave = open_fmu(filtered_fmus[fmi])
     velocity = [0.0, 0.5, 1.5, 2.0, 1.8, 0.2, 0.1, -3.0, 0.0]  # two excursions: samples 2-4 and 7
     inputs = np.column_stack([velocity, np.zeros(len(velocity))])
     slave.initialize(inputs[0])
@@ -262,9 +289,9 @@ def test_default_output_is_exported_folder(delay_onnx, tmp_path, monkeypatch):
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
-def test_initialization_preview_and_nonzero_start_time(delay_fmus, open_fmu, reference, fmi):
+def test_initialization_preview_and_nonzero_start_time(filtered_fmus, open_fmu, reference, fmi):
     inputs = random_inputs(400, seed=31)
-    slave = open_fmu(delay_fmus[fmi])
+    slave = open_fmu(filtered_fmus[fmi])
     start = 10.0
     slave.enter_initialization(start)
     slave.set_real(slave.inputs, inputs[0] * 0.5)
@@ -295,12 +322,12 @@ def test_pythonfmu_backend_is_dispatched_with_the_same_variables(delay_onnx, del
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
-def test_10000_steps_of_2_5_t_with_a_rollback_match_onnxruntime(delay_fmus, open_fmu, reference, fmi):
+def test_10000_steps_of_2_5_t_with_a_rollback_match_onnxruntime(filtered_fmus, open_fmu, reference, fmi):
     """The issue's check: 10 000 random steps, h = 2.5 T, with a detour of 1 000 other steps rolled back midway."""
     inputs = random_inputs(10_001, seed=40 + fmi)
     detour = random_inputs(1_000, seed=50, inside=False)
     h = 2.5 * T
-    slave = open_fmu(delay_fmus[fmi])
+    slave = open_fmu(filtered_fmus[fmi])
     slave.initialize(inputs[0])
     rows = [slave.outputs_now()]
     for n in range(1, len(inputs)):

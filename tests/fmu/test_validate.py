@@ -37,7 +37,7 @@ def test_variables_units_and_experiment(delay_fmus, fmi):
     assert variables["velocity"].causality == "input" and variables["velocity"].unit == "m/s"
     assert variables["force"].causality == "output" and variables["force"].unit == "N"
     assert variables["extrapolating"].type == "Boolean" and variables["extrapolating"].causality == "output"
-    assert variables["filter_cutoff"].causality == "parameter" and float(variables["filter_cutoff"].start) == 100.0
+    assert variables["filter_cutoff"].causality == "parameter" and float(variables["filter_cutoff"].start) == 0.0
     assert variables["filter_cutoff"].unit == "Hz" and float(variables["output_gain"].start) == 1.0
     assert variables["velocity"].description == "piston velocity"
     units = {u.name: u.baseUnit for u in md.unitDefinitions}

@@ -32,6 +32,7 @@ from nnfmu.loop.trials import (SIGNIFICANT, TRIAL_TIE, _best_trial, _partner_riv
 from nnfmu.loop.warm_start import Retrained
 from nnfmu.models import Architecture, TrainSettings, get_preset, train_model
 from nnfmu.models.features import Difference, FeatureSpec, SmoothSign
+from plain_master import plain_replay
 
 # Rig sensors at half their default noise: a 5 N rms load cell (0.05 % of its 10 kN range) and a 1 mm/s velocity
 # transducer, the quiet end of a damper dyno (0.05-0.1 % of range). At the default noise the floor that no model fed
@@ -106,6 +107,17 @@ def assert_named_and_improved(report: LoopReport, missing: set[str], at_most: fl
     return ratio
 
 
+def assert_report_is_what_a_plain_master_gets(document: dict, m: Measurement) -> None:
+    """The report's final test-part NRMSE equals that of the final FMU replayed by fmpy alone at its defaults."""
+    component = Component.from_onnx(onnx.load(document["onnx"]))
+    predicted = plain_replay(Path(document["fmu"]), {p.name: m[p.name] for p in component.inputs},
+                             m.sample_period, "force")
+    rows = np.concatenate([np.flatnonzero((m.time >= a) & (m.time <= b)) for a, b in document["blocks"]["test"]])
+    error = predicted[rows] - m["force"][rows]
+    plain = float(np.sqrt(np.mean(error**2)) / np.sqrt(np.mean(m["force"][rows] ** 2)))
+    assert plain == pytest.approx(document["error_after"]["nrmse"], rel=1e-9)
+
+
 def test_undeclared_gas_force_is_named_and_the_error_falls(models, tmp_path):
     truth = (*FULL, "gas_force")
     out = tmp_path / "loop"
@@ -136,6 +148,7 @@ def test_undeclared_gas_force_is_named_and_the_error_falls(models, tmp_path):
     html = (out / "report.html").read_text()
     assert "gas_force" in html and "residual_psd.png" in html and first["retrained_from"] in html
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")], "staging folder left behind"
+    assert_report_is_what_a_plain_master_gets(document, record(truth))
     umask = os.umask(0)
     os.umask(umask)
     assert out.stat().st_mode & 0o777 == 0o777 & ~umask  # as mkdir makes it, not the staging folder's 0700

@@ -15,6 +15,7 @@ from nnfmu.vehicle.models import (
     LinearLaw,
     MonolithicSettings,
     ParameterError,
+    QuarterCarParameters,
     SimulationSettings,
     VehicleModelError,
     VehicleParameters,
@@ -23,18 +24,23 @@ from nnfmu.vehicle.models import (
     simulate_monolithic,
     truth_laws,
 )
-from nnfmu.vehicle.models.quarter_car import corner_sprung_mass
 
 SI_UNITS = {"m", "m/s", "m/s^2", "N", "N.m", "rad", "rad/s", "rad/s^2"}
 
 
 @pytest.fixture(scope="module")
-def params() -> VehicleParameters:
+def vehicle() -> VehicleParameters:
     return VehicleParameters.load()
 
 
-def _linear_damper(params: VehicleParameters) -> VehicleParameters:
-    return replace(params, front_damper=replace(params.front_damper, model="linear"))
+@pytest.fixture(scope="module")
+def params() -> QuarterCarParameters:
+    """The quarter car of the packaged sedan's front-left corner (what `nnfmu vehicle build quarter-car` builds)."""
+    return QuarterCarParameters.load()
+
+
+def _linear_damper(params: QuarterCarParameters) -> QuarterCarParameters:
+    return replace(params, damper=replace(params.damper, model="linear"))
 
 
 def _road(t: np.ndarray) -> np.ndarray:
@@ -48,45 +54,45 @@ def _road_rate(t: np.ndarray) -> np.ndarray:
     )
 
 
-def test_default_parameters_are_a_midsize_car(params: VehicleParameters) -> None:
-    assert 1200 <= params.body.mass <= 1400
-    assert 2000 <= params.body.pitch_inertia <= 2500 and 500 <= params.body.roll_inertia <= 600
-    assert 25e3 <= params.front.spring_rate <= 35e3 and 200e3 <= params.front.tyre_stiffness <= 250e3
+def test_default_parameters_are_a_midsize_car(vehicle: VehicleParameters) -> None:
+    assert 1200 <= vehicle.body.mass <= 1400
+    assert 2000 <= vehicle.body.pitch_inertia <= 2500 and 500 <= vehicle.body.roll_inertia <= 600
+    assert 25e3 <= vehicle.front.spring_rate <= 35e3 and 200e3 <= vehicle.front.tyre_stiffness <= 250e3
 
 
-def test_design_position_is_the_static_equilibrium(params: VehicleParameters) -> None:
+def test_design_position_is_the_static_equilibrium(params: QuarterCarParameters) -> None:
     car = build_quarter_car(params)
     x = car.equilibrium()
     np.testing.assert_allclose(x, 0.0, atol=1e-12)
     y = car.output_vector(x, car.input_vector({}))
-    weight = (corner_sprung_mass(params, "front") + params.front.unsprung_mass) * params.gravity
+    weight = (params.sprung_mass + params.unsprung_mass) * params.gravity
     assert y[car.output_index("spindle_vertical_force")] == pytest.approx(weight, rel=1e-12)
 
 
-def test_gravity_alone_compresses_the_spring_by_mg_over_k(params: VehicleParameters) -> None:
+def test_gravity_alone_compresses_the_spring_by_mg_over_k(params: QuarterCarParameters) -> None:
     """Without the spring and tyre preloads the masses sag: spring by m_s g / k, tyre by (m_s + m_u) g / k_t."""
     car = build_quarter_car(params)
     x = np.linalg.solve(car.A, -car.gravity)
     y = car.output_vector(x, car.input_vector({}))
-    m_s, g = corner_sprung_mass(params, "front"), params.gravity
+    m_s, g = params.sprung_mass, params.gravity
     body, spindle = y[car.output_index("body_displacement")], y[car.output_index("spindle_displacement")]
-    assert body - spindle == pytest.approx(-m_s * g / params.front.spring_rate, rel=1e-9)
-    assert spindle == pytest.approx(-(m_s + params.front.unsprung_mass) * g / params.front.tyre_stiffness, rel=1e-9)
+    assert body - spindle == pytest.approx(-m_s * g / params.wheel_rate, rel=1e-9)
+    assert spindle == pytest.approx(-(m_s + params.unsprung_mass) * g / params.tyre_stiffness, rel=1e-9)
 
 
-def test_natural_frequencies_match_the_two_mass_formula(params: VehicleParameters) -> None:
-    car = build_quarter_car(replace(params, front=replace(params.front, tyre_damping=0.0)))
+def test_natural_frequencies_match_the_two_mass_formula(params: QuarterCarParameters) -> None:
+    car = build_quarter_car(replace(params, tyre_damping=0.0))
     body_hz, hop_hz = car.natural_frequencies()
     assert 1.0 <= body_hz <= 1.5 and 10.0 <= hop_hz <= 15.0
-    m_s, m_u = corner_sprung_mass(params, "front"), params.front.unsprung_mass
-    k, k_t = params.front.spring_rate, params.front.tyre_stiffness
+    m_s, m_u = params.sprung_mass, params.unsprung_mass
+    k, k_t = params.wheel_rate, params.tyre_stiffness
     # det(K - w^2 M) = 0 for M = diag(m_s, m_u), K = [[k, -k], [-k, k + k_t]]
     a, b, c = m_s * m_u, -(k * m_u + (k + k_t) * m_s), k * k_t
     w2 = np.sort(np.roots([a, b, c]).real)
     np.testing.assert_allclose([body_hz, hop_hz], np.sqrt(w2) / (2 * math.pi), rtol=1e-9)
 
 
-def test_zoh_discretisation_equals_cont2discrete(params: VehicleParameters) -> None:
+def test_zoh_discretisation_equals_cont2discrete(params: QuarterCarParameters) -> None:
     car = build_quarter_car(_linear_damper(params), {"damper": "reference"})
     dt = 2e-3
     disc = car.discretise(dt, "zoh")
@@ -100,12 +106,12 @@ def test_zoh_discretisation_equals_cont2discrete(params: VehicleParameters) -> N
 
 
 @pytest.mark.parametrize("hold", ["zoh", "foh"])
-def test_discrete_simulation_equals_a_fine_rk45_solution(params: VehicleParameters, hold: str) -> None:
+def test_discrete_simulation_equals_a_fine_rk45_solution(params: QuarterCarParameters, hold: str) -> None:
     """ZOH is exact for held inputs, FOH for inputs linear between samples: both against RK45 at tight tolerances."""
     car = build_quarter_car(_linear_damper(params), {"damper": "reference"})
     dt, n = 5e-3, 201
     t = np.arange(n) * dt
-    inputs = {"actuator_displacement": _road(t), "actuator_velocity": _road_rate(t)}
+    inputs = {"actuator_fl_displacement": _road(t), "actuator_fl_velocity": _road_rate(t)}
     result = simulate(car, inputs, SimulationSettings(dt=dt, hold=hold), x0=np.zeros(4))
     u = np.array([car.input_vector({k: v[i] for k, v in inputs.items()}) for i in range(n)])
 
@@ -132,12 +138,12 @@ def test_discrete_simulation_equals_a_fine_rk45_solution(params: VehicleParamete
         assert np.max(np.abs(result[name] - ref[:, i])) <= 1e-6 * scale, name
 
 
-def test_spline_damper_sub_stepping_converges(params: VehicleParameters) -> None:
+def test_spline_damper_sub_stepping_converges(params: QuarterCarParameters) -> None:
     """With the nonlinear spline damper built in, the predictor-corrector error falls with the square of the sub-step."""
     car = build_quarter_car(params, {"damper": "reference"})
     dt, n = 2e-3, 400
     t = np.arange(n) * dt
-    inputs = {"actuator_displacement": _road(t), "actuator_velocity": _road_rate(t)}
+    inputs = {"actuator_fl_displacement": _road(t), "actuator_fl_velocity": _road_rate(t)}
     fine = simulate(car, inputs, SimulationSettings(dt=dt, hold="foh", max_substep=dt / 64))["damper_velocity"]
     errors = [
         np.max(
@@ -153,24 +159,24 @@ def test_spline_damper_sub_stepping_converges(params: VehicleParameters) -> None
     assert errors[2] < 1e-3 * np.max(np.abs(fine))
 
 
-def test_a_linear_spline_reproduces_the_linear_damper(params: VehicleParameters) -> None:
-    c = params.front_damper.damping
-    spline = replace(params.front_damper, model="spline", velocity=(-2.0, 0.0, 2.0), force=(-2 * c, 0.0, 2 * c))
+def test_a_linear_spline_reproduces_the_linear_damper(params: QuarterCarParameters) -> None:
+    c = params.damper.damping
+    spline = replace(params.damper, model="spline", velocity=(-2.0, 0.0, 2.0), force=(-2 * c, 0.0, 2 * c))
     t = np.arange(300) * 2e-3
-    inputs = {"actuator_displacement": _road(t), "actuator_velocity": _road_rate(t)}
+    inputs = {"actuator_fl_displacement": _road(t), "actuator_fl_velocity": _road_rate(t)}
     settings = SimulationSettings(dt=2e-3, max_substep=2e-5)
     nonlinear = simulate(
-        build_quarter_car(replace(params, front_damper=spline), {"damper": "reference"}), inputs, settings
+        build_quarter_car(replace(params, damper=spline), {"damper": "reference"}), inputs, settings
     )
     linear = simulate(build_quarter_car(_linear_damper(params), {"damper": "reference"}), inputs, settings)
     scale = np.max(np.abs(linear["body_acceleration"]))
     assert np.max(np.abs(nonlinear["body_acceleration"] - linear["body_acceleration"])) < 1e-3 * scale
 
 
-def _gauss_seidel(params: VehicleParameters, dt: float, duration: float, x0: np.ndarray) -> np.ndarray:
+def _gauss_seidel(params: QuarterCarParameters, dt: float, duration: float, x0: np.ndarray) -> np.ndarray:
     """Co-simulate the external damper port with an 'FMU' force = c * velocity, exchanged once per step."""
     car = build_quarter_car(params)
-    c = params.front_damper.damping
+    c = params.damper.damping
     disc = car.discretise(dt)
     x = x0
     iv, iforce = car.output_index("damper_velocity"), car.input_index("damper_force")
@@ -178,7 +184,7 @@ def _gauss_seidel(params: VehicleParameters, dt: float, duration: float, x0: np.
     for k in range(int(round(duration / dt)) + 1):
         t = k * dt
         u = car.input_vector(
-            {"actuator_displacement": _road(np.array(t)), "actuator_velocity": _road_rate(np.array(t))}
+            {"actuator_fl_displacement": _road(np.array(t)), "actuator_fl_velocity": _road_rate(np.array(t))}
         )
         u[iforce] = c * car.output_vector(x, u)[iv]
         out.append(car.output_vector(x, u)[car.output_index("body_acceleration")])
@@ -186,7 +192,7 @@ def _gauss_seidel(params: VehicleParameters, dt: float, duration: float, x0: np.
     return np.array(out)
 
 
-def test_external_damper_port_converges_to_the_built_in_linear_damper(params: VehicleParameters) -> None:
+def test_external_damper_port_converges_to_the_built_in_linear_damper(params: QuarterCarParameters) -> None:
     duration = 1.0
     steps = (1e-3, 5e-4, 2.5e-4)
     errors = []
@@ -194,21 +200,21 @@ def test_external_damper_port_converges_to_the_built_in_linear_damper(params: Ve
         t = np.arange(int(round(duration / dt)) + 1) * dt
         reference = build_quarter_car(_linear_damper(params), {"damper": "reference"})
         x0 = reference.equilibrium()
-        inputs = {"actuator_displacement": _road(t), "actuator_velocity": _road_rate(t)}
+        inputs = {"actuator_fl_displacement": _road(t), "actuator_fl_velocity": _road_rate(t)}
         ref = simulate(reference, inputs, SimulationSettings(dt=dt), x0=x0)
         errors.append(np.max(np.abs(_gauss_seidel(params, dt, duration, x0) - ref["body_acceleration"])))
     assert errors[0] > errors[1] > errors[2]
     assert errors[2] / errors[0] < 0.35  # first order in the step: about 1/4 for a step 4 times smaller
 
 
-def test_every_port_has_a_unit_and_a_description(params: VehicleParameters) -> None:
+def test_every_port_has_a_unit_and_a_description(params: QuarterCarParameters) -> None:
     car = build_quarter_car(params)
-    assert car.input_names == ["actuator_displacement", "actuator_velocity", "damper_force"]
+    assert car.input_names == ["actuator_fl_displacement", "actuator_fl_velocity", "damper_force"]
     for port in car.inputs + car.outputs:
         assert port.unit in SI_UNITS and port.description, port
 
 
-def test_reference_damper_removes_the_force_input(params: VehicleParameters) -> None:
+def test_reference_damper_removes_the_force_input(params: QuarterCarParameters) -> None:
     assert "damper_force" not in build_quarter_car(params, {"damper": "reference"}).input_names
     with pytest.raises(VehicleModelError, match="unknown component"):
         build_quarter_car(params, {"dampr": "reference"})
@@ -216,8 +222,8 @@ def test_reference_damper_removes_the_force_input(params: VehicleParameters) -> 
         build_quarter_car(params).input_index("damper_forc")
 
 
-def test_bad_parameter_files_name_the_file_and_key(tmp_path: Path, params: VehicleParameters) -> None:
-    text = Path(params.source).read_text(encoding="utf-8")
+def test_bad_parameter_files_name_the_file_and_key(tmp_path: Path, vehicle: VehicleParameters) -> None:
+    text = Path(vehicle.source).read_text(encoding="utf-8")
     cases = {
         "negative.toml": (
             text.replace("spring_rate = 30000.0", "spring_rate = -30000.0"),
@@ -237,23 +243,23 @@ def test_bad_parameter_files_name_the_file_and_key(tmp_path: Path, params: Vehic
         assert str(path) in str(info.value)
 
 
-def test_monolithic_rk4_with_a_linear_law_equals_the_exact_solution(params: VehicleParameters) -> None:
+def test_monolithic_rk4_with_a_linear_law_equals_the_exact_solution(params: QuarterCarParameters) -> None:
     """Two independent solvers: RK4 at 0.1 ms with the damper law closing the port vs the exact FOH discretisation."""
     reference = build_quarter_car(_linear_damper(params), {"damper": "reference"})
     t = np.arange(501) * 1e-3
-    inputs = {"actuator_displacement": _road(t), "actuator_velocity": _road_rate(t)}
+    inputs = {"actuator_fl_displacement": _road(t), "actuator_fl_velocity": _road_rate(t)}
     x0 = reference.equilibrium()
     exact = simulate(reference, inputs, SimulationSettings(dt=1e-3, hold="foh"), x0=x0)
-    law = {"damper_force": LinearLaw(0.0, params.front_damper.damping)}
+    law = {"damper_force": LinearLaw(0.0, params.damper.damping)}
     mono = simulate_monolithic(build_quarter_car(params), law, inputs, MonolithicSettings(sample_period=1e-3), x0=x0)
     for name in ("body_acceleration", "damper_velocity", "spindle_vertical_force"):
         assert np.max(np.abs(mono[name] - exact[name])) < 1e-8 * np.max(np.abs(exact[name])), name
 
 
-def test_monolithic_with_the_truth_damper_differs_from_the_spline_baseline(params: VehicleParameters) -> None:
+def test_monolithic_with_the_truth_damper_differs_from_the_spline_baseline(params: QuarterCarParameters) -> None:
     """The truth damper (hysteresis, friction) gives a plausible, different force from the spline baseline."""
     t = np.arange(501) * 1e-3
-    inputs = {"actuator_displacement": _road(t), "actuator_velocity": _road_rate(t)}
+    inputs = {"actuator_fl_displacement": _road(t), "actuator_fl_velocity": _road_rate(t)}
     car = build_quarter_car(params)
     x0 = build_quarter_car(params, {"damper": "reference"}).equilibrium()
     truth = simulate_monolithic(

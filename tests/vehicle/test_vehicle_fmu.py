@@ -13,6 +13,7 @@ from fmpy.validation import validate_fmu
 from nnfmu.component import Component, Port
 from nnfmu.cosim.slave import FmuSlave
 from nnfmu.export.run import run_step_graph
+from nnfmu.fmu.errors import FmuBuildError
 from nnfmu.vehicle.fmu import (
     VehicleBuildError,
     VehicleBuildSettings,
@@ -61,36 +62,63 @@ def _assert_close(got: dict[str, np.ndarray], want: dict[str, np.ndarray], names
 
 
 def _reference(
-    vehicle: LinearVehicle, period: float, held: dict[str, np.ndarray], x0: np.ndarray
+    vehicle: LinearVehicle, period: float, knots: dict[str, np.ndarray], x0: np.ndarray
 ) -> dict[str, np.ndarray]:
-    """The FMU's samples by the vehicle model's own stepping: sample k (k >= 1) advances one period from sample k-1
-    with the inputs `held` over that interval, and reports the outputs with those inputs; sample 0 reports x0."""
-    n = len(next(iter(held.values())))
-    discrete = vehicle.discretise(period, "zoh")
-    x, rows = np.asarray(x0, dtype=float), []
+    """The step graph's samples by the vehicle model's own stepping: sample k (k >= 1) advances one period from
+    sample k-1 with the inputs linear from `knots` k-1 to k over that interval, and reports the outputs with the
+    inputs of sample k; sample 0 reports x0."""
+    n = len(next(iter(knots.values())))
+    discrete = vehicle.discretise(period, "foh")
+    x, rows, before = np.asarray(x0, dtype=float), [], None
     for k in range(n):
-        u = vehicle.input_vector({name: values[k] for name, values in held.items()})
+        u = vehicle.input_vector({name: values[k] for name, values in knots.items()})
         if k:
-            x = discrete.step(x, u)
+            x = discrete.step(x, before, u)
         rows.append(vehicle.output_vector(x, u))
+        before = u
     table = np.array(rows)
     return {name: table[:, i] for i, name in enumerate(vehicle.output_names)}
 
 
-def _held_one_step(inputs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-    """What each sample sees when the inputs of sample m are set before the step from t_m to t_m + T."""
-    return {name: np.concatenate([values[:1], values[:-1]]) for name, values in inputs.items()}
+def _interpolating_fmu(vehicle: LinearVehicle, period: float, step: float, inputs: dict[str, np.ndarray],
+                       x0: np.ndarray, settle: bool) -> dict[str, np.ndarray]:
+    """docs/fmu.md's semantics of an FMU that interpolates its inputs, computed with the model's own stepping.
+
+    `inputs` row m is set at t_m = m step (row 0 during initialisation); returns the outputs read after
+    initialisation and after every step. A sample evaluated in a step takes the inputs set before it; inputs set at
+    the latest sample's time become that sample's, which is evaluated again. With `settle`, row m + 1 is set right
+    after step m and before the outputs are read (a master resolving feedthrough), else before step m + 1."""
+    discrete = vehicle.discretise(period, "foh")
+    rows = [vehicle.input_vector({name: values[m] for name, values in inputs.items()})
+            for m in range(len(next(iter(inputs.values()))))]
+    knots, states = [rows[0]], [np.asarray(x0, dtype=float)]
+
+    def set_inputs(u: np.ndarray, now: float) -> None:
+        latest = len(knots) - 1
+        if abs(latest * period - now) <= 1e-6 * period and not np.array_equal(u, knots[latest]):
+            knots[latest] = u
+            if latest:
+                states[latest] = discrete.step(states[latest - 1], knots[latest - 1], u)
+
+    read = [vehicle.output_vector(states[0], knots[0])]
+    current = rows[0]
+    for m in range(1, len(rows)):
+        t = (m - 1) * step
+        set_inputs(current, t)
+        while len(knots) * period <= t + step + 1e-6 * period:
+            states.append(discrete.step(states[-1], knots[-1], current))
+            knots.append(current)
+        current = rows[m]
+        if settle:
+            set_inputs(current, t + step)
+        read.append(vehicle.output_vector(states[-1], knots[-1]))
+    table = np.array(read)
+    return {name: table[:, i] for i, name in enumerate(vehicle.output_names)}
 
 
-def _no_feedthrough(vehicle: LinearVehicle) -> list[str]:
-    """Outputs that depend on the state only (no D or Dyn term): where the FMU and `simulate` agree sample by sample."""
-    dyn = vehicle.Dyn if vehicle.Dyn.size else np.zeros((len(vehicle.outputs), 1))
-    return [p.name for i, p in enumerate(vehicle.outputs) if not vehicle.D[i].any() and not dyn[i].any()]
-
-
-def _run_fmu(path: Path, inputs: dict[str, np.ndarray], step: float, period: float) -> dict[str, np.ndarray]:
-    """Drive an FMU from t = 0 with communication step `step`; before each step the inputs are set to those of the
-    sample at its start. Returns the outputs after initialisation and after every step."""
+def _run_fmu(path: Path, inputs: dict[str, np.ndarray], step: float, settle: bool) -> dict[str, np.ndarray]:
+    """Drive an FMU from t = 0 with communication step `step`, row m of `inputs` set at t_m (as in
+    `_interpolating_fmu`, with or without `settle`). Returns the outputs after initialisation and every step."""
     n = len(next(iter(inputs.values())))
     names = list(inputs)
     with FmuSlave(path) as slave:
@@ -100,13 +128,12 @@ def _run_fmu(path: Path, inputs: dict[str, np.ndarray], step: float, period: flo
         slave.set_real(names, [inputs[k][0] for k in names])
         slave.exit_initialization()
         rows = [slave.get_real(outputs)]
-        t, m = 0.0, 0
-        while len(rows) < n:
-            k = int(round(m * step / period))
-            slave.set_real(names, [inputs[name][k] for name in names])
-            slave.do_step(t, step)
-            m += 1
-            t = m * step
+        for m in range(1, n):
+            if not settle:
+                slave.set_real(names, [inputs[name][m - 1] for name in names])
+            slave.do_step((m - 1) * step, step)
+            if settle:
+                slave.set_real(names, [inputs[name][m] for name in names])
             rows.append(slave.get_real(outputs))
     table = np.array(rows)
     return {name: table[:, i] for i, name in enumerate(outputs)}
@@ -174,21 +201,27 @@ def test_initial_state_is_the_static_equilibrium() -> None:
         np.testing.assert_allclose(result[name], result[name][0], rtol=1e-12, atol=1e-15)
 
 
+@pytest.mark.parametrize("settle", [True, False])
 @pytest.mark.parametrize("kind", ["external", "reference"])
-def test_quarter_car_fmu_equals_the_model(quarter_car_fmus: dict[str, Path], kind: str) -> None:
+def test_quarter_car_fmu_equals_the_model(quarter_car_fmus: dict[str, Path], kind: str, settle: bool) -> None:
     """Random actuator input (and damper force, for the external damper) through fmpy, one sample per step: the
-    outputs equal the model's own stepping, and those without feedthrough equal `simulate` (ZOH) directly."""
+    outputs equal the model's own stepping under docs/fmu.md's input interpolation; a master that sets each step's
+    inputs at its end (`settle`) reads `simulate` with a first-order hold, one that sets them only before a step
+    reads each sample predicted with the inputs held, the state following the first-order hold all the same."""
     path = quarter_car_fmus[kind]
     assert validate_fmu(str(path)) == []
     settings = VehicleBuildSettings(components={"damper": kind})
     vehicle = vehicle_model("quarter-car", settings)
     x0 = _initial_state(vehicle_step_graph("quarter-car", settings))
     inputs = _random_inputs(vehicle, 2000)
-    got = _run_fmu(path, inputs, T, T)
-    _assert_close(got, _reference(vehicle, T, _held_one_step(inputs), x0), vehicle.output_names)
-    state_only = _no_feedthrough(vehicle)
-    assert {"damper_displacement", "damper_velocity", "body_displacement"} <= set(state_only)
-    _assert_close(got, simulate(vehicle, inputs, SimulationSettings(dt=T), x0=x0), state_only)
+    got = _run_fmu(path, inputs, T, settle)
+    _assert_close(got, _interpolating_fmu(vehicle, T, T, inputs, x0, settle), vehicle.output_names)
+    foh = simulate(vehicle, inputs, SimulationSettings(dt=T, hold="foh"), x0=x0)
+    if settle:
+        _assert_close(got, foh, vehicle.output_names)
+    else:
+        late = {name: values[1:] for name, values in got.items()}
+        assert max(np.max(np.abs(late[n] - foh[n][1:])) / np.ptp(foh[n]) for n in vehicle.output_names) > 1e-6
     assert np.ptp(got["damper_velocity"]) > 0.05  # the spline is driven across several knots
 
 
@@ -209,11 +242,8 @@ def test_full_vehicle_with_reference_components_runs_alone_and_equals_simulate(t
     assert [p.name for p in vehicle.inputs if not p.name.startswith("actuator")] == []
     x0 = _initial_state(vehicle_step_graph("full-vehicle", settings))
     inputs = _random_inputs(vehicle, 1500, seed=5)
-    got = _run_fmu(path, inputs, T, T)
-    _assert_close(got, _reference(vehicle, T, _held_one_step(inputs), x0), vehicle.output_names)
-    state_only = _no_feedthrough(vehicle)
-    assert "bushing_fl_front_axial_displacement" in state_only and "damper_rr_velocity" in state_only
-    _assert_close(got, simulate(vehicle, inputs, SimulationSettings(dt=T), x0=x0), state_only)
+    got = _run_fmu(path, inputs, T, settle=True)
+    _assert_close(got, simulate(vehicle, inputs, SimulationSettings(dt=T, hold="foh"), x0=x0), vehicle.output_names)
 
 
 def test_full_vehicle_with_external_components_has_every_port_with_its_unit(tmp_path: Path) -> None:
@@ -242,19 +272,19 @@ def test_get_and_set_state_repeat_a_step_exactly(quarter_car_fmus: dict[str, Pat
         outputs = [name for name in slave.names("output") if name != "extrapolating"]
         slave.enter_initialization(0.0)
         slave.exit_initialization()
-        slave.set_real(["actuator_displacement", "actuator_velocity"], [0.004, 0.3])
+        slave.set_real(["actuator_fl_displacement", "actuator_fl_velocity"], [0.004, 0.3])
         for m in range(20):
             slave.do_step(m * 1e-3, 1e-3)
         saved = slave.get_state()
-        slave.set_real(["actuator_displacement", "actuator_velocity"], [0.006, -0.2])
+        slave.set_real(["actuator_fl_displacement", "actuator_fl_velocity"], [0.006, -0.2])
         slave.do_step(20e-3, 1e-3)
         first = slave.get_real(outputs)
         slave.set_state(saved)
-        slave.set_real(["actuator_displacement", "actuator_velocity"], [-0.01, 0.1])  # a different guess first
+        slave.set_real(["actuator_fl_displacement", "actuator_fl_velocity"], [-0.01, 0.1])  # a different guess first
         slave.do_step(20e-3, 1e-3)
         other = slave.get_real(outputs)
         slave.set_state(saved)
-        slave.set_real(["actuator_displacement", "actuator_velocity"], [0.006, -0.2])
+        slave.set_real(["actuator_fl_displacement", "actuator_fl_velocity"], [0.006, -0.2])
         slave.do_step(20e-3, 1e-3)
         again = slave.get_real(outputs)
         slave.free_state(saved)
@@ -262,52 +292,34 @@ def test_get_and_set_state_repeat_a_step_exactly(quarter_car_fmus: dict[str, Pat
     assert not np.array_equal(first, other)
 
 
-def test_communication_step_of_two_and_a_half_periods(quarter_car_fmus: dict[str, Path]) -> None:
-    """docs/fmu.md: a step of 2.5 T evaluates two or three samples with the inputs held; outputs are the latest."""
+@pytest.mark.parametrize("settle", [True, False])
+def test_communication_step_of_two_and_a_half_periods(quarter_car_fmus: dict[str, Path], settle: bool) -> None:
+    """docs/fmu.md: a step of 2.5 T evaluates two or three samples with the inputs set before it; only a sample on
+    a communication point (every other step) takes the inputs set there; outputs are the latest sample's."""
     settings = VehicleBuildSettings(components={"damper": "reference"})
     vehicle = vehicle_model("quarter-car", settings)
     x0 = _initial_state(vehicle_step_graph("quarter-car", settings))
-    steps, h = 400, 2.5 * T
-    drive = _random_inputs(vehicle, steps + 1, seed=11)
-    samples = int(steps * 2.5) + 1
-    # sample k (k >= 1) is evaluated in the step m with m h < k T <= (m + 1) h, with the inputs set before step m
-    held = {name: np.array([values[0]] + [values[math.ceil(k / 2.5) - 1] for k in range(1, samples)])
-            for name, values in drive.items()}
-    want = _reference(vehicle, T, held, x0)
-    with FmuSlave(quarter_car_fmus["reference"]) as slave:
-        slave.enter_initialization(0.0)
-        slave.set_real(list(drive), [v[0] for v in drive.values()])
-        slave.exit_initialization()
-        got = []
-        for m in range(steps):
-            slave.set_real(list(drive), [v[m] for v in drive.values()])
-            slave.do_step(m * h, h)
-            got.append(slave.get_real(vehicle.output_names))
-    latest = [math.floor((m + 1) * 2.5 + 1e-6) for m in range(steps)]
-    assert latest[:4] == [2, 5, 7, 10]
-    table = np.array(got)
-    _assert_close({name: table[:, i] for i, name in enumerate(vehicle.output_names)},
-                  {name: want[name][latest] for name in vehicle.output_names}, vehicle.output_names)
+    drive = _random_inputs(vehicle, 401, seed=11)
+    got = _run_fmu(quarter_car_fmus["reference"], drive, 2.5 * T, settle)
+    _assert_close(got, _interpolating_fmu(vehicle, T, 2.5 * T, drive, x0, settle), vehicle.output_names)
 
 
-def test_component_filter_cutoff_defaults_to_the_thesis_value_and_round_trips() -> None:
+def test_component_filter_cutoff_defaults_to_off_and_round_trips() -> None:
     ports = [Port("velocity", "m/s")], [Port("force", "N")]
-    assert Component("damper", *ports).filter_cutoff == 100.0
+    assert Component("damper", *ports).filter_cutoff == 0.0
     legacy = Component("damper", *ports).to_dict()
     del legacy["filter_cutoff"]
-    assert Component.from_dict(legacy).filter_cutoff == 100.0
-    assert Component.from_dict(Component("vehicle", *ports, filter_cutoff=0.0).to_dict()).filter_cutoff == 0.0
+    assert Component.from_dict(legacy).filter_cutoff == 0.0
+    assert Component.from_dict(Component("damper", *ports, filter_cutoff=100.0).to_dict()).filter_cutoff == 100.0
     with pytest.raises(ValueError, match="filter_cutoff"):
         Component("damper", *ports, filter_cutoff=-1.0)
 
 
-def test_pythonfmu_backend_also_starts_with_the_filter_off(tmp_path: Path) -> None:
-    path = build_vehicle_fmu("quarter-car", tmp_path / "qc.fmu", VehicleBuildSettings(backend="pythonfmu"))
-    starts = {v.name: v.start for v in read_model_description(str(path)).modelVariables}
-    assert float(starts["filter_cutoff"]) == 0.0
-    with FmuSlave(path) as slave:
-        slave.enter_initialization(0.0)
-        assert slave.get_real(["filter_cutoff"])[0] == 0.0
+def test_the_pythonfmu_backend_refuses_a_vehicle_naming_the_native_one(tmp_path: Path) -> None:
+    """A vehicle interpolates its inputs between samples, which the pythonfmu runtimes cannot offer."""
+    with pytest.raises(FmuBuildError, match="interpolates its inputs.*native backend"):
+        build_vehicle_fmu("quarter-car", tmp_path / "qc.fmu", VehicleBuildSettings(backend="pythonfmu"))
+    assert not (tmp_path / "qc.fmu").exists()
 
 
 @pytest.mark.parametrize(
@@ -331,3 +343,33 @@ def test_bad_requests_name_the_value(tmp_path: Path, model: str, settings: Vehic
 def test_bad_settings_are_refused(kwargs: dict, message: str) -> None:
     with pytest.raises(VehicleBuildError, match=message):
         VehicleBuildSettings(**kwargs)
+
+
+def test_input_derivatives_give_the_first_order_hold_without_a_second_set(quarter_car_fmus: dict[str, Path]) -> None:
+    """FMI 2: inputs set at t_m with their slopes toward t_{m+1}: every sample is evaluated once, with the
+    first-order hold, and nothing is evaluated again; the model description says so."""
+    path = quarter_car_fmus["external"]
+    description = read_model_description(str(path))
+    assert description.coSimulation.canInterpolateInputs is True
+    accelerating = next(o for o in description.outputs if o.variable.name == "body_acceleration")
+    assert "damper_force" in [d.name for d in accelerating.dependencies]  # feedthrough at communication points
+    settings = VehicleBuildSettings()
+    vehicle = vehicle_model("quarter-car", settings)
+    x0 = _initial_state(vehicle_step_graph("quarter-car", settings))
+    inputs = _random_inputs(vehicle, 600, seed=8)
+    names = list(inputs)
+    with FmuSlave(path) as slave:
+        refs = slave.value_references(names)
+        slave.enter_initialization(0.0)
+        slave.set_real(names, [inputs[k][0] for k in names])
+        slave.exit_initialization()
+        rows = [slave.get_real(vehicle.output_names)]
+        for m in range(1, 600):
+            slave.set_real(names, [inputs[k][m - 1] for k in names])
+            slave.fmu.setRealInputDerivatives(refs, [1] * len(refs), [(inputs[k][m] - inputs[k][m - 1]) / T
+                                                                      for k in names])
+            slave.do_step((m - 1) * T, T)
+            rows.append(slave.get_real(vehicle.output_names))
+    table = np.array(rows)
+    got = {name: table[:, i] for i, name in enumerate(vehicle.output_names)}
+    _assert_close(got, simulate(vehicle, inputs, SimulationSettings(dt=T, hold="foh"), x0=x0), vehicle.output_names)

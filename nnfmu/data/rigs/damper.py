@@ -39,29 +39,31 @@ class ValveSide:
             )
 
     @property
-    def _blow_off(self) -> float:
+    def blow_off(self) -> float:
+        """Force [N] where the blow-off line meets zero speed."""
         return (self.c_low - self.c_high) * self.knee_velocity
 
     @property
-    def _offset(self) -> float:
-        fb = self._blow_off
+    def offset(self) -> float:
+        """Force [N] of the unshifted hyperbola at zero speed; subtracted, so the curve passes through zero."""
+        fb = self.blow_off
         return 0.5 * (fb - (fb * fb + 4 * self.rounding**2) ** 0.5)
 
     def force(self, u):
         """Force [N] at speed u >= 0 [m/s] (float or array)."""
-        l1, l2 = self.c_low * u, self._blow_off + self.c_high * u
-        return 0.5 * ((l1 + l2) - ((l1 - l2) ** 2 + 4 * self.rounding**2) ** 0.5) - self._offset
+        l1, l2 = self.c_low * u, self.blow_off + self.c_high * u
+        return 0.5 * ((l1 + l2) - ((l1 - l2) ** 2 + 4 * self.rounding**2) ** 0.5) - self.offset
 
     def slope(self, u):
         """dF/du [N.s/m] at speed u >= 0."""
-        d = self.c_low * u - self._blow_off - self.c_high * u
+        d = self.c_low * u - self.blow_off - self.c_high * u
         spread = self.c_low - self.c_high
         return 0.5 * ((self.c_low + self.c_high) - d * spread / (d * d + 4 * self.rounding**2) ** 0.5)
 
     def speed(self, f: float) -> float:
         """Speed u >= 0 [m/s] at which the side carries force f >= 0 [N] (scalar; the larger root of the quadratic)."""
-        fh = f + self._offset
-        fb = self._blow_off
+        fh = f + self.offset
+        fb = self.blow_off
         a = self.c_low * self.c_high
         b = self.c_low * (fb - fh) - self.c_high * fh
         c = -fh * (fb - fh) - self.rounding**2

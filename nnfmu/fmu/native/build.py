@@ -1,20 +1,21 @@
-"""Build a native FMU: generated C for the graph + the fixed FMI glue from `templates/`, compiled for this platform.
+"""Build a native FMU: generated C for the graph + the fixed FMI glue from `templates/`, compiled for each platform.
 
-FMU layout: `modelDescription.xml`, `binaries/<platform>/<identifier>.so`, `sources/` (glue, config.h, graph.c/.h,
-FMI headers copied from the installed fmpy, buildDescription.xml). Nothing of Python, onnxruntime or torch is needed
-to run it.
+FMU layout: `modelDescription.xml`, `binaries/<platform>/<identifier>.so|.dll` (this machine's, and win64 when the
+MinGW-w64 cross compiler is installed or asked for), `sources/` (glue, config.h, graph.c/.h, FMI headers copied from
+the installed fmpy, buildDescription.xml) and, when the graph carries a reference stimulus, reference results under
+`extra/org.fmi-standard.fmi-ls-ref/`. Nothing of Python, onnxruntime or torch is needed to run it.
 """
 
 from __future__ import annotations
 
 import shutil
 import tempfile
+import warnings
 from pathlib import Path
 
 import onnx
 
-from nnfmu.component import Component
-from nnfmu.fmu.errors import FmuBuildError
+from nnfmu.fmu.errors import FmuBuildError, PlatformSkippedWarning
 from nnfmu.fmu.model_description import (
     FmuIdentity,
     ModelDescriptionView,
@@ -25,10 +26,11 @@ from nnfmu.fmu.model_description import (
 )
 from nnfmu.fmu.names import c_identifier
 from nnfmu.fmu.native.codegen import UnsupportedGraphError, generate_c
-from nnfmu.fmu.native.compiler import compile_shared_library, host_platform
+from nnfmu.fmu.native.compiler import compile_shared_library, select_targets
 from nnfmu.fmu.native.config import GraphLayout, port_map, render_config
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.fmu.package import package_fmu
+from nnfmu.fmu.reference_results import write_reference_results
 from nnfmu.fmu.variables import fmu_variables
 from nnfmu.resources import templates_dir
 
@@ -71,10 +73,7 @@ def build_native(onnx_path: Path, options: BuildOptions) -> Path:
     """Build the native FMU for the step graph `onnx_path`; return its path. Raises FmuBuildError."""
     onnx_path = Path(onnx_path)
     model = load_model(onnx_path)
-    try:
-        component = Component.from_onnx(model, options.name)
-    except (ValueError, KeyError, TypeError) as err:  # malformed or too new `nnfmu.component` metadata
-        raise FmuBuildError(f"{onnx_path}: cannot read the component description: {err}") from err
+    component = options.component_of(model, onnx_path)
     identifier = c_identifier(component.name)
     target = Path(options.out) if options.out is not None else default_output(identifier)
     try:
@@ -87,7 +86,9 @@ def build_native(onnx_path: Path, options: BuildOptions) -> Path:
     fmi = options.fmi_version
     identity = FmuIdentity(component.name, identifier, instantiation_token(onnx_path.read_bytes(), component, fmi), fmi)
     view = ModelDescriptionView(identity, component, variables, tensor_dependencies(model), source_files(fmi))
-    platform = host_platform()
+    platforms, skipped = select_targets(options.platforms)
+    if skipped:
+        warnings.warn(skipped, PlatformSkippedWarning, stacklevel=2)
 
     with tempfile.TemporaryDirectory(prefix="nnfmu-build-") as tmp:
         tree = Path(tmp) / "fmu"
@@ -105,6 +106,8 @@ def build_native(onnx_path: Path, options: BuildOptions) -> Path:
         (sources / "buildDescription.xml").write_text(render_build_description(identifier, source_files(fmi)),
                                                       encoding="utf-8")
         (tree / "modelDescription.xml").write_text(render_model_description(view), encoding="utf-8")
-        binary = tree / "binaries" / platform.folder(fmi) / f"{identifier}{platform.suffix}"
-        compile_shared_library([sources / s for s in source_files(fmi)], sources, binary)
+        write_reference_results(tree, model, component, variables)
+        for platform in platforms:
+            binary = tree / "binaries" / platform.folder(fmi) / f"{identifier}{platform.suffix}"
+            compile_shared_library(platform, [sources / s for s in source_files(fmi)], sources, binary)
         return package_fmu(tree, target)

@@ -65,6 +65,7 @@ class PortMap:
     """Where every port and state value sits in the graph's flat input/output vectors."""
 
     inputs: list[int]
+    input_starts: list[int]  # where each input's value at the start of a sample interval goes (interpolating FMUs)
     outputs: list[int]
     state_inputs: list[int]
     state_outputs: list[int]
@@ -74,6 +75,8 @@ class PortMap:
 def port_map(component: Component, layout: GraphLayout) -> PortMap:
     """Map ports and states to flat graph indices; fail if a graph input element would be left unfed."""
     inputs = [layout.element("input", p.tensor, p.index, f"input port {p.name!r}") for p in component.inputs]
+    starts = [layout.element("input", component.interval_starts[p.tensor], p.index, f"start of input port {p.name!r}")
+              for p in component.inputs] if component.interpolates_inputs else []
     outputs = [layout.element("output", p.tensor, p.index, f"output port {p.name!r}") for p in component.outputs]
     state_in, state_out, initial = [], [], []
     for state in component.states:
@@ -86,14 +89,14 @@ def port_map(component: Component, layout: GraphLayout) -> PortMap:
             if size != state.size:
                 raise FmuBuildError(f"state {state.input!r}: {len(state.initial)} initial values but {side} tensor "
                                     f"{tensor!r} has {size} elements")
-    fed = set(inputs) | set(state_in)
-    if len(fed) != len(inputs) + len(state_in):
+    fed = set(inputs) | set(starts) | set(state_in)
+    if len(fed) != len(inputs) + len(starts) + len(state_in):
         raise FmuBuildError("two ports or states feed the same graph input element")
     for tensor, (offset, size) in layout.inputs.items():
         missing = [i for i in range(size) if offset + i not in fed]
         if missing:
             raise FmuBuildError(f"graph input {tensor!r} element {missing[0]} is neither an input port nor a state")
-    return PortMap(inputs, outputs, state_in, state_out, initial)
+    return PortMap(inputs, starts, outputs, state_in, state_out, initial)
 
 
 def c_double(value: float) -> str:
@@ -143,6 +146,9 @@ def render_config(component: Component, variables: FmuVariables, ports: PortMap,
         "input_names": _c_list([c_string_literal(v.name) for v in variables.inputs], '""'),
         "input_units": _c_list([c_string_literal(v.unit) for v in variables.inputs], '""'),
         "input_graph_index": _c_list([str(i) for i in ports.inputs], "0"),
+        "interpolates_inputs": int(component.interpolates_inputs),
+        "has_time_variable": int(identity.fmi_version == 3),
+        "input_start_graph_index": _c_list([str(i) for i in ports.input_starts] or ["0"] * len(ports.inputs), "0"),
         "input_min": _c_list(lows, "0.0"),
         "input_max": _c_list(highs, "0.0"),
         "output_names": _c_list([c_string_literal(v.name) for v in variables.outputs], '""'),

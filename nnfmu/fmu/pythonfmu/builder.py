@@ -24,7 +24,6 @@ from google.protobuf.message import DecodeError
 from onnxruntime.capi.onnxruntime_pybind11_state import Fail, InvalidArgument, InvalidGraph
 from onnxruntime.capi.onnxruntime_pybind11_state import NotImplemented as OrtNotImplemented
 
-from nnfmu.component import Component
 from nnfmu.fmu.model_description import GENERATION_TOOL, FmuIdentity, ModelDescriptionView, tensor_dependencies
 from nnfmu.fmu.names import c_identifier
 from nnfmu.fmu.options import BuildOptions
@@ -33,6 +32,7 @@ from nnfmu.fmu.pythonfmu import sampled_component
 from nnfmu.fmu.pythonfmu.errors import PythonFmuBuildError
 from nnfmu.fmu.pythonfmu.model_description_fix import DescriptionFix, fix_model_description
 from nnfmu.fmu.pythonfmu.runtimes import Runtime, runtime
+from nnfmu.fmu.reference_results import write_reference_results
 from nnfmu.fmu.variables import FmuVariables, fmu_variables
 
 RUNTIME_NOTE = ("pythonfmu backend: runs in the importing tool's Python 3 process, "
@@ -42,7 +42,12 @@ def build_pythonfmu(onnx_path: Path, options: BuildOptions) -> Path:
     """Build `options.out` (default `exported/<identifier>.fmu`) from the step graph `onnx_path`; return its path."""
     model = _load(Path(onnx_path))
     run = runtime(options.fmi_version)
-    component = Component.from_onnx(model, options.name)
+    component = options.component_of(model, Path(onnx_path))
+    if component.interpolates_inputs:
+        raise PythonFmuBuildError(
+            f"{onnx_path}: {component.name!r} interpolates its inputs between samples (a vehicle), which the pythonfmu "
+            "runtimes cannot offer (no input derivatives, no evaluation of the latest sample when inputs are set "
+            "after a step); build it with the native backend")
     component.attach_to(model)  # the slave reads its ports from here, also for graphs from other tools
     identifier = c_identifier(component.name)
     variables = fmu_variables(component)
@@ -55,6 +60,7 @@ def build_pythonfmu(onnx_path: Path, options: BuildOptions) -> Path:
         view = ModelDescriptionView(identity, component, variables, tensor_dependencies(model))
         (tree / "modelDescription.xml").write_bytes(_model_description(tree / "resources", view, run))
         _copy_binaries(tree / "binaries", identifier, run)
+        write_reference_results(tree, model, component, variables)
         return package_fmu(tree, out)
 
 

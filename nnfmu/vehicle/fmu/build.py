@@ -3,10 +3,12 @@
 The vehicle's exact discrete step becomes an ONNX step graph (`step_graph`) with a `Component` attached: input
 ports are the vehicle's inputs (actuator displacements and velocities, forces of external components), output ports
 its outputs, the state starts at the static equilibrium for zero actuator input, and the output filter is off (an
-exact model must not be low-passed). `nnfmu.fmu.build_fmu` turns it into an FMU like any trained component, so the
-FMU semantics (samples at t_start + k T, inputs held over a step, get/set FMU state) are those of docs/fmu.md: the
-inputs set before doStep(t, h) act over (t, t + h], the state at each sample in it is the exact zero-order-hold
-solution, and the outputs there see the inputs held over the step.
+exact model must not be low-passed). The component interpolates its inputs (`interval_starts`), and
+`nnfmu.fmu.build_fmu` turns it into a native FMU like any trained component, so the FMU semantics are those of
+docs/fmu.md: samples at t_start + k T; the inputs are linear between samples, from the values set at one sample's
+time to those set at the next; a sample in a step takes the inputs set before the step (plus their FMI 2 derivatives
+times the time into the step); inputs set at the latest sample's time make the FMU evaluate that sample again, so
+the outputs there (accelerations, tyre forces) follow the component forces set there.
 """
 
 from __future__ import annotations
@@ -21,23 +23,26 @@ from nnfmu.component import Component, Port, StatePort
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 
-from ..models import DEFAULT_FILE, LinearVehicle, VehicleModelError, VehicleParameters
+from ..models import DEFAULT_FILE, LinearVehicle, QuarterCarParameters, VehicleModelError, VehicleParameters
 from ..models.full_vehicle import build_full_vehicle
 from ..models.linear import DiscreteVehicle
+from ..models.ports import CORNERS
 from ..models.quarter_car import build_quarter_car
 from .errors import VehicleBuildError
 from .settings import MAX_SUBSTEP, MODELS, VehicleBuildSettings
-from .step_graph import FIRST_IN, FIRST_OUT, INPUTS, OUTPUTS, STATE_IN, STATE_OUT, discrete_step_graph
+from .step_graph import FIRST_IN, FIRST_OUT, INPUTS, INPUTS_START, OUTPUTS, STATE_IN, STATE_OUT, discrete_step_graph
 
 
 def vehicle_model(model: str, settings: VehicleBuildSettings) -> LinearVehicle:
     """The quarter car or full vehicle of `settings`' parameter file with its component choices."""
     if model not in MODELS:
         raise VehicleBuildError(f"unknown vehicle model {model!r}; choose one of {', '.join(MODELS)}")
-    params = VehicleParameters.load(settings.params_path or DEFAULT_FILE)
+    path = settings.params_path or DEFAULT_FILE
     if model == "quarter-car":
-        return build_quarter_car(params, settings.components, settings.axle)
-    return build_full_vehicle(params, settings.components)
+        return build_quarter_car(QuarterCarParameters.load(path, settings.corner), settings.components)
+    if settings.corner is not None:
+        raise VehicleBuildError(f"corner {settings.corner!r}: only a quarter car stands on one corner")
+    return build_full_vehicle(VehicleParameters.load(path), settings.components)
 
 
 def initial_state(vehicle: LinearVehicle) -> tuple[float, ...]:
@@ -64,11 +69,13 @@ def vehicle_component(discrete: DiscreteVehicle, model: str, settings: VehicleBu
         sample_period=discrete.dt,
         description=vehicle.description,
         filter_cutoff=0.0,
+        interval_starts={INPUTS: INPUTS_START},
         metadata={
             "producer": f"nnfmu {nnfmu.__version__} vehicle build",
             "model": model,
             "parameters": str(settings.params_path or DEFAULT_FILE),
             "components": settings.components,
+            "corners": [c for c in CORNERS if f"actuator_{c}_displacement" in vehicle.input_names],
             "external_force_inputs": external,
             "reference_dampers": vehicle.feedback_names,
             "hold": discrete.hold,
@@ -81,7 +88,7 @@ def vehicle_component(discrete: DiscreteVehicle, model: str, settings: VehicleBu
 def vehicle_step_graph(model: str, settings: VehicleBuildSettings) -> onnx.ModelProto:
     """The ONNX step graph of `model` at `settings.sample_period`, its `Component` attached."""
     vehicle = vehicle_model(model, settings)
-    discrete = vehicle.discretise(settings.sample_period, "zoh", MAX_SUBSTEP)
+    discrete = vehicle.discretise(settings.sample_period, "foh", MAX_SUBSTEP)
     graph = discrete_step_graph(discrete)
     vehicle_component(discrete, model, settings).attach_to(graph)
     return graph
@@ -95,5 +102,6 @@ def build_vehicle_fmu(model: str, out: Path, settings: VehicleBuildSettings | No
     with tempfile.TemporaryDirectory(prefix="nnfmu-vehicle-") as folder:
         onnx_path = Path(folder) / f"{graph.graph.name}.onnx"
         onnx_path.write_bytes(graph.SerializeToString())  # a private temporary folder: nothing to half-write
-        options = BuildOptions(out=Path(out), backend=settings.backend, fmi_version=settings.fmi_version)
+        options = BuildOptions(out=Path(out), backend=settings.backend, fmi_version=settings.fmi_version,
+                               platforms=settings.platforms)
         return build_fmu(onnx_path, options)

@@ -5,11 +5,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal
 
 from nnfmu.fmu.options import BACKENDS, FMI_VERSIONS, Backend, FmiVersion
 
 from ..models.components import CHOICES
+from ..models.ports import CORNERS
 from .errors import VehicleBuildError
 
 MODELS = ("quarter-car", "full-vehicle")
@@ -22,10 +22,13 @@ MAX_SUBSTEP = 1e-4
 
 @dataclass(frozen=True)
 class VehicleBuildSettings:
-    """`params_path` (None: the packaged mid-size sedan), `components` maps a component name ('damper',
-    'damper_fl', 'bushing_fl_front', ...) to 'external' (force input port, the default), 'stabilised' (force input port
-    with the reference element's change over a step applied, for stiff components) or 'reference' (built-in
-    element), `sample_period` [s] of the FMU's samples, `axle` of the quarter car, FMI version and backend.
+    """`params_path` (None: the packaged mid-size sedan): a full-vehicle file, or for the quarter car also a
+    quarter-car file; `components` maps a component name ('damper', 'damper_fl', 'bushing_fl_front', ...) to
+    'external' (force input port, the default), 'stabilised' (force input port with the reference element's change
+    over a step applied, for stiff components) or 'reference' (built-in element), `sample_period` [s] of the FMU's
+    samples, FMI version, backend and the native backend's `platforms` (None: this machine's plus win64 when its
+    cross compiler is installed). `corner` (fl, fr, rl, rr) is the quarter car's: None takes a quarter-car file's
+    own corner, or fl of a full-vehicle file.
     A stabilised port holds its reference from the start of each *sample*: sample at the communication step, or
     the stabilisation is renewed at every sample inside a step and mostly lost."""
 
@@ -33,8 +36,9 @@ class VehicleBuildSettings:
     components: dict[str, str] = field(default_factory=dict)
     sample_period: float = DEFAULT_SAMPLE_PERIOD
     fmi_version: FmiVersion = 2
-    axle: Literal["front", "rear"] = "front"
+    corner: str | None = None
     backend: Backend = "native"
+    platforms: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.sample_period) and self.sample_period > 0.0):
@@ -43,6 +47,8 @@ class VehicleBuildSettings:
             raise VehicleBuildError(f"FMI version {self.fmi_version!r}; choose 2 or 3")
         if self.backend not in BACKENDS:
             raise VehicleBuildError(f"backend {self.backend!r}; choose one of {', '.join(BACKENDS)}")
+        if self.corner is not None and self.corner not in CORNERS:
+            raise VehicleBuildError(f"corner {self.corner!r}; choose one of {', '.join(CORNERS)}")
         bad = {name: choice for name, choice in self.components.items() if choice not in CHOICES}
         if bad:
             raise VehicleBuildError(f"component choice(s) {bad}; expected one of {', '.join(CHOICES)}")

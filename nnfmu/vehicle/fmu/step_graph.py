@@ -1,16 +1,21 @@
 """The exact discrete step of a vehicle model as an ONNX step graph (float64), ready for the component FMU factory.
 
-One evaluation is one sample k: it advances the state x from sample k-1 to sample k with the inputs u held over that
-interval (what an FMU's doStep gets: the inputs set at t are held over (t, t+h]) and reports the outputs at sample k,
-y = C x + D u + Dyn g(x, u) + e. Graph tensors: state inputs x (1, nx) and first (1, 1), inputs u (1, nu); outputs
-y (1, ny) and the next states x_next, first_next. `first` is 1 only at sample 0, which reports the initial state
-without advancing it (x_k = (1 - first) advanced + first x, exact for first in {0, 1}); it is 0 afterwards.
+One evaluation is one sample k: it advances the state x from sample k-1 to sample k with the inputs linear over that
+interval, from their values at sample k-1 (`u_start`) to those at sample k (`u`), and reports the outputs at sample
+k, y = C x + D u + Dyn g(x, u) + e. The FMU declares `u_start` as the interval start of `u` (`Component.
+interval_starts`), so it interpolates the inputs between samples (docs/fmu.md): a drive file's post motion ramps
+between its samples, and the force a component sets at a sample's time is the force there. Graph tensors: state
+inputs x (1, nx) and first (1, 1), inputs u and u_start (1, nu); outputs y (1, ny) and the next states x_next,
+first_next. `first` is 1 only at sample 0, which reports the initial state without advancing it (x_k = (1 - first)
+advanced + first x, exact for first in {0, 1}); it is 0 afterwards.
 
-The linear part advances exactly (zero-order hold): x_k = Ad x + Bd0 u + fd. Built-in spline dampers (forces g) are
-stepped as `nnfmu.vehicle.models.DiscreteVehicle.step` does: the graph unrolls its predictor-corrector sub-steps, and
-evaluates each spline as f0 + s0 (v - v0) + sum_i (s_i - s_{i-1}) Relu(v - v_i), which is its piecewise-linear table
-extended linearly beyond the end points. Stabilised force ports enter the advance as u - S x (S x at the sample's
-start; see `nnfmu.vehicle.models.linear`). Operators: Concat, Gemm, MatMul, Mul, Add, Sub, Relu, Identity (built with the exporter's GraphBuilder).
+The linear part advances exactly (first-order hold): x_k = Ad x + Bd0 u_start + Bd1 u + fd. Built-in spline dampers
+(forces g) are stepped as `nnfmu.vehicle.models.DiscreteVehicle.step` does: the graph unrolls its predictor-corrector
+sub-steps, and evaluates each spline as f0 + s0 (v - v0) + sum_i (s_i - s_{i-1}) Relu(v - v_i), which is its
+piecewise-linear table extended linearly beyond the end points. Stabilised force ports hold their deviation from the
+reference element, u_start - S x with S x at the sample's start, over the interval (see
+`nnfmu.vehicle.models.linear`). Operators: Concat, Gemm, MatMul, Mul, Add, Sub, Relu, Identity (built with the
+exporter's GraphBuilder).
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ from ..models.reference import SplineDamper
 from .errors import VehicleBuildError
 
 STATE_IN, STATE_OUT, INPUTS, OUTPUTS = "x", "x_next", "u", "y"
+INPUTS_START = "u_start"  # the inputs at the previous sample: the start of the interval
 FIRST_IN, FIRST_OUT = "first", "first_next"
 
 
@@ -82,14 +88,15 @@ def _spline(graph: GraphBuilder, v: str, terms: dict[str, str], name: str) -> st
 
 
 def discrete_step_graph(discrete: DiscreteVehicle) -> onnx.ModelProto:
-    """The step graph of `discrete` (zero-order hold): each evaluation after the first advances `discrete.dt`."""
-    if discrete.hold != "zoh":
-        raise VehicleBuildError(f"{discrete.vehicle.name}: hold {discrete.hold!r}; an FMU holds its inputs (use 'zoh')")
+    """The step graph of `discrete` (first-order hold): each evaluation after the first advances `discrete.dt`."""
+    if discrete.hold != "foh":
+        raise VehicleBuildError(f"{discrete.vehicle.name}: hold {discrete.hold!r}; the FMU interpolates its inputs "
+                                "between samples (use 'foh')")
     vehicle = discrete.vehicle
     nx, nu, ny = len(vehicle.states), len(vehicle.inputs), len(vehicle.outputs)
-    graph = GraphBuilder(reserved=(STATE_IN, FIRST_IN, INPUTS, OUTPUTS, STATE_OUT, FIRST_OUT))
+    graph = GraphBuilder(reserved=(STATE_IN, FIRST_IN, INPUTS, INPUTS_START, OUTPUTS, STATE_OUT, FIRST_OUT))
     spline = _spline_constants(graph, vehicle)
-    advanced = _advance(graph, discrete, spline, _held_inputs(graph, vehicle))
+    advanced = _advance(graph, discrete, spline, *_interval_inputs(graph, vehicle))
     keep = graph.node("Mul", [FIRST_IN, STATE_IN], "kept_state")
     later = graph.node("Sub", [graph.constant("one", np.ones(1)), FIRST_IN], "later_sample")
     state = graph.node("Add", [graph.node("Mul", [later, advanced], "advanced_state"), keep], "state")
@@ -107,7 +114,7 @@ def discrete_step_graph(discrete: DiscreteVehicle) -> onnx.ModelProto:
     onnx_graph = helper.make_graph(
         graph.nodes,
         vehicle.name,
-        [_row(STATE_IN, nx), _row(FIRST_IN, 1), _row(INPUTS, nu)],
+        [_row(STATE_IN, nx), _row(FIRST_IN, 1), _row(INPUTS, nu), _row(INPUTS_START, nu)],
         [_row(OUTPUTS, ny), _row(STATE_OUT, nx), _row(FIRST_OUT, 1)],
         graph.initializers,
         doc_string=f"exact discrete step of {vehicle.description}, {discrete.dt:g} s",
@@ -143,35 +150,59 @@ def _damper_forces(graph: GraphBuilder, state_and_inputs: str, spline: dict[str,
     return _spline(graph, velocity, spline, name)
 
 
-def _held_inputs(graph: GraphBuilder, vehicle: LinearVehicle) -> str:
-    """The inputs the advance sees: u, or u - S x for a vehicle with stabilised force ports."""
+def _interval_inputs(graph: GraphBuilder, vehicle: LinearVehicle) -> tuple[str, str]:
+    """The inputs at the interval's start and end as the advance sees them: `u_start` and `u`, except that a
+    stabilised force port keeps its start value (its deviation from the reference is held), and less S x (x at the
+    sample's start) for a vehicle with stabilised force ports."""
     if not np.any(vehicle.stabiliser):
-        return INPUTS
-    held = _affine(graph, STATE_IN, graph.constant("stabiliser", vehicle.stabiliser),
-                   graph.constant("zero_inputs", np.zeros(len(vehicle.inputs))), "stabiliser_force")
-    return graph.node("Sub", [INPUTS, held], "held_inputs")
+        return INPUTS_START, INPUTS
+    held = graph.constant("held_ports", vehicle.stabilised_inputs.astype(float))
+    kept = graph.node("Mul", [INPUTS_START, held], "held_port_values")
+    ramped = graph.node("Mul", [INPUTS, graph.constant("ramped_ports", 1.0 - vehicle.stabilised_inputs)],
+                        "ramped_port_values")
+    end = graph.node("Add", [ramped, kept], "inputs_at_end")
+    force = _affine(graph, STATE_IN, graph.constant("stabiliser", vehicle.stabiliser),
+                    graph.constant("zero_inputs", np.zeros(len(vehicle.inputs))), "stabiliser_force")
+    return (graph.node("Sub", [INPUTS_START, force], "held_inputs_start"),
+            graph.node("Sub", [end, force], "held_inputs_end"))
 
 
-def _advance(graph: GraphBuilder, discrete: DiscreteVehicle, spline: dict[str, str], inputs: str) -> str:
-    """The state one step of `discrete.dt` after x with `inputs` held: exact if linear, else `discrete.substeps`
-    predictor-corrector sub-steps."""
+def _along(graph: GraphBuilder, start: str, end: str, fraction: float, name: str) -> str:
+    """start + fraction (end - start): the inputs a fraction of the way through the interval."""
+    if fraction == 0.0:
+        return start
+    if fraction == 1.0:
+        return end
+    from_start = graph.node("Mul", [start, graph.constant(f"{name}_start_weight", np.array([1.0 - fraction]))],
+                            f"{name}_from_start")
+    from_end = graph.node("Mul", [end, graph.constant(f"{name}_end_weight", np.array([fraction]))],
+                          f"{name}_from_end")
+    return graph.node("Add", [from_start, from_end], name)
+
+
+def _advance(graph: GraphBuilder, discrete: DiscreteVehicle, spline: dict[str, str], start: str, end: str) -> str:
+    """The state one step of `discrete.dt` after x with inputs linear from `start` to `end`: exact if linear, else
+    `discrete.substeps` predictor-corrector sub-steps."""
     vehicle = discrete.vehicle
     if vehicle.is_linear:
-        state_input = graph.node("Concat", [STATE_IN, inputs], "start_state_and_inputs", axis=1)
-        step = graph.constant("step_matrix", np.hstack([discrete.Ad, discrete.Bd0]))
+        state_input = graph.node("Concat", [STATE_IN, start, end], "start_state_and_inputs", axis=1)
+        step = graph.constant("step_matrix", np.hstack([discrete.Ad, discrete.Bd0, discrete.Bd1]))
         return _affine(graph, state_input, step, graph.constant("step_offset", discrete.fd), "advanced")
-    predict = graph.constant("predict_matrix", np.hstack([discrete.Ad, discrete.Bd0, discrete.Bnd]))
+    predict = graph.constant("predict_matrix", np.hstack([discrete.Ad, discrete.Bd0, discrete.Bd1, discrete.Bnd]))
     predict_offset = graph.constant("predict_offset", discrete.fd)
     correct = graph.constant("correct_matrix", discrete.Bnr)
     no_correction = graph.constant("zero_correction", np.zeros(len(vehicle.states)))
     x = STATE_IN
-    for j in range(discrete.substeps):
+    m = discrete.substeps
+    for j in range(m):
         tag = f"sub{j + 1}"
-        at_start = graph.node("Concat", [x, inputs], f"{tag}_state_and_inputs", axis=1)
+        u0 = _along(graph, start, end, j / m, f"{tag}_inputs_start")
+        u1 = _along(graph, start, end, (j + 1) / m, f"{tag}_inputs_end")
+        at_start = graph.node("Concat", [x, u0], f"{tag}_state_and_inputs", axis=1)
         g0 = _damper_forces(graph, at_start, spline, f"{tag}_force")
-        held = graph.node("Concat", [at_start, g0], f"{tag}_with_force", axis=1)
+        held = graph.node("Concat", [x, u0, u1, g0], f"{tag}_with_force", axis=1)
         predicted = _affine(graph, held, predict, predict_offset, f"{tag}_predicted")
-        at_end = graph.node("Concat", [predicted, inputs], f"{tag}_predicted_and_inputs", axis=1)
+        at_end = graph.node("Concat", [predicted, u1], f"{tag}_predicted_and_inputs", axis=1)
         g1 = _damper_forces(graph, at_end, spline, f"{tag}_end_force")
         change = graph.node("Sub", [g1, g0], f"{tag}_force_change")
         x = graph.node("Add", [predicted, _affine(graph, change, correct, no_correction, f"{tag}_ramp")], f"{tag}_state")

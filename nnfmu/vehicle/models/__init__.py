@@ -8,6 +8,7 @@ from .monolithic import MonolithicSettings, simulate_monolithic
 from .parameters import DEFAULT_FILE, VehicleParameters
 from .ports import VehiclePort
 from .quarter_car import build_quarter_car
+from .quarter_car_parameters import QuarterCarParameters
 from .reference import LinearSpring, SplineDamper
 
 __all__ = [
@@ -17,6 +18,7 @@ __all__ = [
     "DamperTruthLaw",
     "LinearLaw",
     "MonolithicSettings",
+    "QuarterCarParameters",
     "DiscreteVehicle",
     "LinearSpring",
     "LinearVehicle",

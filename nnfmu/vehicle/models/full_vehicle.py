@@ -23,9 +23,8 @@ from .assembly import Assembly, Deflection, RigidMotion
 from .components import REFERENCE, STABILISED, resolve_components
 from .geometry import SIDES, BushingFrame, mirror_point, mirror_rotation, unit
 from .linear import LinearVehicle
-from .parameters import AxleParameters, BushingParameters, DamperParameters, VehicleParameters
+from .parameters import AxleParameters, BushingParameters, DamperParameters, VehicleParameters, corner_sprung_mass
 from .ports import CORNERS, VehiclePort, actuator_ports, bushing_inputs, bushing_outputs, damper_input, damper_outputs
-from .quarter_car import corner_sprung_mass
 from .reference import LinearSpring, SplineDamper
 
 FRONT_CORNERS = ("fl", "fr")
@@ -131,7 +130,7 @@ def _add_corner(
     s = mirror_point(axle.strut_unit, side)
     top = mirror_point(axle.strut_top, side)
     strut = Deflection(s @ (body.point(top) - wheel), asm.post_row())
-    asm.add_spring(strut, LinearSpring(axle.spring_rate / s[2] ** 2, 0.0, preload=-sprung_load / s[2]))
+    asm.add_spring(strut, LinearSpring(axle.strut_spring_rate, 0.0, preload=-sprung_load / s[2]))
     stroke = Deflection(axle.damper_ratio * strut.row, asm.post_row())
     if choice == REFERENCE and damper.model == "linear":
         asm.add_spring(stroke, LinearSpring(0.0, damper.damping))

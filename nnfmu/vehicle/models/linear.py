@@ -18,7 +18,8 @@ linear part stays exact and the error of the nonlinear part falls with the squar
 
 Stabilised force ports (rows of `stabiliser` S, the ports' linear reference elements): over a step from x[k] the
 vehicle applies the force u set at the step start plus S (x(t) - x[k]), i.e. x' = (A + B S) x + B (u - S x[k]) + ...,
-still exact for the linear part. A stiff component (a bushing of kN/mm on a light arm) coupled through a force held
+still exact for the linear part; with a first-order hold such a port keeps its start value (its deviation from the
+reference is held over the step, never interpolated). A stiff component (a bushing of kN/mm on a light arm) coupled through a force held
 for a step then acts on the vehicle with only its deviation from the reference held, which keeps the exchange stable
 at steps its own modes would otherwise forbid; at the sample itself the applied force is u, so the outputs and the
 continuous model are those of a plain external port.
@@ -77,6 +78,11 @@ class LinearVehicle:
     def stabilised_A(self) -> np.ndarray:
         """A + B S: the state matrix over a step, stabilised ports' reference elements built in."""
         return self.A + self.B @ self.stabiliser
+
+    @property
+    def stabilised_inputs(self) -> np.ndarray:
+        """Boolean mask of the inputs that are stabilised force ports (a nonzero row of `stabiliser`)."""
+        return np.any(self.stabiliser != 0.0, axis=1)
 
     @property
     def f(self) -> np.ndarray:
@@ -216,7 +222,7 @@ class DiscreteVehicle:
         """State one step later from state x, inputs u now and (for foh) u_next at the step end."""
         if self.hold == "foh" and u_next is None:
             raise VehicleModelError(f"{self.vehicle.name}: a first-order hold step needs the inputs at the step end")
-        end = u if u_next is None or self.hold == "zoh" else u_next
+        end = u if u_next is None or self.hold == "zoh" else np.where(self.vehicle.stabilised_inputs, u, u_next)
         u, end = self.held_inputs(x, u), self.held_inputs(x, end)
         for j in range(self.substeps):
             u0 = u + (end - u) * (j / self.substeps)

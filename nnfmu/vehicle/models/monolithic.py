@@ -4,6 +4,12 @@ This is the "ground truth" a co-simulation of the same vehicle with component FM
 step, no force held over a step. Each external force port of the vehicle is closed by a `ComponentLaw` driven by the
 port's displacement and rate outputs. Inputs (actuator displacements and velocities) are sampled at the drive's
 sample period and interpolated linearly between samples; built-in spline dampers are evaluated at every stage.
+
+Two paths solve the same equations with the same RK4 arithmetic: a compiled kernel (`rk4_kernel`, numba) for the
+laws it knows (`law_tables`: `LinearLaw`, `DamperTruthLaw`, `BushingTruthLaw`, exactly those types, which is what
+`truth_laws` and `linear_laws` make), and the generic path, which calls each law's own `force` and `derivatives` at
+every stage and so takes any `ComponentLaw`. A single law of another type sends the whole run down the generic path,
+which is 10-100x slower.
 """
 
 from __future__ import annotations
@@ -13,8 +19,10 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.sparse import csr_array
 
 from .errors import VehicleModelError
+from .law_tables import LawTable, law_table, spline_table
 from .laws import BushingTruthBank, BushingTruthLaw, ComponentLaw
 from .linear import LinearVehicle, input_samples
 from .ports import component_channels
@@ -22,10 +30,15 @@ from .ports import component_channels
 
 @dataclass(frozen=True)
 class MonolithicSettings:
-    """`sample_period` [s] of the inputs and outputs; `step` [s], the RK4 step (rounded down to divide the period)."""
+    """`sample_period` [s] of the inputs and outputs; `step` [s], the RK4 step (rounded down to divide the period);
+    `compiled`: use the compiled kernel when it knows every law (False: always the generic path, for cross-checks)."""
 
     sample_period: float
     step: float = 1e-4
+    compiled: bool = True
+
+
+Solved = tuple[np.ndarray, np.ndarray, int]  # vehicle states and port forces at the samples, samples solved
 
 
 @dataclass(frozen=True)
@@ -119,12 +132,63 @@ def simulate_monolithic(
     if closed:
         raise VehicleModelError(f"{vehicle.name}: inputs {closed} are force ports that the laws close")
     u_samples = input_samples(vehicle, inputs, period, None)
+    x = np.zeros(len(vehicle.states)) if x0 is None else np.asarray(x0, dtype=float)
+    table = law_table(law_list) if settings.compiled else None
+    if table is None:
+        states, port_forces, solved = _solve_generic(vehicle, law_list, wiring, x, u_samples, substeps, h)
+    else:
+        states, port_forces, solved = _solve_compiled(vehicle, table, wiring, x, u_samples, substeps, h)
+    n = u_samples.shape[0]
+    if solved < n:
+        raise VehicleModelError(
+            f"{vehicle.name}: monolithic solution diverged at t = {solved * period:.6g} s; use a smaller step"
+        )
+    applied = u_samples.copy()
+    applied[:, wiring.force_columns] = port_forces
+    out = _outputs(vehicle, states, applied)
+    result = {name: out[:, i] for i, name in enumerate(vehicle.output_names)}
+    result |= {name: port_forces[:, i] for i, name in enumerate(laws)}
+    result["time"] = np.arange(n) * period
+    return result
+
+
+def _outputs(vehicle: LinearVehicle, states: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Outputs y = C x + D u + Dyn g + e at every sample (rows of states and inputs)."""
+    v = states @ vehicle.Cn.T + u @ vehicle.Dn.T
+    g = np.column_stack([law(v[:, i]) for i, law in enumerate(vehicle.feedback_laws)] or [np.zeros((len(u), 0))])
+    return states @ vehicle.C.T + u @ vehicle.D.T + g @ vehicle.Dyn.T + vehicle.e
+
+
+def _solve_compiled(vehicle: LinearVehicle, table: LawTable, wiring: _Wiring, x: np.ndarray, u_samples: np.ndarray,
+                    substeps: int, h: float) -> Solved:
+    """The RK4 loop in the compiled kernel; only the output rows the laws read are evaluated at each stage."""
+    from . import rk4_kernel  # numba takes about a second to load; only solving needs it
+
+    rows = np.concatenate([wiring.disp_rows, wiring.rate_rows])
+    splines = spline_table(vehicle.feedback_laws)
+    matrices = (vehicle.A, vehicle.B, vehicle.Bn, vehicle.Cn, vehicle.Dn, vehicle.C[rows], vehicle.D[rows])
+    arrays = (*(_csr(m) for m in matrices), np.ascontiguousarray(vehicle.f, dtype=float),
+              wiring.force_columns.astype(np.int64))
+    z0 = np.concatenate([x, table.initial_state])
+    return rk4_kernel.solve(arrays, (splines.start, splines.velocity, splines.force), (table.layout, table.values),
+                            z0, np.ascontiguousarray(u_samples, dtype=float), substeps, h)
+
+
+def _csr(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(indptr, indices, data) of a dense matrix, columns in order: the vehicle's matrices are mostly zeros."""
+    sparse = csr_array(np.asarray(matrix, dtype=float))
+    sparse.sort_indices()
+    return sparse.indptr.astype(np.int64), sparse.indices.astype(np.int64), sparse.data.astype(float)
+
+
+def _solve_generic(vehicle: LinearVehicle, law_list: list[ComponentLaw], wiring: _Wiring, x: np.ndarray,
+                   u_samples: np.ndarray, substeps: int, h: float) -> Solved:
+    """The RK4 loop in numpy, calling each law (or bank of bushing laws) at every stage."""
     groups = _groups(law_list)
     nx = len(vehicle.states)
     offsets = nx + np.concatenate([[0], np.cumsum([group.n_states for group, _ in groups])]).astype(int)
     spans = [(group, members, wiring.disp_rows[members], wiring.rate_rows[members], a, b)
              for (group, members), a, b in zip(groups, offsets[:-1], offsets[1:])]
-    x = np.zeros(nx) if x0 is None else np.asarray(x0, dtype=float)
     z = np.concatenate([x] + [group.initial_state() for group, _ in groups])
 
     def forces(z: np.ndarray, u: np.ndarray) -> np.ndarray:
@@ -144,13 +208,11 @@ def simulate_monolithic(
         return np.concatenate(parts)
 
     n = u_samples.shape[0]
-    out = np.empty((n, len(vehicle.outputs)))
+    states = np.empty((n, nx))
     port_forces = np.empty((n, len(law_list)))
     for k in range(n):
-        u = u_samples[k].copy()
-        u[wiring.force_columns] = forces(z, u)
-        out[k] = vehicle.output_vector(z[:nx], u)
-        port_forces[k] = u[wiring.force_columns]
+        states[k] = z[:nx]
+        port_forces[k] = forces(z, u_samples[k])
         if k + 1 == n:
             break
         du = (u_samples[k + 1] - u_samples[k]) / substeps
@@ -163,10 +225,5 @@ def simulate_monolithic(
             k4 = rhs(t + h, z + h * k3, u0 + du)
             z = z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         if not np.all(np.isfinite(z)):
-            raise VehicleModelError(
-                f"{vehicle.name}: monolithic solution diverged at t = {(k + 1) * period:.6g} s; use a smaller step"
-            )
-    result = {name: out[:, i] for i, name in enumerate(vehicle.output_names)}
-    result |= {name: port_forces[:, i] for i, name in enumerate(laws)}
-    result["time"] = np.arange(n) * period
-    return result
+            return states, port_forces, k + 1
+    return states, port_forces, n

@@ -2,7 +2,8 @@
 
 Coordinates are the vehicle's (ISO 8855): origin at the sprung mass's centre of gravity in the design position,
 x forward, y left, z up, in metres. Geometry of the front suspension is given for the left side; the right side is
-its mirror image in y. Every value is SI (kg, m, N/m, N.s/m, N.m/rad, kg.m^2).
+its mirror image in y. Every value is SI (kg, m, N/m, N.s/m, N.m/rad, kg.m^2). A quarter-car file (a `[quarter_car]`
+table) is read by `quarter_car_parameters` with the same table reader.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from .errors import ParameterError
 
 DEFAULTS_DIR = Path(__file__).resolve().parent.parent / "parameters"
 DEFAULT_FILE = DEFAULTS_DIR / "midsize_sedan.toml"
+QUARTER_CAR_TABLE = "quarter_car"  # the table that makes a parameter file a quarter-car file
 
 
 class _Table:
@@ -31,8 +33,21 @@ class _Table:
         self._source = source
         self._used: set[str] = set()
 
+    @property
+    def source(self) -> str:
+        """The file being read (what every error message starts with)."""
+        return self._source
+
     def _key(self, key: str) -> str:
         return f"{self._where}.{key}" if self._where else key
+
+    def dotted(self, key: str) -> str:
+        """`key`'s full name in the file, such as 'quarter_car.damper.model'."""
+        return self._key(key)
+
+    def has(self, key: str) -> bool:
+        """Whether the table holds `key` (without marking it read)."""
+        return key in self._data
 
     def _raw(self, key: str) -> Any:
         if key not in self._data:
@@ -57,6 +72,13 @@ class _Table:
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise ParameterError(f"{self._source}: {self._key(key)} = {value!r} is not a finite number")
         return float(value)
+
+    def string(self, key: str) -> str:
+        """A text value such as a name (any string)."""
+        value = self._raw(key)
+        if not isinstance(value, str):
+            raise ParameterError(f"{self._source}: {self._key(key)} = {value!r} must be a string")
+        return value
 
     def text(self, key: str, choices: tuple[str, ...]) -> str:
         value = self._raw(key)
@@ -115,8 +137,12 @@ class BodyParameters:
 class AxleParameters:
     """One axle's corners: unsprung mass, spring rate at the wheel, tyre, and the spring/damper line (left side).
 
-    `strut_direction` points from the wheel to the body mount `strut_top`; the spring and damper act along it.
-    `damper_ratio` is damper stroke per unit strut deflection (1 for a strut, below 1 for a damper on a link).
+    `strut_direction` points from the wheel to the body mount `strut_top`; the spring and damper both act along it,
+    so the strut's tilt enters both: for vertical wheel travel the strut deflects `strut_vertical` (s_z, its vertical
+    cosine) per unit. The file states the spring by its rate at the wheel (`spring_rate`; the coil along the strut is
+    `strut_spring_rate` = spring_rate / s_z^2) and the damper along its own stroke (its dyno characteristic):
+    `damper_ratio` is damper stroke per unit strut deflection (1 for a strut, below 1 for a damper on a link), so
+    the damper moves `damper_motion_ratio` = damper_ratio * s_z per unit of vertical wheel travel.
     """
 
     unsprung_mass: float
@@ -132,10 +158,29 @@ class AxleParameters:
         s = np.asarray(self.strut_direction)
         return s / np.linalg.norm(s)
 
+    @property
+    def strut_vertical(self) -> float:
+        """s_z [1]: strut deflection per unit of vertical wheel travel relative to the body (the strut's cosine)."""
+        return float(self.strut_unit[2])
+
+    @property
+    def strut_spring_rate(self) -> float:
+        """Rate [N/m] of the coil along the strut that gives `spring_rate` at the wheel: spring_rate / s_z^2."""
+        return self.spring_rate / self.strut_vertical**2
+
+    @property
+    def damper_motion_ratio(self) -> float:
+        """Damper stroke per unit of vertical wheel travel relative to the body [1]: damper_ratio * s_z."""
+        return self.damper_ratio * self.strut_vertical
+
+
+DAMPER_MODELS = ("linear", "spline")
+
 
 @dataclass(frozen=True)
 class DamperParameters:
-    """A damper's built-in reference: linear damping, or a piecewise-linear force-velocity spline (rebound positive)."""
+    """A damper's built-in reference along its own stroke: linear damping, or a piecewise-linear force-velocity spline
+    (rebound positive); `damping` is also the linear reference of a stabilised damper port."""
 
     model: str
     damping: float
@@ -193,16 +238,37 @@ class VehicleParameters:
 
     @classmethod
     def load(cls, path: str | os.PathLike[str] = DEFAULT_FILE) -> "VehicleParameters":
-        """Read and check a TOML parameter file; any problem raises ParameterError naming the file and key."""
-        path = Path(path)
-        try:
-            with path.open("rb") as fh:
-                data = tomllib.load(fh)
-        except FileNotFoundError:
-            raise ParameterError(f"{path}: no such parameter file") from None
-        except tomllib.TOMLDecodeError as exc:
-            raise ParameterError(f"{path}: not valid TOML ({exc})") from None
+        """Read and check a full-vehicle TOML parameter file; any problem raises ParameterError naming the file and
+        key (a quarter-car file included: it lacks the body, rear axle and LCA a full vehicle needs)."""
+        data = read_toml(path)
+        if QUARTER_CAR_TABLE in data:
+            raise ParameterError(
+                f"{path}: a quarter-car parameter file ([{QUARTER_CAR_TABLE}]); a full vehicle needs a full-vehicle "
+                "file (body, front, rear, damper, lca), such as the packaged midsize_sedan.toml"
+            )
         return _read(_Table(data, "", str(path)), str(path))
+
+
+def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """The tables of a TOML parameter file; ParameterError naming the file when it is missing or not TOML."""
+    path = Path(path)
+    try:
+        with path.open("rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise ParameterError(f"{path}: no such parameter file") from None
+    except IsADirectoryError:
+        raise ParameterError(f"{path}: a folder, not a parameter file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterError(f"{path}: not valid TOML ({exc})") from None
+
+
+def corner_sprung_mass(params: VehicleParameters, axle: str) -> float:
+    """Share of the body mass [kg] that one corner of `axle` ('front' or 'rear') carries statically: the axle load
+    from the centre of gravity's position on the wheelbase, halved."""
+    body = params.body
+    lever = body.cog_to_rear_axle if axle == "front" else body.cog_to_front_axle
+    return body.mass * lever / body.wheelbase / 2.0
 
 
 def _read_axle(t: _Table) -> AxleParameters:
@@ -223,20 +289,23 @@ def _read_axle(t: _Table) -> AxleParameters:
 
 def _read_damper(t: _Table) -> DamperParameters:
     damper = DamperParameters(
-        model=t.text("model", ("linear", "spline")),
-        damping=t.positive("damping"),
-        velocity=t.numbers("velocity"),
-        force=t.numbers("force"),
+        t.text("model", DAMPER_MODELS), t.positive("damping"), *read_force_velocity_table(t)
     )
-    where = f"{t._source}: {t._where}"
-    if len(damper.velocity) != len(damper.force) or len(damper.velocity) < 2:
-        raise ParameterError(
-            f"{where}: velocity and force need the same length (>= 2); got {len(damper.velocity)} and {len(damper.force)}"
-        )
-    if np.any(np.diff(damper.velocity) <= 0.0):
-        raise ParameterError(f"{where}.velocity must increase strictly: {damper.velocity}")
     t.finish()
     return damper
+
+
+def read_force_velocity_table(t: _Table) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """A damper table's `velocity` and `force` lists: same length (>= 2), velocities strictly increasing."""
+    velocity, force = t.numbers("velocity"), t.numbers("force")
+    where = f"{t._source}: {t._where}"
+    if len(velocity) != len(force) or len(velocity) < 2:
+        raise ParameterError(
+            f"{where}: velocity and force need the same length (>= 2); got {len(velocity)} and {len(force)}"
+        )
+    if np.any(np.diff(velocity) <= 0.0):
+        raise ParameterError(f"{where}.velocity must increase strictly: {velocity}")
+    return velocity, force
 
 
 def _read_bushing(t: _Table) -> BushingParameters:

@@ -24,16 +24,18 @@ class VehiclePort:
     description: str
 
 
-def actuator_ports(tag: str) -> list[VehiclePort]:
-    """Displacement and velocity inputs of the actuator post under corner `tag` ('' for the quarter car)."""
-    prefix = f"actuator_{tag}_" if tag else "actuator_"
-    where = f"{tag} post" if tag else "post"
+def actuator_ports(corner: str) -> list[VehiclePort]:
+    """Displacement and velocity inputs of the actuator post under `corner` (named like the drive file's channels)."""
     return [
         VehiclePort(
-            f"{prefix}displacement", "m", f"vertical displacement of the {where} from its rest position, up positive"
+            f"actuator_{corner}_displacement",
+            "m",
+            f"vertical displacement of the {corner} post from its rest position, up positive",
         ),
         VehiclePort(
-            f"{prefix}velocity", "m/s", f"vertical velocity of the {where}, up positive (the rate of the displacement)"
+            f"actuator_{corner}_velocity",
+            "m/s",
+            f"vertical velocity of the {corner} post, up positive (the rate of the displacement)",
         ),
     ]
 

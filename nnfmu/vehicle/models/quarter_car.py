@@ -1,60 +1,47 @@
 """Quarter car on one actuator post: sprung and unsprung mass, spring and damper between, tyre to the post.
 
-The thesis's single-corner experiment. Built from one corner (front by default) of a full-vehicle parameter file:
-the sprung mass is that corner's share of the body mass (axle load split by the centre of gravity, halved), the spring
-and damper act vertically with the vertical share of the corner's strut line. Coordinates are displacements from the
-design position, which is the static equilibrium: the spring carries the sprung weight, the tyre the corner's weight.
+The thesis's single-corner experiment, built from `QuarterCarParameters` (a quarter-car file, or one corner of a
+full-vehicle file). Everything moves vertically: the spring acts with its wheel rate on the wheel travel relative to
+the body (body minus wheel), the damper's stroke is `damper_motion_ratio` times that travel (rebound positive) and
+its force acts back on wheel and body times the same ratio; no tilt enters beyond the ratio the parameters state.
+Coordinates are displacements from the design position, which is the static equilibrium: the spring carries the
+sprung weight, the tyre the corner's weight. The actuator inputs are named after the corner the quarter car stands
+on (`actuator_fl_displacement`), so a four-poster drive file feeds them by name.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 
-
 from .assembly import Assembly, Deflection
 from .components import REFERENCE, STABILISED, resolve_components
-from .errors import VehicleModelError
 from .linear import LinearVehicle
-from .parameters import VehicleParameters
 from .ports import VehiclePort, actuator_ports, damper_input, damper_outputs
+from .quarter_car_parameters import QuarterCarParameters
 from .reference import LinearSpring, SplineDamper
 
 COMPONENTS = ["damper"]
 
 
-def corner_sprung_mass(params: VehicleParameters, axle: str) -> float:
-    """Share of the body mass [kg] that one corner of `axle` ('front' or 'rear') carries statically."""
-    body = params.body
-    lever = body.cog_to_rear_axle if axle == "front" else body.cog_to_front_axle
-    return body.mass * lever / body.wheelbase / 2.0
-
-
-def build_quarter_car(
-    params: VehicleParameters, components: Mapping[str, str] | None = None, axle: str = "front"
-) -> LinearVehicle:
-    """Quarter car of `axle`; `components={'damper': 'reference'}` closes the damper loop with the built-in damper."""
-    if axle not in ("front", "rear"):
-        raise VehicleModelError(f"quarter car: axle {axle!r}; expected 'front' or 'rear'")
+def build_quarter_car(params: QuarterCarParameters, components: Mapping[str, str] | None = None) -> LinearVehicle:
+    """Quarter car of `params`; `components={'damper': 'reference'}` closes the damper loop with the built-in damper."""
     choice = resolve_components("quarter car", COMPONENTS, components)
-    corner = params.front if axle == "front" else params.rear
-    damper = params.front_damper if axle == "front" else params.rear_damper
-    sprung = corner_sprung_mass(params, axle)
-    g = params.gravity
-    s_z = float(corner.strut_unit[2])
+    damper = params.damper
+    sprung, g = params.sprung_mass, params.gravity
     coords = [
         VehiclePort("body_displacement", "m", "vertical displacement of the sprung mass from the design position"),
         VehiclePort("spindle_displacement", "m", "vertical displacement of the unsprung mass from the design position"),
     ]
-    asm = Assembly(coords, posts=["post"], gravity=g)
+    asm = Assembly(coords, posts=[params.corner], gravity=g)
     body, wheel = asm.unit_row(0), asm.unit_row(1)
     asm.add_point_mass(sprung, body)
-    asm.add_point_mass(corner.unsprung_mass, wheel)
-    strut = Deflection(s_z * (body - wheel), asm.post_row())
-    asm.add_spring(strut, LinearSpring(corner.spring_rate / s_z**2, 0.0, preload=-sprung * g / s_z))
-    tyre = Deflection(-wheel, asm.post_row("post"))
-    tyre_spring = LinearSpring(corner.tyre_stiffness, corner.tyre_damping, preload=(sprung + corner.unsprung_mass) * g)
+    asm.add_point_mass(params.unsprung_mass, wheel)
+    travel = Deflection(body - wheel, asm.post_row())
+    asm.add_spring(travel, LinearSpring(params.wheel_rate, 0.0, preload=-sprung * g))
+    tyre = Deflection(-wheel, asm.post_row(params.corner))
+    tyre_spring = LinearSpring(params.tyre_stiffness, params.tyre_damping, preload=(sprung + params.unsprung_mass) * g)
     asm.add_spring(tyre, tyre_spring)
-    stroke = Deflection(corner.damper_ratio * strut.row, asm.post_row())
+    stroke = Deflection(params.damper_motion_ratio * travel.row, asm.post_row())
     if choice["damper"] == REFERENCE and damper.model == "linear":
         asm.add_spring(stroke, LinearSpring(0.0, damper.damping))
     elif choice["damper"] == REFERENCE:
@@ -85,6 +72,8 @@ def build_quarter_car(
         tyre_spring,
     )
     description = (
-        f"quarter car ({axle} corner) of {params.name}: sprung {sprung:.1f} kg, unsprung {corner.unsprung_mass:.1f} kg"
+        f"quarter car ({params.corner} corner) of {params.name}: sprung {sprung:.1f} kg, unsprung "
+        f"{params.unsprung_mass:.1f} kg, wheel rate {params.wheel_rate:.0f} N/m, damper motion ratio "
+        f"{params.damper_motion_ratio:.4f}"
     )
-    return asm.to_vehicle(f"quarter_car_{axle}", description, actuator_ports(""))
+    return asm.to_vehicle(f"quarter_car_{params.corner}", description, actuator_ports(params.corner))

@@ -1,0 +1,176 @@
+"""Where cases run: in this process one after another, or on Dask (a LocalCluster of worker processes, or an existing
+cluster by its scheduler address).
+
+On Dask, the files a case needs travel with its task as bytes (an FMU is some tens of kB), so workers need the same
+nnfmu install but no shared folder, and a task a dead worker held carries everything it needs to run elsewhere (data
+scattered to one worker would die with it). Cases are sent a window at a time (a few per worker thread, topped up as
+they finish), so the bytes in flight stay bounded. Robustness is Dask's own: a worker that dies takes its tasks back
+to the scheduler, which runs them elsewhere until `allowed-failures` deaths (set to 1 for the LocalCluster: a case
+is retried once), then reports KilledWorker, which is recorded as the case's failure; `retries=1` reruns a task that
+raised outside the case's own error handling. A lost scheduler stops the run (nothing is recorded as failed for it),
+and a rerun resumes from the parts written.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import uuid
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from .cases import Case
+from .errors import CampaignError
+from .execute import FAILED, CaseOutcome, run_case
+
+ALLOWED_FAILURES = 1  # worker deaths a case may be involved in before it is given up (LocalCluster)
+LOCAL_CONFIG = {
+    "distributed.scheduler.allowed-failures": ALLOWED_FAILURES,
+    # the statistical profiler keeps an hour of per-second stack trees in each worker: tens of MB over a campaign
+    "distributed.worker.profile.enabled": False,
+}
+CASES_PER_THREAD = 4  # cases in flight per worker thread
+WAIT_FOR_WORKERS = 60  # seconds to wait for a cluster without workers to get one
+OnOutcome = Callable[[Case, CaseOutcome], None]
+
+
+@dataclass(frozen=True)
+class EngineInfo:
+    """How a run was executed: 'serial', 'local' (LocalCluster) or 'scheduler'; workers and threads in all; the
+    scheduler's address and its allowed failures per task (None when serial)."""
+
+    kind: str
+    workers: int
+    threads: int
+    address: str | None
+    allowed_failures: int | None
+
+
+class FileBytes(Mapping[str, bytes]):
+    """A campaign's blobs as bytes: FMUs are held in memory already, drive files are read when asked for."""
+
+    def __init__(self, blobs: Mapping[str, bytes | Path]) -> None:
+        self._blobs = blobs
+
+    def __getitem__(self, key: str) -> bytes:
+        value = self._blobs[key]
+        return value.read_bytes() if isinstance(value, Path) else value
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._blobs)
+
+    def __len__(self) -> int:
+        return len(self._blobs)
+
+
+def machine_workers() -> int:
+    """Worker processes to start by default: the cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def run_serial(cases: Sequence[Case], blobs: Mapping[str, bytes | Path], on_outcome: OnOutcome) -> EngineInfo:
+    """Run the cases here, one after another (the reference the distributed runs are checked against)."""
+    files = FileBytes(blobs)
+    for case in cases:
+        on_outcome(case, run_case(case, files))
+    return EngineInfo("serial", 1, 1, None, None)
+
+
+def _installed() -> dict[str, str]:
+    """nnfmu's and fmpy's versions where this runs (compared between the client and each worker)."""
+    import fmpy
+
+    import nnfmu
+
+    return {"nnfmu": nnfmu.__version__, "fmpy": fmpy.__version__}
+
+
+def check_workers(client: Any) -> None:
+    """Every worker runs the same nnfmu and fmpy as this process; CampaignError names the first that does not."""
+    here = _installed()
+    for worker, versions in client.run(_installed).items():
+        if versions != here:
+            raise CampaignError(f"Dask worker {worker} has {versions}, this process {here}: workers need the same "
+                                "nnfmu install")
+
+
+def run_dask(client: Any, cases: Sequence[Case], blobs: Mapping[str, bytes | Path], on_outcome: OnOutcome) -> None:
+    """Run the cases on the client's cluster, calling `on_outcome` here as each finishes (in finishing order)."""
+    from distributed import as_completed
+
+    files = FileBytes(blobs)
+    threads = max(1, sum(client.nthreads().values()))
+    window = max(2, CASES_PER_THREAD * threads)
+    run = uuid.uuid4().hex[:8]
+    queue = iter(cases)
+    running: dict[Any, Case] = {}
+    finished = as_completed()
+
+    def submit_next() -> None:
+        case = next(queue, None)
+        if case is None:
+            return
+        future = client.submit(run_case, case, {key: files[key] for key in case.blob_keys},
+                               key=f"nnfmu-case-{case.key[:16]}-{run}", pure=False, retries=1)
+        running[future] = case
+        finished.add(future)
+
+    for _ in range(window):
+        submit_next()
+    for future in finished:
+        case = running.pop(future)
+        if future.status == "error":
+            error = future.exception()
+            outcome = CaseOutcome(case.key, case.event.name, case.variant.name, FAILED,
+                                  f"{type(error).__name__}: {error}", math.nan)
+        elif future.status == "finished":
+            outcome = future.result()
+        else:
+            raise CampaignError(f"the Dask cluster lost case {case.event.name} x {case.variant.name} "
+                                f"({future.status}); run the campaign again to resume")
+        future.release()
+        on_outcome(case, outcome)
+        submit_next()
+
+
+@contextmanager
+def dask_client(scheduler: str | None, workers: int | None) -> Iterator[tuple[Any, EngineInfo]]:
+    """A client of the cluster at `scheduler`, or of a new LocalCluster of `workers` single-threaded processes
+    (default: one per core), closed afterwards."""
+    import dask
+    from distributed import Client, LocalCluster
+
+    cluster = None
+    try:
+        if scheduler is None:
+            with dask.config.set(LOCAL_CONFIG):
+                cluster = LocalCluster(n_workers=workers or machine_workers(), threads_per_worker=1,
+                                       processes=True, dashboard_address=None, silence_logs=logging.ERROR)
+            client = Client(cluster)
+        else:
+            try:
+                client = Client(scheduler, timeout="30s")
+            except (OSError, TimeoutError) as error:
+                raise CampaignError(f"cannot reach the Dask scheduler at {scheduler}: {error}") from None
+        try:
+            if not client.nthreads():
+                try:
+                    client.wait_for_workers(1, timeout=WAIT_FOR_WORKERS)
+                except TimeoutError:
+                    raise CampaignError(f"the Dask scheduler at {scheduler} has no workers "
+                                        f"(waited {WAIT_FOR_WORKERS} s)") from None
+            check_workers(client)
+            nthreads = client.nthreads()
+            info = EngineInfo("local" if cluster is not None else "scheduler", len(nthreads), sum(nthreads.values()),
+                              client.scheduler.address,
+                              client.run_on_scheduler(lambda dask_scheduler: dask_scheduler.allowed_failures))
+            yield client, info
+        finally:
+            client.close()
+    finally:
+        if cluster is not None:
+            cluster.close()

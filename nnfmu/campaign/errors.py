@@ -1,0 +1,7 @@
+"""The one error a campaign raises for bad input."""
+
+from __future__ import annotations
+
+
+class CampaignError(ValueError):
+    """A campaign file or folder that cannot be run as given; the message names the file, the entry and the key."""

@@ -1,0 +1,225 @@
+"""A uniform time base fitted to a record's stamps: print rounding and sampling jitter accepted, gaps and drift refused.
+
+nnfmu trains on uniformly sampled records, t_k = t_0 + k·T. Files store rounded stamps: a controller printing 8
+significant digits resolves 1e-7 s on [1, 10) s, 1e-6 s on [10, 100) s (0.1 % of a 1024 Hz period) and 1e-5 s
+beyond. `t_0` and `T` are fitted by least squares over all stamps, and each stamp may lie off that line by its
+tolerance, the largest of
+- print rounding: half its resolution (one unit in the last digit the file's format prints at the stamp's
+  magnitude, inferred per file from the stamps' text by `printed_resolution`), plus RESOLUTION_SIGMAS standard
+  deviations of the fitted line itself under that rounding (the line is estimated from rounded stamps too);
+  binary stamps (MDF) have no print rounding, except a float32 time channel, resolved to the float32 spacing;
+- sampling jitter: TIME_JITTER of the period, for every record;
+- float64 noise: FLOAT_NOISE units of float64 epsilon of the largest stamp.
+Rounding to nearest is assumed; a controller that truncates is covered as far as the sampling jitter reaches.
+
+A record whose stamps all lie within float64 noise of the line keeps them as stored. Otherwise `uniform_time` replaces
+them by the fitted base and notes in one line how far they strayed and which tolerance covered it. A stamp beyond its
+tolerance is refused, naming the sample: the first step that differs from the median step by more than its two
+stamps' tolerances (a gap or a jump), else the stamp farthest off the line (a clock whose rate drifts, or a stamp
+out of line).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .errors import DataError
+from .measurement import Measurement
+
+TIME_JITTER = 1e-3  # sampling jitter accepted at every stamp, relative to the period
+FLOAT_NOISE = 64.0  # float64 rounding accepted at every stamp, in units of epsilon times the largest |stamp|
+RESOLUTION_SIGMAS = 3.0  # standard deviations of the fitted line's own rounding error added to half the resolution
+
+
+@dataclass(frozen=True)
+class Resolution:
+    """How finely a file stores each time stamp: `step` [file's time unit] per stamp, shape (n,), and a description."""
+
+    step: np.ndarray
+    format: str
+
+    def scaled(self, factor: float) -> "Resolution":
+        """The same resolution in another time unit (`factor` = new units per old unit)."""
+        return Resolution(step=self.step * factor, format=self.format)
+
+
+def _digits(text: str) -> tuple[int, int] | None:
+    """(significant digits, decimals) as printed in one number's text; None for a zero or not a plain number."""
+    mantissa, _, exponent_text = text.strip().lstrip("+-").upper().partition("E")
+    whole, _, fraction = mantissa.partition(".")
+    digits = whole + fraction
+    if not digits.isdigit() or not digits.isascii():
+        return None
+    try:
+        exponent = int(exponent_text) if exponent_text else 0
+    except ValueError:
+        return None
+    significant = digits.lstrip("0")
+    if not significant:
+        return None
+    return len(significant), len(fraction) - exponent
+
+
+def printed_resolution(cells: Sequence[str], values: np.ndarray) -> Resolution | None:
+    """The resolution of time stamps printed as `cells` (their text) with the parsed `values`, or None if no cell
+    shows a digit.
+
+    The file's format is inferred from all cells: the most significant digits any stamp shows (S, for `%.8g`-style
+    stamps whose last digit moves with the magnitude) and the most decimals (D, for fixed-decimal stamps). A stamp's
+    resolution is the coarser of 10^-D and one unit in its S-th significant digit, which is the format's own
+    resolution whichever of the two styles the file uses (trailing zeros a `%g` format drops do not count against it).
+    """
+    counts = [d for d in map(_digits, cells) if d is not None]
+    if not counts:
+        return None
+    significant = max(s for s, _ in counts)
+    decimals = max(d for _, d in counts)
+    magnitude = np.abs(np.asarray(values, dtype=float))
+    exponent = np.floor(np.log10(np.where(magnitude > 0, magnitude, 1.0)))
+    by_digits = np.where(magnitude > 0, 10.0 ** (exponent - significant + 1), 0.0)
+    step = np.maximum(10.0**-decimals, by_digits)
+    coarser_by_digits = step.size > 0 and float(np.max(by_digits)) > 10.0**-decimals
+    style = f"{significant} significant digits" if coarser_by_digits else f"{decimals} decimals"
+    return Resolution(step=step, format=f"printed to {style}")
+
+
+def float32_resolution(values: np.ndarray) -> Resolution:
+    """The resolution of stamps stored as float32: the float32 spacing at each stamp."""
+    spacing = np.spacing(np.abs(np.asarray(values, dtype=np.float32))).astype(np.float64)
+    return Resolution(step=spacing, format="stored as float32")
+
+
+@dataclass(frozen=True)
+class UniformFit:
+    """The least-squares base t_k = start + k·period [s] of n stamps, each stamp's deviation from it and tolerance."""
+
+    start: float
+    period: float
+    deviation: np.ndarray
+    tolerance: np.ndarray
+    noise: float
+
+    @property
+    def exact(self) -> bool:
+        """True when every stamp lies within float64 noise of the base (nothing to replace)."""
+        return bool(np.max(np.abs(self.deviation)) <= self.noise)
+
+    def times(self) -> np.ndarray:
+        """The fitted base itself, shape (n,)."""
+        return self.start + np.arange(self.deviation.size) * self.period
+
+
+def _g(value: float) -> str:
+    """A number for a message: 10 significant digits, no numpy type name."""
+    return f"{float(value):.10g}"
+
+
+def _rounding(resolution: Resolution) -> np.ndarray:
+    """Half of each stamp's resolution plus RESOLUTION_SIGMAS standard deviations of a line fitted by least squares
+    to stamps carrying independent rounding errors, uniform over one resolution step (variance step²/12)."""
+    step = resolution.step
+    n = step.size
+    k = np.arange(n) - (n - 1) / 2.0
+    variance = float(np.mean(step**2)) / 12.0
+    line_sigma = np.sqrt(variance * (1.0 / n + k**2 / max(float(np.dot(k, k)), 1.0)))
+    return 0.5 * step + RESOLUTION_SIGMAS * line_sigma
+
+
+def stamp_tolerance(time: np.ndarray, period: float, resolution: Resolution | None = None) -> np.ndarray:
+    """How far each stamp of `time` [s] may lie off a uniform base of `period` [s]: the module docstring's rule."""
+    time = np.asarray(time, dtype=float)
+    noise = FLOAT_NOISE * np.finfo(float).eps * float(np.max(np.abs(time), initial=0.0))
+    tolerance = np.full(time.size, max(TIME_JITTER * abs(period), noise))
+    return tolerance if resolution is None else np.maximum(tolerance, _rounding(resolution))
+
+
+def fit_uniform(time: np.ndarray, resolution: Resolution | None = None) -> UniformFit:
+    """Fit t_k = start + k·period to `time` (shape (n,), n >= 2, in s) by least squares; tolerances as documented."""
+    time = np.asarray(time, dtype=float)
+    n = time.size
+    k = np.arange(n) - (n - 1) / 2.0
+    offset = time - time[0]  # fitting relative to the first stamp keeps the sums well conditioned
+    mean = float(np.mean(offset))
+    period = float(np.dot(k, offset - mean) / np.dot(k, k))
+    deviation = offset - (mean + k * period)
+    noise = FLOAT_NOISE * np.finfo(float).eps * float(np.max(np.abs(time)))
+    tolerance = stamp_tolerance(time, period, resolution)
+    start = float(time[0] + mean - period * (n - 1) / 2.0)
+    return UniformFit(start=start, period=period, deviation=deviation, tolerance=tolerance, noise=noise)
+
+
+def _tolerance_text(fit: UniformFit, row: int, resolution: Resolution | None) -> str:
+    """Which tolerance applies at one stamp, for an error message."""
+    jitter = f"{TIME_JITTER:g} of the period"
+    if resolution is None:
+        return jitter
+    return (
+        f"the larger of {jitter} and {_g(_rounding(resolution)[row])} s for the stamp's "
+        f"resolution {_g(resolution.step[row])} s ({resolution.format})"
+    )
+
+
+def check_uniform(time: np.ndarray, where: str, resolution: Resolution | None = None) -> UniformFit | None:
+    """Raise DataError naming `where` and the sample unless `time` [s] increases and is uniform within tolerance.
+
+    Returns the fit (None for fewer than two stamps). `time` must be finite.
+    """
+    time = np.asarray(time, dtype=float)
+    if time.size < 2:
+        return None
+    steps = np.diff(time)
+    not_increasing = np.flatnonzero(steps <= 0)
+    if not_increasing.size:
+        row = int(not_increasing[0]) + 1
+        raise DataError(
+            f"{where}: time does not increase at sample {row}: t = {_g(time[row - 1])} s then {_g(time[row])} s"
+        )
+    fit = fit_uniform(time, resolution)
+    off = np.abs(fit.deviation) > fit.tolerance
+    if not off.any():
+        return fit
+    median = float(np.median(steps))
+    jumps = np.flatnonzero(np.abs(steps - median) > fit.tolerance[1:] + fit.tolerance[:-1])
+    if jumps.size:
+        row = int(jumps[0]) + 1
+        raise DataError(
+            f"{where}: time is not uniformly sampled at sample {row} (t = {_g(time[row])} s): the step from the "
+            f"previous sample is {_g(steps[row - 1])} s, the period {_g(median)} s (each stamp may be off by "
+            f"{_tolerance_text(fit, row, resolution)})"
+        )
+    row = int(np.argmax(np.abs(fit.deviation) / fit.tolerance))
+    raise DataError(
+        f"{where}: time is not uniformly sampled at sample {row} (t = {_g(time[row])} s): the stamp lies "
+        f"{fit.deviation[row]:.3g} s off the least-squares uniform base t = {_g(fit.start)} s + k * "
+        f"{_g(fit.period)} s, "
+        f"farther than {_tolerance_text(fit, row, resolution)}; {int(off.sum())} of {time.size} stamps lie beyond "
+        f"their tolerance (a sampling clock that drifts, or stamps out of line)"
+    )
+
+
+def _note(fit: UniformFit, resolution: Resolution | None) -> str:
+    """One line: how far the stamps strayed, which tolerance covered it, and the base the record now uses."""
+    worst = float(np.max(np.abs(fit.deviation)))
+    why = f"within the sampling jitter of {TIME_JITTER:g} of the period nnfmu accepts"
+    if resolution is not None and np.all(np.abs(fit.deviation) <= np.maximum(_rounding(resolution), fit.noise)):
+        why = f"within their resolution ({resolution.format}; {_g(resolution.step[-1])} s at the last stamp)"
+    return (
+        f"time stamps deviate from a uniform base by up to {worst:.3g} s ({worst / fit.period:.3%} of the period), "
+        f"{why}; the record uses the least-squares base t = {_g(fit.start)} s + k * {_g(fit.period * 1e3)} ms "
+        f"({_g(1.0 / fit.period)} Hz) instead of the stamps"
+    )
+
+
+def uniform_time(m: Measurement, resolution: Resolution | None = None) -> Measurement:
+    """`m` on its fitted uniform time base, with `notes["time"]` saying so; `m` itself when its stamps are exact.
+
+    Raises DataError (see `check_uniform`) when the stamps are not uniform within tolerance.
+    """
+    fit = check_uniform(m.time, m.source, resolution)
+    if fit is None or fit.exact:
+        return m
+    return replace(m, time=fit.times(), notes={**m.notes, "time": _note(fit, resolution)})
+
