@@ -23,14 +23,15 @@ import time
 from pathlib import Path
 
 from nnfmu.data.rigs import RigOptions, write_rig
-from nnfmu.demo import PRESETS_BY_RIG
+from nnfmu.demo import MOVING_MASS_BY_RIG, PRESETS_BY_RIG
 from nnfmu.models.workflow import TrainRequest, train_from_file
 from nnfmu.roadtest import BushingDriveSettings, RoadTestSettings, SystemRun, run_road_test, train_vehicle_bushings
 
 
 def models_in(folder: Path, durations: dict[str, float] | None = None, **training: int) -> dict[str, Path]:
     """ONNX files of every preset in `folder`, training the missing ones on rig records (default length, or
-    `durations` [s] per rig) with the preset's settings (overridden by `training`, e.g. restarts=1)."""
+    `durations` [s] per rig) with the preset's settings (overridden by `training`, e.g. restarts=1); the damper
+    presets learn the force less the dyno's moving mass times acceleration, as in `nnfmu demo`."""
     models = {}
     for rig, presets in PRESETS_BY_RIG.items():
         lab = folder / "rig" / f"{rig}_lab.csv"
@@ -40,7 +41,8 @@ def models_in(folder: Path, durations: dict[str, float] | None = None, **trainin
                 if not lab.is_file():
                     write_rig(rig, lab, RigOptions(seed=0, duration=(durations or {}).get(rig)))
                 started = time.perf_counter()
-                train_from_file(lab, TrainRequest(preset=preset, **training), path)
+                request = TrainRequest(preset=preset, moving_mass=MOVING_MASS_BY_RIG.get(rig, 0.0), **training)
+                train_from_file(lab, request, path)
                 print(f"trained {preset} in {time.perf_counter() - started:.1f} s", file=sys.stderr, flush=True)
             models[preset] = path
     return models

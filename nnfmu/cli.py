@@ -157,6 +157,7 @@ def train(
     seed: int = typer.Option(0, help="Seed: the same seed gives the same network."),
     name: str = typer.Option("", help="Model name stored in the ONNX metadata (default: from the preset)."),
     channel_map: Optional[list[str]] = typer.Option(None, "--map", help=MAP_HELP),
+    moving_mass: float = typer.Option(0.0, help="Dyno mass [kg] between load cell and actuator (rod, piston, fixture): subtracted from the force as m·a before training, as a dyno's mass compensation does; 0: none."),
 ) -> None:
     """Train a component network on rig data and export it as a verified ONNX step graph."""
     from rich.console import Console
@@ -172,7 +173,7 @@ def train(
                            delays=_int_list(delays, "--delays"), hidden=_int_list(hidden, "--hidden"),
                            recurrent=recurrent, thesis=thesis, restarts=restarts, seed=seed, max_epochs=max_epochs,
                            select_inputs=select_inputs, optimizer=optimizer, name=name,
-                           channel_map=tuple(_channel_map(channel_map).items()))
+                           channel_map=tuple(_channel_map(channel_map).items()), moving_mass=moving_mass)
     console = Console(markup=False)  # feature and channel names carry brackets: velocity[k]
     try:
         with Progress(console=console, transient=True) as bar:

@@ -74,12 +74,18 @@ class RealBlock:
     def set(self) -> None:
         status = self._set(*self._args)
         if status > WARNING:
-            raise FmiStatusError(self.slave, f"{self._set_name}({', '.join(self.names)})", status)
+            raise self.set_error(status)
 
     def get(self) -> None:
         status = self._get(*self._args)
         if status > WARNING:
-            raise FmiStatusError(self.slave, f"{self._get_name}({', '.join(self.names)})", status)
+            raise self.get_error(status)
+
+    def set_error(self, status: int) -> FmiStatusError:
+        return FmiStatusError(self.slave, f"{self._set_name}({', '.join(self.names)})", status)
+
+    def get_error(self, status: int) -> FmiStatusError:
+        return FmiStatusError(self.slave, f"{self._get_name}({', '.join(self.names)})", status)
 
 
 class SlopeBlock:
@@ -101,7 +107,10 @@ class SlopeBlock:
     def set(self) -> None:
         status = self._call(*self._args)
         if status > WARNING:
-            raise FmiStatusError(self.slave, f"fmi2SetRealInputDerivatives({', '.join(self.names)})", status)
+            raise self.error(status)
+
+    def error(self, status: int) -> FmiStatusError:
+        return FmiStatusError(self.slave, f"fmi2SetRealInputDerivatives({', '.join(self.names)})", status)
 
 
 class Stepper:
@@ -125,4 +134,7 @@ class Stepper:
     def step(self, t: float, h: float) -> None:
         status = self._do_step(self._instance, t, h, *self._flags)
         if status > WARNING:
-            raise FmiStatusError(self.slave, f"{self._name}(t = {t:.9g} s, h = {h:.9g} s)", status)
+            raise self.error(t, h, status)
+
+    def error(self, t: float, h: float, status: int) -> FmiStatusError:
+        return FmiStatusError(self.slave, f"{self._name}(t = {t:.9g} s, h = {h:.9g} s)", status)

@@ -8,7 +8,8 @@ import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from nnfmu.data import load_measurement
+from nnfmu.data import Measurement, load_measurement
+from nnfmu.data.inertia import compensate_inertia
 from nnfmu.export import ExportResult, export_onnx
 from nnfmu.models.metrics import SplitMetrics
 from nnfmu.models.presets import Preset, custom_spec, get_preset, recurrent
@@ -25,7 +26,8 @@ class TrainRequest:
     size, or several to choose among by validation error; thesis: the thesis's inputs, delays and fixed hidden size
     instead of nnfmu's default (high-pass memory bank, hidden size by validation); recurrent: GRU instead of the MLP; select_inputs: choose the
     inputs by sensitivity analysis (overrides the preset's and `inputs`); optimizer: auto, lm, adam or lbfgs;
-    channel_map: (file channel, nnfmu name) pairs passed to `load_measurement`.
+    channel_map: (file channel, nnfmu name) pairs passed to `load_measurement`; moving_mass [kg]: the dyno's mass
+    between load cell and actuator, subtracted from the force as m·a before training (`nnfmu.data.inertia`; 0: none).
     """
 
     preset: str
@@ -42,6 +44,7 @@ class TrainRequest:
     optimizer: str | None = None
     name: str = ""
     channel_map: tuple[tuple[str, str], ...] = ()
+    moving_mass: float = 0.0
 
 
 @dataclass
@@ -85,6 +88,12 @@ def _stage(progress: Progress | None, start: float, end: float) -> Progress | No
     return lambda label, done: progress(label, start + (end - start) * done)
 
 
+def _load(data: str | os.PathLike[str], required: list[str], output: str, request: TrainRequest) -> Measurement:
+    """The rig file with the request's channel map, its output compensated for the dyno's moving mass if asked."""
+    measurement = load_measurement(data, required=required, channel_map=dict(request.channel_map))
+    return compensate_inertia(measurement, request.moving_mass, output) if request.moving_mass else measurement
+
+
 def train_from_file(
     data: str | os.PathLike[str], request: TrainRequest, out: str | os.PathLike[str], progress: Progress | None = None
 ) -> TrainOutcome:
@@ -95,18 +104,19 @@ def train_from_file(
     """
     started = time.perf_counter()
     preset, architecture, settings = resolve(request)
-    spec = custom_spec(preset.thesis_spec if request.thesis else preset.spec, request.output, request.inputs, request.delays)
+    spec = custom_spec(preset.thesis_spec if request.thesis else preset.spec, request.output, request.inputs,
+                       request.delays)
     selection = None
     if request.select_inputs:
-        measurement = load_measurement(data, required=[spec.output], channel_map=dict(request.channel_map))
+        measurement = _load(data, [spec.output], spec.output, request)
         selection_settings = SelectionSettings(training=replace(settings, restarts=min(settings.restarts, 2)))
         selection = select_inputs(measurement, spec.output, selection_settings, _stage(progress, 0.0, 0.5))
         spec = selection.spec
         progress = _stage(progress, 0.5, 1.0)
     else:
-        measurement = load_measurement(
-            data, required=[*spec.channels, spec.output], channel_map=dict(request.channel_map)
-        )
+        measurement = _load(data, [*spec.channels, spec.output], spec.output, request)
+    mass = request.moving_mass
+    compensated = f" ({spec.output} compensated for {mass:g} kg of moving mass)" if mass else ""
     result = train_model(measurement, spec, architecture, settings, progress)
     block = max(result.splits.test, key=lambda part: part.stop - part.start)
     test = measurement.slice(block.start, block.stop)
@@ -114,7 +124,7 @@ def train_from_file(
         result.model,
         out,
         name=request.name or preset.name.replace("-", "_"),
-        description=f"{preset.description}; trained by nnfmu on {Path(data).name}",
+        description=f"{preset.description}; trained by nnfmu on {Path(data).name}{compensated}",
         verify_on={c: test[c] for c in spec.channels},
     )
     metrics = {name: SplitMetrics(**values) for name, values in result.model.metrics.items()}

@@ -36,8 +36,8 @@ class TruthGraphError(ValueError):
 def _speed(graph: GraphBuilder, force: str, side: ValveSide, name: str) -> str:
     """Speed [m/s] at which `side` carries `force` >= 0 [N] (a (1,) tensor): the larger root of the quadratic
     a u^2 + b u + c = 0 of `ValveSide.speed`, clipped at 0."""
-    fh = graph.node("Add", [force, graph.constant(f"{name}_offset", np.array([side._offset]))], f"{name}_shifted")
-    fb = side._blow_off
+    fh = graph.node("Add", [force, graph.constant(f"{name}_offset", np.array([side.offset]))], f"{name}_shifted")
+    fb = side.blow_off
     # b = c_low (fb - fh) - c_high fh = c_low fb - (c_low + c_high) fh;  c = -fh (fb - fh) - r^2 = fh^2 - fb fh - r^2
     b = graph.node("Sub", [graph.constant(f"{name}_b0", np.array([side.c_low * fb])),
                            graph.node("Mul", [fh, graph.constant(f"{name}_b1", np.array([side.c_low + side.c_high]))],

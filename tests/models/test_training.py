@@ -224,3 +224,22 @@ def test_workflow_with_input_selection_exports_the_chosen_channels(tmp_path):
     component = Component.from_onnx(onnx.load(outcome.path))
     assert [p.name for p in component.inputs] == outcome.selection.spec.channels
     assert outcome.model.spec == outcome.selection.spec
+
+
+def test_workflow_compensates_the_dyno_moving_mass_before_training(tmp_path):
+    """moving_mass: the network is fitted to force - m·a; the data note and the model's description say so."""
+    from nnfmu.data import save_measurement
+    from nnfmu.models.workflow import TrainRequest, train_from_file
+
+    measured = lagged_damper(2000)
+    data = save_measurement(measured, tmp_path / "dyno.csv")
+    request = TrainRequest(preset="damper-spline", restarts=1, max_epochs=20, moving_mass=50.0)
+    outcome = train_from_file(data, request, tmp_path / "model.onnx")
+    assert any("force compensated for 50 kg of moving mass" in note for note in outcome.data_notes)
+    assert "(force compensated for 50 kg of moving mass)" in Component.from_onnx(onnx.load(outcome.path)).description
+    inertia = 50.0 * np.gradient(measured["velocity"], measured.time)
+    assert np.std(inertia) > 0.05 * np.std(measured["force"])  # so the target the metrics score really changed
+    plain = train_from_file(data, TrainRequest(preset="damper-spline", restarts=1, max_epochs=20), tmp_path / "p.onnx")
+    compensated = measured["force"] - inertia
+    assert outcome.model.target_scaler.hi == pytest.approx(compensated.max(), rel=0.02)  # fitted to force - m·a
+    assert plain.model.target_scaler.hi == pytest.approx(measured["force"].max(), rel=1e-12)

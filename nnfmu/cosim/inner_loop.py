@@ -1,0 +1,186 @@
+"""The master's one-pass schemes stepped in C (`inner_loop.c`): the same arithmetic as the Python loop, without a
+foreign call per transfer, which is most of a step's cost when nine FMUs exchange every millisecond.
+
+The C source ships with the package and is compiled once per machine with the host C compiler (the one `nnfmu build`
+uses) into a cache folder (`$NNFMU_CACHE`, else `$XDG_CACHE_HOME/nnfmu`, else `~/.cache/nnfmu`), named by the hash of
+source and compiler command; without a compiler the master keeps its Python loop. Everything the C loop touches is
+a numpy array or ctypes object held by `CompiledLoop`, so the buffers stay alive and Python can read them after a
+failed call.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import tempfile
+from ctypes import CDLL, Structure, byref, c_double, c_int, c_int64, c_void_p, cast
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from .master import _Element, _System
+
+SOURCE = Path(__file__).with_name("inner_loop.c")
+CALL_NAMES = ("set inputs", "set input slopes", "step", "get outputs", "refresh: set inputs", "refresh: get outputs")
+_LIBRARY: CDLL | None = None
+
+
+class _Element(Structure):
+    _fields_ = [(name, c_void_p) for name in ("instance", "set_real", "get_real", "set_slopes", "do_step",
+                                               "input_references", "inputs")] + [
+        ("n_coupled", c_int64), ("n_driven", c_int64), ("sources", c_void_p), ("slope_references", c_void_p),
+        ("slope_orders", c_void_p), ("slopes", c_void_p), ("output_references", c_void_p), ("n_outputs", c_int64),
+        ("span_start", c_int64), ("vehicle", c_int64), ("feedthrough", c_int64)]
+
+
+class _Plan(Structure):
+    _fields_ = [("elements", c_void_p), ("n_elements", c_int64), ("group_starts", c_void_p), ("n_groups", c_int64),
+                ("refreshed", c_void_p), ("n_refreshed", c_int64), ("n_values", c_int64), ("n_drive", c_int64),
+                ("linear_extrapolation", c_int64), ("gauss_seidel", c_int64)] + [
+        (name, c_void_p) for name in ("values", "now", "before", "estimate", "fresh")]
+
+
+class _Failure(Structure):
+    _fields_ = [("step", c_int64), ("element", c_int64), ("call", c_int64), ("status", c_int64)]
+
+
+@dataclass(frozen=True)
+class LoopFailure:
+    """A call the C loop saw fail: step index, the element, which call (`CALL_NAMES`) and the FMI status."""
+
+    step: int
+    element: _Element
+    call: str
+    status: int
+
+
+def cache_dir() -> Path:
+    """Where compiled helpers are kept: `$NNFMU_CACHE`, else `$XDG_CACHE_HOME/nnfmu`, else `~/.cache/nnfmu`."""
+    if os.environ.get("NNFMU_CACHE"):
+        return Path(os.environ["NNFMU_CACHE"])
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "nnfmu"
+
+
+def library() -> CDLL | None:
+    """The compiled loop (compiled on first use, then from the cache); None when no host C compiler can build it."""
+    global _LIBRARY
+    if _LIBRARY is None:
+        from ..fmu.errors import CompilerError
+        from ..fmu.native.compiler import compile_shared_library, host_target
+
+        try:
+            target = host_target()
+        except CompilerError:
+            return None
+        key = hashlib.sha256(SOURCE.read_bytes() + "\0".join((*target.compiler, *target.flags)).encode()).hexdigest()
+        path = cache_dir() / f"inner_loop-{key[:16]}{target.suffix}"
+        if not path.is_file():
+            path.parent.mkdir(parents=True, exist_ok=True)
+            with tempfile.TemporaryDirectory(dir=path.parent, prefix=".build-") as scratch:
+                built = Path(scratch) / path.name
+                try:
+                    compile_shared_library(target, [SOURCE], SOURCE.parent, built)
+                except CompilerError:
+                    return None
+                os.replace(built, path)  # atomic: a concurrent master finds the whole library or none
+        loaded = CDLL(str(path))
+        loaded.nn_cosim_steps.argtypes = [c_void_p, c_int64, c_int64, c_double, c_double, c_void_p, c_void_p,
+                                          c_void_p]
+        loaded.nn_cosim_steps.restype = c_int
+        _LIBRARY = loaded
+    return _LIBRARY
+
+
+def _address(function: object) -> int:
+    return cast(function, c_void_p).value
+
+
+def _pointer(array: np.ndarray) -> int:
+    return array.ctypes.data
+
+
+class CompiledLoop:
+    """The prepared C loop for `system` (every FMU FMI 2; scheme not plain, no iterations: see `usable`)."""
+
+    def __init__(self, system: _System, drive_size: int) -> None:
+        self.library = library()
+        groups = system.groups
+        order = [element for group in groups for element in group]
+        self.order = order
+        self.system = system
+        settings = system.settings
+        index = {id(element): i for i, element in enumerate(order)}
+        keep: list[object] = []  # arrays the C structs point into
+        elements = (_Element * len(order))()
+        for slot, element in zip(elements, order):
+            slave = element.outputs.slave
+            dll, inputs = slave.fmu.dll, element.inputs
+            sources = np.ascontiguousarray(element.sources, dtype=np.int64)
+            keep.append(sources)
+            slot.instance = slave.fmu.component
+            slot.set_real, slot.get_real = _address(dll.fmi2SetReal), _address(dll.fmi2GetReal)
+            slot.do_step = _address(dll.fmi2DoStep)
+            slot.n_coupled, slot.n_driven = len(element.sources), len(element.driven)
+            slot.sources = _pointer(sources)
+            if inputs is not None:
+                slot.input_references, slot.inputs = cast(inputs._references, c_void_p).value, _pointer(inputs.values)
+            if element.slopes is not None:
+                slopes = element.slopes
+                slot.set_slopes = _address(dll.fmi2SetRealInputDerivatives)
+                slot.slope_references = cast(slopes._references, c_void_p).value
+                slot.slope_orders = cast(slopes._orders, c_void_p).value
+                slot.slopes = _pointer(slopes.values)
+            slot.output_references = cast(element.outputs._references, c_void_p).value
+            slot.n_outputs, slot.span_start = len(element.outputs.names), element.span.start
+            slot.vehicle, slot.feedthrough = int(element.vehicle), int(element.feedthrough)
+        starts = np.cumsum([0] + [len(group) for group in groups], dtype=np.int64)
+        refreshed = np.array([index[id(e)] for e in system.refreshed], dtype=np.int64)
+        self.values, n = system.values, len(system.values)
+        self.now, self.before = np.zeros(n), np.zeros(n)
+        self.estimate, self.fresh = np.zeros(n), np.zeros(n)
+        keep += [starts, refreshed]
+        self.plan = _Plan(
+            elements=cast(elements, c_void_p).value, n_elements=len(order), group_starts=_pointer(starts),
+            n_groups=len(groups), refreshed=_pointer(refreshed), n_refreshed=len(refreshed), n_values=n,
+            n_drive=drive_size, linear_extrapolation=int(settings.extrapolation == "linear"),
+            gauss_seidel=int(settings.scheme == "gauss-seidel"), values=_pointer(self.values),
+            now=_pointer(self.now), before=_pointer(self.before), estimate=_pointer(self.estimate),
+            fresh=_pointer(self.fresh))
+        self._keep = (keep, elements)
+        self.failure = _Failure()
+
+    @staticmethod
+    def usable(system: _System) -> bool:
+        """Whether the C loop can run `system`: one pass per step (no iterations, scheme not plain), every FMU FMI 2,
+        and the loop compiled on this machine."""
+        settings = system.settings
+        return (settings.iterations == 0 and not settings.plain
+                and all(slave.fmi_version == 2 for slave in system.slaves.values()) and library() is not None)
+
+    def start(self) -> None:
+        """Take the coupling values at t0 from the initialised system."""
+        self.now[:] = self.system.now
+        self.before[:] = self.system.before
+
+    def steps(self, first: int, last: int, t0: float, h: float, drive: np.ndarray, rows: np.ndarray) -> LoopFailure | None:
+        """Steps first .. last - 1 with `drive` at t_first .. t_last (C-contiguous float64), each step's values row
+        into `rows` (last - first rows); the failing call, or None."""
+        drive = np.ascontiguousarray(drive, dtype=np.float64)
+        if rows.shape != (last - first, len(self.values)) or not rows.flags.c_contiguous or rows.dtype != np.float64:
+            raise ValueError(f"rows for steps {first}..{last} must be a C-contiguous float64 array of shape "
+                             f"({last - first}, {len(self.values)}), got {rows.shape} {rows.dtype}")
+        if self.library.nn_cosim_steps(byref(self.plan), first, last, t0, h, _pointer(drive), _pointer(rows),
+                                       byref(self.failure)) == 0:
+            return None
+        failure = self.failure
+        return LoopFailure(failure.step, self.order[failure.element], CALL_NAMES[failure.call], failure.status)
+
+    @property
+    def source(self) -> np.ndarray:
+        """The coupling values the elements were set from in the latest step (the estimate, with fresh outputs
+        under Gauss-Seidel)."""
+        return self.fresh if self.system.settings.scheme == "gauss-seidel" else self.estimate
+
