@@ -207,7 +207,7 @@ def run_demo(out: str | Path, settings: DemoSettings = DemoSettings(), log: Call
     vehicle_bushings = None
     if settings.vehicle_bushings:
         vehicle_bushings = train_vehicle_bushings(out / "vehicle_bushing", settings.road_test, settings.bushing_drive,
-                                                  settings.request, log)
+                                                  lambda preset: settings.request(preset, "bushing"), log)
         onnx_files |= vehicle_bushings.models
     road = run_road_test(out / "road_test", onnx_files, settings.road_test, log)
     for system, path in road.reports().items():
