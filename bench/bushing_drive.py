@@ -10,7 +10,9 @@ input is checked against its training envelope on all four bushings. Target: NRM
 bushing_fl_front. Prints one JSON document (last line).
 
 Usage: python bench/bushing_drive.py [--out DIR] [--duration S] [--source-seed N] [--heldout-seed N]
-       [--rig-duration S] [--margin M] [--elements NAME ...] [--lab-models DIR]
+       [--rig-duration S] [--margin M] [--elements NAME ...] [--lab-models DIR] [--unsettled]
+--unsettled starts the vehicle-derived rig record at zero deflection instead of the car's static one (the friction's
+anchor; `DriveDesign(settled=False)`).
 References are kept in --out and reused when present (their solve time is then not measured again).
 """
 
@@ -93,6 +95,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--elements", nargs="+", default=bushing_elements(SYSTEM),
                         help="bushings the drive is derived from (default: all four front LCA bushings)")
     parser.add_argument("--lab-models", type=Path, help="folder with the lab-trained bushing-*.onnx to reuse")
+    parser.add_argument("--unsettled", action="store_true",
+                        help="start the rig record at zero deflection, not at the car's static deflection")
     args = parser.parse_args(argv)
     if args.source_seed == args.heldout_seed:
         parser.error("the held-out drive must differ from the source drive")
@@ -104,7 +108,7 @@ def main(argv: list[str] | None = None) -> None:
     started = time.perf_counter()
     vehicle_record, truth = write_vehicle_rig(source, args.elements, out / "vehicle" / "bushing_vehicle.csv",
                                               RigOptions(seed=0, duration=args.rig_duration),
-                                              DriveDesign(margin=args.margin))
+                                              DriveDesign(margin=args.margin, settled=not args.unsettled))
     rig_s = time.perf_counter() - started
     lab_models, lab_training = train_set(lab_record, out / "lab", args.lab_models)
     vehicle_models, vehicle_training = train_set(vehicle_record, out / "vehicle", None)
