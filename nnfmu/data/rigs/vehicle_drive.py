@@ -14,7 +14,8 @@ the motion act as springs anchored where the bushing was last relaxed. The vehic
 relaxed at its static deflection (the first sample of the result, the same for every drive), so by default the rig
 record starts there too (the specimen mounted and settled at the car's static deflection) and moves to the working
 point over the fade; a drive faded in from zero deflection leaves the non-slipping elements anchored at zero, which
-on the front LCA bushing's radial channel shifted the force by ~13 N (rms 31 N) along a held-out car motion.
+shifted the front LCA bushing's radial network by 10.8 N on average (the force's rms about its mean: 20 N) along a
+held-out car motion (`bench/bushing_drive.py --unsettled`).
 """
 
 from __future__ import annotations
