@@ -27,7 +27,7 @@ from pathlib import Path
 from nnfmu.data import load_measurement, save_measurement
 from nnfmu.data.rigs import DriveDesign, RigOptions, write_rig, write_vehicle_rig
 from nnfmu.models.workflow import TrainRequest, train_from_file
-from nnfmu.roadtest import BUSHING_MODELS, monolithic_reference
+from nnfmu.roadtest import BUSHING_MODELS, RoadTestSettings, monolithic_reference
 from nnfmu.roadtest.bushing_drive import replay_bushing_networks
 from nnfmu.roadtest.systems import bushing_elements, vehicle_components
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
@@ -42,12 +42,15 @@ def log(line: str) -> None:
 
 
 def reference(out: Path, seed: int, duration: float) -> tuple[Path, float | None]:
-    """The full vehicle's monolithic reference on drive `seed` (kept as CSV in `out`; None seconds when reused)."""
-    path = out / f"reference-seed{seed}-{duration:g}s.csv"
+    """The full vehicle's monolithic reference on drive `seed`, faded in as the road test's (kept as CSV in `out`;
+    None seconds when reused)."""
+    fade = RoadTestSettings().fade_in
+    path = out / f"reference-seed{seed}-{duration:g}s-fade{fade:g}s.csv"
     if path.is_file():
         log(f"reusing {path}")
         return path, None
-    drive = generate_drive(DriveSettings(seed=seed, duration=duration + 1e-3, sample_rate=1000.0))
+    drive = generate_drive(DriveSettings(seed=seed, duration=duration + 1e-3, sample_rate=1000.0,
+                                         fade_in=fade))
     solved = monolithic_reference(SYSTEM, drive, vehicle_components(SYSTEM))
     log(f"reference on drive seed {seed}: {duration:g} s solved in {solved.seconds:.0f} s")
     return save_measurement(solved.measurement, path), solved.seconds

@@ -70,7 +70,7 @@ class VehicleBushingModels:
 def train_vehicle_bushings(out: str | Path, road: RoadTestSettings, settings: BushingDriveSettings = BushingDriveSettings(),
                            request: Callable[[str], TrainRequest] = lambda preset: TrainRequest(preset=preset),
                            log: Callable[[str], None] = print) -> VehicleBushingModels:
-    """Source reference (the road test's road class, speed, rate and reference step on drive seed
+    """Source reference (the road test's road class, speed, rate, fade-in and reference step on drive seed
     road.seed + seed_offset) -> vehicle-derived bushing rig record -> the four bushing presets trained on it, each
     with `request(preset)`; everything under `out` (source_drive.csv, source_reference.csv, rig/, models/)."""
     out = Path(out)
@@ -78,7 +78,7 @@ def train_vehicle_bushings(out: str | Path, road: RoadTestSettings, settings: Bu
     seed = road.seed + settings.seed_offset
     drive = generate_drive(DriveSettings(road_class=road.road_class, speed=road.speed, seed=seed,
                                          duration=settings.duration + 1 / road.sample_rate,
-                                         sample_rate=road.sample_rate))
+                                         sample_rate=road.sample_rate, fade_in=road.fade_in))
     drive_path = write_drive(drive, out / "source_drive.csv")
     log(f"bushing rig drive: source reference of the {SYSTEM} over {settings.duration:g} s on drive seed {seed}")
     reference = monolithic_reference(SYSTEM, drive, vehicle_components(SYSTEM), road.reference_step)

@@ -31,8 +31,9 @@ def vehicle_bushings(tmp_path_factory: pytest.TempPathFactory) -> VehicleBushing
 
 def test_source_runs_on_its_own_drive_seed_and_the_record_names_it(vehicle_bushings: VehicleBushingModels) -> None:
     drive = read_drive(vehicle_bushings.drive)
-    own = generate_drive(DriveSettings(seed=5, duration=0.501))  # the road test's seed 4 plus the offset
-    road = generate_drive(DriveSettings(seed=4, duration=0.501))
+    fade = RoadTestSettings().fade_in  # the road test's drives start from rest
+    own = generate_drive(DriveSettings(seed=5, duration=0.501, fade_in=fade))  # the road test's seed 4 plus the offset
+    road = generate_drive(DriveSettings(seed=4, duration=0.501, fade_in=fade))
     for channel in own.names:
         assert np.allclose(drive[channel], own[channel], rtol=1e-6, atol=1e-9)
         assert not np.allclose(drive[channel], road[channel], rtol=1e-3, atol=1e-6)
