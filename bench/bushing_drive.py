@@ -90,7 +90,7 @@ def judged(models: dict[str, Path], held_out: Path, folder: Path) -> dict[str, o
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=Path("bench-out/bushing_drive"))
-    parser.add_argument("--duration", type=float, default=20.0, help="length of both references [s]")
+    parser.add_argument("--duration", type=float, default=50.0, help="length of both references [s]")
     parser.add_argument("--source-seed", type=int, default=1)
     parser.add_argument("--heldout-seed", type=int, default=0)
     parser.add_argument("--rig-duration", type=float, default=60.0)

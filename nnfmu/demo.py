@@ -86,8 +86,8 @@ class DemoSettings:
 
     @property
     def bushing_drive(self) -> BushingDriveSettings:
-        """Quick: a 0.5 s source reference and a 10 s rig record (a smoke run); full: the road test's 20 s and the
-        bushing rig's 60 s."""
+        """Quick: a 0.5 s source reference and a 10 s rig record (a smoke run); full: a 50 s source reference (the thesis
+        drive's length) and the bushing rig's 60 s."""
         if self.quick:
             return BushingDriveSettings(duration=0.5, rig_duration=10.0, rig_seed=self.seed)
         return BushingDriveSettings(rig_seed=self.seed)
