@@ -4,7 +4,6 @@ derived from all four front LCA bushings, the four presets trained on it, their 
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import onnx
