@@ -15,7 +15,7 @@ from .bushing_rig import BushingRig, describe_params, run_bushing_rig
 from .damper import DamperParams
 from .damper_rig import UNITS as DAMPER_UNITS
 from .damper_rig import DamperDyno, run_damper_dyno
-from .options import RigOptions, check_options, resolve_duration, resolve_effects
+from .options import VEHICLE_EXCITATION, RigOptions, check_options, resolve_duration, resolve_effects
 from .parameters import describe
 from .truth import build_truth, truth_path, write_truth
 
@@ -34,6 +34,9 @@ def simulate_rig(kind: str, options: RigOptions, params: DamperParams | BushingP
     Raises ValueError naming an unknown kind, effect, excitation or an unusable option value.
     """
     check_options(kind, options)
+    if options.excitation == VEHICLE_EXCITATION:
+        raise ValueError("a vehicle-derived bushing drive needs the vehicle's result: use simulate_vehicle_rig "
+                         "(nnfmu rig bushing --drive-from RESULT --element NAME)")
     effects = resolve_effects(kind, options.effects)
     duration = resolve_duration(kind, options)
     n = int(round(duration * options.sample_rate))
