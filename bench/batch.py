@@ -1,7 +1,7 @@
 """Campaign throughput on Dask: cases per hour serial vs a LocalCluster of 2 workers (parallel efficiency; target
->= 85 %), the engine's overhead per case (1-worker LocalCluster vs serial), and one worker's RSS and open files after 1000
-quarter-car cases vs after 10 (target: growth <= 10 %), beside the same for this process running them serially. Also
-the FMU set-up cost per case that reusing instances (fmi2Reset) would save. JSON lines, the summary last.
+>= 85 %), the engine's overhead per case (1-worker LocalCluster vs serial), and one worker's RSS and open files after
+1000 quarter-car cases vs after 10 (target: growth <= 10 %), beside the same for this process running them serially.
+Also the FMU set-up cost per case that reusing instances (fmi2Reset) would save. JSON lines, the summary last.
 
 Usage: python bench/batch.py [--cases 60] [--duration 10] [--memory-cases 1000] [--memory-duration 1]
 

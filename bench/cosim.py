@@ -40,7 +40,8 @@ STEP = 1e-3  # [s] communication step
 DAMPER = "damper-hysteresis"
 QUICK_RECORDS = {"damper": 40.0, "bushing": 20.0}  # [s] rig records for the quick networks
 QUICK_TRAINING = {"restarts": 1, "max_epochs": 15}
-TARGETS = {"full_vehicle_wall_s": 2.5, "quarter_car_wall_s": 1.0}  # [s] for 50 s simulated (full vehicle: 20x real time)
+# [s] for 50 s simulated (full vehicle: 20x real time)
+TARGETS = {"full_vehicle_wall_s": 2.5, "quarter_car_wall_s": 1.0}
 MOTION_CHANNELS = ("body_heave", "body_pitch", "lca_fl_angle", "damper_fl_displacement",
                    "bushing_fl_front_axial_displacement", "bushing_fl_front_radial_displacement")
 BOUNDED_RATIO = 10.0  # a diverging loop grows by orders of magnitude; a stable one stays within tens of percent
@@ -142,7 +143,8 @@ def main() -> None:
                   "vehicle_sample_period_s": STEP, "damper_network": DAMPER,
                   "bushings": "network FMUs on stabilised vehicle ports", "network_output_filter": "FMU default (off)",
                   "models": sys.argv[1] if len(sys.argv) > 1 else "quick-trained (bench)",
-                  "cpus": os.cpu_count(), "load_average_1min_before_runs": round(load, 2), "python": platform.python_version(), "machine": platform.machine()},
+                  "cpus": os.cpu_count(), "load_average_1min_before_runs": round(load, 2),
+                  "python": platform.python_version(), "machine": platform.machine()},
     }, allow_nan=False))
 
 

@@ -90,14 +90,15 @@ def main() -> None:
             for name, kw in SCHEMES.items():
                 started = time.perf_counter()
                 run = cosimulate(system, drive, CosimSettings(step=h, stop_time=duration, **kw))
-                row = {"step_ms": h * 1e3, "scheme": name, "errors": errors(run.measurement, exact, drive.sample_period),
+                row = {"step_ms": h * 1e3, "scheme": name,
+                       "errors": errors(run.measurement, exact, drive.sample_period),
                        "mean_iterations": round(run.mean_iterations, 2), "unconverged": run.unconverged_steps,
                        "wall_s": round(time.perf_counter() - started, 2)}
                 table[(h, name)] = row
                 print(json.dumps(row), flush=True)
     at_1ms = {name: {c: round(table[(1e-3, name)]["errors"][c]["nrmse"], 6) for c in CHANNELS} for name in SCHEMES}
-    print(json.dumps({"duration_s": duration, "monolithic_rk4_step_s": 5e-5, "monolithic_wall_s": round(monolithic_s, 1),
-                      "nrmse_at_1ms": at_1ms}))
+    print(json.dumps({"duration_s": duration, "monolithic_rk4_step_s": 5e-5,
+                      "monolithic_wall_s": round(monolithic_s, 1), "nrmse_at_1ms": at_1ms}))
 
 
 if __name__ == "__main__":

@@ -6,7 +6,8 @@ and compare it with the true, noise-free output of the same run (and with the no
 damper-spline is trained on the dyno's sine series instead and judged as a dyno report would: its force at each
 test velocity (rebound +v and jounce -v) against the peak force per sine level of a noise-free sine test, the error
 given in % of the largest peak force (target <= 1 %). A dyno report lists the force at peak velocity, where the
-acceleration and so the inertia force vanish; the documented base curve plus seal friction is the second reference. Targets (issue): damper-hysteresis NRMSE <= 2 %, each bushing channel <= 3 %.
+acceleration and so the inertia force vanish; the documented base curve plus seal friction is the second reference.
+Targets (issue): damper-hysteresis NRMSE <= 2 %, each bushing channel <= 3 %.
 
 Usage: python bench/networks.py [--presets NAME ...] [--test-duration S] [--variant default|thesis|gru]
 """
@@ -36,7 +37,9 @@ def _train(name: str, lab, variant: str):
     """Train preset `name` as `variant` says: "default", "thesis" (its inputs, delays and fixed size) or "gru"."""
     preset = get_preset(name)
     spec = preset.thesis_spec if variant == "thesis" else preset.spec
-    architecture = {"default": preset.architecture, "thesis": preset.thesis, "gru": recurrent(preset.architecture)}[variant]
+    architecture = {
+        "default": preset.architecture, "thesis": preset.thesis, "gru": recurrent(preset.architecture)
+    }[variant]
     started = time.perf_counter()
     result = train_model(lab.measurement, spec, architecture, preset.settings)
     return spec, result, time.perf_counter() - started
@@ -94,7 +97,8 @@ def _level_peaks(measurement, levels: list[dict]) -> tuple[np.ndarray, np.ndarra
 
 
 def bench_spline(variant: str) -> dict:
-    """damper-spline trained on the noisy sine series; its F(±v) against the noise-free dyno report and the base curve."""
+    """damper-spline trained on the noisy sine series; its F(±v) against the noise-free dyno report and the base
+    curve."""
     sine = simulate_rig("damper", RigOptions(seed=0, excitation="sine"))
     _, result, seconds = _train("damper-spline", sine, variant)
     clean = simulate_rig("damper", RigOptions(seed=0, excitation="sine", noise=0.0))
@@ -137,7 +141,9 @@ def main(argv: list[str] | None = None) -> None:
         print(f"{name}: done", file=sys.stderr, flush=True)
     document = {
         "benchmark": "nnfmu network presets on the rig simulators",
-        "machine": {"python": platform.python_version(), "torch": torch.__version__, "threads": torch.get_num_threads()},
+        "machine": {
+            "python": platform.python_version(), "torch": torch.__version__, "threads": torch.get_num_threads()
+        },
         "variant": args.variant,
         "presets": results,
         "all_pass": all(r["pass"] for r in results.values()),

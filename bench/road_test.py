@@ -1,10 +1,13 @@
 """The thesis's road-test cases at full length: quarter car and full vehicle on a 50 s class C drive (JSON out).
 
-Usage: python bench/road_test.py [MODELS_DIR] [OUT_DIR] [DURATION_S]
+Usage: python bench/road_test.py [MODELS_DIR] [OUT_DIR] [DURATION_S] [--bushings vehicle|lab]
 MODELS_DIR holds <preset>.onnx for the two damper and four bushing presets (e.g. a demo's models/ folder); when it
-does not exist they are trained there first on default rig records with the presets' default settings. DURATION_S
-(default 50) shortens both systems' drives (20 s finishes in minutes on 2 cores). The co-simulations run the master
-and the FMUs at their defaults. Progress goes to stderr; the last stdout line is one JSON object: run times,
+does not exist they are trained there first on default rig records with the presets' default settings. With
+`--bushings vehicle` (the default, as in `nnfmu demo`) the road test's bushing networks are instead trained on a rig
+record derived from the vehicle's own bushing deflections on another drive seed (`train_vehicle_bushings`, in
+OUT_DIR/vehicle_bushing); `lab` keeps MODELS_DIR's. DURATION_S (default 50) shortens both systems' drives (20 s
+finishes in minutes on 2 cores). The co-simulations run the master and the FMUs at their defaults. Progress goes to
+stderr; the last stdout line is one JSON object: run times, which record the bushing networks were trained on,
 `realtime_factor_full_vehicle` (simulated seconds per wall second of the full vehicle with the hysteresis damper
 networks), the error `budget` (per system, channel and damper model: nrmse_total, nrmse_network, nrmse_coupling,
 damage_ratio; see nnfmu/roadtest/budget.py), the thesis comparison, and the largest use of each network input's
@@ -13,6 +16,7 @@ training envelope.
 
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 import time
@@ -21,7 +25,7 @@ from pathlib import Path
 from nnfmu.data.rigs import RigOptions, write_rig
 from nnfmu.demo import MOVING_MASS_BY_RIG, PRESETS_BY_RIG
 from nnfmu.models.workflow import TrainRequest, train_from_file
-from nnfmu.roadtest import RoadTestSettings, SystemRun, run_road_test
+from nnfmu.roadtest import BushingDriveSettings, RoadTestSettings, SystemRun, run_road_test, train_vehicle_bushings
 
 
 def models_in(folder: Path, durations: dict[str, float] | None = None, **training: int) -> dict[str, Path]:
@@ -44,15 +48,30 @@ def models_in(folder: Path, durations: dict[str, float] | None = None, **trainin
     return models
 
 
+def log(line: str) -> None:
+    print(line, file=sys.stderr, flush=True)
+
+
 def main() -> None:
-    folder = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("bench-out/models")
-    out = Path(sys.argv[2]) if len(sys.argv) > 2 else Path("bench-out/road_test")
-    duration = float(sys.argv[3]) if len(sys.argv) > 3 else 50.0
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("folder", nargs="?", type=Path, default=Path("bench-out/models"), help="MODELS_DIR")
+    parser.add_argument("out", nargs="?", type=Path, default=Path("bench-out/road_test"), help="OUT_DIR")
+    parser.add_argument("duration", nargs="?", type=float, default=50.0, help="drive length [s]")
+    parser.add_argument("--bushings", choices=("vehicle", "lab"), default="vehicle",
+                        help="train the bushing networks on a vehicle-derived rig record, or use MODELS_DIR's")
+    args = parser.parse_args()
+    out, duration = args.out, args.duration
     started = time.perf_counter()
-    models = models_in(folder)
-    train_seconds = time.perf_counter() - started
+    models = models_in(args.folder)
     settings = RoadTestSettings(quarter_car=SystemRun(duration), full_vehicle=SystemRun(duration))
-    result = run_road_test(out, models, settings, log=lambda line: print(line, file=sys.stderr, flush=True))
+    bushing_networks: dict[str, object] = {"trained_on": "the bushing rig's lab record"}
+    if args.bushings == "vehicle":
+        vehicle = train_vehicle_bushings(out / "vehicle_bushing", settings, BushingDriveSettings(), log=log)
+        models |= vehicle.models
+        bushing_networks = {"trained_on": str(vehicle.rig), "source_reference": str(vehicle.source),
+                            "seconds": {k: round(v, 1) for k, v in vehicle.seconds.items()}}
+    train_seconds = time.perf_counter() - started
+    result = run_road_test(out, models, settings, log=log)
     summary = json.loads(result.summary.read_text())
     envelope = {}
     for system in summary["systems"]:
@@ -62,6 +81,7 @@ def main() -> None:
     full = next((s for s in summary["systems"] if s["system"] == "full-vehicle"), None)
     print(json.dumps({
         "duration_s": duration, "training_s": round(train_seconds, 1), "road_test_s": round(result.seconds, 1),
+        "bushing_networks": bushing_networks,
         "realtime_factor_full_vehicle": round(full["duration_s"] / full["seconds"]["damper-hysteresis"], 2)
         if full else None,
         "budget": [row for s in summary["systems"] for row in s["budget"]],

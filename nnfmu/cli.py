@@ -87,20 +87,52 @@ def rig(
     seed: int = typer.Option(0, help="Seed for excitation and sensor noise."),
     noise: float = typer.Option(1.0, help="Multiplier of the realistic sensor noise (0: exact values)."),
     effects: Optional[str] = typer.Option(None, help="Comma-separated effects to switch on, or 'none' (default: the kind's defaults)."),
-    excitation: str = typer.Option("lab", help="lab (sine series + random), random (held-out test data) or sine."),
+    excitation: Optional[str] = typer.Option(None, help="lab (default: sine series + random), random (held-out test data), sine, or vehicle (with --drive-from)."),
+    drive_from: Optional[Path] = typer.Option(None, "--drive-from", help="Bushing only: a vehicle result (co-simulation or monolithic reference) whose bushing deflections the drive is derived from."),
+    element: Optional[list[str]] = typer.Option(None, help="With --drive-from: bushing element(s) to derive the drive from, e.g. bushing_fl_front (repeat or comma-separate; the envelope covers them all)."),
+    margin: float = typer.Option(1.2, help="With --drive-from: the drive's excursions over the simulated ones on each side of the working point."),
+    band: str = typer.Option("0.5:40", help="With --drive-from: the rig controller's pass band LOW:HIGH [Hz]."),
+    default_sensors: bool = typer.Option(False, "--default-sensors", help="With --drive-from: record with the rig's default transducers instead of ranges sized for the test."),
 ) -> None:
     """Simulate a lab rig and write realistic "measured" data plus a separate truth file."""
     from nnfmu.data import DataError
     from nnfmu.data.rigs import RigOptions, write_rig
 
     chosen = None if effects is None else () if effects.strip() == "none" else tuple(_split([effects]))
+    vehicle = drive_from is not None or excitation == "vehicle"
     options = RigOptions(sample_rate=sample_rate, duration=duration, seed=seed, noise=noise, effects=chosen,
-                         excitation=excitation)
+                         excitation=excitation or ("vehicle" if vehicle else "lab"))
     try:
-        data_path, truth_path = write_rig(kind, check_output_file(out, []), options)
+        target = check_output_file(out, [drive_from] if drive_from is not None else [])
+        if vehicle:
+            data_path, truth_path = _vehicle_rig(kind, drive_from, _split(element), target, options, margin, band,
+                                                 not default_sensors)
+        else:
+            data_path, truth_path = write_rig(kind, target, options)
     except (ValueError, DataError) as error:
         _fail(error)
     typer.echo(f"data: {data_path}\ntruth (for evaluation only, never for training): {truth_path}")
+
+
+def _vehicle_rig(kind: str, source: Optional[Path], elements: list[str], out: Path, options, margin: float,
+                 band: str, fit_sensors: bool) -> tuple[Path, Path]:
+    """`nnfmu rig bushing --drive-from`: check the combination of options, then write the vehicle-derived record."""
+    from nnfmu.data.rigs import DriveDesign, write_vehicle_rig
+
+    if kind != "bushing":
+        raise ValueError(f"--drive-from derives a bushing rig drive; the {kind} rig has none")
+    if source is None:
+        raise ValueError("excitation 'vehicle' needs --drive-from RESULT (a vehicle result file)")
+    if options.excitation != "vehicle":
+        raise ValueError(f"--drive-from sets the excitation to 'vehicle'; it cannot be {options.excitation!r} too")
+    if not elements:
+        raise ValueError("--drive-from needs --element NAME (e.g. bushing_fl_front)")
+    try:
+        low, high = (float(v) for v in band.split(":"))
+    except ValueError:
+        raise ValueError(f"--band must be LOW:HIGH in Hz, e.g. 0.5:40; got {band!r}") from None
+    design = DriveDesign(margin=margin, band=(low, high), fit_sensors=fit_sensors)
+    return write_vehicle_rig(source, elements, out, options, design)
 
 
 def _channel_map(items: Optional[list[str]]) -> dict[str, str]:
@@ -200,6 +232,7 @@ def demo(
     out: Path = typer.Option(Path("demo-out"), "--out", "-o", help="Folder for everything the demo writes."),
     seed: int = typer.Option(0, help="Seed of the rig records and the training."),
     quick: bool = typer.Option(False, help="Short records and training: checks every stage runs, not results to quote."),
+    lab_bushings: bool = typer.Option(False, "--lab-bushings", help="Road test with the bushing networks of the lab record instead of ones trained on a vehicle-derived rig record."),
 ) -> None:
     """Run the pipeline end to end on built-in data: rig data, networks, ONNX, FMUs, replay, road test, loop."""
     from rich.console import Console
@@ -210,7 +243,8 @@ def demo(
     console = Console(markup=False)  # diagnosis test names carry brackets: test[velocity]
     try:
         with _warnings_as_lines():
-            summary = run_demo(out, DemoSettings(seed=seed, quick=quick), log=console.print)
+            summary = run_demo(out, DemoSettings(seed=seed, quick=quick, vehicle_bushings=not lab_bushings),
+                               log=console.print)
     except OutputPathError as error:
         _fail(error)
     table = Table(title="component FMUs replayed on held-out random rig records")

@@ -1,4 +1,5 @@
-"""The component description: one object that feeds the ONNX metadata, the FMU model description, the C and the Python FMU.
+"""The component description: one object that feeds the ONNX metadata, the FMU model description, the C and the
+Python FMU.
 
 An nnfmu ONNX file is a *step function*: it maps the inputs at sample k (physical units) and the state at sample k
 to the outputs at sample k (physical units) and the state at sample k+1. `Component` says which graph tensors are
@@ -71,8 +72,8 @@ class Component:
     that takes its value at the start of a sample's interval: such a component (a vehicle, solved exactly between
     samples) has its inputs interpolated linearly between samples by the FMU (docs/fmu.md); empty: inputs are
     sampled (a network). `filter_cutoff` [Hz] is the start value of the FMU's output
-    low-pass (0: off, the default: what the FMU reports is the model itself). `metadata` holds provenance: nnfmu version,
-    training data hash, feature spec, training settings and metrics.
+    low-pass (0: off, the default: what the FMU reports is the model itself). `metadata` holds provenance: nnfmu
+    version, training data hash, feature spec, training settings and metrics.
     """
 
     name: str

@@ -5,10 +5,12 @@ lab record and exported as an ONNX step graph; each graph is built into a native
 held-out record with fmpy and validated against the measurement (NRMSE, R², peaks, PSD, rainflow pseudo-damage).
 Then the road test (`nnfmu.roadtest`): the damper and bushing networks as FMUs in the quarter car and the full
 vehicle on a generated ISO 8608 class C drive, against the monolithic reference with the rigs' truth physics, with
-the thesis comparison (spline vs hysteresis network vs reference) in a report per system. Last, the loop
-(`nnfmu.loop`): a damper whose rig record carries two effects the model was not told about (the gas spring of a
-monotube and the oil's warming), a hysteresis network trained on the record's fit blocks, and `run_loop` tracing the
-residual to the missing effects, adding them and reporting the held-out error before and after.
+the bushing networks trained on a rig record whose drive is derived from the vehicle's own bushing deflections on
+another drive (`nnfmu.roadtest.bushing_drive`, as the thesis designed its rig data), and with the thesis comparison
+(spline vs hysteresis network vs reference) in a report per system. Last, the loop (`nnfmu.loop`): a damper whose
+rig record carries two effects the model was not told about (the gas spring of a monotube and the oil's warming), a
+hysteresis network trained on the record's fit blocks, and `run_loop` tracing the residual to the missing effects,
+adding them and reporting the held-out error before and after.
 """
 
 from __future__ import annotations
@@ -34,7 +36,9 @@ from nnfmu.loop.run import LoopReport, run_loop
 from nnfmu.models import TrainSettings, get_preset, train_model
 from nnfmu.models.workflow import TrainRequest, train_from_file
 from nnfmu.out_paths import check_output_dir, mark_output_dir
-from nnfmu.roadtest import RoadTestSettings, SystemRun, run_road_test
+from nnfmu.roadtest import (
+    BushingDriveSettings, RoadTestSettings, SystemRun, VehicleBushingModels, run_road_test, train_vehicle_bushings,
+)
 from nnfmu.validate import ValidationSettings, compare, write_report
 
 # The loop stage's damper has these; its starting model has neither displacement nor temperature input.
@@ -55,10 +59,12 @@ PRESETS_BY_RIG: dict[str, tuple[str, ...]] = {
 @dataclass(frozen=True)
 class DemoSettings:
     """seed: rig and training seed (the test records use seed + 1); quick: short records and short training, a smoke
-    run of every stage (used by the tests), not results to quote."""
+    run of every stage (used by the tests), not results to quote; vehicle_bushings: the road test's bushing networks
+    are trained on a rig record derived from the vehicle (`train_vehicle_bushings`) instead of the lab record."""
 
     seed: int = 0
     quick: bool = False
+    vehicle_bushings: bool = True
 
     def lab_duration(self, rig: str) -> float | None:
         return ({"damper": 40.0, "bushing": 20.0}[rig]) if self.quick else None
@@ -69,15 +75,23 @@ class DemoSettings:
 
     @property
     def road_test(self) -> RoadTestSettings:
-        """Quick: a 2 s quarter car and a 0.3 s full vehicle, two compared channels each (smoke runs of every road-test stage; the full vehicle's metrics are not meaningful that short). Full: the
-        thesis's 50 s drive for the quarter car; 20 s for the full vehicle, whose monolithic reference costs several
-        seconds per simulated second on 2 cores (the 50 s case is `bench/road_test.py`'s)."""
+        """Quick: a 2 s quarter car and a 0.3 s full vehicle, two compared channels each (smoke runs of every
+        road-test stage; the full vehicle's metrics are not meaningful that short). Full: the thesis's 50 s drive for
+        both systems, as `bench/road_test.py` runs it."""
         if self.quick:
             return RoadTestSettings(
                 quarter_car=SystemRun(2.0, channels=("damper_force", "damper_displacement")),
                 full_vehicle=SystemRun(0.3, channels=("damper_fl_force", "lca_fl_angle")),
                 seed=self.seed)
-        return RoadTestSettings(quarter_car=SystemRun(50.0), full_vehicle=SystemRun(20.0), seed=self.seed)
+        return RoadTestSettings(quarter_car=SystemRun(50.0), full_vehicle=SystemRun(50.0), seed=self.seed)
+
+    @property
+    def bushing_drive(self) -> BushingDriveSettings:
+        """Quick: a 0.5 s source reference and a 10 s rig record (a smoke run); full: a 50 s source reference (the thesis
+        drive's length) and the bushing rig's 60 s."""
+        if self.quick:
+            return BushingDriveSettings(duration=0.5, rig_duration=10.0, rig_seed=self.seed)
+        return BushingDriveSettings(rig_seed=self.seed)
 
     @property
     def loop_duration(self) -> float:
@@ -115,6 +129,7 @@ class DemoSummary:
     seconds: float
     road_test: dict[str, Path]
     loop: LoopReport
+    vehicle_bushings: VehicleBushingModels | None = None
 
 
 def _single(m: Measurement, channel: str, label: str) -> Measurement:
@@ -143,9 +158,19 @@ def close_the_loop(out: Path, settings: DemoSettings, log: Callable[[str], None]
     return report
 
 
+def _bushing_origin(vehicle: VehicleBushingModels | None, onnx_files: dict[str, Path]) -> dict[str, object]:
+    """Which record the road test's bushing networks were trained on, and their files."""
+    if vehicle is None:
+        return {"trained_on": "the bushing rig's lab record",
+                "models": {p: str(onnx_files[p]) for p in PRESETS_BY_RIG["bushing"]}}
+    return {"trained_on": str(vehicle.rig), "source_reference": str(vehicle.source), "truth": str(vehicle.truth),
+            "models": {p: str(path) for p, path in vehicle.models.items()},
+            "seconds": {k: round(v, 1) for k, v in vehicle.seconds.items()}}
+
+
 def run_demo(out: str | Path, settings: DemoSettings = DemoSettings(), log: Callable[[str], None] = print) -> DemoSummary:
-    """Run every stage into `out` (rig/, models/, fmu/, report/, road_test/, loop/, summary.json); return what it
-    measured."""
+    """Run every stage into `out` (rig/, models/, fmu/, report/, vehicle_bushing/, road_test/, loop/, summary.json);
+    return what it measured."""
     started = time.perf_counter()
     out = check_output_dir(out, "demo")
     out.mkdir(parents=True, exist_ok=True)
@@ -182,16 +207,22 @@ def run_demo(out: str | Path, settings: DemoSettings = DemoSettings(), log: Call
                            "records": "lab: sine series + random (training); test: band-limited random (held out)"})
     log(f"component report {report}")
     onnx_files = {r.preset: Path(r.onnx) for r in results}
+    vehicle_bushings = None
+    if settings.vehicle_bushings:
+        vehicle_bushings = train_vehicle_bushings(out / "vehicle_bushing", settings.road_test, settings.bushing_drive,
+                                                  lambda preset: settings.request(preset, "bushing"), log)
+        onnx_files |= vehicle_bushings.models
     road = run_road_test(out / "road_test", onnx_files, settings.road_test, log)
     for system, path in road.reports().items():
         log(f"road test {system}: report {path}")
     loop = close_the_loop(out, settings, log)
     summary = DemoSummary(out=out, report=report, models=results, seconds=time.perf_counter() - started,
-                          road_test=road.reports(), loop=loop)
+                          road_test=road.reports(), loop=loop, vehicle_bushings=vehicle_bushings)
     write_text_atomic(out / "summary.json", json.dumps(
         {"report": str(report), "seconds": round(summary.seconds, 1), "models": [asdict(r) for r in results],
          "road_test": {"summary": str(road.summary), "reports": {k: str(v) for k, v in road.reports().items()},
-                       "seconds": round(road.seconds, 1)},
+                       "seconds": round(road.seconds, 1),
+                       "bushing_networks": _bushing_origin(vehicle_bushings, onnx_files)},
          "loop": {"report": str(out / "loop" / "report.json"), "effects_added": loop.effects_added,
                   "error_before": loop.error_before, "error_after": loop.error_after}},
         indent=2))

@@ -23,6 +23,9 @@ def test_quick_demo_runs_every_stage(tmp_path: Path) -> None:
     assert [m["preset"] for m in written["models"]] == presets
     assert sorted(summary.road_test) == ["full-vehicle", "quarter-car"]
     assert all(path.is_file() for path in summary.road_test.values())
+    bushings = written["road_test"]["bushing_networks"]  # trained on a rig record derived from the car's deflections
+    assert summary.vehicle_bushings is not None and bushings["trained_on"] == str(summary.vehicle_bushings.rig)
+    assert all(Path(path).is_file() and "vehicle_bushing" in path for path in bushings["models"].values())
     road = json.loads(Path(written["road_test"]["summary"]).read_text())
     quarter = road["systems"][0]
     assert quarter["system"] == "quarter-car"

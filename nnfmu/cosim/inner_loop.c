@@ -99,7 +99,7 @@ static int set_inputs(const nn_plan *plan, int64_t index, const double *source, 
         }
         if (e->set_slopes != NULL) {
             for (i = 0; i < n; i++) e->slopes[i] = (source[e->sources[i]] - plan->now[e->sources[i]]) / h;
-            for (i = 0; i < e->n_driven; i++) e->slopes[n + i] = (end[i] - e->inputs[n + i]) / h;
+            for (i = 0; i < e->n_driven; i++) e->slopes[n + i] = (end[i] - drive[i]) / h;
             return failed(failure, step, index, NN_CALL_SLOPES,
                           e->set_slopes(e->instance, e->slope_references, n_inputs, e->slope_orders, e->slopes));
         }

@@ -165,7 +165,9 @@ class CompiledLoop:
         self.now[:] = self.system.now
         self.before[:] = self.system.before
 
-    def steps(self, first: int, last: int, t0: float, h: float, drive: np.ndarray, rows: np.ndarray) -> LoopFailure | None:
+    def steps(
+        self, first: int, last: int, t0: float, h: float, drive: np.ndarray, rows: np.ndarray
+    ) -> LoopFailure | None:
         """Steps first .. last - 1 with `drive` at t_first .. t_last (C-contiguous float64), each step's values row
         into `rows` (last - first rows); the failing call, or None."""
         drive = np.ascontiguousarray(drive, dtype=np.float64)

@@ -307,7 +307,7 @@ class _System:
             if element.slopes is not None and not self.settings.plain:
                 n = len(element.sources)
                 element.slopes.values[:n] = (source[element.sources] - self.now[element.sources]) / h
-                element.slopes.values[n:] = (end - element.driven) / h
+                element.slopes.values[n:] = (end - drive) / h  # not the buffer: a repeat finds t_{n+1} there
                 try:
                     element.slopes.set()
                 except FmiStatusError as error:

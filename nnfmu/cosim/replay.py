@@ -36,7 +36,9 @@ class ReplaySettings:
         return {name: float(value) for name, value in chosen.items() if value is not None}
 
 
-def replay_fmu(fmu_path: str | Path, measurement: Measurement, settings: ReplaySettings = ReplaySettings()) -> Measurement:
+def replay_fmu(
+    fmu_path: str | Path, measurement: Measurement, settings: ReplaySettings = ReplaySettings()
+) -> Measurement:
     """Drive the FMU with the measured channels named like its inputs; return its outputs on the measurement's time."""
     with FmuSlave(fmu_path, instance_name=Path(fmu_path).stem) as slave:
         inputs = slave.names("input")

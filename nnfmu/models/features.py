@@ -151,7 +151,9 @@ class Lowpass(Derived):
         return -math.expm1(-sample_period / self.tau)
 
     def state_slots(self) -> tuple[StateSlot, ...]:
-        return (StateSlot(name=f"{self.name}[k-1]", channel=self.channel, description=f"previous output of {self.name}"),)
+        return (
+            StateSlot(name=f"{self.name}[k-1]", channel=self.channel, description=f"previous output of {self.name}"),
+        )
 
     def compute(self, x: np.ndarray, initial: np.ndarray, sample_period: float) -> np.ndarray:
         a = self.coefficient(sample_period)
@@ -451,7 +453,9 @@ class FeatureSpec:
             offset += k
         return np.stack(columns, axis=1)
 
-    def emit(self, g: NodeSink, inputs: dict[str, str], state: str | None, sample_period: float) -> tuple[str, str | None]:
+    def emit(
+        self, g: NodeSink, inputs: dict[str, str], state: str | None, sample_period: float
+    ) -> tuple[str, str | None]:
         """Nodes of one sample: input tensors [1] per channel, state [state_size] or None
         -> (features [n_features], state_next [state_size] or None)."""
         sample_period = _check_positive(sample_period, "sample period")

@@ -84,7 +84,9 @@ def weight_warning(largest: float) -> str | None:
     return None
 
 
-def split_metrics(output: np.ndarray, target: np.ndarray, target_scaler: MinMaxScaler, largest_weight: float) -> SplitMetrics:
+def split_metrics(
+    output: np.ndarray, target: np.ndarray, target_scaler: MinMaxScaler, largest_weight: float
+) -> SplitMetrics:
     """Metrics of `output` against `target`, both (n,) in SI units, n >= 1."""
     output = np.asarray(output, dtype=np.float64)
     target = np.asarray(target, dtype=np.float64)

@@ -8,16 +8,19 @@ or smoothed copy of another (nearly collinear after scaling), which a net can on
 opposite weights (the thesis's limit is |weight| <~ 10). Bushings: the same input channels plus a bank of
 first-order high-pass filters of the position, one time constant per decade (1, 10, 100 ms): c·highpass(x, tau) is
 the force of a Maxwell branch, so the bank is the memory of a generalised Maxwell (Prony-series) material, which a
-one-sample delay line at 1 kHz cannot hold. Damper hysteresis: velocity, its backward differences over 2 and 8 samples
-(valve lag, acceleration) instead of the thesis's single delay, and the seal friction's smoothed sign. Damper
-spline: velocity, the seal friction's smoothed sign and the valve's blow-off knee as tanh(v/0.1 m/s).
+one-sample delay line at 1 kHz cannot hold. The conical torque adds stop operators of the rotation (Prandtl elements,
+the feature-space form of the friction's Jenkins elements): at the few mrad a four-poster tilts a front LCA bushing its
+friction is half the torque and follows the motion since the last reversal. Damper hysteresis: velocity, its
+backward differences over 2 and 8 samples (valve lag, acceleration) instead of the thesis's single delay, and the
+seal friction's smoothed sign. Damper spline: velocity, the seal friction's smoothed sign and the valve's blow-off
+knee as tanh(v/0.1 m/s).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from nnfmu.models.features import Derived, Difference, FeatureSpec, Highpass, SmoothSign, Tap
+from nnfmu.models.features import Derived, Difference, FeatureSpec, Highpass, SmoothSign, Stop, Tap
 from nnfmu.models.train import Architecture, TrainSettings
 
 # Hidden sizes tried by default after the thesis's size (chosen by validation error).
@@ -37,6 +40,11 @@ VALVE_KNEE_VELOCITY = 0.1
 # Rate scale [rad/s] of the conical channel's friction-sign feature: its friction is a larger share of its torque
 # than in the other channels (a stiff, small-angle channel), ~2 % of the peak rate of a front LCA bushing's rig drive.
 CONICAL_FRICTION_RATE = 0.05
+# Radii [rad] of the conical channel's stop operators (Prandtl elements, the Jenkins elements of Berg's friction in
+# the feature space): around the friction's x2 of ~2 mrad and the ±3-5 mrad a four-poster tilts a front LCA bushing,
+# where the friction is half the torque and depends on the motion since the last reversal (Masing), not on the rate's
+# sign; on the lab record's ±50 mrad they saturate into friction-sign features.
+CONICAL_STOP_RADII = (0.5e-3, 1.5e-3, 4.5e-3)
 
 
 @dataclass(frozen=True)
@@ -118,7 +126,8 @@ PRESETS: dict[str, Preset] = {
         _preset(
             "bushing-conical-torque", "bushing conical torque from conical rotation and rate (thesis 4-7-1 with delays)",
             ("conical_rotation", "conical_angular_velocity"), "conical_torque", (0, 1), 7,
-            (*memory_bank("conical_rotation"), SmoothSign("conical_angular_velocity", scale=CONICAL_FRICTION_RATE)),
+            (*memory_bank("conical_rotation"), SmoothSign("conical_angular_velocity", scale=CONICAL_FRICTION_RATE),
+             *(Stop("conical_rotation", radius=r) for r in CONICAL_STOP_RADII)),
         ),
     )
 }

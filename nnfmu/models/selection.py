@@ -64,7 +64,8 @@ def candidate_taps(measurement: Measurement, output: str, delays: tuple[int, ...
     taps += [Tap(c) for c in EXTRA_CANDIDATES if c in measurement and c != output]
     if not taps:
         raise ValueError(
-            f"{measurement.source}: none of the candidate inputs {[prefix + k for k in kinematics]} is in the measurement"
+            f"{measurement.source}: none of the candidate inputs {[prefix + k for k in kinematics]}"
+            " is in the measurement"
         )
     return taps
 
@@ -74,7 +75,9 @@ def _validation_mse(network: torch.nn.Module, x: torch.Tensor, y: torch.Tensor) 
         return float(torch.mean((network(x)[:, 0] - y) ** 2))
 
 
-def permutation_ranking(network: torch.nn.Module, data: PreparedData, names: list[str], seed: int) -> list[tuple[str, float]]:
+def permutation_ranking(
+    network: torch.nn.Module, data: PreparedData, names: list[str], seed: int
+) -> list[tuple[str, float]]:
     """Each feature's validation-MSE increase when its column alone is shuffled, largest first."""
     x, y = data.rows("validation")
     base = _validation_mse(network, x, y)
@@ -98,7 +101,10 @@ def spec_of(taps: list[Tap], chosen: list[str], output: str) -> FeatureSpec:
 
 
 def select_inputs(
-    measurement: Measurement, output: str, settings: SelectionSettings = SelectionSettings(), progress: Progress | None = None
+    measurement: Measurement,
+    output: str,
+    settings: SelectionSettings = SelectionSettings(),
+    progress: Progress | None = None,
 ) -> SelectionResult:
     """Rank the candidate inputs of `output` and choose the smallest set that predicts it about as well as any."""
     taps = candidate_taps(measurement, output)

@@ -28,7 +28,9 @@ class SplitFractions:
                 raise ValueError(f"split fraction {name} must be a number > 0, got {value!r}")
         total = self.train + self.validation + self.test
         if abs(total - 1.0) > 1e-9:
-            raise ValueError(f"split fractions must add up to 1, got {self.train} + {self.validation} + {self.test} = {total}")
+            raise ValueError(
+                f"split fractions must add up to 1, got {self.train} + {self.validation} + {self.test} = {total}"
+            )
         if isinstance(self.blocks, bool) or not isinstance(self.blocks, int) or self.blocks < 1:
             raise ValueError(f"blocks must be an integer >= 1, got {self.blocks!r}")
 
@@ -63,7 +65,11 @@ def contiguous_splits(n: int, fractions: SplitFractions = SplitFractions(), min_
         length = hi - lo
         n_train = int(round(length * fractions.train))
         n_validation = int(round(length * fractions.validation))
-        cuts = {"train": (lo, lo + n_train), "validation": (lo + n_train, lo + n_train + n_validation), "test": (lo + n_train + n_validation, hi)}
+        cuts = {
+            "train": (lo, lo + n_train),
+            "validation": (lo + n_train, lo + n_train + n_validation),
+            "test": (lo + n_train + n_validation, hi),
+        }
         for name, (start, stop) in cuts.items():
             if stop - start < min_samples:
                 raise ValueError(

@@ -23,7 +23,8 @@ class EarlyStopping:
         self._best_state: dict[str, torch.Tensor] | None = None
 
     def update(self, epoch: int, validation_loss: float, network: torch.nn.Module) -> bool:
-        """Record one epoch's validation loss; True when training should stop (patience exhausted or loss not finite)."""
+        """Record one epoch's validation loss; True when training should stop (patience exhausted or loss not
+        finite)."""
         if not math.isfinite(validation_loss):
             return True
         if validation_loss < self.best_loss:

@@ -81,7 +81,9 @@ class TrainSettings:
     def __post_init__(self) -> None:
         if self.optimizer not in ("auto", "lm", "adam", "lbfgs"):
             raise ValueError(f"optimizer must be auto, lm, adam or lbfgs, got {self.optimizer!r}")
-        for name in ("max_epochs", "patience", "restarts", "lm_max_samples", "batch_size", "chunk_length", "sequences_per_batch"):
+        for name in (
+            "max_epochs", "patience", "restarts", "lm_max_samples", "batch_size", "chunk_length", "sequences_per_batch"
+        ):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name} must be >= 1, got {getattr(self, name)!r}")
         if not 0 <= self.burn_in < self.chunk_length:
@@ -146,7 +148,10 @@ def prepare_data(measurement: Measurement, spec: FeatureSpec, fractions: SplitFr
     """Features of `spec` over the record, split in time, scaled with the training split's extremes."""
     missing = [c for c in (*spec.channels, spec.output) if c not in measurement]
     if missing:
-        raise ValueError(f"{measurement.source}: channel(s) {missing} needed by the feature spec are missing (has {measurement.names})")
+        raise ValueError(
+            f"{measurement.source}: channel(s) {missing} needed by the feature spec are missing"
+            f" (has {measurement.names})"
+        )
     features = spec.features({c: measurement[c] for c in spec.channels}, measurement.sample_period)
     target = np.asarray(measurement[spec.output], dtype=np.float64)
     splits = contiguous_splits(len(target), fractions)
@@ -200,7 +205,9 @@ def _fit_mlp_gradient(
     with torch.no_grad():
         log = TrainingLog(network, settings.patience, float(mse(x, y)), float(mse(x_val, y_val)))
     if method == "lbfgs":
-        optimiser: torch.optim.Optimizer = torch.optim.LBFGS(network.parameters(), max_iter=1, line_search_fn="strong_wolfe")
+        optimiser: torch.optim.Optimizer = torch.optim.LBFGS(
+            network.parameters(), max_iter=1, line_search_fn="strong_wolfe"
+        )
     else:
         optimiser = torch.optim.Adam(network.parameters(), lr=settings.learning_rate)
     reason = "max_epochs"
@@ -254,7 +261,9 @@ def _chunks(
     return torch.stack(xs), torch.stack(ys)
 
 
-def _fit_gru(network: GRUNet, data: PreparedData, settings: TrainSettings, on_epoch: Callable[[int, int], None]) -> FitHistory:
+def _fit_gru(
+    network: GRUNet, data: PreparedData, settings: TrainSettings, on_epoch: Callable[[int, int], None]
+) -> FitHistory:
     """Adam on overlapping training sequences (truncated back-propagation through time), early stopping on validation
     sequences; losses count only samples after each sequence's burn-in and inside its split."""
     x_train, y_train = _chunks(data.x, data.y, data.splits.train, settings.chunk_length, settings.burn_in)
@@ -348,7 +357,9 @@ def fit_best(
                 if progress is not None:
                     progress(label, (run + epoch / total) / runs)
 
-            network, history = fit_network(data, architecture.kind, hidden, settings, restart_seed(settings.seed, hidden, restart), on_epoch)
+            network, history = fit_network(
+                data, architecture.kind, hidden, settings, restart_seed(settings.seed, hidden, restart), on_epoch
+            )
             loss = history.best_validation_loss
             if best is None or loss < best[0]:
                 best = (loss, restart, network, history)
@@ -385,7 +396,10 @@ def train_model(
         target_scaler=data.target_scaler,
         sample_period=measurement.sample_period,
         units={c: measurement.units[c] for c in (*spec.channels, spec.output)},
-        envelope={c: (float(np.min(measurement[c][train_part])), float(np.max(measurement[c][train_part]))) for c in spec.channels},
+        envelope={
+            c: (float(np.min(measurement[c][train_part])), float(np.max(measurement[c][train_part])))
+            for c in spec.channels
+        },
         metrics={name: m.as_dict() for name, m in metrics.items()},
         data_hash=data_hash(measurement, [*spec.channels, spec.output]),
         settings={

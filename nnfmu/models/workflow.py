@@ -24,10 +24,11 @@ class TrainRequest:
 
     output: output channel; inputs/delays: replace the preset's input taps (delays apply to every input); hidden: one
     size, or several to choose among by validation error; thesis: the thesis's inputs, delays and fixed hidden size
-    instead of nnfmu's default (high-pass memory bank, hidden size by validation); recurrent: GRU instead of the MLP; select_inputs: choose the
-    inputs by sensitivity analysis (overrides the preset's and `inputs`); optimizer: auto, lm, adam or lbfgs;
-    channel_map: (file channel, nnfmu name) pairs passed to `load_measurement`; moving_mass [kg]: the dyno's mass
-    between load cell and actuator, subtracted from the force as m·a before training (`nnfmu.data.inertia`; 0: none).
+    instead of nnfmu's default (high-pass memory bank, hidden size by validation); recurrent: GRU instead of the MLP;
+    select_inputs: choose the inputs by sensitivity analysis (overrides the preset's and `inputs`); optimizer: auto, lm,
+    adam or lbfgs; channel_map: (file channel, nnfmu name) pairs passed to `load_measurement`; moving_mass [kg]: the
+    dyno's mass between load cell and actuator, subtracted from the force as m·a before training (`nnfmu.data.inertia`;
+    0: none).
     """
 
     preset: str

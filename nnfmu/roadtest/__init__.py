@@ -1,5 +1,6 @@
 """Virtual road test simulator runs: quarter car and full vehicle with network FMUs vs the monolithic reference."""
 
+from .bushing_drive import BushingDriveSettings, VehicleBushingModels, train_vehicle_bushings
 from .envelope import Excursion, excursion
 from .reference import Reference, actuator_inputs, monolithic_reference
 from .runs import RoadTestResult, RoadTestSettings, SystemResult, SystemRun, run_road_test
@@ -11,6 +12,7 @@ from .thesis import ThesisRow, amplitude_ratio, thesis_row
 
 __all__ = [
     "BUSHING_MODELS",
+    "BushingDriveSettings",
     "ComponentFmus",
     "DAMPER_MODELS",
     "Excursion",
@@ -22,6 +24,7 @@ __all__ = [
     "SystemResult",
     "SystemRun",
     "ThesisRow",
+    "VehicleBushingModels",
     "actuator_inputs",
     "amplitude_ratio",
     "build_component_fmus",
@@ -31,5 +34,6 @@ __all__ = [
     "monolithic_reference",
     "run_road_test",
     "thesis_row",
+    "train_vehicle_bushings",
     "write_system",
 ]

@@ -31,6 +31,7 @@ from nnfmu.vehicle.models.components import STABILISED
 from nnfmu.vehicle.models.full_vehicle import FRONT_CORNERS
 from nnfmu.vehicle.models.ports import CORNERS
 
+from .reference import settled_state
 from .truth_graphs import bushing_truth_graph, damper_truth_graph
 
 SYSTEMS = ("quarter-car", "full-vehicle")
@@ -117,9 +118,10 @@ def vehicle_components(system: str) -> dict[str, str]:
 
 def build_vehicle(system: str, out: Path, step: float) -> Path:
     """The vehicle FMU of `system` (`vehicle_components`) sampled at the communication `step` [s] (exact: every
-    component is a port, so the vehicle is linear)."""
-    return build_vehicle_fmu(system, out / f"{system}.fmu",
-                             VehicleBuildSettings(components=vehicle_components(system), sample_period=step))
+    component is a port, so the vehicle is linear), starting where the monolithic reference does (`settled_state`)."""
+    components = vehicle_components(system)
+    return build_vehicle_fmu(system, out / f"{system}.fmu", VehicleBuildSettings(
+        components=components, sample_period=step, initial_state=settled_state(system, components)))
 
 
 def write_system(system: str, vehicle_fmu: Path, damper_fmu: Path, bushing_fmu: Path | None, folder: Path,

@@ -49,7 +49,8 @@ def test_failing_cases_are_recorded_and_the_rest_go_on(quarter_car, tmp_path):
     assert set(failed) == {(e, "unstable") for e in ("C-20#0", "C-20#1", "bad-file")} | {
         ("bad-file", "linear"), ("bad-file", "firm")}
     assert failed[("C-20#0", "unstable")].startswith("CosimError: system 'quarter car', step from t = ")
-    assert "the coupling diverged: damper (damper-unstable.fmu) output force went from" in failed[("C-20#0", "unstable")]
+    assert ("the coupling diverged: damper (damper-unstable.fmu) output force went from"
+            in failed[("C-20#0", "unstable")])
     assert failed[("bad-file", "linear")] == ("DataError: bad.csv: line 3, column 'actuator_fl_displacement [m]': "
                                               "'zz' is not a number")
     ok = [r for r in rows if r["status"] == "ok"]

@@ -88,3 +88,42 @@ def test_the_refresh_gives_the_accelerations_the_force_of_the_step_end(systems) 
     unrefreshed, refreshed = errors(systems, refresh=False), errors(systems)
     for name in ("body_acceleration", "spindle_acceleration"):
         assert refreshed[name][1] * 5 < unrefreshed[name][1], (name, refreshed[name][1], unrefreshed[name][1])
+
+
+def trapezoidal(h: float) -> np.ndarray:
+    """Damper force of the implicit trapezoidal exchange, computed here on the vehicle package's model: over each
+    step the vehicle ramps from F_n to F_{n+1} (and the drive between its samples), with F_{n+1} = c v(t_{n+1}) solved
+    by fixed-point iteration. What iterating the master's step to convergence must give."""
+    car = build_quarter_car(QuarterCarParameters.load())
+    discrete = car.discretise(h, "foh")
+    stride = round(h / DRIVE.sample_period)
+    drive_at = {name: DRIVE[name][::stride] for name in VEHICLE_DRIVE}
+    velocity = car.output_index("damper_velocity")
+
+    def inputs(force: float, k: int) -> np.ndarray:
+        return car.input_vector({"damper_force": force, **{name: drive_at[name][k] for name in VEHICLE_DRIVE}})
+
+    x = np.array(initial_state(vehicle_model("quarter-car", VehicleBuildSettings())))
+    force = DAMPING * car.output_vector(x, inputs(0.0, 0))[velocity]
+    forces = [force]
+    for k in range(len(drive_at[VEHICLE_DRIVE[0]]) - 1):
+        end = force
+        for _ in range(60):
+            x_next = discrete.step(x, inputs(force, k), inputs(end, k + 1))
+            end = DAMPING * car.output_vector(x_next, inputs(end, k + 1))[velocity]
+        x, force = x_next, end
+        forces.append(force)
+    return np.array(forces)
+
+
+@pytest.mark.parametrize("refresh", [True, False])
+def test_iterating_the_default_converges_to_the_trapezoidal_exchange(systems, refresh: bool) -> None:
+    """The fixed point of a step is the implicit trapezoidal exchange, with and without the refresh (a repeat once
+    took the drive's slope from the refreshed buffer, holding the drive over the step)."""
+    h = 1e-3
+    with open_system(systems[h]) as system:
+        result = cosimulate(system, DRIVE, CosimSettings(step=h, iterations=30, tolerance=1e-13, refresh=refresh))
+    want = trapezoidal(h)
+    assert result.unconverged_steps == 0
+    got = result.measurement["damper_force"]
+    assert np.max(np.abs(got - want)) <= 1e-9 * np.max(np.abs(want))

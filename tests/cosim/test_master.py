@@ -68,7 +68,9 @@ def test_iterative_coupling_is_ten_times_better_than_gauss_seidel_at_1ms(errors:
 
 def test_jacobi_iterations_reach_the_same_fixed_point(systems: dict[float, Path]) -> None:
     gauss_seidel = _error(systems, 1e-3, CosimSettings(step=1e-3, iterations=30, tolerance=1e-12, **BASIC))
-    jacobi = _error(systems, 1e-3, CosimSettings(step=1e-3, iterations=60, tolerance=1e-12, **BASIC | {"scheme": "jacobi"}))
+    jacobi = _error(
+        systems, 1e-3, CosimSettings(step=1e-3, iterations=60, tolerance=1e-12, **BASIC | {"scheme": "jacobi"})
+    )
     assert jacobi == pytest.approx(gauss_seidel, rel=1e-6)
 
 

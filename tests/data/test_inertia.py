@@ -16,7 +16,9 @@ EFFECTS = ("hysteresis", "seal_friction")
 
 
 def run(effects: tuple[str, ...], noise: float) -> Measurement:
-    return simulate_rig("damper", RigOptions(duration=20.0, seed=3, noise=noise, effects=effects, excitation="random")).measurement
+    return simulate_rig(
+        "damper", RigOptions(duration=20.0, seed=3, noise=noise, effects=effects, excitation="random")
+    ).measurement
 
 
 def nrmse(x: np.ndarray, reference: np.ndarray) -> float:

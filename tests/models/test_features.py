@@ -139,7 +139,10 @@ def test_dict_round_trip_through_json(make):
         (lambda: Tap("velocity", (1, 1)), "duplicate delay"),
         (lambda: Tap("", (0,)), "''"),
         (lambda: FeatureSpec((Tap("velocity"), Tap("velocity", (1,))), "force"), "'velocity' is tapped twice"),
-        (lambda: FeatureSpec((Tap("velocity"),), "force", (SmoothSign("velocity"), SmoothSign("velocity"))), "duplicate feature names"),
+        (
+            lambda: FeatureSpec((Tap("velocity"),), "force", (SmoothSign("velocity"), SmoothSign("velocity"))),
+            "duplicate feature names",
+        ),
         (lambda: FeatureSpec((Tap("force"),), "force"), "'force' is also an input"),
         (lambda: FeatureSpec((), "force"), "no features"),
         (lambda: Lowpass("velocity", tau=0.0), "tau"),

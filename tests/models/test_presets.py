@@ -95,7 +95,9 @@ def test_custom_inputs_delays_and_output():
 
 
 def test_request_overrides_network_and_settings():
-    preset, architecture, settings = resolve(TrainRequest("damper-spline", hidden=(3, 5), restarts=1, seed=7, max_epochs=9))
+    preset, architecture, settings = resolve(
+        TrainRequest("damper-spline", hidden=(3, 5), restarts=1, seed=7, max_epochs=9)
+    )
     assert architecture.hidden == (3, 5) and architecture.kind == "mlp"
     assert (settings.restarts, settings.seed, settings.max_epochs) == (1, 7, 9)
     _, thesis, _ = resolve(TrainRequest("bushing-axial-torque", thesis=True))

@@ -135,7 +135,9 @@ def test_training_is_deterministic_for_a_seed():
     for a, b in zip(first.model.network.parameters(), second.model.network.parameters()):
         assert torch.equal(a, b)
     assert first.model.metrics == second.model.metrics
-    assert any(not torch.equal(a, b) for a, b in zip(first.model.network.parameters(), other.model.network.parameters()))
+    assert any(
+        not torch.equal(a, b) for a, b in zip(first.model.network.parameters(), other.model.network.parameters())
+    )
 
 
 def test_delays_capture_the_lag_a_static_map_cannot():
@@ -186,7 +188,9 @@ def test_gru_trains_and_predicts_sequentially():
     assert result.model.settings["optimizer_used"] == "adam"
     assert result.history.best_validation_loss < result.history.validation_loss[0]
     with pytest.raises(ValueError, match="Adam"):
-        train_model(m, FeatureSpec((Tap("velocity"),), "force"), Architecture("gru", (4,)), TrainSettings(optimizer="lm"))
+        train_model(
+            m, FeatureSpec((Tap("velocity"),), "force"), Architecture("gru", (4,)), TrainSettings(optimizer="lm")
+        )
 
 
 def test_missing_channel_is_named():

@@ -208,9 +208,23 @@ def test_controller_gain_is_the_analog_butterworth_magnitude():
         (DriveSettings(events=(Pothole(time=10.0, side="middle"),)), "'middle'"),
         (DriveSettings(events=(Pothole(time=49.99),)), "rear axle leaves"),
         (DriveSettings(events=(KerbStrike(time=0.0),)), "before the drive starts"),
+        (DriveSettings(duration=2.0, fade_in=3.0), "fade_in"),
+        (DriveSettings(fade_in=-0.5), "-0.5"),
     ],
 )
 def test_bad_settings_raise_an_error_naming_the_value(settings, named):
     with pytest.raises(DriveError) as error:
         generate_drive(settings)
     assert named in str(error.value)
+
+
+def test_a_faded_in_drive_starts_at_rest_and_is_the_road_after_the_fade():
+    """The weight and its slope are zero at t = 0 (a car at rest on the rig sees no step), one from fade_in on."""
+    plain = generate_drive(DriveSettings(duration=3.0))
+    faded = generate_drive(DriveSettings(duration=3.0, fade_in=0.5))
+    after = plain.time >= 0.5
+    for channel in CHANNELS:
+        assert abs(plain[channel][0]) > 1e-4  # m: the road's own height at the first sample
+        assert faded[channel][0] == 0.0 and abs(faded[channel][1]) < 1e-6
+        np.testing.assert_array_equal(faded[channel][after], plain[channel][after])
+    assert "0.5 s" in faded.notes["fade_in"] and plain.notes["fade_in"] == "none"

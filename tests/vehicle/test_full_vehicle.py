@@ -179,7 +179,9 @@ def test_stabilised_bushings_fed_their_linear_law_once_per_step_equal_the_built_
     ref = simulate(car, inputs, SimulationSettings(dt=dt), x0=x0)["lca_fl_angle"]
     diverged = {}
     for choice in ("stabilised", "external"):
-        ports = build_full_vehicle(linear_params, dampers_in | {n: choice for n in COMPONENTS if n.startswith("bushing")})
+        ports = build_full_vehicle(
+            linear_params, dampers_in | {n: choice for n in COMPONENTS if n.startswith("bushing")}
+        )
         disc, laws = ports.discretise(dt), _port_laws(ports, linear_params)
         x, angle = x0.copy(), []
         for k in range(len(t)):

@@ -10,7 +10,7 @@ import pytest
 
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import DamperParams, DamperTruth
-from nnfmu.roadtest.reference import monolithic_reference
+from nnfmu.roadtest.reference import monolithic_reference, settled_state
 from nnfmu.roadtest.systems import vehicle_components
 from nnfmu.vehicle.fmu import initial_state
 from nnfmu.vehicle.models import (
@@ -23,6 +23,7 @@ from nnfmu.vehicle.models import (
     VehicleParameters,
     build_full_vehicle,
     build_quarter_car,
+    rest_state,
     simulate_monolithic,
     truth_laws,
 )
@@ -173,3 +174,33 @@ def test_both_paths_report_divergence_at_the_same_time(params: VehicleParameters
                                 x0=car.equilibrium())
         messages.append(str(info.value))
     assert messages[0] == messages[1]
+
+
+def test_the_reference_starts_at_rest_on_the_truth_physics() -> None:
+    """The linear equilibrium holds the LCA on its reference bushings; the truth physics of the rear bushings is the
+    front rig bushing's (twice as stiff), so a run started there moves without any input; from the rest state on the
+    laws nothing moves."""
+    components = vehicle_components("full-vehicle")
+    vehicle = build_full_vehicle(VehicleParameters.load(), components)
+    laws = truth_laws([p.name for p in vehicle.inputs if not p.name.startswith("actuator")])
+    linear = np.array(initial_state(vehicle))
+    rest = rest_state(vehicle, laws, linear)
+    np.testing.assert_allclose(rest, settled_state("full-vehicle", components), rtol=0, atol=0)
+    assert np.max(np.abs(rest - linear)) > 1e-5  # m / rad: the LCA settles elsewhere on the stiffer rear bushings
+    still = {p.name: np.zeros(200) for p in vehicle.inputs if p.name.startswith("actuator")}
+    settings = MonolithicSettings(sample_period=PERIOD)
+    from_linear = simulate_monolithic(vehicle, laws, still, settings, linear)
+    from_rest = simulate_monolithic(vehicle, laws, still, settings, rest)
+    velocity = "bushing_fl_front_radial_velocity"
+    assert np.max(np.abs(from_linear[velocity])) > 1e-3  # m/s: rings at the LCA mode
+    for name in vehicle.output_names:
+        if name.startswith("bushing_") or name.startswith("body_"):
+            assert np.ptp(from_rest[name]) <= 1e-12 * max(1.0, np.max(np.abs(from_rest[name]))), name
+
+
+def test_the_quarter_car_rests_on_its_linear_equilibrium() -> None:
+    """The damper's truth physics carries no force at rest: its rest state is the linear equilibrium."""
+    vehicle = build_quarter_car(QuarterCarParameters.load(), vehicle_components("quarter-car"))
+    laws = truth_laws([p.name for p in vehicle.inputs if not p.name.startswith("actuator")])
+    linear = np.array(initial_state(vehicle))
+    np.testing.assert_allclose(rest_state(vehicle, laws, linear), linear, rtol=0, atol=1e-15)

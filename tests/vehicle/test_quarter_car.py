@@ -139,7 +139,8 @@ def test_discrete_simulation_equals_a_fine_rk45_solution(params: QuarterCarParam
 
 
 def test_spline_damper_sub_stepping_converges(params: QuarterCarParameters) -> None:
-    """With the nonlinear spline damper built in, the predictor-corrector error falls with the square of the sub-step."""
+    """With the nonlinear spline damper built in, the predictor-corrector error falls with the square of the
+    sub-step."""
     car = build_quarter_car(params, {"damper": "reference"})
     dt, n = 2e-3, 400
     t = np.arange(n) * dt

@@ -338,7 +338,7 @@ def test_bad_requests_name_the_value(tmp_path: Path, model: str, settings: Vehic
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [({"sample_period": 0.0}, "sample period"), ({"components": {"damper": "spline"}}, "choice"),
-     ({"fmi_version": 1}, "FMI version")],
+     ({"fmi_version": 1}, "FMI version"), ({"initial_state": (0.0, math.nan)}, "initial state")],
 )
 def test_bad_settings_are_refused(kwargs: dict, message: str) -> None:
     with pytest.raises(VehicleBuildError, match=message):
@@ -373,3 +373,14 @@ def test_input_derivatives_give_the_first_order_hold_without_a_second_set(quarte
     table = np.array(rows)
     got = {name: table[:, i] for i, name in enumerate(vehicle.output_names)}
     _assert_close(got, simulate(vehicle, inputs, SimulationSettings(dt=T, hold="foh"), x0=x0), vehicle.output_names)
+
+
+def test_a_given_initial_state_is_where_the_fmu_starts() -> None:
+    """A road test starts the vehicle where its components rest (`rest_state`): the graph's state starts there; a
+    state of the wrong length is refused with both counts."""
+    vehicle = vehicle_model("quarter-car", VehicleBuildSettings())
+    start = tuple(0.001 * (i + 1) for i in range(len(vehicle.states)))
+    np.testing.assert_array_equal(
+        _initial_state(vehicle_step_graph("quarter-car", VehicleBuildSettings(initial_state=start))), start)
+    with pytest.raises(VehicleBuildError, match=f"initial state has 2 values; the vehicle has {len(start)} states"):
+        vehicle_step_graph("quarter-car", VehicleBuildSettings(initial_state=(0.0, 0.0)))

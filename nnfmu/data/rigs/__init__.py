@@ -9,6 +9,8 @@ from .excitation import Motion, SineLevel, SpectrumShape
 from .options import BUSHING_EFFECTS, DAMPER_EFFECTS, DEFAULT_EFFECTS, EXCITATIONS, KINDS, RigOptions
 from .run import RigRun, simulate_rig, write_rig
 from .truth import truth_path
+from .vehicle_drive import DriveDesign, VehicleDrive, design_vehicle_drive
+from .vehicle_rig import simulate_vehicle_rig, write_vehicle_rig
 
 __all__ = [
     "BUSHING_CHANNELS",
@@ -22,6 +24,7 @@ __all__ = [
     "DamperDyno",
     "DamperParams",
     "DamperTruth",
+    "DriveDesign",
     "EXCITATIONS",
     "KINDS",
     "Motion",
@@ -30,7 +33,11 @@ __all__ = [
     "SineLevel",
     "SpectrumShape",
     "ValveSide",
+    "VehicleDrive",
+    "design_vehicle_drive",
     "simulate_rig",
+    "simulate_vehicle_rig",
     "truth_path",
     "write_rig",
+    "write_vehicle_rig",
 ]

@@ -104,22 +104,33 @@ def run_bushing_rig(
     noise: float, seed: int,
 ) -> tuple[np.ndarray, dict[str, np.ndarray], dict]:
     """Time [s], recorded channels (SI) and the truth's description of the excitation of one rig run."""
-    true: dict[str, np.ndarray] = {}
+    motions: dict[str, Motion] = {}
     drives: dict[str, dict] = {}
     streams = np.random.SeedSequence([seed, 0]).spawn(len(CHANNELS))
-    for (key, channel), stream in zip(CHANNELS.items(), streams):
-        motion, drives[key] = rig.motion(key, excitation, rate, n, np.random.default_rng(stream))
+    for key, stream in zip(CHANNELS, streams):
+        motions[key], drives[key] = rig.motion(key, excitation, rate, n, np.random.default_rng(stream))
+    channels = record(true_signals(params, effects, motions, rate), rig.sensors, noise, seed)
+    return np.arange(n) / rate, channels, {"drives": drives, **RUN_NOTES}
+
+
+# How every bushing rig run is simulated and recorded (written into the truth file's excitation).
+RUN_NOTES = {
+    "friction_realisation": {"jenkins_elements": IWAN_ELEMENTS, "slip_span_in_x2": list(IWAN_SPAN)},
+    "integration": "exact for positions linear between samples (exponential Maxwell update, play operators)",
+    "recorded_rate": "true rate plus rate-transducer noise",
+    "channels_independent": "each channel driven and modelled on its own; no cross-coupling",
+}
+
+
+def true_signals(params: BushingParams, effects: tuple[str, ...], motions: dict[str, Motion],
+                 rate: float) -> dict[str, np.ndarray]:
+    """Position, rate and force of every channel (a BushingParams field in `motions`) before the transducers."""
+    true: dict[str, np.ndarray] = {}
+    for key, motion in motions.items():
+        channel = CHANNELS[key]
         force, _ = BushingChannelTruth(getattr(params, key), effects).simulate(1 / rate, motion.x)
         true.update({channel.position: motion.x, channel.rate: motion.v, channel.force: force})
-    channels = record(true, rig.sensors, noise, seed)
-    described = {
-        "drives": drives,
-        "friction_realisation": {"jenkins_elements": IWAN_ELEMENTS, "slip_span_in_x2": list(IWAN_SPAN)},
-        "integration": "exact for positions linear between samples (exponential Maxwell update, play operators)",
-        "recorded_rate": "true rate plus rate-transducer noise",
-        "channels_independent": "each channel driven and modelled on its own; no cross-coupling",
-    }
-    return np.arange(n) / rate, channels, described
+    return true
 
 
 def describe_params(params: BushingParams) -> dict:

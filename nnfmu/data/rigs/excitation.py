@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
@@ -41,6 +42,18 @@ class Motion:
 
     def scaled(self, factor: float) -> "Motion":
         return Motion(self.x * factor, self.v * factor, self.a * factor)
+
+
+class Spectrum(Protocol):
+    """A target one-sided PSD of a position signal (relative: `random_motion` scales to unit rms)."""
+
+    def psd(self, f: np.ndarray) -> np.ndarray:
+        """PSD at frequencies `f` [Hz], zero outside the band."""
+        ...
+
+    def describe(self) -> dict:
+        """Plain-JSON description for the truth file."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -126,7 +139,15 @@ def sine_series(levels: list[SineLevel], cycles: int, rate: float, rest: float) 
     return Motion.concatenate(parts), described
 
 
-def random_motion(shape: SpectrumShape, rate: float, n: int, rng: np.random.Generator, fade: float) -> Motion:
+def preload(level: float, rate: float, n: int, fade: float) -> Motion:
+    """A constant `level` held over `n` samples at `rate` [Hz], raised-cosine faded in and out over `fade` s, so a
+    drive around a working point starts and ends at rest."""
+    t = np.arange(n) / rate
+    w, dw, ddw = _ramp(t, fade, n / rate)
+    return Motion(level * w, level * dw, level * ddw)
+
+
+def random_motion(shape: Spectrum, rate: float, n: int, rng: np.random.Generator, fade: float) -> Motion:
     """Random motion of `n` samples at `rate` [Hz] whose PSD follows `shape` (unit rms before the fade).
 
     A random-phase multisine, as lab drive files are built: every frequency line of the record carries the target

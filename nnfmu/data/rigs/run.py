@@ -18,7 +18,7 @@ from .bushing_rig import BushingRig, describe_params, run_bushing_rig
 from .damper import DamperParams
 from .damper_rig import UNITS as DAMPER_UNITS
 from .damper_rig import DamperDyno, run_damper_dyno
-from .options import RigOptions, check_options, resolve_duration, resolve_effects
+from .options import VEHICLE_EXCITATION, RigOptions, check_options, resolve_duration, resolve_effects
 from .parameters import describe
 from .truth import build_truth, truth_path, truth_text
 
@@ -37,6 +37,9 @@ def simulate_rig(kind: str, options: RigOptions, params: DamperParams | BushingP
     Raises ValueError naming an unknown kind, effect, excitation or an unusable option value.
     """
     check_options(kind, options)
+    if options.excitation == VEHICLE_EXCITATION:
+        raise ValueError("a vehicle-derived bushing drive needs the vehicle's result: use simulate_vehicle_rig "
+                         "(nnfmu rig bushing --drive-from RESULT --element NAME)")
     effects = resolve_effects(kind, options.effects)
     duration = resolve_duration(kind, options)
     n = int(round(duration * options.sample_rate))
@@ -66,12 +69,15 @@ def _check_params(params: object, expected: type) -> None:
 
 
 def write_rig(kind: str, out: Path, options: RigOptions) -> tuple[Path, Path]:
-    """Simulate and write the data (CSV or MDF4 by the suffix of `out`) and `<out without suffix>.truth.json`.
+    """Simulate and write the data (CSV or MDF4 by the suffix of `out`) and `<out without suffix>.truth.json`."""
+    return write_run(simulate_rig(kind, options), Path(out))
+
+
+def write_run(run: RigRun, out: Path) -> tuple[Path, Path]:
+    """Write a rig run's data to `out` and its truth beside it; returns both paths.
 
     Both files or neither: the truth goes to its temporary file before the data is written, and is renamed into
     place after it, so a truth file that cannot be written leaves an earlier record as it was (DataError)."""
-    out = Path(out)
-    run = simulate_rig(kind, options)
     truth = truth_path(out)
     if truth.is_dir():
         raise DataError(f"{truth}: is a folder, so the rig's truth file cannot be written there")

@@ -8,11 +8,13 @@ controller's filtered derivative of the LVDT, not from a raw difference of noisy
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 ADC_BITS = 16
+RANGE_MANTISSAS = (1.0, 2.0, 5.0)  # transducer full scales come in a 1-2-5 series per decade, as catalogues list them
 
 
 @dataclass(frozen=True)
@@ -39,6 +41,16 @@ class Sensor:
 
     def describe(self) -> dict[str, float]:
         return {"full_scale": self.full_scale, "noise_rms": self.noise_rms, "adc_resolution": self.resolution}
+
+    def sized_for(self, peak: float, headroom: float) -> "Sensor":
+        """The same kind of transducer with the range a lab would pick for a test reaching `peak`: the smallest
+        1-2-5 full scale at or above headroom·peak, never above this sensor's own; same noise as a share of range."""
+        needed = headroom * abs(peak)
+        if not (math.isfinite(needed) and needed > 0):
+            return self
+        decade = 10.0 ** math.floor(math.log10(needed))
+        full_scale = min(m * decade * f for f in (1.0, 10.0) for m in RANGE_MANTISSAS if m * decade * f >= needed)
+        return Sensor(min(full_scale, self.full_scale), self.noise_fraction)
 
 
 def record(true: dict[str, np.ndarray], sensors: dict[str, Sensor], noise: float, seed: int) -> dict[str, np.ndarray]:

@@ -63,11 +63,12 @@ def generate_drive(settings: DriveSettings | None = None) -> Measurement:
     gain = controller_gain(rfftfreq(points, 1.0 / settings.sample_rate), settings)
     to_front = np.exp(2j * np.pi * n * settings.wheelbase)
     channels: dict[str, np.ndarray] = {}
+    weight = fade_in_weight(settings)
     for axle, shift, offset in (("f", to_front, settings.wheelbase), ("r", 1.0, 0.0)):
         for side, spectrum in (("l", left), ("r", right)):
             events = _events_on_track(settings, "left" if side == "l" else "right", positions + offset)
             track = irfft(gain * (spectrum * shift + rfft(events)), points)
-            channels[f"actuator_{axle}{side}_displacement"] = track[: settings.samples]
+            channels[f"actuator_{axle}{side}_displacement"] = track[: settings.samples] * weight
     return Measurement(
         time=np.arange(settings.samples) / settings.sample_rate,
         channels=channels,
@@ -76,6 +77,14 @@ def generate_drive(settings: DriveSettings | None = None) -> Measurement:
         f"seed {settings.seed})",
         notes=_notes(settings),
     )
+
+
+def fade_in_weight(settings: DriveSettings) -> np.ndarray:
+    """Weight of every sample: (1 - cos(pi t / fade_in)) / 2 over the fade-in, then 1."""
+    t = np.arange(settings.samples) / settings.sample_rate
+    if settings.fade_in == 0:
+        return np.ones_like(t)
+    return 0.5 - 0.5 * np.cos(np.pi * np.clip(t / settings.fade_in, 0.0, 1.0))
 
 
 def _notes(settings: DriveSettings) -> dict[str, str]:
@@ -89,4 +98,5 @@ def _notes(settings: DriveSettings) -> dict[str, str]:
         "rig_filter": f"high-pass {settings.highpass} Hz, low-pass {settings.lowpass} Hz, zero-phase Butterworth "
         f"order {settings.filter_order}",
         "events": "; ".join(repr(event) for event in settings.events) or "none",
+        "fade_in": f"{settings.fade_in:g} s raised cosine from rest" if settings.fade_in else "none",
     }

@@ -26,7 +26,9 @@ class DriveSettings:
     band: (lowest, highest) spatial frequency [cycles/m] synthesised (content above the sampling's Nyquist
     frequency, sample_rate / (2 speed) cycles/m, cannot be represented and is left out); highpass / lowpass: the rig
     controller's cut-offs [Hz] (None = off), zero-phase Butterworth of `filter_order` (see `rig_filter`);
-    seed: the random phases; events: potholes and kerb strikes laid over the profile.
+    seed: the random phases; events: potholes and kerb strikes laid over the profile; fade_in [s]: every channel
+    rises from the actuators' rest position (zero) over the first fade_in seconds with a raised-cosine weight, as a
+    rig drive file starts (0: the road's height and slope from the first sample, a step for a car at rest).
     """
 
     road_class: str = "C"
@@ -42,6 +44,7 @@ class DriveSettings:
     filter_order: int = 4
     seed: int = 0
     events: tuple[Event, ...] = ()
+    fade_in: float = 0.0
 
     @property
     def samples(self) -> int:
@@ -80,6 +83,10 @@ class DriveSettings:
             raise DriveError(f"unknown track coherence {self.coherence!r}; models are {', '.join(COHERENCE_MODELS)}")
         self._check_band()
         self._check_filter()
+        if not (isinstance(self.fade_in, numbers.Real) and math.isfinite(self.fade_in)
+                and 0 <= self.fade_in <= self.duration):
+            raise DriveError(f"fade_in must be a time between 0 and the duration {self.duration:g} s, got "
+                             f"{self.fade_in!r}")
         if not isinstance(self.seed, numbers.Integral) or self.seed < 0:
             raise DriveError(f"seed must be a non-negative integer, got {self.seed!r}")
         for event in self.events:

@@ -2,7 +2,8 @@
 
 The vehicle's exact discrete step becomes an ONNX step graph (`step_graph`) with a `Component` attached: input
 ports are the vehicle's inputs (actuator displacements and velocities, forces of external components), output ports
-its outputs, the state starts at the static equilibrium for zero actuator input, and the output filter is off (an
+its outputs, the state starts at the static equilibrium for zero actuator input (or the settings' initial state), and the
+output filter is off (an
 exact model must not be low-passed). The component interpolates its inputs (`interval_starts`), and
 `nnfmu.fmu.build_fmu` turns it into a native FMU like any trained component, so the FMU semantics are those of
 docs/fmu.md: samples at t_start + k T; the inputs are linear between samples, from the values set at one sample's
@@ -54,6 +55,17 @@ def initial_state(vehicle: LinearVehicle) -> tuple[float, ...]:
         return (0.0,) * len(vehicle.states)
 
 
+def _start(vehicle: LinearVehicle, settings: VehicleBuildSettings) -> tuple[float, ...]:
+    """The state the FMU starts in: `settings.initial_state` when given (checked for the state's length), else
+    `initial_state`."""
+    if settings.initial_state is None:
+        return initial_state(vehicle)
+    if len(settings.initial_state) != len(vehicle.states):
+        raise VehicleBuildError(f"{vehicle.name}: initial state has {len(settings.initial_state)} values; the "
+                                f"vehicle has {len(vehicle.states)} states")
+    return tuple(float(v) for v in settings.initial_state)
+
+
 def vehicle_component(discrete: DiscreteVehicle, model: str, settings: VehicleBuildSettings) -> Component:
     """The component description of the step graph of `discrete`: ports with units, state, period, no filter."""
     vehicle = discrete.vehicle
@@ -63,7 +75,7 @@ def vehicle_component(discrete: DiscreteVehicle, model: str, settings: VehicleBu
         inputs=[Port(p.name, p.unit, p.description, INPUTS, i) for i, p in enumerate(vehicle.inputs)],
         outputs=[Port(p.name, p.unit, p.description, OUTPUTS, i) for i, p in enumerate(vehicle.outputs)],
         states=[
-            StatePort(STATE_IN, STATE_OUT, initial_state(vehicle), "vehicle state [q, q'] (names in the metadata)"),
+            StatePort(STATE_IN, STATE_OUT, _start(vehicle, settings), "vehicle state [q, q'] (names in the metadata)"),
             StatePort(FIRST_IN, FIRST_OUT, (1.0,), "1 before sample 0 (which reports the initial state), then 0"),
         ],
         sample_period=discrete.dt,

@@ -28,7 +28,9 @@ class VehicleBuildSettings:
     over a step applied, for stiff components) or 'reference' (built-in element), `sample_period` [s] of the FMU's
     samples, FMI version, backend and the native backend's `platforms` (None: this machine's plus win64 when its
     cross compiler is installed). `corner` (fl, fr, rl, rr) is the quarter car's: None takes a quarter-car file's
-    own corner, or fl of a full-vehicle file.
+    own corner, or fl of a full-vehicle file. `initial_state` [q, q'] the FMU starts in (None: the static equilibrium
+    on the linear reference elements, `initial_state`; a road test gives the rest state on the components it
+    connects, `nnfmu.vehicle.models.rest_state`).
     A stabilised port holds its reference from the start of each *sample*: sample at the communication step, or
     the stabilisation is renewed at every sample inside a step and mostly lost."""
 
@@ -39,6 +41,7 @@ class VehicleBuildSettings:
     corner: str | None = None
     backend: Backend = "native"
     platforms: tuple[str, ...] | None = None
+    initial_state: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.sample_period) and self.sample_period > 0.0):
@@ -49,6 +52,8 @@ class VehicleBuildSettings:
             raise VehicleBuildError(f"backend {self.backend!r}; choose one of {', '.join(BACKENDS)}")
         if self.corner is not None and self.corner not in CORNERS:
             raise VehicleBuildError(f"corner {self.corner!r}; choose one of {', '.join(CORNERS)}")
+        if self.initial_state is not None and not all(math.isfinite(v) for v in self.initial_state):
+            raise VehicleBuildError(f"initial state {self.initial_state!r} must hold finite numbers")
         bad = {name: choice for name, choice in self.components.items() if choice not in CHOICES}
         if bad:
             raise VehicleBuildError(f"component choice(s) {bad}; expected one of {', '.join(CHOICES)}")

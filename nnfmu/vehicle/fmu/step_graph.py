@@ -79,7 +79,9 @@ def _affine(graph: GraphBuilder, row: str, matrix: str, bias: str, name: str) ->
 
 def _spline(graph: GraphBuilder, v: str, terms: dict[str, str], name: str) -> str:
     """Forces of the spline dampers at velocities v (1, nn)."""
-    linear = graph.node("Add", [graph.node("Mul", [v, terms["slope"]], f"{name}_slope"), terms["offset"]], f"{name}_line")
+    linear = graph.node(
+        "Add", [graph.node("Mul", [v, terms["slope"]], f"{name}_slope"), terms["offset"]], f"{name}_line"
+    )
     if "select" not in terms:
         return linear
     spread = graph.node("MatMul", [v, terms["select"]], f"{name}_at_knots")
@@ -205,7 +207,9 @@ def _advance(graph: GraphBuilder, discrete: DiscreteVehicle, spline: dict[str, s
         at_end = graph.node("Concat", [predicted, u1], f"{tag}_predicted_and_inputs", axis=1)
         g1 = _damper_forces(graph, at_end, spline, f"{tag}_end_force")
         change = graph.node("Sub", [g1, g0], f"{tag}_force_change")
-        x = graph.node("Add", [predicted, _affine(graph, change, correct, no_correction, f"{tag}_ramp")], f"{tag}_state")
+        x = graph.node(
+            "Add", [predicted, _affine(graph, change, correct, no_correction, f"{tag}_ramp")], f"{tag}_state"
+        )
     return x
 
 

@@ -4,7 +4,7 @@ from .errors import ParameterError, VehicleModelError
 from .full_vehicle import build_full_vehicle
 from .laws import BushingTruthLaw, ComponentLaw, DamperTruthLaw, LinearLaw, linear_laws, truth_laws
 from .linear import DiscreteVehicle, LinearVehicle, SimulationSettings, simulate
-from .monolithic import MonolithicSettings, simulate_monolithic
+from .monolithic import MonolithicSettings, rest_state, simulate_monolithic
 from .parameters import DEFAULT_FILE, VehicleParameters
 from .ports import VehiclePort
 from .quarter_car import build_quarter_car
@@ -31,6 +31,7 @@ __all__ = [
     "build_full_vehicle",
     "build_quarter_car",
     "linear_laws",
+    "rest_state",
     "simulate",
     "simulate_monolithic",
     "truth_laws",

@@ -110,7 +110,9 @@ class Assembly:
         self.post_damping -= spring.damping * np.outer(r, deflection.post)
         self.preload -= spring.preload * r
 
-    def add_force_input(self, port: VehiclePort, deflection: Deflection, stabiliser: LinearSpring | None = None) -> None:
+    def add_force_input(
+        self, port: VehiclePort, deflection: Deflection, stabiliser: LinearSpring | None = None
+    ) -> None:
         """An external force (input port) resisting `deflection`. With a `stabiliser` (the element's linear
         reference), the force set at a step's start is applied plus the stabiliser's change since then, so a stiff
         component coupled through a held force acts on the vehicle with its linear part solved exactly over the step
@@ -134,7 +136,8 @@ class Assembly:
         self.outputs.append((port, kind, deflection, spring))
 
     def to_vehicle(self, name: str, description: str, post_ports: list[VehiclePort]) -> LinearVehicle:
-        """First-order model x' = A x + B u + f, y = C x + D u + e with u = [post displacements, post velocities, forces]."""
+        """First-order model x' = A x + B u + f, y = C x + D u + e with u = [post displacements, post velocities,
+        forces]."""
         n, p, nf = self.size, len(self.posts), len(self.forces)
         try:
             minv = np.linalg.inv(self.mass)

@@ -19,10 +19,10 @@ linear part stays exact and the error of the nonlinear part falls with the squar
 Stabilised force ports (rows of `stabiliser` S, the ports' linear reference elements): over a step from x[k] the
 vehicle applies the force u set at the step start plus S (x(t) - x[k]), i.e. x' = (A + B S) x + B (u - S x[k]) + ...,
 still exact for the linear part; with a first-order hold such a port keeps its start value (its deviation from the
-reference is held over the step, never interpolated). A stiff component (a bushing of kN/mm on a light arm) coupled through a force held
-for a step then acts on the vehicle with only its deviation from the reference held, which keeps the exchange stable
-at steps its own modes would otherwise forbid; at the sample itself the applied force is u, so the outputs and the
-continuous model are those of a plain external port.
+reference is held over the step, never interpolated). A stiff component (a bushing of kN/mm on a light arm) coupled
+through a force held for a step then acts on the vehicle with only its deviation from the reference held, which keeps
+the exchange stable at steps its own modes would otherwise forbid; at the sample itself the applied force is u, so the
+outputs and the continuous model are those of a plain external port.
 """
 
 from __future__ import annotations
@@ -243,7 +243,8 @@ class DiscreteVehicle:
 
 @dataclass(frozen=True)
 class SimulationSettings:
-    """Fixed-step simulation: step `dt` [s], input `hold` ('zoh' or 'foh'), sub-step limit for nonlinear elements [s]."""
+    """Fixed-step simulation: step `dt` [s], input `hold` ('zoh' or 'foh'), sub-step limit for nonlinear elements
+    [s]."""
 
     dt: float
     hold: str = "zoh"

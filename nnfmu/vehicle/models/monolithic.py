@@ -19,6 +19,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import root
 from scipy.sparse import csr_array
 
 from .errors import VehicleModelError
@@ -150,6 +151,32 @@ def simulate_monolithic(
     result |= {name: port_forces[:, i] for i, name in enumerate(laws)}
     result["time"] = np.arange(n) * period
     return result
+
+
+def rest_state(vehicle: LinearVehicle, laws: Mapping[str, ComponentLaw], start: np.ndarray) -> np.ndarray:
+    """The static state of the vehicle standing on `laws` for zero actuator input, every law relaxed (its initial
+    state) and at rest: where the laws' own static forces hold the car up. A vehicle's `equilibrium` holds it on its
+    linear reference elements instead; where a law is stiffer or softer than its element (a rear bushing carrying the
+    front bushing's physics), a run started there is not at rest and rings through the first tenths of a second.
+    Solved from `start` (e.g. that linear equilibrium) with scipy's hybrid Powell method."""
+    wiring = _wire(vehicle, laws)
+    law_list = list(laws.values())
+    relaxed = [law.initial_state() for law in law_list]
+
+    def inputs(x: np.ndarray) -> np.ndarray:
+        u = np.zeros(len(vehicle.inputs))
+        deflections = vehicle.output_vector(x, u)[wiring.disp_rows]
+        u[wiring.force_columns] = [law.force(state, d, 0.0) for law, state, d in zip(law_list, relaxed, deflections)]
+        return u
+
+    start = np.asarray(start, dtype=float)
+    solved = root(lambda x: vehicle.derivative(x, inputs(x)), start, method="hybr", options={"xtol": 1e-13})
+    residual = float(np.max(np.abs(vehicle.derivative(solved.x, inputs(solved.x))), initial=0.0))
+    scale = max(1.0, float(np.max(np.abs(vehicle.derivative(np.zeros_like(start), np.zeros(len(vehicle.inputs)))))))
+    if not solved.success or residual > 1e-9 * scale:
+        raise VehicleModelError(f"{vehicle.name}: no static rest state on the component laws from the linear "
+                                f"equilibrium ({solved.message}; largest residual {residual:.3g})")
+    return solved.x
 
 
 def _outputs(vehicle: LinearVehicle, states: np.ndarray, u: np.ndarray) -> np.ndarray:

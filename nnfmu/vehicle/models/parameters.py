@@ -25,7 +25,8 @@ QUARTER_CAR_TABLE = "quarter_car"  # the table that makes a parameter file a qua
 
 
 class _Table:
-    """One TOML table being read: typed access by key, errors that name the file and dotted key, unknown keys refused."""
+    """One TOML table being read: typed access by key, errors that name the file and dotted key, unknown keys
+    refused."""
 
     def __init__(self, data: dict[str, Any], where: str, source: str) -> None:
         self._data = data
@@ -317,7 +318,8 @@ def _read_bushing(t: _Table) -> BushingParameters:
         axis
     ) * np.linalg.norm(radial):
         raise ParameterError(
-            f"{t._source}: {t._where}: axis {values['axis']} and radial {values['radial']} must be non-zero and not parallel"
+            f"{t._source}: {t._where}: axis {values['axis']} and radial {values['radial']}"
+            " must be non-zero and not parallel"
         )
     t.finish()
     return BushingParameters(**values)

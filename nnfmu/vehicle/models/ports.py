@@ -56,7 +56,8 @@ def damper_outputs(tag: str) -> list[VehiclePort]:
 
 
 def bushing_inputs(name: str) -> list[VehiclePort]:
-    """Force/torque inputs of bushing `name` (e.g. 'bushing_fl_front'): what the bushing needs to hold its deflection."""
+    """Force/torque inputs of bushing `name` (e.g. 'bushing_fl_front'): what the bushing needs to hold its
+    deflection."""
     return [
         VehiclePort(
             f"{name}_axial_force", "N", "bushing force along its axis, same sign as the axial displacement for a spring"

@@ -24,7 +24,8 @@ class SplineDamper:
         v = np.asarray(self.velocity, dtype=float)
         if v.shape != np.shape(self.force) or v.size < 2 or np.any(np.diff(v) <= 0.0):
             raise VehicleModelError(
-                f"spline damper needs strictly increasing velocities and as many forces (got {self.velocity}, {self.force})"
+                "spline damper needs strictly increasing velocities and as many forces"
+                f" (got {self.velocity}, {self.force})"
             )
 
     def __call__(self, velocity: np.ndarray | float) -> np.ndarray:
