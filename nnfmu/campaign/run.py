@@ -17,6 +17,7 @@ from nnfmu.out_paths import OutputPathError, check_output_dir, mark_output_dir
 
 from .cases import Case, expand_cases
 from .engine import EngineInfo, dask_client, run_dask, run_serial
+from .errors import CampaignError
 from .execute import FAILED, CaseOutcome
 from .hashing import file_sha256
 from .record import inputs, write_record

@@ -136,3 +136,19 @@ def test_the_batch_command_names_a_bad_key_and_exits_non_zero(quarter_car, tmp_p
     assert result.exit_code == 2
     assert "error:" in result.output and "step_size" in result.output
     assert not (tmp_path / "out").exists()
+
+
+def test_the_batch_command_refuses_a_folder_it_did_not_write(quarter_car, tmp_path):
+    from typer.testing import CliRunner
+
+    from nnfmu.cli import app
+
+    foreign = tmp_path / "mine"
+    foreign.mkdir()
+    (foreign / "summary.html").write_text("someone's page")
+    result = CliRunner().invoke(app, ["batch", str(write_campaign(tmp_path, campaign_text(quarter_car, events=1))),
+                                      "--out", str(foreign)])
+    assert result.exit_code == 2, result.output
+    assert "error:" in result.output and "not empty" in result.output and str(foreign) in result.output
+    assert [p.name for p in foreign.iterdir()] == ["summary.html"]
+    assert (foreign / "summary.html").read_text() == "someone's page"
