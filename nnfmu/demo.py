@@ -87,8 +87,8 @@ class DemoSettings:
 
     @property
     def bushing_drive(self) -> BushingDriveSettings:
-        """Quick: a 0.5 s source reference and a 10 s rig record (a smoke run); full: a 50 s source reference (the thesis
-        drive's length) and the bushing rig's 60 s."""
+        """Quick: a 0.5 s source reference and a 10 s rig record (a smoke run); full: a 50 s source reference (the
+        thesis drive's length) and the bushing rig's 60 s."""
         if self.quick:
             return BushingDriveSettings(duration=0.5, rig_duration=10.0, rig_seed=self.seed)
         return BushingDriveSettings(rig_seed=self.seed)
@@ -168,7 +168,8 @@ def _bushing_origin(vehicle: VehicleBushingModels | None, onnx_files: dict[str, 
             "seconds": {k: round(v, 1) for k, v in vehicle.seconds.items()}}
 
 
-def run_demo(out: str | Path, settings: DemoSettings = DemoSettings(), log: Callable[[str], None] = print) -> DemoSummary:
+def run_demo(out: str | Path, settings: DemoSettings = DemoSettings(),
+             log: Callable[[str], None] = print) -> DemoSummary:
     """Run every stage into `out` (rig/, models/, fmu/, report/, vehicle_bushing/, road_test/, loop/, summary.json);
     return what it measured."""
     started = time.perf_counter()

@@ -2,11 +2,11 @@
 
 libcosim's fixed-step algorithm steps every FMU from t_n on the values transferred after the previous step, so it is
 a Jacobi scheme without extrapolation, iteration or refresh; the fmpy master with `scheme="jacobi"`, the plain
-settings and `refresh=False` is the same scheme, and only that combination is accepted here. libcosim counts time in integer nanoseconds, so the
-step must be a whole number of nanoseconds; it logs every call at its default level, so its output level is set to
-errors only. The drive inputs are set through an override manipulator before each step, as the fmpy master sets
-them, and the outputs are read from a last-value observer after each step (row n + 1 belongs to t_{n+1}); row 0 is
-the time-series observer's record of the initialised system.
+settings and `refresh=False` is the same scheme, and only that combination is accepted here. libcosim counts time
+in integer nanoseconds, so the step must be a whole number of nanoseconds; it logs every call at its default level,
+so its output level is set to errors only. The drive inputs are set through an override manipulator before each
+step, as the fmpy master sets them, and the outputs are read from a last-value observer after each step (row n + 1
+belongs to t_{n+1}); row 0 is the time-series observer's record of the initialised system.
 """
 
 from __future__ import annotations
@@ -43,7 +43,8 @@ def _check_settings(settings: CosimSettings) -> None:
 
 
 def run_libcosim(ssd_path: str | os.PathLike[str], drive: Measurement, settings: CosimSettings) -> CosimResult:
-    """Co-simulate the system of `ssd_path` (.ssd, its folder or .ssp) in libcosim; channels named as fmpy names them."""
+    """Co-simulate the system of `ssd_path` (.ssd, its folder or .ssp) in libcosim; channels named as fmpy names
+    them."""
     from libcosimpy.CosimEnums import CosimVariableCausality, CosimVariableType
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level

@@ -37,7 +37,8 @@ def _graph_doc(model: TrainedModel, component: Component) -> str:
     slots = [slot.name for slot in state_layout(model)]
     state = f"; state [{len(slots)}] = {', '.join(slots)}" if slots else ""
     return (
-        f"nnfmu {nnfmu.__version__} step function: one sample (T = {model.sample_period:g} s) of {out.name} [{out.unit}] "
+        f"nnfmu {nnfmu.__version__} step function: one sample (T = {model.sample_period:g} s) of {out.name} "
+        f"[{out.unit}] "
         f"from {inputs}{state}. Features {model.spec.feature_names} are min-max scaled to [-1, 1] inside the graph "
         f"and fed to a {kind.upper()} {sizes}; the output is unscaled to SI units."
     )
@@ -51,7 +52,8 @@ def export_onnx(
     description: str = "",
     verify_on: dict[str, np.ndarray] | None = None,
 ) -> ExportResult:
-    """Write `model`'s step graph to `path` after checking onnxruntime reproduces `model.predict` (relative error <= 1e-6).
+    """Write `model`'s step graph to `path` after checking onnxruntime reproduces `model.predict` (relative error
+    <= 1e-6).
 
     `verify_on` is the test split's input channels; without it the check runs on random samples inside the training
     envelope. The first samples of the checked inputs go into the metadata as the reference stimulus `nnfmu build`
@@ -59,7 +61,8 @@ def export_onnx(
     ValidationError for a malformed graph).
     """
     name = name or f"{model.spec.output}_model"
-    component = build_component(model, name, description or f"{model.spec.output} of a component, learnt from rig data by nnfmu")
+    component = build_component(model, name,
+                                description or f"{model.spec.output} of a component, learnt from rig data by nnfmu")
     onnx_model = build_step_graph(model, name, _graph_doc(model, component))
     onnx_model.producer_version = nnfmu.__version__
     onnx_model.doc_string = component.description
@@ -78,4 +81,5 @@ def export_onnx(
     path = Path(path)
     with atomic_path(path) as tmp:
         onnx.save(onnx_model, tmp)
-    return ExportResult(path=path, component=component, max_relative_error=error, verified_samples=samples, verified_on=source)
+    return ExportResult(path=path, component=component, max_relative_error=error, verified_samples=samples,
+                        verified_on=source)

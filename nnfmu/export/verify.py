@@ -26,7 +26,8 @@ def envelope_signal(model: TrainedModel, n: int = 200, seed: int = 0) -> dict[st
     return {c: rng.uniform(*model.envelope[c], size=n) for c in model.spec.channels}
 
 
-def verify_step_graph(graph: onnx.ModelProto, model: TrainedModel, channels: dict[str, np.ndarray]) -> tuple[float, int]:
+def verify_step_graph(graph: onnx.ModelProto, model: TrainedModel,
+                      channels: dict[str, np.ndarray]) -> tuple[float, int]:
     """(relative error, samples) of the graph's output against `model.predict` over `channels`.
 
     Raises ExportError when the error exceeds MAX_RELATIVE_ERROR or there are no samples.
@@ -41,6 +42,7 @@ def verify_step_graph(graph: onnx.ModelProto, model: TrainedModel, channels: dic
         worst = int(np.argmax(np.abs(result - reference)))
         raise ExportError(
             f"step graph output {output!r} differs from the torch model: relative error {error:.3g} > "
-            f"{MAX_RELATIVE_ERROR:g} (worst at sample {worst}: onnx {float(result[worst])!r}, torch {float(reference[worst])!r})"
+            f"{MAX_RELATIVE_ERROR:g} (worst at sample {worst}: onnx {float(result[worst])!r}, "
+            f"torch {float(reference[worst])!r})"
         )
     return error, reference.size

@@ -7,8 +7,10 @@ states inside the step graph, each computable sample by sample from the componen
 | seal_friction | smooth_sign(velocity, scale): tanh at `friction_scale` × the fit part's rms velocity |
 | inertia | acceleration at delay 0 when measured, else velocity at delay 1 (with delay 0: a finite difference) |
 | hysteresis | lowpass(velocity, tau) states at `memory_taus` (compliance lag, Maxwell-like memory) |
-| backlash | stop(displacement, radius) states: the position inside a gap closed after each of the diagnosis's `reversal_fractions` of the fit part's mean travel between reversals (a play operator's state each) |
-| temperature | the measured temperature channel, else lowpass_square(velocity, `thermal_tau`): a running mean square of velocity, the damper's dissipated power c·v² through the thermal lag of oil and tube |
+| backlash | stop(displacement, radius) states: the position inside a gap closed after each of the diagnosis's
+  `reversal_fractions` of the fit part's mean travel between reversals (a play operator's state each) |
+| temperature | the measured temperature channel, else lowpass_square(velocity, `thermal_tau`): a running mean
+  square of velocity, the damper's dissipated power c·v² through the thermal lag of oil and tube |
 | frequency_dependence | lowpass(displacement, tau) states at `frequency_taus` |
 | amplitude_dependence | lowpass_square(displacement, `amplitude_tau`): the running amplitude² |
 | sensor_offset | nothing: a load-cell offset or drift is the measurement's, not the component's (reported) |
@@ -108,7 +110,8 @@ def extend_spec(
         if missing := need(velocity):
             return missing
         return _result(effect, spec, _with_delays(spec, velocity, (0, 1)),
-                       f"{velocity} at delays 0 and 1 (acceleration as a finite difference; no {acceleration} measured)")
+                       f"{velocity} at delays 0 and 1 (acceleration as a finite difference; "
+                       f"no {acceleration} measured)")
     if effect == "hysteresis":
         if missing := need(velocity):
             return missing

@@ -33,10 +33,11 @@ class LoopSettings:
     of the residual variance (beyond the effects ranked above it; alone, for a simpler rival): with tens of
     thousands of samples a network's own approximation error makes tiny effects statistically significant, and the
     loop adds what matters, not what is merely detectable. Extensions:
-    `friction_scale` (fraction of the rms velocity: the smoothed sign's velocity scale), `memory_taus` [s] (low-pass states of velocity for hysteresis), `frequency_taus` [s] (low-pass
-    states of displacement), `thermal_tau` [s] (thermal time constant of the running mean square of velocity that
-    stands in for an unmeasured temperature), `amplitude_tau` [s] (averaging time of the running mean square of
-    displacement). `backend`/`fmi_version`: the FMUs built.
+    `friction_scale` (fraction of the rms velocity: the smoothed sign's velocity scale), `memory_taus` [s] (low-pass
+    states of velocity for hysteresis), `frequency_taus` [s] (low-pass states of displacement), `thermal_tau` [s]
+    (thermal time constant of the running mean square of velocity that stands in for an unmeasured temperature),
+    `amplitude_tau` [s] (averaging time of the running mean square of displacement). `backend`/`fmi_version`: the
+    FMUs built.
     """
 
     max_effects: int = 3
@@ -90,7 +91,8 @@ class LoopSettings:
             raise LoopError(f"fit, validation and test fractions must be positive, got {parts}")
         if self.validation_fraction >= self.fit_fraction or self.fit_fraction + self.test_fraction >= 1:
             raise LoopError(
-                f"fractions leave no room: validation {self.validation_fraction} must be below fit {self.fit_fraction}, "
+                f"fractions leave no room: validation {self.validation_fraction} must be below fit "
+                f"{self.fit_fraction}, "
                 f"and fit + test ({self.fit_fraction + self.test_fraction}) below 1 so a diagnosis part remains"
             )
         if self.max_epochs < 1 or self.patience < 1 or self.lm_max_samples < 1:

@@ -76,7 +76,8 @@ def _warm_network(old: TrainedModel, spec: FeatureSpec, extra: int, seed: int) -
         b1 = torch.zeros(hidden + extra, dtype=torch.float64)
         b1[:hidden] = source.hidden.bias
         if extra:
-            w1[hidden:] = EXTRA_WEIGHT_SCALE * torch.randn(extra, spec.n_features, generator=generator, dtype=torch.float64)
+            w1[hidden:] = EXTRA_WEIGHT_SCALE * torch.randn(extra, spec.n_features, generator=generator,
+                                                           dtype=torch.float64)
             b1[hidden:] = EXTRA_WEIGHT_SCALE * torch.randn(extra, generator=generator, dtype=torch.float64)
         w2 = torch.zeros(1, hidden + extra, dtype=torch.float64)
         w2[:, :hidden] = source.out.weight
@@ -87,7 +88,8 @@ def _warm_network(old: TrainedModel, spec: FeatureSpec, extra: int, seed: int) -
     return network
 
 
-def _envelope(old: TrainedModel, spec: FeatureSpec, m: Measurement, train: np.ndarray) -> dict[str, tuple[float, float]]:
+def _envelope(old: TrainedModel, spec: FeatureSpec, m: Measurement,
+              train: np.ndarray) -> dict[str, tuple[float, float]]:
     """Each input's range over the training rows, widened by the old model's envelope where it had the channel."""
     envelope = {}
     for c in spec.channels:

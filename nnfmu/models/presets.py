@@ -104,7 +104,8 @@ PRESETS: dict[str, Preset] = {
             (SmoothSign("velocity", scale=SEAL_FRICTION_VELOCITY), SmoothSign("velocity", scale=VALVE_KNEE_VELOCITY)),
         ),
         _preset(
-            "damper-hysteresis", "damper force with hysteresis and inertia from velocity history (thesis 2-5-1 time-delay net)",
+            "damper-hysteresis",
+            "damper force with hysteresis and inertia from velocity history (thesis 2-5-1 time-delay net)",
             ("velocity",), "force", (0, 1), 5,
             (
                 *(Difference("velocity", delay=d) for d in HYSTERESIS_DIFFERENCES),
@@ -120,11 +121,13 @@ PRESETS: dict[str, Preset] = {
             ("radial_displacement", "radial_velocity"), "radial_force", (0,), 3, memory_bank("radial_displacement"),
         ),
         _preset(
-            "bushing-axial-torque", "bushing axial torque from rotation and angular velocity (thesis 4-7-1 with delays)",
+            "bushing-axial-torque",
+            "bushing axial torque from rotation and angular velocity (thesis 4-7-1 with delays)",
             ("axial_rotation", "axial_angular_velocity"), "axial_torque", (0, 1), 7, memory_bank("axial_rotation"),
         ),
         _preset(
-            "bushing-conical-torque", "bushing conical torque from conical rotation and rate (thesis 4-7-1 with delays)",
+            "bushing-conical-torque",
+            "bushing conical torque from conical rotation and rate (thesis 4-7-1 with delays)",
             ("conical_rotation", "conical_angular_velocity"), "conical_torque", (0, 1), 7,
             (*memory_bank("conical_rotation"), SmoothSign("conical_angular_velocity", scale=CONICAL_FRICTION_RATE),
              *(Stop("conical_rotation", radius=r) for r in CONICAL_STOP_RADII)),

@@ -69,7 +69,8 @@ class VehicleBushingModels:
     seconds: dict[str, float] = field(default_factory=dict)
 
 
-def train_vehicle_bushings(out: str | Path, road: RoadTestSettings, settings: BushingDriveSettings = BushingDriveSettings(),
+def train_vehicle_bushings(out: str | Path, road: RoadTestSettings,
+                           settings: BushingDriveSettings = BushingDriveSettings(),
                            request: Callable[[str], TrainRequest] = lambda preset: TrainRequest(preset=preset),
                            log: Callable[[str], None] = print) -> VehicleBushingModels:
     """Source reference (the road test's road class, speed, rate, fade-in and reference step on drive seed

@@ -57,8 +57,8 @@ Log = Callable[[str], None]
 @dataclass(frozen=True)
 class SystemRun:
     """How one system runs: `duration` [s] of drive, communication `step` [s], coupling `iterations` (0: plain
-    Gauss-Seidel), network output low-pass `filter_cutoff` [Hz] (None: the FMUs' default, off; 0: off), `channels` compared
-    with the reference (empty: the system's default set, `COMPARED`)."""
+    Gauss-Seidel), network output low-pass `filter_cutoff` [Hz] (None: the FMUs' default, off; 0: off), `channels`
+    compared with the reference (empty: the system's default set, `COMPARED`)."""
 
     duration: float
     step: float = 1e-3
@@ -74,10 +74,10 @@ class SystemRun:
 @dataclass(frozen=True)
 class RoadTestSettings:
     """Which systems run and how (None: skipped); the road (ISO 8608 class, speed [m/s], seed, drive sample rate
-    [Hz]); the reference's RK4 step [s]; the time-history plot `window` [s] (the thesis's 30-35 s), used when the drive covers it;
-    `fade_in` [s]: the drive rises from rest over its first seconds (`DriveSettings.fade_in`), as the car starts at
-    rest: the road's height at t = 0 kicked the LCA and its bushing networks out of their training envelope, which
-    locked vehicle-trained bushing networks into a 125 Hz oscillation for the whole drive."""
+    [Hz]); the reference's RK4 step [s]; the time-history plot `window` [s] (the thesis's 30-35 s), used when the
+    drive covers it; `fade_in` [s]: the drive rises from rest over its first seconds (`DriveSettings.fade_in`), as
+    the car starts at rest: the road's height at t = 0 kicked the LCA and its bushing networks out of their training
+    envelope, which locked vehicle-trained bushing networks into a 125 Hz oscillation for the whole drive."""
 
     quarter_car: SystemRun | None = SystemRun(50.0)
     full_vehicle: SystemRun | None = SystemRun(50.0)
@@ -260,7 +260,8 @@ def _context(system: str, run: SystemRun, settings: RoadTestSettings, drive: Mea
                  f"{settings.fade_in:g} s",
         "co-simulation": f"fmpy master at its defaults (Gauss-Seidel, vehicle first, linear extrapolation, refresh "
                          f"at every communication point), step {run.step:g} s, iterations {run.iterations}, network "
-                         f"output filter {'the FMU default (off)' if run.filter_cutoff is None else f'{run.filter_cutoff:g} Hz'}"
+                         "output filter "
+                         f"{'the FMU default (off)' if run.filter_cutoff is None else f'{run.filter_cutoff:g} Hz'}"
                          f"; vehicle FMU exact at {run.step:g} s, inputs interpolated",
         "reference": f"monolithic RK4 at {settings.reference_step:g} s, rig truth physics in every network's place",
         "front LCA bushings": "networks in the loop through stabilised ports (the vehicle holds only each network's "

@@ -1,4 +1,5 @@
-"""Vehicle-derived bushing rig drives: spectrum follows the source, peaks exceed it by the margin, errors, CLI, truth."""
+"""Vehicle-derived bushing rig drives: spectrum follows the source, peaks exceed it by the margin, errors, CLI,
+truth."""
 
 from __future__ import annotations
 

@@ -58,7 +58,8 @@ MLP_SPEC = FeatureSpec(
     output="force",
     derived=(SmoothSign("velocity", scale=0.05), Lowpass("velocity", tau=0.01)),
 )
-GRU_SPEC = FeatureSpec(taps=(Tap("velocity", (0, 1)), Tap("displacement")), output="force", derived=(Lowpass("displacement", tau=0.02),))
+GRU_SPEC = FeatureSpec(taps=(Tap("velocity", (0, 1)), Tap("displacement")), output="force",
+                       derived=(Lowpass("displacement", tau=0.02),))
 
 
 def relative(a: np.ndarray, b: np.ndarray) -> float:
@@ -83,7 +84,11 @@ def test_graph_follows_the_step_convention(tmp_path, spec, recurrent):
     graph = onnx.load(path)
     onnx.checker.check_model(graph, full_check=True)
     n_state = spec.state_size + (6 if recurrent else 0)
-    shapes = lambda vis: [(v.name, v.type.tensor_type.elem_type, [d.dim_value for d in v.type.tensor_type.shape.dim]) for v in vis]
+
+    def shapes(vis):
+        return [(v.name, v.type.tensor_type.elem_type, [d.dim_value for d in v.type.tensor_type.shape.dim])
+                for v in vis]
+
     double = onnx.TensorProto.DOUBLE
     assert shapes(graph.graph.input) == [(c, double, [1]) for c in spec.channels] + [("state", double, [n_state])]
     assert shapes(graph.graph.output) == [("force", double, [1]), ("state_next", double, [n_state])]
@@ -118,10 +123,13 @@ def test_component_round_trip_from_file(tmp_path, recurrent):
     assert component.sample_period == T and component.name == "damper" and component.description == "front damper"
     meta = component.metadata
     assert FeatureSpec.from_dict(meta["feature_spec"]) == spec
-    assert meta["network"] == {"kind": "gru" if recurrent else "mlp", "sizes": [spec.n_features, 6 if recurrent else 7, 1]}
-    assert meta["data_hash"] == "ab" * 32 and meta["metrics"] == {"test": {"nrmse": 0.05}} and meta["training"]["seed"] == 0
+    assert meta["network"] == {"kind": "gru" if recurrent else "mlp",
+                               "sizes": [spec.n_features, 6 if recurrent else 7, 1]}
+    assert (meta["data_hash"] == "ab" * 32 and meta["metrics"] == {"test": {"nrmse": 0.05}}
+            and meta["training"]["seed"] == 0)
     assert [s["name"] for s in meta["state_layout"]][: spec.state_size] == [s.name for s in spec.state_layout()]
-    assert meta["max_abs_weight"] == pytest.approx(max(float(p.detach().abs().max()) for p in model.network.parameters()))
+    assert meta["max_abs_weight"] == pytest.approx(
+        max(float(p.detach().abs().max()) for p in model.network.parameters()))
 
 
 def test_stateless_model_has_no_state_port(tmp_path):

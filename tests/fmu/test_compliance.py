@@ -38,7 +38,8 @@ def every_kind(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
                                                                           backend="pythonfmu")) for v in (2, 3)}
     fmus["merged bushing FMI 2"] = build_fmu(merged, BuildOptions(out=folder / "bushing.fmu"))
     fmus["quarter car FMI 2"] = build_vehicle_fmu("quarter-car", folder / "qc.fmu", VehicleBuildSettings())
-    fmus["full vehicle FMI 3"] = build_vehicle_fmu("full-vehicle", folder / "fv3.fmu", VehicleBuildSettings(fmi_version=3))
+    fmus["full vehicle FMI 3"] = build_vehicle_fmu("full-vehicle", folder / "fv3.fmu",
+                                                   VehicleBuildSettings(fmi_version=3))
     fmus["full vehicle stabilised FMI 2"] = build_vehicle_fmu(
         "full-vehicle", folder / "fv2.fmu",
         VehicleBuildSettings(components={"bushing_fl_front": "stabilised", "bushing_fl_rear": "stabilised"}))

@@ -121,7 +121,8 @@ def test_fmu_with_one_weight_changed_fails_naming_the_output(network, tmp_path):
 
 
 def test_merged_graph_fmu_carries_the_parts_stimuli_and_passes(tmp_path):
-    parts = [onnx.load(export_network(FORCE, tmp_path / "force.onnx", 3)), onnx.load(export_network(TORQUE, tmp_path / "t.onnx", 4))]
+    parts = [onnx.load(export_network(FORCE, tmp_path / "force.onnx", 3)),
+             onnx.load(export_network(TORQUE, tmp_path / "t.onnx", 4))]
     merged = merge_step_graphs(parts, "bushing", "force and torque")
     stimulus = ReferenceStimulus.from_onnx(merged)
     assert stimulus is not None and set(stimulus.inputs) == set(FORCE.channels) | set(TORQUE.channels)
@@ -146,7 +147,8 @@ def _other_producer_data(fmu: Path, perturb: float = 0.0) -> dict[str, bytes]:
     refs = "\n".join(['"time","y[0]","y[1]","z"', *(",".join(repr(float(v)) for v in (t[k], *y[k], z[k]))
                                                    for k in range(n))])
     experiments = (f'<?xml version="1.0" encoding="UTF-8"?>\n<Experiments name="acceptance">\n'
-                   f'  <Experiment name="sweep" startTime="0" stopTime="{float(t[-1])!r}" stepSize="{step}" tolerance="1e-12">\n'
+                   f'  <Experiment name="sweep" startTime="0" stopTime="{float(t[-1])!r}" stepSize="{step}" '
+                   'tolerance="1e-12">\n'
                    '    <Parameters source="params.ssv"/>\n    <Stimuli source="in.csv"/>\n'
                    '    <References source="ref.csv"/>\n  </Experiment>\n</Experiments>\n')
     parameters = ('<?xml version="1.0" encoding="UTF-8"?>\n<ssv:ParameterSet version="1.0" name="acceptance" '
@@ -155,7 +157,8 @@ def _other_producer_data(fmu: Path, perturb: float = 0.0) -> dict[str, bytes]:
                   '<ssv:Parameter name="filter_cutoff"><ssv:Real value="0"/></ssv:Parameter>'
                   '</ssv:Parameters></ssv:ParameterSet>\n')
     manifest = ('<?xml version="1.0" encoding="UTF-8"?>\n<fmiReferences '
-                'xmlns:fmi-ls="http://fmi-standard.org/fmi-ls-manifest" fmi-ls:fmi-ls-name="org.fmi-standard.fmi-ls-ref" '
+                'xmlns:fmi-ls="http://fmi-standard.org/fmi-ls-manifest" '
+                'fmi-ls:fmi-ls-name="org.fmi-standard.fmi-ls-ref" '
                 'fmi-ls:fmi-ls-version="1.0.0-alpha.1" fmi-ls:fmi-ls-description="Layered Standard providing '
                 'information on related files included in an FMU.">\n'
                 '  <Related type="application/x-ma-hs-experiments" source="tests/acceptance.exp" role="experiment"/>\n'

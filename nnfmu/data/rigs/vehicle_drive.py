@@ -56,7 +56,8 @@ class DriveDesign:
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.margin) and self.margin >= 1.0):
-            raise ValueError(f"margin must be a number >= 1 (the drive's peaks over the simulated ones), got {self.margin!r}")
+            raise ValueError("margin must be a number >= 1 (the drive's peaks over the simulated ones), "
+                             f"got {self.margin!r}")
         low, high = self.band
         if not (math.isfinite(low) and math.isfinite(high) and 0 <= low < high):
             raise ValueError(f"band must be (low, high) [Hz] with 0 <= low < high, got {self.band!r}")
@@ -140,7 +141,8 @@ class ChannelDesign:
         return {"channel": self.key, "unit": self.unit,
                 "simulated": {element: asdict(e) for element, e in self.simulated.items()},
                 "simulated_variance_outside_band": self.share_outside_band,
-                "start": self.start, "working_point": self.working_point, "target_low": self.target_low, "target_high": self.target_high,
+                "start": self.start, "working_point": self.working_point, "target_low": self.target_low,
+                "target_high": self.target_high,
                 "designed": asdict(self.designed), "designed_rms_over_simulated_rms": self.rms_over_simulated}
 
 
@@ -161,7 +163,8 @@ class VehicleDrive:
             "elements": list(self.elements),
             "design": asdict(self.design) | {"band": list(self.design.band)},
             "start": "settled at the simulated initial deflection (the car's static position), then faded to the "
-                     "working point" if self.design.settled else "at rest (zero deflection), faded to the working point",
+                     "working point" if self.design.settled
+                     else "at rest (zero deflection), faded to the working point",
             "peak_control": "random part scaled about the working point (the simulated mean) so that its excursions "
                             "above and below reach at least margin x the simulated ones; the side that needs more "
                             "sets the scale",

@@ -28,7 +28,8 @@ from .truth import build_truth
 from .vehicle_drive import DriveDesign, design_vehicle_drive
 
 
-def transducers_for(true: dict[str, np.ndarray], design: DriveDesign, rig: BushingRig = BushingRig()) -> dict[str, Sensor]:
+def transducers_for(true: dict[str, np.ndarray], design: DriveDesign,
+                    rig: BushingRig = BushingRig()) -> dict[str, Sensor]:
     """The transducer of every recorded channel: the rig's default, or (`design.fit_sensors`) sized for its peak."""
     if not design.fit_sensors:
         return {name: rig.sensors[name] for name in true}

@@ -2,8 +2,8 @@
 
 The vehicle's exact discrete step becomes an ONNX step graph (`step_graph`) with a `Component` attached: input
 ports are the vehicle's inputs (actuator displacements and velocities, forces of external components), output ports
-its outputs, the state starts at the static equilibrium for zero actuator input (or the settings' initial state), and the
-output filter is off (an
+its outputs, the state starts at the static equilibrium for zero actuator input (or the settings' initial state), and
+the output filter is off (an
 exact model must not be low-passed). The component interpolates its inputs (`interval_starts`), and
 `nnfmu.fmu.build_fmu` turns it into a native FMU like any trained component, so the FMU semantics are those of
 docs/fmu.md: samples at t_start + k T; the inputs are linear between samples, from the values set at one sample's
