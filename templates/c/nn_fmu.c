@@ -404,6 +404,16 @@ NNStatus nn_refuse_type(const NNInstance *instance, const char *function, const 
     return NN_ERROR;
 }
 
+NNStatus nn_setup_experiment(NNInstance *instance, double start_time) {
+    if (!isfinite(start_time)) {
+        nn_log(instance, NN_ERROR, NN_LOG_ERROR, "SetupExperiment: start time %g is not finite", start_time);
+        return NN_ERROR;
+    }
+    instance->data.start_time = start_time;
+    instance->data.time = start_time;
+    return NN_OK;
+}
+
 NNStatus nn_enter_initialization(NNInstance *instance, double start_time) {
     if (!isfinite(start_time)) {
         nn_log(instance, NN_ERROR, NN_LOG_ERROR, "start time %g is not finite", start_time);
