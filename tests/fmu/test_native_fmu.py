@@ -149,6 +149,23 @@ def test_a_state_saved_after_setup_experiment_deserialises_and_a_non_finite_star
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
+def test_a_state_saved_after_terminating_a_failed_initialisation_deserialises(delay_fmus, open_fmu, fmi):
+    """Found by test_fuzz.py (seed 5497): a failed initialisation leaves no sample done; terminated so, the FMU's
+    state failed its own sample-counter check when read back."""
+    slave = open_fmu(delay_fmus[fmi])
+    slave.enter_initialization(0.0)
+    slave.set_real(["output_gain"], [1e308])  # the first sample's outputs overflow: initialisation fails
+    with pytest.raises(FMICallException):
+        slave.exit_initialization()
+    slave.fmu.terminate()
+    saved = slave.fmu.getFMUState()
+    restored = slave.fmu.deserializeFMUState(slave.fmu.serializeFMUState(saved))
+    slave.fmu.setFMUState(restored)
+    slave.fmu.freeFMUState(saved)
+    slave.fmu.freeFMUState(restored)
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
 def test_reset_clears_delay_line_and_filter(filtered_fmus, open_fmu, reference, fmi):
     inputs = random_inputs(200, seed=8)
     slave = open_fmu(filtered_fmus[fmi])
