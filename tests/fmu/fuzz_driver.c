@@ -1,7 +1,10 @@
-/* fuzz_driver.c: drives an FMI 2.0 co-simulation FMU with random call sequences for test_fuzz.py (run under
+/* fuzz_driver.c: drives an FMI 2.0 or 3.0 co-simulation FMU with random call sequences for test_fuzz.py (run under
  * ASan+UBSan, so any invalid access or undefined behaviour aborts the run).
  *
- * Usage: fuzz_driver BINARY GUID N_INPUTS N_OUTPUTS N_REALS SEED SECONDS MAX_SEQUENCES
+ * Usage: fuzz_driver FMI BINARY GUID N_INPUTS N_OUTPUTS N_REALS SEED SECONDS MAX_SEQUENCES
+ *   FMI: 2 or 3. The sequences are written against the FMI 2 functions; for FMI 3 small adapters call the FMI 3
+ *   counterparts (SetupExperiment keeps the start time for EnterInitializationMode, input derivatives go to the
+ *   refused GetOutputDerivatives, the Boolean status to the refused EnterEventMode).
  *   N_REALS: one past the highest Real value reference (inputs come first, then outputs, as nnfmu numbers them).
  * Sequence s (s = 0, 1, ...) draws its calls from the seed SEED + s: instances created and freed, initialisation,
  * reals set and read with valid and invalid value references and values (NaN, inf, huge, denormal), steps with
@@ -22,6 +25,7 @@
 
 #include <dlfcn.h>
 #include "fmi2Functions.h"
+#include "fmi3Functions.h"
 
 #define SLOTS 3          /* instances alive at once */
 #define CALLS 300        /* calls per sequence */
@@ -131,6 +135,183 @@ static struct {
     fmi2SerializeFMUstateTYPE *serialize;
     fmi2DeSerializeFMUstateTYPE *deserialize;
 } f;
+
+
+/* The FMI 3 functions the adapters below call. */
+static struct {
+    fmi3InstantiateCoSimulationTYPE *instantiate;
+    fmi3InstantiateModelExchangeTYPE *instantiate_me;
+    fmi3FreeInstanceTYPE *free_instance;
+    fmi3SetDebugLoggingTYPE *set_debug_logging;
+    fmi3EnterInitializationModeTYPE *enter;
+    fmi3ExitInitializationModeTYPE *exit_init;
+    fmi3EnterEventModeTYPE *enter_event_mode;
+    fmi3TerminateTYPE *terminate;
+    fmi3ResetTYPE *reset;
+    fmi3GetFloat64TYPE *get_float64;
+    fmi3SetFloat64TYPE *set_float64;
+    fmi3GetBooleanTYPE *get_boolean;
+    fmi3GetInt32TYPE *get_int32;
+    fmi3GetOutputDerivativesTYPE *get_output_derivatives;
+    fmi3DoStepTYPE *do_step;
+    fmi3GetFMUStateTYPE *get_state;
+    fmi3SetFMUStateTYPE *set_state;
+    fmi3FreeFMUStateTYPE *free_state;
+    fmi3SerializedFMUStateSizeTYPE *state_size;
+    fmi3SerializeFMUStateTYPE *serialize;
+    fmi3DeserializeFMUStateTYPE *deserialize;
+} g;
+
+/* FMI 3 takes the start time in EnterInitializationMode: SetupExperiment's is kept per instance until then. */
+static struct {
+    fmi2Component c;
+    double start;
+} starts[SLOTS];
+
+static double *start_of(fmi2Component c) {
+    int i;
+    for (i = 0; i < SLOTS; i++) {
+        if (starts[i].c == c) return &starts[i].start;
+    }
+    for (i = 0; i < SLOTS; i++) {
+        if (!starts[i].c) {
+            starts[i].c = c;
+            starts[i].start = 0.0;
+            return &starts[i].start;
+        }
+    }
+    return NULL;
+}
+
+static void log3(fmi3InstanceEnvironment env, fmi3Status status, fmi3String category, fmi3String message) {
+    logger(env, "fmi3", (fmi2Status)status, category, "%s", message);
+}
+
+static fmi2Component instantiate3(fmi2String name, fmi2Type type, fmi2String token, fmi2String resources,
+                                  const fmi2CallbackFunctions *functions, fmi2Boolean visible, fmi2Boolean logging) {
+    (void)functions;
+    if (type != fmi2CoSimulation) {
+        return g.instantiate_me(name, token, resources, visible != 0, logging != 0, NULL, log3);
+    }
+    return g.instantiate(name, token, resources, visible != 0, logging != 0, fmi3False, fmi3False, NULL, 0, NULL, log3,
+                         NULL);
+}
+
+static void free_instance3(fmi2Component c) {
+    int i;
+    for (i = 0; i < SLOTS; i++) {
+        if (starts[i].c == c) starts[i].c = NULL;
+    }
+    g.free_instance(c);
+}
+
+static fmi2Status set_debug_logging3(fmi2Component c, fmi2Boolean on, size_t n, const fmi2String categories[]) {
+    return (fmi2Status)g.set_debug_logging(c, on != 0, n, categories);
+}
+
+static fmi2Status setup3(fmi2Component c, fmi2Boolean tolerance_defined, fmi2Real tolerance, fmi2Real start_time,
+                         fmi2Boolean stop_defined, fmi2Real stop_time) {
+    double *start = start_of(c);
+    (void)tolerance_defined;
+    (void)tolerance;
+    (void)stop_defined;
+    (void)stop_time;
+    if (start) *start = start_time;
+    return fmi2OK;
+}
+
+static fmi2Status enter3(fmi2Component c) {
+    double *start = start_of(c);
+    return (fmi2Status)g.enter(c, fmi3False, 0.0, start ? *start : 0.0, fmi3False, 0.0);
+}
+
+static fmi2Status exit_init3(fmi2Component c) { return (fmi2Status)g.exit_init(c); }
+
+static fmi2Status terminate3(fmi2Component c) { return (fmi2Status)g.terminate(c); }
+
+static fmi2Status reset3(fmi2Component c) {
+    double *start = start_of(c);
+    if (start) *start = 0.0;
+    return (fmi2Status)g.reset(c);
+}
+
+static fmi2Status get_real3(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Real values[]) {
+    return (fmi2Status)g.get_float64(c, vr, n, values, n);
+}
+
+static fmi2Status set_real3(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Real values[]) {
+    return (fmi2Status)g.set_float64(c, vr, n, values, n);
+}
+
+static fmi2Status get_boolean3(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Boolean values[]) {
+    fmi3Boolean flags[MAX_VR];
+    fmi2Status status;
+    size_t i;
+    if (n > MAX_VR) return fmi2Error;
+    status = (fmi2Status)g.get_boolean(c, vr, n, values ? flags : NULL, n);
+    for (i = 0; values && status == fmi2OK && i < n; i++) values[i] = flags[i] ? fmi2True : fmi2False;
+    return status;
+}
+
+static fmi2Status get_integer3(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Integer values[]) {
+    fmi3Int32 got[MAX_VR];
+    (void)values;
+    return n > MAX_VR ? fmi2Error : (fmi2Status)g.get_int32(c, vr, n, got, n);
+}
+
+static fmi2Status set_slopes3(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Integer order[],
+                              const fmi2Real values[]) {
+    fmi3Int32 orders[MAX_VR];
+    fmi3Float64 got[MAX_VR];
+    size_t i;
+    (void)values;
+    if (n > MAX_VR) return fmi2Error;
+    for (i = 0; i < n; i++) orders[i] = order[i];
+    return (fmi2Status)g.get_output_derivatives(c, vr, n, orders, got, n);
+}
+
+static fmi2Status do_step3(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean no_set_prior) {
+    fmi3Boolean event = fmi3True, terminate = fmi3True, early = fmi3True;
+    fmi3Float64 last = NAN;
+    fmi3Status status = g.do_step(c, t, h, no_set_prior != 0, &event, &terminate, &early, &last);
+    if (status == fmi3OK && (event || terminate || early || !(fabs(last - (t + h)) <= 1e-9 * fmax(1.0, fabs(t))))) {
+        fprintf(stderr, "seed %llu: fmi3DoStep OK but flags %d %d %d, last successful time %g for t + h = %g\n",
+                current_seed, event, terminate, early, last, t + h);
+        failures++;
+    }
+    return (fmi2Status)status;
+}
+
+static fmi2Status get_real_status3(fmi2Component c, const fmi2StatusKind kind, fmi2Real *value) {
+    double *start = start_of(c); /* only asked right after EnterInitializationMode, when the time is the start */
+    (void)kind;
+    *value = start ? *start : 0.0;
+    return fmi2OK;
+}
+
+static fmi2Status get_boolean_status3(fmi2Component c, const fmi2StatusKind kind, fmi2Boolean *value) {
+    (void)kind;
+    (void)value;
+    return (fmi2Status)g.enter_event_mode(c);
+}
+
+static fmi2Status get_state3(fmi2Component c, fmi2FMUstate *state) { return (fmi2Status)g.get_state(c, state); }
+
+static fmi2Status set_state3(fmi2Component c, fmi2FMUstate state) { return (fmi2Status)g.set_state(c, state); }
+
+static fmi2Status free_state3(fmi2Component c, fmi2FMUstate *state) { return (fmi2Status)g.free_state(c, state); }
+
+static fmi2Status state_size3(fmi2Component c, fmi2FMUstate state, size_t *size) {
+    return (fmi2Status)g.state_size(c, state, size);
+}
+
+static fmi2Status serialize3(fmi2Component c, fmi2FMUstate state, fmi2Byte bytes[], size_t size) {
+    return (fmi2Status)g.serialize(c, state, (fmi3Byte *)bytes, size);
+}
+
+static fmi2Status deserialize3(fmi2Component c, const fmi2Byte bytes[], size_t size, fmi2FMUstate *state) {
+    return (fmi2Status)g.deserialize(c, (const fmi3Byte *)bytes, size, state);
+}
 
 static int n_in, n_out, n_reals;
 static const char *guid;
@@ -423,7 +604,7 @@ static void *symbol(void *lib, const char *name) {
     return p;
 }
 
-#define FIND(field, name) *(void **)(&f.field) = symbol(lib, name)
+#define FIND(field, name) *(void **)(&field) = symbol(lib, name)
 
 int main(int argc, char **argv) {
     void *lib;
@@ -431,11 +612,13 @@ int main(int argc, char **argv) {
     unsigned long long seed;
     double seconds, start;
     long long sequences = 0, max_sequences;
-    int j, i;
-    if (argc != 9) {
-        fprintf(stderr, "usage: %s BINARY GUID N_INPUTS N_OUTPUTS N_REALS SEED SECONDS MAX_SEQUENCES\n", argv[0]);
+    int j, i, fmi;
+    if (argc != 10 || (strcmp(argv[1], "2") != 0 && strcmp(argv[1], "3") != 0)) {
+        fprintf(stderr, "usage: %s FMI BINARY GUID N_INPUTS N_OUTPUTS N_REALS SEED SECONDS MAX_SEQUENCES\n", argv[0]);
         return 2;
     }
+    fmi = atoi(argv[1]);
+    argv++; /* the arguments after FMI as numbered before FMI 3 was added */
     guid = argv[2];
     n_in = atoi(argv[3]);
     n_out = atoi(argv[4]);
@@ -449,28 +632,74 @@ int main(int argc, char **argv) {
         fprintf(stderr, "%s\n", dlerror());
         return 3;
     }
-    FIND(instantiate, "fmi2Instantiate");
-    FIND(free_instance, "fmi2FreeInstance");
-    FIND(set_debug_logging, "fmi2SetDebugLogging");
-    FIND(setup, "fmi2SetupExperiment");
-    FIND(enter, "fmi2EnterInitializationMode");
-    FIND(exit_init, "fmi2ExitInitializationMode");
-    FIND(terminate, "fmi2Terminate");
-    FIND(reset, "fmi2Reset");
-    FIND(get_real, "fmi2GetReal");
-    FIND(set_real, "fmi2SetReal");
-    FIND(get_boolean, "fmi2GetBoolean");
-    FIND(get_integer, "fmi2GetInteger");
-    FIND(set_slopes, "fmi2SetRealInputDerivatives");
-    FIND(do_step, "fmi2DoStep");
-    FIND(get_real_status, "fmi2GetRealStatus");
-    FIND(get_boolean_status, "fmi2GetBooleanStatus");
-    FIND(get_state, "fmi2GetFMUstate");
-    FIND(set_state, "fmi2SetFMUstate");
-    FIND(free_state, "fmi2FreeFMUstate");
-    FIND(state_size, "fmi2SerializedFMUstateSize");
-    FIND(serialize, "fmi2SerializeFMUstate");
-    FIND(deserialize, "fmi2DeSerializeFMUstate");
+    if (fmi == 2) {
+        FIND(f.instantiate, "fmi2Instantiate");
+        FIND(f.free_instance, "fmi2FreeInstance");
+        FIND(f.set_debug_logging, "fmi2SetDebugLogging");
+        FIND(f.setup, "fmi2SetupExperiment");
+        FIND(f.enter, "fmi2EnterInitializationMode");
+        FIND(f.exit_init, "fmi2ExitInitializationMode");
+        FIND(f.terminate, "fmi2Terminate");
+        FIND(f.reset, "fmi2Reset");
+        FIND(f.get_real, "fmi2GetReal");
+        FIND(f.set_real, "fmi2SetReal");
+        FIND(f.get_boolean, "fmi2GetBoolean");
+        FIND(f.get_integer, "fmi2GetInteger");
+        FIND(f.set_slopes, "fmi2SetRealInputDerivatives");
+        FIND(f.do_step, "fmi2DoStep");
+        FIND(f.get_real_status, "fmi2GetRealStatus");
+        FIND(f.get_boolean_status, "fmi2GetBooleanStatus");
+        FIND(f.get_state, "fmi2GetFMUstate");
+        FIND(f.set_state, "fmi2SetFMUstate");
+        FIND(f.free_state, "fmi2FreeFMUstate");
+        FIND(f.state_size, "fmi2SerializedFMUstateSize");
+        FIND(f.serialize, "fmi2SerializeFMUstate");
+        FIND(f.deserialize, "fmi2DeSerializeFMUstate");
+    } else {
+        FIND(g.instantiate, "fmi3InstantiateCoSimulation");
+        FIND(g.instantiate_me, "fmi3InstantiateModelExchange");
+        FIND(g.free_instance, "fmi3FreeInstance");
+        FIND(g.set_debug_logging, "fmi3SetDebugLogging");
+        FIND(g.enter, "fmi3EnterInitializationMode");
+        FIND(g.exit_init, "fmi3ExitInitializationMode");
+        FIND(g.enter_event_mode, "fmi3EnterEventMode");
+        FIND(g.terminate, "fmi3Terminate");
+        FIND(g.reset, "fmi3Reset");
+        FIND(g.get_float64, "fmi3GetFloat64");
+        FIND(g.set_float64, "fmi3SetFloat64");
+        FIND(g.get_boolean, "fmi3GetBoolean");
+        FIND(g.get_int32, "fmi3GetInt32");
+        FIND(g.get_output_derivatives, "fmi3GetOutputDerivatives");
+        FIND(g.do_step, "fmi3DoStep");
+        FIND(g.get_state, "fmi3GetFMUState");
+        FIND(g.set_state, "fmi3SetFMUState");
+        FIND(g.free_state, "fmi3FreeFMUState");
+        FIND(g.state_size, "fmi3SerializedFMUStateSize");
+        FIND(g.serialize, "fmi3SerializeFMUState");
+        FIND(g.deserialize, "fmi3DeserializeFMUState");
+        f.instantiate = instantiate3;
+        f.free_instance = free_instance3;
+        f.set_debug_logging = set_debug_logging3;
+        f.setup = setup3;
+        f.enter = enter3;
+        f.exit_init = exit_init3;
+        f.terminate = terminate3;
+        f.reset = reset3;
+        f.get_real = get_real3;
+        f.set_real = set_real3;
+        f.get_boolean = get_boolean3;
+        f.get_integer = get_integer3;
+        f.set_slopes = set_slopes3;
+        f.do_step = do_step3;
+        f.get_real_status = get_real_status3;
+        f.get_boolean_status = get_boolean_status3;
+        f.get_state = get_state3;
+        f.set_state = set_state3;
+        f.free_state = free_state3;
+        f.state_size = state_size3;
+        f.serialize = serialize3;
+        f.deserialize = deserialize3;
+    }
 
     start = now_s();
     while (sequences < max_sequences && now_s() - start < seconds && failures == 0) {

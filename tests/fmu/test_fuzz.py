@@ -1,10 +1,10 @@
-"""Random FMI 2 call sequences against native FMUs compiled with ASan+UBSan find nothing (issue #16).
+"""Random FMI 2 and FMI 3 call sequences against native FMUs compiled with ASan+UBSan find nothing (issue #16).
 
 fuzz_driver.c, seeded from its command line, drives several instances with random calls, values, step sizes,
 communication points and FMU state bytes (intact, truncated, corrupted) for a bounded time; any invalid access or
 undefined behaviour aborts it, and it checks that statuses are valid and that outputs read after an OK call are
-finite. The FMUs: the damper graph with a delay-line state (sampled) and the quarter-car vehicle (stateful and
-interpolating its inputs). A failing run names the seed of its sequence ("sequence seed N"); replay it with
+finite. The FMUs: the damper graph with a delay-line state (sampled; FMI 2 and 3) and the quarter-car vehicle (stateful and
+interpolating its inputs; FMI 2). A failing run names the seed of its sequence ("sequence seed N"); replay it with
 SECONDS large and MAX_SEQUENCES 1.
 """
 
@@ -22,7 +22,7 @@ from fmpy import read_model_description
 from nnfmu.fmu.native.build import fmi_headers_dir
 
 SANITIZE = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
-SECONDS_PER_FMU = 12.0
+SECONDS_PER_RUN = 8.0
 SEED = 1
 
 
@@ -74,17 +74,18 @@ def _layout(fmu: Path) -> tuple[str, int, int, int]:
     0.. and n_inputs.. as the driver assumes."""
     md = read_model_description(str(fmu))
     inputs = [v.valueReference for v in md.modelVariables if v.causality == "input"]
-    outputs = [v.valueReference for v in md.modelVariables if v.causality == "output" and v.type == "Real"]
+    reals = ("Real", "Float64")
+    outputs = [v.valueReference for v in md.modelVariables if v.causality == "output" and v.type in reals]
     assert inputs == list(range(len(inputs)))
     assert outputs == list(range(len(inputs), len(inputs) + len(outputs)))
-    n_reals = 1 + max(v.valueReference for v in md.modelVariables if v.type == "Real")
+    n_reals = 1 + max(v.valueReference for v in md.modelVariables if v.type in reals)
     return md.guid, len(inputs), len(outputs), n_reals
 
 
-def _fuzz(driver: Path, fmu: Path, folder: Path, seed: int, seconds: float, sequences: int) -> str:
+def _fuzz(driver: Path, fmi: int, fmu: Path, folder: Path, seed: int, seconds: float, sequences: int) -> str:
     library = _sanitized_library(fmu, folder)
     guid, n_in, n_out, n_reals = _layout(fmu)
-    result = subprocess.run([str(driver), str(library), guid, str(n_in), str(n_out), str(n_reals), str(seed),
+    result = subprocess.run([str(driver), str(fmi), str(library), guid, str(n_in), str(n_out), str(n_reals), str(seed),
                              str(seconds), str(sequences)], capture_output=True, text=True, timeout=seconds + 120,
                             env={"ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1",
                                  "PATH": "/usr/bin:/bin"})
@@ -97,14 +98,15 @@ def _fuzz(driver: Path, fmu: Path, folder: Path, seed: int, seconds: float, sequ
 def test_the_sequences_that_found_bugs_replay_clean(fuzz_driver, delay_fmus, tmp_path, seed):
     """Seed 2 saved a state between SetupExperiment and initialisation, seed 5497 one after terminating a failed
     initialisation; the FMU refused to read either back (fixed in nn_fmu.c / fmi2Functions.c)."""
-    _fuzz(fuzz_driver, delay_fmus[2], tmp_path, seed, 60.0, 1)
+    _fuzz(fuzz_driver, 2, delay_fmus[2], tmp_path, seed, 60.0, 1)
 
 
-def test_random_call_sequences_on_the_damper_find_nothing(fuzz_driver, delay_fmus, tmp_path):
-    report = _fuzz(fuzz_driver, delay_fmus[2], tmp_path, SEED, SECONDS_PER_FMU, 10**9)
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_random_call_sequences_on_the_damper_find_nothing(fuzz_driver, delay_fmus, tmp_path, fmi):
+    report = _fuzz(fuzz_driver, fmi, delay_fmus[fmi], tmp_path, SEED, SECONDS_PER_RUN, 10**9)
     print(report)
 
 
 def test_random_call_sequences_on_the_vehicle_find_nothing(fuzz_driver, vehicle_fmu, tmp_path):
-    report = _fuzz(fuzz_driver, vehicle_fmu, tmp_path, SEED, SECONDS_PER_FMU, 10**9)
+    report = _fuzz(fuzz_driver, 2, vehicle_fmu, tmp_path, SEED, SECONDS_PER_RUN, 10**9)
     print(report)
