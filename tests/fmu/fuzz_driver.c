@@ -10,9 +10,12 @@
  * reals set and read with valid and invalid value references and values (NaN, inf, huge, denormal), steps with
  * valid, zero, negative, huge and non-finite sizes at right and wrong communication points, FMU states saved,
  * restored, serialised and deserialised from intact, truncated and corrupted bytes, reset and terminate in any mode.
+ * Half the calls are well-formed ones for the mode the driver believes an instance is in (set up, initialise, set
+ * inputs and step), so that sequences reach far into stepping between the hostile ones.
  * It stops after SECONDS or MAX_SEQUENCES sequences. Checked invariants: every status is a valid fmi2Status, the
  * outputs read after an OK doStep (and any OK read of outputs) are finite, a state serialised and deserialised
- * intact is accepted. Exits 0 when no invariant broke, printing how many sequences and calls ran.
+ * intact is accepted, an OK fmi3DoStep reports no event, no termination, no early return and t + h as its last
+ * successful time. Exits 0 when no invariant broke, printing how many sequences and calls ran.
  */
 #define _POSIX_C_SOURCE 200112L /* clock_gettime */
 #include <math.h>
@@ -382,7 +385,7 @@ static void free_slot(Slot *s) {
 }
 
 static void instantiate(Slot *s) {
-    static const char *names[] = {"fuzz", "", "a%s%n%d", "very long name ................................................"};
+    static const char *names[] = {"fuzz", "", "a%s%n%d", "a long name ..........................................."};
     const char *token = guid;
     fmi2Type type = fmi2CoSimulation;
     switch (below(8)) {

@@ -3,9 +3,9 @@
 fuzz_driver.c, seeded from its command line, drives several instances with random calls, values, step sizes,
 communication points and FMU state bytes (intact, truncated, corrupted) for a bounded time; any invalid access or
 undefined behaviour aborts it, and it checks that statuses are valid and that outputs read after an OK call are
-finite. The FMUs: the damper graph with a delay-line state (sampled; FMI 2 and 3) and the quarter-car vehicle (stateful and
-interpolating its inputs; FMI 2). A failing run names the seed of its sequence ("sequence seed N"); replay it with
-SECONDS large and MAX_SEQUENCES 1.
+finite. The FMUs: the damper graph with a delay-line state (sampled; FMI 2 and 3) and the quarter-car vehicle
+(stateful and interpolating its inputs; FMI 2). A failing run names the seed of its sequence ("sequence seed N");
+replay it with SECONDS large and MAX_SEQUENCES 1.
 """
 
 from __future__ import annotations
