@@ -78,8 +78,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
     (void)stopTimeDefined;
     (void)stopTime;
     if (!instance) return fmi2Error;
-    instance->data.start_time = startTime;
-    return fmi2OK;
+    return (fmi2Status)nn_setup_experiment(instance, startTime);
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {

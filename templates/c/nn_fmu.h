@@ -106,6 +106,9 @@ NNStatus nn_set_input_slopes(NNInstance *instance, const unsigned vr[], size_t n
                              const double value[]);
 NNStatus nn_refuse_type(const NNInstance *instance, const char *function, const char *type, unsigned vr);
 
+/* FMI 2 SetupExperiment: the start time (finite) becomes the instance's time too, so that a state saved before
+ * initialisation is one DeserializeFMUstate accepts. */
+NNStatus nn_setup_experiment(NNInstance *instance, double start_time);
 NNStatus nn_enter_initialization(NNInstance *instance, double start_time);
 NNStatus nn_exit_initialization(NNInstance *instance);
 NNStatus nn_do_step(NNInstance *instance, double current_time, double step_size);

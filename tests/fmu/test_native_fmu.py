@@ -10,6 +10,8 @@ import numpy as np
 import onnx
 import pytest
 from fmpy import read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import fmi2LastSuccessfulTime
 from onnx import helper
 
 from native_fmu_helpers import SAMPLE_PERIOD, Reference, delay_step_graph, generic_graph, hostile_graph
@@ -125,6 +127,42 @@ def test_rollback_with_get_set_and_serialised_state(delay_fmus, open_fmu, fmi):
     slave.fmu.freeFMUState(restored)
     np.testing.assert_array_equal(first, second)
     np.testing.assert_array_equal(first, third)
+
+
+def test_a_state_saved_after_setup_experiment_deserialises_and_a_non_finite_start_is_refused(delay_fmus, open_fmu):
+    """Found by test_fuzz.py (seed 2): SetupExperiment kept the start time apart from the time, so a state saved
+    between it and initialisation failed the FMU's own plausibility check (time != start + elapsed) when read back."""
+    slave = open_fmu(delay_fmus[2])
+    slave.fmu.setupExperiment(startTime=5.0)
+    saved = slave.fmu.getFMUState()
+    restored = slave.fmu.deserializeFMUState(slave.fmu.serializeFMUState(saved))
+    slave.fmu.setFMUState(restored)
+    slave.fmu.freeFMUState(saved)
+    slave.fmu.freeFMUState(restored)
+    slave.fmu.enterInitializationMode()
+    slave.fmu.exitInitializationMode()
+    slave.do_step(5.0, T)
+    assert slave.fmu.getRealStatus(fmi2LastSuccessfulTime) == pytest.approx(5.0 + T)
+    other = open_fmu(delay_fmus[2], name="other")
+    with pytest.raises(FMICallException):
+        other.fmu.setupExperiment(startTime=float("nan"))
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_a_state_saved_after_terminating_a_failed_initialisation_deserialises(delay_fmus, open_fmu, fmi):
+    """Found by test_fuzz.py (seed 5497): a failed initialisation leaves no sample done; terminated so, the FMU's
+    state failed its own sample-counter check when read back."""
+    slave = open_fmu(delay_fmus[fmi])
+    slave.enter_initialization(0.0)
+    slave.set_real(["output_gain"], [1e308])  # the first sample's outputs overflow: initialisation fails
+    with pytest.raises(FMICallException):
+        slave.exit_initialization()
+    slave.fmu.terminate()
+    saved = slave.fmu.getFMUState()
+    restored = slave.fmu.deserializeFMUState(slave.fmu.serializeFMUState(saved))
+    slave.fmu.setFMUState(restored)
+    slave.fmu.freeFMUState(saved)
+    slave.fmu.freeFMUState(restored)
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
