@@ -23,6 +23,9 @@ METADATA_KEY = "nnfmu.component"
 FORMAT_VERSION = 1
 # Sample periods a component may have [s]: shorter ones would make an FMU evaluate billions of samples per second.
 SAMPLE_PERIOD_RANGE = (1e-9, 1e4)
+# Most ports (tensor elements) one graph from another tool may have: each becomes an FMU variable, so a declared
+# input of a billion elements is refused before any port is made.
+MAX_PORTS = 100_000
 DEFAULT_FILTER_CUTOFF_HZ = 0.0  # off: an FMU computes its model; the thesis's 100 Hz is an option (docs/fmu.md)
 
 
@@ -235,9 +238,17 @@ def _static_size(value_info: onnx.ValueInfoProto) -> int:
 
 
 def _ports_of(value_infos: list[onnx.ValueInfoProto]) -> list[Port]:
+    """One port per tensor element; ValueError naming the tensor, its size and MAX_PORTS before any is made when
+    the tensors together have more elements than that."""
+    sizes = [_static_size(vi) for vi in value_infos]
+    for vi, size in zip(value_infos, sizes):
+        if size > MAX_PORTS:
+            raise ValueError(f"tensor {vi.name!r} has {size} elements, more than the {MAX_PORTS} ports an FMU may have")
+    if sum(sizes) > MAX_PORTS:
+        raise ValueError(f"tensors {', '.join(repr(vi.name) for vi in value_infos)} have {sum(sizes)} elements "
+                         f"together, more than the {MAX_PORTS} ports an FMU may have")
     ports: list[Port] = []
-    for vi in value_infos:
-        size = _static_size(vi)
+    for vi, size in zip(value_infos, sizes):
         if size == 1:
             ports.append(Port(name=vi.name, tensor=vi.name, index=0))
         else:

@@ -14,6 +14,7 @@ import hashlib
 import uuid
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import jinja2
 import onnx
@@ -25,6 +26,9 @@ from nnfmu.fmu.variables import FmuVariable, FmuVariables
 from nnfmu.resources import templates_dir
 
 GENERATION_TOOL = f"nnfmu {nnfmu.__version__}"
+# An unknown that depends on more knowns than this has no `dependencies` attribute, which FMI 2 and 3 define as
+# "depends on every known" (a superset): listing them would make the XML grow with inputs x outputs.
+MAX_LISTED_DEPENDENCIES = 100
 
 # SI base-unit exponents (FMI BaseUnit attributes) of the units nnfmu writes.
 SI_EXPONENTS: dict[str, tuple[tuple[str, int], ...]] = {
@@ -81,29 +85,32 @@ def unit_definitions(variables: Iterable[FmuVariable]) -> list[UnitDefinition]:
 
 
 def tensor_dependencies(model: onnx.ModelProto) -> dict[str, set[str]]:
-    """For every graph output tensor, the graph input tensors it is computed from (walking nodes backwards)."""
+    """For every graph output tensor, the graph input tensors it is computed from (walking nodes backwards, without
+    recursion: a chain of thousands of nodes is fine)."""
     producers = {out: node for node in model.graph.node for out in node.output}
     graph_inputs = {vi.name for vi in model.graph.input}
-
-    def reach(tensor: str, seen: set[str]) -> set[str]:
-        if tensor in seen:
-            return set()
-        seen.add(tensor)
-        if tensor in graph_inputs:
-            return {tensor}
-        node = producers.get(tensor)
-        if node is None:
-            return set()
+    dependencies: dict[str, set[str]] = {}
+    for output in model.graph.output:
         found: set[str] = set()
-        for name in node.input:
-            if name:
-                found |= reach(name, seen)
-        for attribute in node.attribute:  # subgraphs (If/Loop/Scan) may read outer tensors: be conservative
-            if attribute.g.node or attribute.graphs:
-                return set(graph_inputs)
-        return found
-
-    return {vi.name: reach(vi.name, set()) for vi in model.graph.output}
+        seen = {output.name}
+        pending = [output.name]
+        while pending:
+            tensor = pending.pop()
+            if tensor in graph_inputs:
+                found.add(tensor)
+                continue
+            node = producers.get(tensor)
+            if node is None:
+                continue
+            if any(attribute.g.node or attribute.graphs for attribute in node.attribute):
+                found = set(graph_inputs)  # subgraphs (If/Loop/Scan) may read outer tensors: be conservative
+                break
+            for name in node.input:
+                if name and name not in seen:
+                    seen.add(name)
+                    pending.append(name)
+        dependencies[output.name] = found
+    return dependencies
 
 
 @dataclass
@@ -140,11 +147,11 @@ class ModelDescriptionView:
     def sample_period(self) -> float | None:
         return self.component.sample_period
 
-    @property
+    @cached_property
     def variables(self) -> list[FmuVariable]:
         return [self._clean(v) for v in self.fmu_variables.listed(self.identity.fmi_version)]
 
-    @property
+    @cached_property
     def outputs(self) -> list[FmuVariable]:
         return [self._clean(v) for v in (*self.fmu_variables.outputs, self.fmu_variables.extrapolating)]
 
@@ -172,30 +179,63 @@ class ModelDescriptionView:
 
     def index(self, v: FmuVariable) -> int:
         """FMI 2 `index`: 1-based position in ModelVariables."""
-        return 1 + [x.value_reference for x in self.variables].index(v.value_reference)
+        return self._indices[v.value_reference]
+
+    @cached_property
+    def _indices(self) -> dict[int, int]:
+        """FMI 2 index of every value reference, built once (a lookup per variable would make rendering quadratic)."""
+        return {x.value_reference: position for position, x in enumerate(self.variables, start=1)}
 
     @property
     def interpolates_inputs(self) -> bool:
         return self.component.interpolates_inputs
 
-    def initial_dependencies(self, v: FmuVariable) -> str:
-        """Knowns an output depends on at initialisation: FMI 2 indices or FMI 3 value references, ascending."""
-        knowns = self._input_sources(v)
-        if v.value_reference != self.fmu_variables.extrapolating.value_reference:
-            knowns.append(self.fmu_variables.output_gain)
-        return self._keys(knowns)
+    def has_initial_dependencies(self, v: FmuVariable) -> bool:
+        """False when output `v` depends on so many knowns at initialisation that the attribute is left out."""
+        return self.initial_dependencies(v) is not None
 
-    def step_dependencies(self, v: FmuVariable) -> str:
+    def has_step_dependencies(self, v: FmuVariable) -> bool:
+        """False when output `v` depends on so many inputs at a communication point that the attribute is left out."""
+        return self.step_dependencies(v) is not None
+
+    def initial_dependencies(self, v: FmuVariable) -> str | None:
+        """Knowns an output depends on at initialisation: FMI 2 indices or FMI 3 value references, ascending; None
+        for more than MAX_LISTED_DEPENDENCIES (the attribute is left out: every known)."""
+        return self._dependency_keys(self._source_key(v), initial=True)
+
+    def step_dependencies(self, v: FmuVariable) -> str | None:
         """Inputs an output depends on at a communication point: none for a sampled FMU (its outputs change only in
-        doStep), its graph sources for an interpolating one (inputs set there are the latest sample's)."""
-        return self._keys(self._input_sources(v)) if self.interpolates_inputs else ""
+        doStep), its graph sources for an interpolating one (inputs set there are the latest sample's); None for more
+        than MAX_LISTED_DEPENDENCIES."""
+        return self._dependency_keys(self._source_key(v), initial=False) if self.interpolates_inputs else ""
 
-    def _input_sources(self, v: FmuVariable) -> list[FmuVariable]:
-        """The inputs output `v` is computed from (for `extrapolating`: those with a training envelope)."""
+    def _source_key(self, v: FmuVariable) -> str | None:
+        """What output `v`'s dependencies follow from: its graph tensor, or None for `extrapolating`."""
+        if v.value_reference == self.fmu_variables.extrapolating.value_reference:
+            return None
+        return self.component.outputs[v.port_index].tensor
+
+    def _dependency_keys(self, source: str | None, initial: bool) -> str | None:
+        """The dependency list of every output with this source, computed once per source tensor."""
+        cache = self._dependency_cache
+        if (source, initial) not in cache:
+            knowns = list(self._input_sources(source))
+            if initial and source is not None:
+                knowns.append(self.fmu_variables.output_gain)
+            cache[(source, initial)] = self._keys(knowns) if len(knowns) <= MAX_LISTED_DEPENDENCIES else None
+        return cache[(source, initial)]
+
+    @cached_property
+    def _dependency_cache(self) -> dict[tuple[str | None, bool], str | None]:
+        return {}
+
+    def _input_sources(self, source: str | None) -> list[FmuVariable]:
+        """The inputs an output of graph tensor `source` is computed from (None, `extrapolating`: those with a
+        training envelope)."""
         fv = self.fmu_variables
-        if v.value_reference == fv.extrapolating.value_reference:
+        if source is None:
             return [x for x in fv.inputs if self._has_envelope(x)]
-        sources = self.dependencies.get(self.component.outputs[v.port_index].tensor, set())
+        sources = self.dependencies.get(source, set())
         return [x for x in fv.inputs if self.component.inputs[x.port_index].tensor in sources]
 
     def _keys(self, knowns: list[FmuVariable]) -> str:

@@ -141,13 +141,18 @@ def _add_model_structure(root: ET.Element, view: ModelDescriptionView) -> None:
             ET.SubElement(listed, "Unknown", index=str(view.index(var)), dependencies="")
         initial = ET.SubElement(structure, "InitialUnknowns")
         for var in view.outputs:
-            ET.SubElement(initial, "Unknown", index=str(view.index(var)), dependencies=view.initial_dependencies(var))
+            ET.SubElement(initial, "Unknown", index=str(view.index(var)), **_dependencies(view, var))
         return
     for var in view.outputs:
         ET.SubElement(structure, "Output", valueReference=str(var.value_reference), dependencies="")
     for var in view.outputs:
-        ET.SubElement(structure, "InitialUnknown", valueReference=str(var.value_reference),
-                      dependencies=view.initial_dependencies(var))
+        ET.SubElement(structure, "InitialUnknown", valueReference=str(var.value_reference), **_dependencies(view, var))
+
+
+def _dependencies(view: ModelDescriptionView, var: FmuVariable) -> dict[str, str]:
+    """The `dependencies` attribute of an initial unknown; none when it depends on too many knowns to list."""
+    keys = view.initial_dependencies(var)
+    return {} if keys is None else {"dependencies": keys}
 
 
 def _sort_children(root: ET.Element, order: tuple[str, ...]) -> None:

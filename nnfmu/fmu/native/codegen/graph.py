@@ -102,26 +102,37 @@ def _graph_input(value: onnx.ValueInfoProto) -> Tensor:
 
 
 def _topological(graph: onnx.GraphProto, available: set[str]) -> list[onnx.NodeProto]:
-    """Nodes ordered so every input is produced before use (Kahn's algorithm, stable)."""
-    known = set(available)
-    pending = list(range(len(graph.node)))
-    ordered: list[onnx.NodeProto] = []
-    while pending:
-        ready = [i for i in pending if all(not name or name in known for name in graph.node[i].input)]
-        if not ready:
-            first = graph.node[pending[0]]
-            missing = sorted(name for name in first.input if name and name not in known)
-            raise UnsupportedGraphError(
-                f"inputs {missing} are never produced (or the graph has a cycle)",
-                op_type=first.op_type,
-                node_name=first.name,
-            )
-        for i in ready:
-            known.update(name for name in graph.node[i].output if name)
-            ordered.append(graph.node[i])
-        done = set(ready)
-        pending = [i for i in pending if i not in done]
-    return ordered
+    """Nodes ordered so every input is produced before use: Kahn's algorithm in waves (a node's wave is one past its
+    latest producer's), each wave in file order; linear in the graph, so long chains are fine."""
+    consumers: dict[str, list[int]] = {}
+    waiting: list[int] = []  # per node: how many of its input tensors are not produced yet
+    for i, node in enumerate(graph.node):
+        missing = {name for name in node.input if name and name not in available}
+        waiting.append(len(missing))
+        for name in missing:
+            consumers.setdefault(name, []).append(i)
+    wave = [0] * len(graph.node)
+    ready = [i for i, count in enumerate(waiting) if count == 0]
+    placed: list[int] = []
+    while ready:
+        i = ready.pop()
+        placed.append(i)
+        for name in {name for name in graph.node[i].output if name}:
+            for consumer in consumers.get(name, ()):
+                wave[consumer] = max(wave[consumer], wave[i] + 1)
+                waiting[consumer] -= 1
+                if waiting[consumer] == 0:
+                    ready.append(consumer)
+    if len(placed) < len(graph.node):
+        known = set(available) | {name for i in placed for name in graph.node[i].output if name}
+        first = graph.node[min(set(range(len(graph.node))) - set(placed))]
+        missing_names = sorted(name for name in first.input if name and name not in known)
+        raise UnsupportedGraphError(
+            f"inputs {missing_names} are never produced (or the graph has a cycle)",
+            op_type=first.op_type,
+            node_name=first.name,
+        )
+    return [graph.node[i] for i in sorted(placed, key=lambda i: (wave[i], i))]
 
 
 def _resolve(proto: onnx.NodeProto, opset: int, tensors: dict[str, Tensor]) -> Step | None:
