@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from nnfmu.demo import PRESETS_BY_RIG, UNDECLARED_EFFECTS, DemoSettings, run_demo
+from nnfmu.fmu.check import check_fmu
 
 
 def test_quick_demo_runs_every_stage(tmp_path: Path) -> None:
@@ -39,3 +40,7 @@ def test_quick_demo_runs_every_stage(tmp_path: Path) -> None:
     # the demo's damper has an undeclared gas spring and warming oil; the loop adds only effects that are there
     assert loop["effects_added"] and set(loop["effects_added"]) <= set(UNDECLARED_EFFECTS)
     assert loop["error_after"]["nrmse"] < loop["error_before"]["nrmse"]
+    # every network FMU the demo hands over carries its reference results and passes them (nnfmu check)
+    for fmu in [Path(m.fmu) for m in summary.models] + [summary.loop.fmu]:
+        report = check_fmu(fmu)
+        assert report.passed and report.experiments, (fmu, report.checksum_errors, report.experiments)
