@@ -150,7 +150,7 @@ def close_the_loop(out: Path, settings: DemoSettings, log: Callable[[str], None]
     train = TrainSettings(seed=settings.seed, restarts=1, max_epochs=15) if settings.quick else TrainSettings(
         seed=settings.seed)
     first = export_onnx(train_model(fit, preset.spec, preset.architecture, train).model,
-                        out / "loop" / f"{LOOP_PRESET}.onnx").path
+                        out / "models" / f"{LOOP_PRESET}-loop-start.onnx").path  # an input: not in the loop's folder
     log(f"loop: {lab} has {', '.join(UNDECLARED_EFFECTS)}, which {first.name} was not given; running the loop")
     report = run_loop(measured, first, "force", out / "loop", loop_settings)
     log(f"loop: {report.summary}; effects added: {', '.join(report.effects_added) or 'none'}; held-out NRMSE "
