@@ -28,7 +28,9 @@ CALL_NAMES = ("set inputs", "set input slopes", "step", "get outputs", "refresh:
 _LIBRARY: CDLL | None = None
 
 
-class _Element(Structure):
+class _CElement(Structure):
+    """`nn_element` of inner_loop.c."""
+
     _fields_ = [(name, c_void_p) for name in ("instance", "set_real", "get_real", "set_slopes", "do_step",
                                                "input_references", "inputs")] + [
         ("n_coupled", c_int64), ("n_driven", c_int64), ("sources", c_void_p), ("slope_references", c_void_p),
@@ -36,14 +38,18 @@ class _Element(Structure):
         ("span_start", c_int64), ("vehicle", c_int64), ("feedthrough", c_int64)]
 
 
-class _Plan(Structure):
+class _CPlan(Structure):
+    """`nn_plan` of inner_loop.c."""
+
     _fields_ = [("elements", c_void_p), ("n_elements", c_int64), ("group_starts", c_void_p), ("n_groups", c_int64),
                 ("refreshed", c_void_p), ("n_refreshed", c_int64), ("n_values", c_int64), ("n_drive", c_int64),
                 ("linear_extrapolation", c_int64), ("gauss_seidel", c_int64)] + [
         (name, c_void_p) for name in ("values", "now", "before", "estimate", "fresh")]
 
 
-class _Failure(Structure):
+class _CFailure(Structure):
+    """`nn_failure` of inner_loop.c."""
+
     _fields_ = [("step", c_int64), ("element", c_int64), ("call", c_int64), ("status", c_int64)]
 
 
@@ -114,7 +120,7 @@ class CompiledLoop:
         settings = system.settings
         index = {id(element): i for i, element in enumerate(order)}
         keep: list[object] = []  # arrays the C structs point into
-        elements = (_Element * len(order))()
+        elements = (_CElement * len(order))()
         for slot, element in zip(elements, order):
             slave = element.outputs.slave
             dll, inputs = slave.fmu.dll, element.inputs
@@ -142,7 +148,7 @@ class CompiledLoop:
         self.now, self.before = np.zeros(n), np.zeros(n)
         self.estimate, self.fresh = np.zeros(n), np.zeros(n)
         keep += [starts, refreshed]
-        self.plan = _Plan(
+        self.plan = _CPlan(
             elements=cast(elements, c_void_p).value, n_elements=len(order), group_starts=_pointer(starts),
             n_groups=len(groups), refreshed=_pointer(refreshed), n_refreshed=len(refreshed), n_values=n,
             n_drive=drive_size, linear_extrapolation=int(settings.extrapolation == "linear"),
@@ -150,7 +156,7 @@ class CompiledLoop:
             now=_pointer(self.now), before=_pointer(self.before), estimate=_pointer(self.estimate),
             fresh=_pointer(self.fresh))
         self._keep = (keep, elements)
-        self.failure = _Failure()
+        self.failure = _CFailure()
 
     @staticmethod
     def usable(system: _System) -> bool:
