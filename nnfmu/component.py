@@ -66,6 +66,14 @@ class StatePort:
         return len(self.initial)
 
 
+def replace_metadata(model: onnx.ModelProto, key: str, value: str) -> None:
+    """Set the ONNX model's metadata entry `key` to `value`, dropping any earlier entry of that key."""
+    kept = [p for p in model.metadata_props if p.key != key]
+    del model.metadata_props[:]
+    model.metadata_props.extend(kept)
+    model.metadata_props.add(key=key, value=value)
+
+
 @dataclass
 class Component:
     """Everything a consumer of a step graph needs besides the graph itself.
@@ -150,10 +158,7 @@ class Component:
 
     def attach_to(self, model: onnx.ModelProto) -> None:
         """Store this description in the ONNX model's metadata (replacing an earlier one)."""
-        kept = [p for p in model.metadata_props if p.key != METADATA_KEY]
-        del model.metadata_props[:]
-        model.metadata_props.extend(kept)
-        model.metadata_props.add(key=METADATA_KEY, value=self.to_json())
+        replace_metadata(model, METADATA_KEY, self.to_json())
 
     @classmethod
     def from_onnx(cls, model: onnx.ModelProto, name: str | None = None) -> "Component":

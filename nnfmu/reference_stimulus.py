@@ -16,6 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 import onnx
 
+from .component import replace_metadata
+
 METADATA_KEY = "nnfmu.reference_stimulus"
 FORMAT_VERSION = 1
 REFERENCE_SAMPLES = 500  # 0.5 s at 1 kHz: enough to exercise delays, filters and the recurrent state
@@ -53,10 +55,7 @@ class ReferenceStimulus:
 
     def attach_to(self, model: onnx.ModelProto) -> None:
         """Store this stimulus in the ONNX model's metadata (replacing an earlier one)."""
-        kept = [p for p in model.metadata_props if p.key != METADATA_KEY]
-        del model.metadata_props[:]
-        model.metadata_props.extend(kept)
-        model.metadata_props.add(key=METADATA_KEY, value=self.to_json())
+        replace_metadata(model, METADATA_KEY, self.to_json())
 
     @classmethod
     def from_onnx(cls, model: onnx.ModelProto) -> "ReferenceStimulus | None":
