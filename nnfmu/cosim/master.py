@@ -50,6 +50,7 @@ from ..data import Measurement
 from .direct import FmiStatusError, RealBlock, SlopeBlock, Stepper
 from .drive_inputs import DriveInputs
 from .inner_loop import CompiledLoop, LoopFailure
+from .instances import InstancePool
 from .results import CosimResult
 from .slave import FmuSlave
 from .ssp import SystemStructure
@@ -197,8 +198,10 @@ class _System:
     row is what a result row records. `now`, `before` and the estimates have the same layout.
     """
 
-    def __init__(self, system: SystemStructure, drive: Measurement, settings: CosimSettings) -> None:
+    def __init__(self, system: SystemStructure, drive: Measurement, settings: CosimSettings,
+                 pool: InstancePool | None = None) -> None:
         self.settings = settings
+        self.pool = pool
         self.vehicle = find_vehicle(system)
         self.links = [_Link(c.start_element, c.start_connector, c.end_element, c.end_connector)
                       for c in system.connections]
@@ -206,7 +209,9 @@ class _System:
         self.slaves: dict[str, FmuSlave] = {}
         try:
             for element in system.elements:
-                self.slaves[element.name] = FmuSlave(system.fmu_path(element), instance_name=element.name)
+                path = system.fmu_path(element)
+                self.slaves[element.name] = (pool.take(path, element.name) if pool is not None
+                                             else FmuSlave(path, instance_name=element.name))
             driven = {(link.target, link.input) for link in self.links}
             vehicle = self.slaves[self.vehicle]
             self.drive_names = [n for n in vehicle.names("input") if (self.vehicle, n) not in driven]
@@ -220,7 +225,7 @@ class _System:
                             for name, slave in self.slaves.items()}
             self.elements = self._wire(system.name)
         except BaseException:
-            self.close()
+            self.close(healthy=False)
             raise
         components = [e.name for e in system.elements if e.name != self.vehicle]
         order = components + [self.vehicle] if settings.order == "components-first" else [self.vehicle] + components
@@ -261,9 +266,13 @@ class _System:
             )
         return elements
 
-    def close(self) -> None:
+    def close(self, healthy: bool) -> None:
+        """Close the instances, or give them back to the pool (kept for another run only if this one went well)."""
         for slave in self.slaves.values():
-            slave.close()
+            if self.pool is not None:
+                self.pool.give(slave, healthy)
+            else:
+                slave.close()
 
     def initialise(self, t0: float, drive: np.ndarray) -> None:
         """Initialisation mode: parameters, drive inputs at t0, outputs passed to inputs until settled; then every
@@ -442,13 +451,14 @@ def _loop_error(parts: _System, loop: CompiledLoop, failure: LoopFailure, t: flo
 
 
 def cosimulate(system: SystemStructure, drive: Measurement, settings: CosimSettings,
-               progress: Progress | None = None) -> CosimResult:
+               progress: Progress | None = None, pool: InstancePool | None = None) -> CosimResult:
     """Run `system` driven by `drive` on fmpy; every FMU output at t_n = t0 + n h, n = 0..N.
 
     A failing FMU call (an FMU refusing a non-finite input when the loop diverges) raises CosimError naming the
-    element, the time and what the FMU logged."""
+    element, the time and what the FMU logged. With a `pool`, the FMU instances come from it and go back to it."""
     stop = settings.stop_time if settings.stop_time is not None else system.stop_time
-    parts = _System(system, drive, settings)
+    parts = _System(system, drive, settings, pool)
+    healthy = False
     try:
         h, t0 = settings.step, settings.start_time
         n_steps = step_count(t0, stop, h) if stop is not None else whole_steps(t0, parts.drive.end, h)
@@ -490,8 +500,9 @@ def cosimulate(system: SystemStructure, drive: Measurement, settings: CosimSetti
         except (FmiStatusError, _Diverged) as error:
             raise CosimError(f"system {system.name!r}, step from t = {t:.9g} s: {error}") from error
         elapsed = clock.perf_counter() - started
+        healthy = True
     finally:
-        parts.close()
+        parts.close(healthy)
     measurement = Measurement(
         time=t0 + np.arange(n_steps + 1) * h,
         channels={name: rows[:, i] for i, (name, _) in enumerate(channels)},

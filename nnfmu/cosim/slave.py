@@ -149,6 +149,13 @@ class FmuSlave:
     def free_state(self, state: object) -> None:
         self.fmu.freeFMUState(state)
 
+    def reset(self) -> None:
+        """Terminate the run and reset the instance to its state right after instantiation (start values, no
+        messages), so that it can run again without loading and instantiating the FMU anew."""
+        self.fmu.terminate()
+        self.fmu.reset()
+        self.messages.clear()  # in place: the FMI 2 logger routes into this very list
+
     def close(self) -> None:
         """Terminate and free the instance and remove its extracted files (once)."""
         if not self._open:
