@@ -414,6 +414,7 @@ def batch(
     scheduler: Optional[str] = typer.Option(None, help="Address of an existing Dask scheduler, e.g. tcp://HOST:8786."),
     workers: Optional[int] = typer.Option(None, help="LocalCluster worker processes (default: one per core); 0 runs the cases here, one after another."),
     retry_failed: bool = typer.Option(False, help="Run the cases that failed in an earlier run into --out again."),
+    reuse_instances: bool = typer.Option(True, help="Keep FMU instances between cases and reset them (fmi2Reset/fmi3Reset) instead of opening them again; --no-reuse-instances for FMUs whose reset is unreliable."),
 ) -> None:
     """Run a road-test campaign (events x variants) on Dask into one Parquet table of pseudo-damage per channel."""
     from nnfmu.campaign import CampaignError, run_campaign
@@ -423,7 +424,7 @@ def batch(
         raise typer.BadParameter(f"--workers {workers}: give 0 (here, serially) or more")
     try:
         run = run_campaign(campaign, out, scheduler=scheduler, workers=workers, retry_failed=retry_failed,
-                           progress=CaseProgress())
+                           reuse_instances=reuse_instances, progress=CaseProgress())
     except CampaignError as error:
         _fail(error)
     typer.echo(f"{run.cases} cases: {run.ok} ok, {run.failed} failed, {run.skipped} finished before "

@@ -1,14 +1,18 @@
 """Where cases run: in this process one after another, or on Dask (a LocalCluster of worker processes, or an existing
 cluster by its scheduler address).
 
-On Dask, the files a case needs travel with its task as bytes (an FMU is some tens of kB), so workers need the same
-nnfmu install but no shared folder, and a task a dead worker held carries everything it needs to run elsewhere (data
-scattered to one worker would die with it). Cases are sent a window at a time (a few per worker thread, topped up as
-they finish), so the bytes in flight stay bounded. Robustness is Dask's own: a worker that dies takes its tasks back
-to the scheduler, which runs them elsewhere until `allowed-failures` deaths (set to 1 for the LocalCluster: a case
-is retried once), then reports KilledWorker, which is recorded as the case's failure; `retries=1` reruns a task that
-raised outside the case's own error handling. A lost scheduler stops the run (nothing is recorded as failed for it),
-and a rerun resumes from the parts written.
+On Dask, a task is a group of consecutive cases (events outer, variants inner: a group shares drives and FMUs),
+sized so that each worker thread still gets several groups. A short case (a 10 s quarter-car drive runs in ~20 ms)
+costs the engine about as much as it costs to run, so one task per case would halve the throughput; and a worker
+keeps its FMU instances between the cases of all its groups, resetting them instead of opening them again. The files
+a group needs travel with its task as bytes (an FMU is some tens of kB), so workers need the same nnfmu install but no
+shared folder, and a task a dead worker held carries everything it needs to run elsewhere (data scattered to one
+worker would die with it). Groups are sent a window at a time (a few per worker thread, topped up as they finish),
+so the bytes in flight stay bounded. Robustness is Dask's own: a worker that dies takes its tasks back to the
+scheduler, which runs them elsewhere until `allowed-failures` deaths (set to 1 for the LocalCluster: a case is
+retried once), then reports KilledWorker, which is recorded as the failure of the group's cases; `retries=1` reruns
+a task that raised outside the cases' own error handling. A lost scheduler stops the run (nothing is recorded as
+failed for it), and a rerun resumes from the parts written.
 """
 
 from __future__ import annotations
@@ -25,7 +29,7 @@ from typing import Any
 
 from .cases import Case
 from .errors import CampaignError
-from .execute import FAILED, CaseOutcome, run_case
+from .execute import FAILED, CaseOutcome, release_instances, run_case, run_cases
 
 ALLOWED_FAILURES = 1  # worker deaths a case may be involved in before it is given up (LocalCluster)
 LOCAL_CONFIG = {
@@ -33,7 +37,8 @@ LOCAL_CONFIG = {
     # the statistical profiler keeps an hour of per-second stack trees in each worker: tens of MB over a campaign
     "distributed.worker.profile.enabled": False,
 }
-CASES_PER_THREAD = 4  # cases in flight per worker thread
+GROUPS_PER_THREAD = 4  # groups per worker thread over the whole run (balance), also the groups in flight per thread
+MAX_GROUP = 16  # cases in one task at most
 WAIT_FOR_WORKERS = 60  # seconds to wait for a cluster without workers to get one
 OnOutcome = Callable[[Case, CaseOutcome], None]
 
@@ -72,12 +77,22 @@ def machine_workers() -> int:
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
-def run_serial(cases: Sequence[Case], blobs: Mapping[str, bytes | Path], on_outcome: OnOutcome) -> EngineInfo:
+def run_serial(cases: Sequence[Case], blobs: Mapping[str, bytes | Path], on_outcome: OnOutcome,
+               reuse_instances: bool = True) -> EngineInfo:
     """Run the cases here, one after another (the reference the distributed runs are checked against)."""
     files = FileBytes(blobs)
-    for case in cases:
-        on_outcome(case, run_case(case, files))
+    try:
+        for case in cases:
+            on_outcome(case, run_case(case, files, reuse_instances))
+    finally:
+        release_instances()
     return EngineInfo("serial", 1, 1, None, None)
+
+
+def group_cases(cases: Sequence[Case], threads: int) -> list[list[Case]]:
+    """Consecutive cases in groups of equal size: GROUPS_PER_THREAD groups per thread, at most MAX_GROUP cases each."""
+    size = max(1, min(MAX_GROUP, math.ceil(len(cases) / (GROUPS_PER_THREAD * max(1, threads)))))
+    return [list(cases[i:i + size]) for i in range(0, len(cases), size)]
 
 
 def _installed() -> dict[str, str]:
@@ -98,42 +113,46 @@ def check_workers(client: Any) -> None:
                                 "nnfmu install")
 
 
-def run_dask(client: Any, cases: Sequence[Case], blobs: Mapping[str, bytes | Path], on_outcome: OnOutcome) -> None:
-    """Run the cases on the client's cluster, calling `on_outcome` here as each finishes (in finishing order)."""
+def run_dask(client: Any, cases: Sequence[Case], blobs: Mapping[str, bytes | Path], on_outcome: OnOutcome,
+             reuse_instances: bool = True) -> None:
+    """Run the cases on the client's cluster in groups, calling `on_outcome` here for each case as its group finishes
+    (groups in finishing order)."""
     from distributed import as_completed
 
     files = FileBytes(blobs)
     threads = max(1, sum(client.nthreads().values()))
-    window = max(2, CASES_PER_THREAD * threads)
+    window = max(2, GROUPS_PER_THREAD * threads)
     run = uuid.uuid4().hex[:8]
-    queue = iter(cases)
-    running: dict[Any, Case] = {}
+    queue = iter(group_cases(cases, threads))
+    running: dict[Any, list[Case]] = {}
     finished = as_completed()
 
     def submit_next() -> None:
-        case = next(queue, None)
-        if case is None:
+        group = next(queue, None)
+        if group is None:
             return
-        future = client.submit(run_case, case, {key: files[key] for key in case.blob_keys},
-                               key=f"nnfmu-case-{case.key[:16]}-{run}", pure=False, retries=1)
-        running[future] = case
+        keys = dict.fromkeys(key for case in group for key in case.blob_keys)
+        future = client.submit(run_cases, group, {key: files[key] for key in keys}, reuse_instances,
+                               key=f"nnfmu-cases-{group[0].key[:16]}-{run}", pure=False, retries=1)
+        running[future] = group
         finished.add(future)
 
     for _ in range(window):
         submit_next()
     for future in finished:
-        case = running.pop(future)
+        group = running.pop(future)
         if future.status == "error":
             error = future.exception()
-            outcome = CaseOutcome(case.key, case.event.name, case.variant.name, FAILED,
-                                  f"{type(error).__name__}: {error}", math.nan)
+            outcomes = [CaseOutcome(case.key, case.event.name, case.variant.name, FAILED,
+                                    f"{type(error).__name__}: {error}", math.nan) for case in group]
         elif future.status == "finished":
-            outcome = future.result()
+            outcomes = future.result()
         else:
-            raise CampaignError(f"the Dask cluster lost case {case.event.name} x {case.variant.name} "
-                                f"({future.status}); run the campaign again to resume")
+            raise CampaignError(f"the Dask cluster lost the cases from {group[0].event.name} x "
+                                f"{group[0].variant.name} on ({future.status}); run the campaign again to resume")
         future.release()
-        on_outcome(case, outcome)
+        for case, outcome in zip(group, outcomes):
+            on_outcome(case, outcome)
         submit_next()
 
 

@@ -54,11 +54,12 @@ def _now() -> str:
 
 
 def run_campaign(campaign_file: str | Path, out: str | Path, scheduler: str | None = None,
-                 workers: int | None = None, retry_failed: bool = False,
+                 workers: int | None = None, retry_failed: bool = False, reuse_instances: bool = True,
                  progress: Progress | None = None) -> CampaignRun:
     """Run a campaign into `out`: on the Dask cluster at `scheduler`, else on a LocalCluster of `workers` processes
     (None: one per core), or here one case after another when `workers` is 0. Cases with a part in `out` are skipped
-    (failed ones too, unless `retry_failed`)."""
+    (failed ones too, unless `retry_failed`). `reuse_instances`: FMU instances are reset between cases instead of
+    opened again (the results are the same for FMUs whose reset works as FMI says)."""
     campaign = read_campaign(campaign_file)
     try:
         out = check_output_dir(out, "batch", [campaign_file])
@@ -86,10 +87,10 @@ def run_campaign(campaign_file: str | Path, out: str | Path, scheduler: str | No
         if not todo:
             engine = EngineInfo("none (every case finished before)", 0, 0, None, None)
         elif scheduler is None and workers == 0:
-            engine = run_serial(todo, campaign.blobs, record)
+            engine = run_serial(todo, campaign.blobs, record, reuse_instances)
         else:
             with dask_client(scheduler, workers) as (client, engine):
-                run_dask(client, todo, campaign.blobs, record)
+                run_dask(client, todo, campaign.blobs, record, reuse_instances)
     finally:
         if progress is not None:
             progress.stop()

@@ -152,3 +152,14 @@ def test_the_batch_command_refuses_a_folder_it_did_not_write(quarter_car, tmp_pa
     assert "error:" in result.output and "not empty" in result.output and str(foreign) in result.output
     assert [p.name for p in foreign.iterdir()] == ["summary.html"]
     assert (foreign / "summary.html").read_text() == "someone's page"
+
+
+def test_reused_instances_give_the_results_of_fresh_ones(quarter_car, tmp_path):
+    """Cases run on reset FMU instances score exactly as on freshly opened ones, failed cases among them (whose
+    instances are closed, not kept)."""
+    text = campaign_text(quarter_car, events=2, variants=("linear", "unstable", "firm"))
+    path = write_campaign(tmp_path, text)
+    reused = run_campaign(path, tmp_path / "reused", workers=0)
+    fresh = run_campaign(path, tmp_path / "fresh", workers=0, reuse_instances=False)
+    assert (reused.ok, reused.failed) == (fresh.ok, fresh.failed) == (4, 2)
+    assert metrics_of(read_rows(tmp_path / "reused")) == metrics_of(read_rows(tmp_path / "fresh"))
