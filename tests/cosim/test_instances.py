@@ -7,14 +7,18 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import onnx
 import pytest
 from cosim_system_helpers import drive
 
-from nnfmu.campaign.quarter_car import build_quarter_car_system
+from nnfmu.campaign.quarter_car import NO_FILTER, build_quarter_car_system
 from nnfmu.cosim.instances import InstancePool
 from nnfmu.cosim.drive_inputs import DriveInputError
 from nnfmu.cosim.master import CosimSettings, cosimulate
-from nnfmu.cosim.ssp import SystemStructure, open_system
+from nnfmu.cosim.linear_damper import linear_damper_graph
+from nnfmu.cosim.ssp import SystemStructure, connect_by_name, open_system, write_ssd
+from nnfmu.fmu.build import build_fmu
+from nnfmu.fmu.options import BuildOptions
 
 H = 1e-3  # [s]
 DRIVE = drive(0.5, 0.5e-3, corner="fl")
@@ -57,6 +61,26 @@ def test_a_reset_instance_runs_like_a_fresh_one(system):
     finally:
         pool.close()
     assert len(pool) == 0
+
+
+def test_a_pythonfmu_fmi3_damper_resets_too(tmp_path):
+    """The other backend and FMI 3's reset: the damper as a pythonfmu FMI 3 FMU beside the native vehicle."""
+    paths = build_quarter_car_system(tmp_path / "native", {"linear": 2400.0}, step=H)
+    onnx.save(linear_damper_graph(2400.0), tmp_path / "damper.onnx")
+    damper = build_fmu(tmp_path / "damper.onnx", BuildOptions(out=tmp_path / "damper.fmu", backend="pythonfmu",
+                                                              fmi_version=3))
+    ssd = write_ssd(connect_by_name("quarter car", ("vehicle", paths["vehicle"]), {"damper": damper}, tmp_path,
+                                    {"damper": NO_FILTER}), tmp_path / "system.ssd")
+    with open_system(ssd) as system:
+        fresh = channels(cosimulate(system, DRIVE, CosimSettings(step=H)))
+        pool = InstancePool()
+        try:
+            cosimulate(with_damper_parameters(system, output_gain=2.0), DRIVE, CosimSettings(step=H), pool=pool)
+            again = channels(cosimulate(system, DRIVE, CosimSettings(step=H), pool=pool))
+            assert pool.reused == 2
+        finally:
+            pool.close()
+    assert_identical(again, fresh)
 
 
 def test_instances_of_a_failed_run_are_not_kept(system):
