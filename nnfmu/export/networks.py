@@ -12,6 +12,7 @@ import torch
 
 from nnfmu.export.errors import ExportError
 from nnfmu.export.graph import GraphBuilder
+from nnfmu.export.initializers import HIDDEN_LAYER, OUTPUT_LAYER, layer_initializers
 from nnfmu.models.networks import GRUNet, MLP
 
 
@@ -22,9 +23,8 @@ def _weights(layer: torch.nn.Linear) -> tuple[np.ndarray, np.ndarray]:
 def _linear(g: GraphBuilder, x: str, layer: torch.nn.Linear, name: str) -> str:
     """x [1, n_in] -> [1, n_out] = x W^T + b."""
     weight, bias = _weights(layer)
-    w = g.constant(f"{name}_weight", weight)
-    b = g.constant(f"{name}_bias", bias)
-    return g.node("Gemm", [x, w, b], f"{name}_gemm", transB=1)
+    weight_name, bias_name = layer_initializers(name)
+    return g.node("Gemm", [x, g.constant(weight_name, weight), g.constant(bias_name, bias)], f"{name}_gemm", transB=1)
 
 
 def _columns(g: GraphBuilder, x: str, start: int, end: int, name: str) -> str:
@@ -43,8 +43,8 @@ def _sigmoid(g: GraphBuilder, x: str, name: str) -> str:
 
 def mlp_nodes(g: GraphBuilder, network: MLP, x: str) -> str:
     """Scaled features [1, n_in] -> scaled output [1, n_out] of the tanh perceptron."""
-    hidden = g.node("Tanh", [_linear(g, x, network.hidden, "hidden")], "hidden_tanh")
-    return _linear(g, hidden, network.out, "out")
+    hidden = g.node("Tanh", [_linear(g, x, network.hidden, HIDDEN_LAYER)], "hidden_tanh")
+    return _linear(g, hidden, network.out, OUTPUT_LAYER)
 
 
 def gru_nodes(g: GraphBuilder, network: GRUNet, x: str, h: str) -> tuple[str, str]:
@@ -74,7 +74,7 @@ def gru_nodes(g: GraphBuilder, network: GRUNet, x: str, h: str) -> tuple[str, st
     candidate = g.node("Tanh", [g.node("Add", [input_n, reset_hidden], "gru_candidate_sum")], "gru_candidate")
     keep = g.node("Mul", [update, g.node("Sub", [h, candidate], "gru_hidden_minus_candidate")], "gru_keep")
     h_next = g.node("Add", [candidate, keep], "gru_hidden_next")
-    return _linear(g, h_next, network.out, "out"), h_next
+    return _linear(g, h_next, network.out, OUTPUT_LAYER), h_next
 
 
 def max_abs_weight(network: MLP | GRUNet) -> float:

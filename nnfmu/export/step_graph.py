@@ -11,6 +11,7 @@ import onnx
 
 from nnfmu.export.errors import ExportError
 from nnfmu.export.graph import GraphBuilder
+from nnfmu.export.initializers import FEATURE_GAIN, FEATURE_MIN, TARGET_GAIN, TARGET_MIN
 from nnfmu.export.networks import gru_nodes, mlp_nodes
 from nnfmu.models.features import StateSlot
 from nnfmu.models.networks import GRUNet, MLP
@@ -79,8 +80,8 @@ def build_step_graph(model: TrainedModel, graph_name: str, doc: str) -> onnx.Mod
 
     scaler = model.feature_scaler
     one = g.constant("one", np.array([1.0]))
-    shifted = g.node("Sub", [features, g.constant("feature_min", np.ravel(scaler.lo))], "features_minus_min")
-    stretched = g.node("Mul", [shifted, g.constant("feature_gain", np.ravel(scaler.gain))], "features_times_gain")
+    shifted = g.node("Sub", [features, g.constant(FEATURE_MIN, np.ravel(scaler.lo))], "features_minus_min")
+    stretched = g.node("Mul", [shifted, g.constant(FEATURE_GAIN, np.ravel(scaler.gain))], "features_times_gain")
     scaled = g.node("Sub", [stretched, one], "scale_inputs")
     row = g.node("Reshape", [scaled, g.constant("row_shape", np.array([1, -1], dtype=np.int64))], "scaled_row")
 
@@ -98,8 +99,8 @@ def build_step_graph(model: TrainedModel, graph_name: str, doc: str) -> onnx.Mod
     target = model.target_scaler
     scaled_out = g.node("Reshape", [out, g.constant("output_shape", np.array([1], dtype=np.int64))], "scaled_output")
     shifted_out = g.node("Add", [scaled_out, one], "output_plus_one")
-    unscaled = g.node("Div", [shifted_out, g.constant("target_gain", np.ravel(target.gain))], "output_over_gain")
-    y = g.node("Add", [unscaled, g.constant("target_min", np.ravel(target.lo))], "unscale_output")
+    unscaled = g.node("Div", [shifted_out, g.constant(TARGET_GAIN, np.ravel(target.gain))], "output_over_gain")
+    y = g.node("Add", [unscaled, g.constant(TARGET_MIN, np.ravel(target.lo))], "unscale_output")
     g.output(y, spec.output)
 
     inputs = [(c, 1) for c in spec.channels]

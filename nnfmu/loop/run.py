@@ -21,7 +21,7 @@ import numpy as np
 from nnfmu.atomic import staging_dir
 from nnfmu.cosim.replay import replay_fmu
 from nnfmu.data import DataError, Measurement, check_measurement, load_measurement
-from nnfmu.export import export_onnx
+from nnfmu.export import ExportError, export_onnx, read_step_graph
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.out_paths import check_output_dir, mark_output_dir
@@ -34,7 +34,6 @@ from .diagnose import FamilyGains, diagnose
 from .evidence import Diagnosis
 from .loop_report import write_loop_report
 from .loop_settings import LoopError, LoopSettings
-from .onnx_model import load_onnx_model
 from .trials import TRIAL_TIE, nrmse, retrain_rivals, trial_group
 
 PERIOD_TOLERANCE = 1e-6  # relative sample-period mismatch accepted between data and model
@@ -239,7 +238,10 @@ def run_loop(
     model_path = Path(model_path)
     inputs = [model_path] if isinstance(data, Measurement) else [model_path, Path(data)]
     out_dir = check_output_dir(out_dir, "loop", inputs)
-    model, component = load_onnx_model(model_path)
+    try:
+        model, component = read_step_graph(model_path)
+    except ExportError as error:
+        raise LoopError(f"{error} (the loop extends and retrains models exported by `nnfmu train`)") from None
     m = _load(data)
     _check(m, model, model_path, output, settings)
     blocks = plan_blocks(len(m), settings, m.source)

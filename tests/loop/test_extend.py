@@ -13,12 +13,10 @@ import torch
 
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import RigOptions, simulate_rig
-from nnfmu.export import export_onnx, run_step_graph
 from nnfmu.export.graph import GraphBuilder
 from nnfmu.loop.blocks import plan_blocks
 from nnfmu.loop.extend import Extension, NoExtension, extend_spec
 from nnfmu.loop.loop_settings import LoopError, LoopSettings
-from nnfmu.loop.onnx_model import load_onnx_model
 from nnfmu.loop import warm_start as warm_start_module
 from nnfmu.loop.warm_start import _warm_network, fresh_start, warm_start
 from nnfmu.models import Architecture, TrainSettings, train_model
@@ -120,18 +118,6 @@ def test_effects_that_cannot_be_added_say_why():
     spec = FeatureSpec((Tap("velocity", (0, 1)),), "force")
     again = extend_spec("inertia", spec, bare, rows, LoopSettings())
     assert isinstance(again, NoExtension) and "already has" in again.reason
-
-
-def test_a_model_read_back_from_onnx_predicts_what_its_graph_computes(tmp_path):
-    model = small_model()
-    path = tmp_path / "m.onnx"
-    export_onnx(model, path)
-    loaded, component = load_onnx_model(path)
-    assert loaded.spec == model.spec and loaded.sample_period == model.sample_period
-    v = rig()["velocity"][:500]
-    np.testing.assert_allclose(loaded.predict({"velocity": v}), run_step_graph(path, {"velocity": v})["force"],
-                               rtol=1e-10, atol=1e-9)
-    np.testing.assert_allclose(loaded.feature_scaler.gain, model.feature_scaler.gain, rtol=1e-12)
 
 
 def test_warm_started_network_starts_exactly_at_the_old_model():

@@ -1,5 +1,6 @@
 """Read an nnfmu ONNX step graph back into a trainable model: feature spec and training settings from its metadata,
-weights and scalers from its initializers, so the loop can extend and retrain a model it did not make itself."""
+weights and scalers from the initializers the exporter wrote (`initializers.py`), so that a model can be extended and
+retrained by a process that did not make it (the loop)."""
 
 from __future__ import annotations
 
@@ -17,11 +18,8 @@ from nnfmu.models.networks import MLP
 from nnfmu.models.scaling import MinMaxScaler
 from nnfmu.models.trained import TrainedModel
 
-from .loop_settings import LoopError
-
-# Initializer names the exporter gives the MLP step graph (nnfmu.export.step_graph and .networks).
-WEIGHTS = ("hidden_weight", "hidden_bias", "out_weight", "out_bias")
-SCALERS = ("feature_min", "feature_gain", "target_min", "target_gain")
+from .errors import ExportError
+from .initializers import FEATURE_GAIN, FEATURE_MIN, MLP_INITIALIZERS, SCALER_INITIALIZERS, TARGET_GAIN, TARGET_MIN
 
 
 def _scaler(low: np.ndarray, gain: np.ndarray) -> MinMaxScaler:
@@ -30,41 +28,39 @@ def _scaler(low: np.ndarray, gain: np.ndarray) -> MinMaxScaler:
     return MinMaxScaler(lo=low, hi=low + 2.0 / gain)
 
 
-def load_onnx_model(path: str | os.PathLike[str]) -> tuple[TrainedModel, Component]:
-    """(the step graph at `path` as a TrainedModel with an MLP, its Component). LoopError names what is missing:
-    no file, no nnfmu metadata (another tool's graph has no feature spec to extend), a recurrent network, or an
-    initializer the exporter writes."""
+def read_step_graph(path: str | os.PathLike[str]) -> tuple[TrainedModel, Component]:
+    """(the MLP step graph at `path` as a TrainedModel, its Component). ExportError names what is missing: no file,
+    no nnfmu metadata (another tool's graph has no feature spec), a recurrent network, or an initializer the exporter
+    writes."""
     path = Path(path)
     if not path.is_file():
-        raise LoopError(f"{path}: no such model file")
+        raise ExportError(f"{path}: no such model file")
     try:
         graph = onnx.load(str(path))
     except Exception as err:  # onnx raises DecodeError, ValueError and others for a file that is not ONNX
-        raise LoopError(f"{path}: not a readable ONNX file ({err})") from None
+        raise ExportError(f"{path}: not a readable ONNX file ({err})") from None
     component = Component.from_onnx(graph)
     meta = component.metadata
     if "feature_spec" not in meta or "network" not in meta:
-        raise LoopError(
-            f"{path}: no nnfmu feature spec in the ONNX metadata; the loop extends models exported by nnfmu "
-            f"(`nnfmu train`), whose metadata say which features and network they hold"
-        )
+        raise ExportError(f"{path}: no nnfmu feature spec in the ONNX metadata: only graphs exported by nnfmu "
+                          "(`nnfmu train`) say which features and network they hold")
     kind = meta["network"].get("kind")
     if kind != "mlp":
-        raise LoopError(f"{path}: network kind {kind!r}; the loop extends and retrains MLP step graphs only")
+        raise ExportError(f"{path}: network kind {kind!r}; only MLP step graphs are read back into a model")
     spec = FeatureSpec.from_dict(meta["feature_spec"])
     tensors = {t.name: numpy_helper.to_array(t) for t in graph.graph.initializer}
-    absent = [name for name in (*WEIGHTS, *SCALERS) if name not in tensors]
+    absent = [name for name in (*MLP_INITIALIZERS, *SCALER_INITIALIZERS) if name not in tensors]
     if absent:
-        raise LoopError(f"{path}: initializer(s) {', '.join(absent)} missing; not an nnfmu MLP step graph")
-    w1, b1, w2, b2 = (np.array(tensors[name], dtype=float) for name in WEIGHTS)
+        raise ExportError(f"{path}: initializer(s) {', '.join(absent)} missing; not an nnfmu MLP step graph")
+    w1, b1, w2, b2 = (np.array(tensors[name], dtype=float) for name in MLP_INITIALIZERS)
     if w1.shape[1] != spec.n_features:
-        raise LoopError(f"{path}: hidden weights take {w1.shape[1]} features, the feature spec has {spec.n_features}")
+        raise ExportError(f"{path}: hidden weights take {w1.shape[1]} features, the feature spec has {spec.n_features}")
     network = MLP(w1.shape[1], w1.shape[0], w2.shape[0])
     with torch.no_grad():
         for parameter, value in zip(network.parameters(), (w1, b1, w2, b2)):
             parameter.copy_(torch.from_numpy(value.reshape(parameter.shape)))
     if component.sample_period is None:
-        raise LoopError(f"{path}: the component has no sample period")
+        raise ExportError(f"{path}: the component has no sample period")
     ports = {p.name: p for p in component.inputs}
     units = {p.name: p.unit for p in (*component.inputs, *component.outputs)}
     envelope = {
@@ -74,8 +70,8 @@ def load_onnx_model(path: str | os.PathLike[str]) -> tuple[TrainedModel, Compone
     model = TrainedModel(
         spec=spec,
         network=network,
-        feature_scaler=_scaler(tensors["feature_min"], tensors["feature_gain"]),
-        target_scaler=_scaler(tensors["target_min"], tensors["target_gain"]),
+        feature_scaler=_scaler(tensors[FEATURE_MIN], tensors[FEATURE_GAIN]),
+        target_scaler=_scaler(tensors[TARGET_MIN], tensors[TARGET_GAIN]),
         sample_period=float(component.sample_period),
         units=units,
         envelope=envelope,
