@@ -5,6 +5,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from nnfmu.models.retrain import RetrainSettings
+
 from .settings import DiagnosisSettings
 
 
@@ -95,15 +97,10 @@ class LoopSettings:
                 f"{self.fit_fraction}, "
                 f"and fit + test ({self.fit_fraction + self.test_fraction}) below 1 so a diagnosis part remains"
             )
-        if self.max_epochs < 1 or self.patience < 1 or self.lm_max_samples < 1:
-            raise LoopError(f"max_epochs, patience and lm_max_samples must be >= 1, got {self.max_epochs}, "
-                            f"{self.patience} and {self.lm_max_samples}")
-        if not self.extra_hidden or self.extra_hidden[0] < 0 or any(
-                a >= b for a, b in zip(self.extra_hidden, self.extra_hidden[1:])):
-            raise LoopError(f"extra_hidden must be non-negative unit counts in rising order, got "
-                            f"{self.extra_hidden!r}")
-        if not (math.isfinite(self.lm_mu) and self.lm_mu > 0):
-            raise LoopError(f"lm_mu must be a positive damping, got {self.lm_mu!r}")
+        try:
+            self.retrain_settings()
+        except ValueError as error:
+            raise LoopError(str(error)) from None
         if not (0 <= self.parsimony < 1 and 0 <= self.min_explained < 1):
             raise LoopError(f"parsimony and min_explained must lie in [0, 1), got {self.parsimony!r} and "
                             f"{self.min_explained!r}")
@@ -115,3 +112,8 @@ class LoopSettings:
         for name, values in positive.items():
             if not values or not all(math.isfinite(v) and v > 0 for v in values):
                 raise LoopError(f"{name} must be positive, got {getattr(self, name)!r}")
+
+    def retrain_settings(self) -> RetrainSettings:
+        """How the loop retrains a model on an extended spec (ValueError for bad values)."""
+        return RetrainSettings(self.max_epochs, self.patience, self.lm_max_samples, self.lm_mu, self.extra_hidden,
+                               self.seed)

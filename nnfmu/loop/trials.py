@@ -11,13 +11,13 @@ from dataclasses import replace
 import numpy as np
 
 from nnfmu.data import Measurement
+from nnfmu.models.retrain import Retrained, retrain
 from nnfmu.models.trained import TrainedModel
 
 from .evidence import Diagnosis, EffectEvidence
 from .extend import Extension, NoExtension, extend_spec
 from .loop_settings import LoopSettings
 from .ranking import GainTest
-from .warm_start import Retrained, fresh_start, warm_start
 
 SIGNIFICANT = "significant in the diagnosis"
 # Rival explanations of one residual (a compliance lag, inertia and viscoelastic states all look like the force's
@@ -200,20 +200,21 @@ def retrain_rivals(group: list[Candidate], partners: list[Candidate], model: Tra
     scores."""
     measured = np.asarray(m[model.spec.output], dtype=float)
 
-    def retrain(ext: Extension) -> tuple[Retrained, float]:
-        trial = warm_start(model, ext.spec, m, rows["train"], rows["validation"], settings, ext.effect)
+    training = settings.retrain_settings()
+
+    def retrain_both(ext: Extension) -> tuple[Retrained, float]:
+        trial = retrain(model, ext.spec, m, rows["train"], rows["validation"], training, ext.effect)
         scores = {"warm": _diagnosis_nrmse(trial.model, m, measured, rows["diagnosis"])}
         trials = [trial]
         if settings.fresh_rival:
-            hidden = trial.model.network.hidden.out_features
-            trials.append(fresh_start(model, ext.spec, m, rows["train"], rows["validation"], settings, ext.effect,
-                                      hidden))
+            trials.append(retrain(model, ext.spec, m, rows["train"], rows["validation"], training, ext.effect,
+                                  start="fresh", hidden=trial.model.network.hidden.out_features))
             scores["fresh"] = _diagnosis_nrmse(trials[-1].model, m, measured, rows["diagnosis"])
         kept = min(trials, key=lambda t: scores[t.start])  # the warm start on a tie
         return replace(kept, diagnosis_nrmse_by_start=scores), scores[kept.start]
 
     group = list(group)
-    trials, scores = (list(t) for t in zip(*(retrain(ext) for ext, _, _ in group)))
+    trials, scores = (list(t) for t in zip(*(retrain_both(ext) for ext, _, _ in group)))
     pick = _best_trial(scores)
     first = group[pick][0].effect
     if group[-1][2].startswith(SIGNIFICANT) and pick < len(group) - 1:
@@ -235,7 +236,7 @@ def retrain_rivals(group: list[Candidate], partners: list[Candidate], model: Tra
     if pairs:
         start = len(group)
         for pair in pairs:
-            trial, score = retrain(pair[0])
+            trial, score = retrain_both(pair[0])
             group.append(pair)
             trials.append(trial)
             scores.append(score)

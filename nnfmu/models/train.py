@@ -3,7 +3,6 @@ early stopping on validation, hidden size fixed or chosen by validation error, m
 
 from __future__ import annotations
 
-import hashlib
 import math
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, replace
@@ -20,7 +19,7 @@ from nnfmu.models.networks import GRUNet, MLP
 from nnfmu.models.scaling import MinMaxScaler
 from nnfmu.models.splits import SplitFractions, Splits, contiguous_splits
 from nnfmu.models.stopping import FitHistory, TrainingLog
-from nnfmu.models.trained import TrainedModel
+from nnfmu.models.trained import TrainedModel, trained_model
 
 NetworkKind = Literal["mlp", "gru"]
 Optimizer = Literal["auto", "lm", "adam", "lbfgs"]
@@ -133,15 +132,6 @@ class TrainResult:
     trials: list[SizeTrial]
     history: FitHistory
     warnings: list[str] = field(default_factory=list)
-
-
-def data_hash(measurement: Measurement, names: list[str]) -> str:
-    """SHA-256 over the named channels' names and float64 values (the training data's fingerprint)."""
-    digest = hashlib.sha256()
-    for name in names:
-        digest.update(name.encode("utf-8") + b"\0")
-        digest.update(np.ascontiguousarray(measurement[name], dtype=np.float64).tobytes())
-    return digest.hexdigest()
 
 
 def prepare_data(measurement: Measurement, spec: FeatureSpec, fractions: SplitFractions) -> PreparedData:
@@ -389,20 +379,10 @@ def train_model(
     train_part = data.splits.index("train")
     warnings = [w for w in [weight_warning(max_abs_weight(network))] if w]
     n_in = data.x.shape[1]
-    model = TrainedModel(
-        spec=spec,
-        network=network,
-        feature_scaler=data.feature_scaler,
-        target_scaler=data.target_scaler,
-        sample_period=measurement.sample_period,
-        units={c: measurement.units[c] for c in (*spec.channels, spec.output)},
-        envelope={
-            c: (float(np.min(measurement[c][train_part])), float(np.max(measurement[c][train_part])))
-            for c in spec.channels
-        },
-        metrics={name: m.as_dict() for name, m in metrics.items()},
-        data_hash=data_hash(measurement, [*spec.channels, spec.output]),
-        settings={
+    model = trained_model(
+        spec, network, data.feature_scaler, data.target_scaler, measurement, train_part, measurement.sample_period,
+        {name: m.as_dict() for name, m in metrics.items()},
+        {
             **settings.as_dict(),
             "kind": architecture.kind,
             "hidden": hidden,

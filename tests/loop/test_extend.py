@@ -17,8 +17,8 @@ from nnfmu.export.graph import GraphBuilder
 from nnfmu.loop.blocks import plan_blocks
 from nnfmu.loop.extend import Extension, NoExtension, extend_spec
 from nnfmu.loop.loop_settings import LoopError, LoopSettings
-from nnfmu.loop import warm_start as warm_start_module
-from nnfmu.loop.warm_start import _warm_network, fresh_start, warm_start
+from nnfmu.models import retrain as warm_start_module
+from nnfmu.models.retrain import RetrainSettings, _warm_network, fresh_start, retrain, warm_start
 from nnfmu.models import Architecture, TrainSettings, train_model
 from nnfmu.models.features import FeatureSpec, LowpassSquare, SmoothSign, Tap, derived_from_dict
 from nnfmu.models.networks import MLP
@@ -141,7 +141,7 @@ def test_warm_start_keeps_old_scalers_and_lowers_the_validation_error():
     blocks = plan_blocks(len(m), LoopSettings(diagnosis=LoopSettings().diagnosis), m.source)
     ext = extend_spec("temperature", SPEC, m, blocks.rows("train"), LoopSettings())
     result = warm_start(model, ext.spec, m, blocks.rows("train"), blocks.rows("validation"),
-                        LoopSettings(max_epochs=30, extra_hidden=(0, 2), lm_max_samples=3000),
+                        LoopSettings(max_epochs=30, extra_hidden=(0, 2), lm_max_samples=3000).retrain_settings(),
                         "temperature")
     new = result.model
     np.testing.assert_array_equal(new.feature_scaler.lo[:2], model.feature_scaler.lo)
@@ -150,7 +150,7 @@ def test_warm_start_keeps_old_scalers_and_lowers_the_validation_error():
     assert new.feature_scaler.lo[2] == pytest.approx(np.min(m["temperature"][train]))
     assert set(result.validation_mse) == {0, 2} and result.extra_hidden in (0, 2)
     assert new.network.hidden.out_features == 3 + result.extra_hidden
-    assert new.settings["loop"]["effect"] == "temperature"
+    assert new.settings["retraining"]["effect"] == "temperature"
 
 
 def test_fresh_start_trains_a_seeded_network_of_the_given_size_on_the_extended_inputs():
@@ -159,10 +159,10 @@ def test_fresh_start_trains_a_seeded_network_of_the_given_size_on_the_extended_i
     blocks = plan_blocks(len(m), LoopSettings(), m.source)
     train, validation = blocks.rows("train"), blocks.rows("validation")
     ext = extend_spec("temperature", SPEC, m, train, LoopSettings())
-    settings = LoopSettings(max_epochs=30, lm_max_samples=3000)
+    settings = LoopSettings(max_epochs=30, lm_max_samples=3000).retrain_settings()
     result = fresh_start(model, ext.spec, m, train, validation, settings, "temperature", hidden=5)
     new = result.model
-    assert result.start == "fresh" and new.settings["loop"]["start"] == "fresh"
+    assert result.start == "fresh" and new.settings["retraining"]["start"] == "fresh"
     assert new.network.hidden.out_features == 5 and result.extra_hidden == 2 and set(result.validation_mse) == {2}
     np.testing.assert_array_equal(new.feature_scaler.lo[:2], model.feature_scaler.lo)
     # trained: below the validation MSE of the same seeded draw untrained
@@ -191,7 +191,7 @@ def test_warm_start_tries_more_hidden_units_only_while_they_help(monkeypatch):
     blocks = plan_blocks(len(m), LoopSettings(), m.source)
     ext = extend_spec("temperature", SPEC, m, blocks.rows("train"), LoopSettings())
     result = warm_start(small_model(), ext.spec, m, blocks.rows("train"), blocks.rows("validation"),
-                        LoopSettings(extra_hidden=(0, 2, 4, 8)), "temperature")
+                        LoopSettings(extra_hidden=(0, 2, 4, 8)).retrain_settings(), "temperature")
     assert tried == [3, 5, 7] and result.extra_hidden == 2 and result.validation_mse == {0: 0.5, 2: 0.3, 4: 0.4}
     with pytest.raises(LoopError, match="rising order"):
         LoopSettings(extra_hidden=(0, 6, 3))
@@ -206,3 +206,18 @@ def test_blocks_interleave_fit_diagnosis_and_test_without_overlap():
     assert len(blocks.ranges["test"]) == 5  # one test block per segment
     with pytest.raises(LoopError, match="4900 samples are too short"):
         plan_blocks(4900, LoopSettings(), "record")
+
+
+def test_retrain_starts_warm_or_fresh_and_refuses_anything_else():
+    m = rig()
+    blocks = plan_blocks(len(m), LoopSettings(), m.source)
+    train, validation = blocks.rows("train"), blocks.rows("validation")
+    ext = extend_spec("temperature", SPEC, m, train, LoopSettings())
+    settings = RetrainSettings(max_epochs=5, lm_max_samples=2000)
+    warm = retrain(small_model(), ext.spec, m, train, validation, settings, "temperature")
+    fresh = retrain(small_model(), ext.spec, m, train, validation, settings, "temperature", start="fresh", hidden=4)
+    assert (warm.start, fresh.start, fresh.model.network.hidden.out_features) == ("warm", "fresh", 4)
+    with pytest.raises(ValueError, match="start must be 'warm' or 'fresh'"):
+        retrain(small_model(), ext.spec, m, train, validation, settings, "temperature", start="lukewarm")
+    with pytest.raises(ValueError, match="rising order"):
+        RetrainSettings(extra_hidden=(3, 1))

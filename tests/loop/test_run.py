@@ -29,7 +29,7 @@ from nnfmu.loop.run import LoopReport, run_loop
 from nnfmu.loop import trials as trials_module
 from nnfmu.loop.trials import (SIGNIFICANT, TRIAL_TIE, _best_trial, _partner_rivals, _simpler_cover, _together,
                                retrain_rivals)
-from nnfmu.loop.warm_start import Retrained
+from nnfmu.models.retrain import Retrained
 from nnfmu.models import Architecture, TrainSettings, get_preset, train_model
 from nnfmu.models.features import Difference, FeatureSpec, SmoothSign
 from nnfmu.out_paths import MARKER
@@ -230,12 +230,13 @@ def test_the_warm_or_the_fresh_start_that_predicts_the_diagnosis_part_better_is_
     rows = {part: np.arange(i * 400, (i + 1) * 400) for i, part in enumerate(("train", "validation", "diagnosis"))}
     sizes = []
 
-    def fresh(old, spec, m, train, validation, settings, effect, hidden):
+    def retrain(old, spec, m, train, validation, settings, effect, start="warm", hidden=None):
+        if start == "warm":
+            return stand_in_retrained("warm", warm_error, 7)
         sizes.append(hidden)
         return stand_in_retrained("fresh", fresh_error, hidden)
 
-    monkeypatch.setattr(trials_module, "warm_start", lambda *args: stand_in_retrained("warm", warm_error, 7))
-    monkeypatch.setattr(trials_module, "fresh_start", fresh)
+    monkeypatch.setattr(trials_module, "retrain", retrain)
     group = [candidate("gas_force", STATIC, SIGNIFICANT)]
     model = SimpleNamespace(spec=SimpleNamespace(output="force"))
     pick, _, trials, scores = retrain_rivals(group, [], model, m, rows, np.arange(800),

@@ -16,7 +16,8 @@ from nnfmu.models.lm import LMSettings, fit_lm, mlp_jacobian
 from nnfmu.models.networks import MLP
 from nnfmu.models.splits import SplitFractions, contiguous_splits
 from nnfmu.models.stopping import EarlyStopping
-from nnfmu.models.train import Architecture, TrainSettings, data_hash, train_model
+from nnfmu.models.train import Architecture, TrainSettings, train_model
+from nnfmu.models.trained import data_hash
 
 T = 0.001
 

@@ -1,8 +1,8 @@
-"""Retrain a model on an extended feature spec. The warm start goes on from where the model stands: the old hidden
-units keep their weights, the new input columns start at zero weight (so training starts from the old model's output
-exactly), a few extra hidden units may join with zero output weight. The fresh start draws a network of the same size
-at random, as a first fit does, which can leave the old network's basin. Levenberg-Marquardt trains on the fit part
-only, early stopping on its validation rows.
+"""Retrain a model on an extended feature spec (the loop's step after naming an effect). The warm start goes on from
+where the model stands: the old hidden units keep their weights, the new input columns start at zero weight (so
+training starts from the old model's output exactly), a few extra hidden units may join with zero output weight.
+The fresh start draws a network of the same size at random, as a first fit does, which can leave the old network's
+basin. Levenberg-Marquardt trains on the fit part only, early stopping on its validation rows.
 
 Scaling: the old feature columns keep their scalers (the copied weights were learnt on them); the new columns are
 min-max scaled with the fit part's extremes. The target keeps its scaler.
@@ -17,20 +17,43 @@ import numpy as np
 import torch
 
 from nnfmu.data import Measurement
-from nnfmu.models.features import FeatureSpec
-from nnfmu.models.lm import LMSettings, fit_lm
-from nnfmu.models.metrics import max_abs_weight, split_metrics
-from nnfmu.models.networks import MLP
-from nnfmu.models.scaling import MinMaxScaler
-from nnfmu.models.stopping import FitHistory
-from nnfmu.models.train import data_hash
-from nnfmu.models.trained import TrainedModel
 
-from .loop_settings import LoopSettings
+from .features import FeatureSpec
+from .lm import LMSettings, fit_lm
+from .metrics import max_abs_weight, split_metrics
+from .networks import MLP
+from .scaling import MinMaxScaler
+from .stopping import FitHistory
+from .trained import TrainedModel, trained_model
 
 # Training settings of the first fit that no longer describe the retrained network.
 FIRST_FIT_KEYS = ("best_epoch", "epochs_run", "stop_reason", "validation_mse_by_hidden", "samples", "hidden_candidates")
 EXTRA_WEIGHT_SCALE = 0.5  # std of the input weights and biases of added hidden units (scaled inputs lie in [-1, 1])
+
+
+@dataclass(frozen=True)
+class RetrainSettings:
+    """Levenberg-Marquardt's `max_epochs` and `patience`; `lm_max_samples` (evenly strided training rows it fits on,
+    and validation rows it checks on); `lm_mu`, the warm start's initial damping; `extra_hidden`, hidden-unit counts
+    the warm start adds beside the copied units, in rising order; `seed` of the added units and the fresh draw."""
+
+    max_epochs: int = 1000
+    patience: int = 12
+    lm_max_samples: int = 20000
+    lm_mu: float = 1.0
+    extra_hidden: tuple[int, ...] = (0,)
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if self.max_epochs < 1 or self.patience < 1 or self.lm_max_samples < 1:
+            raise ValueError(f"max_epochs, patience and lm_max_samples must be >= 1, got {self.max_epochs}, "
+                             f"{self.patience} and {self.lm_max_samples}")
+        if not self.extra_hidden or self.extra_hidden[0] < 0 or any(
+                a >= b for a, b in zip(self.extra_hidden, self.extra_hidden[1:])):
+            raise ValueError(f"extra_hidden must be non-negative unit counts in rising order, got "
+                             f"{self.extra_hidden!r}")
+        if not (math.isfinite(self.lm_mu) and self.lm_mu > 0):
+            raise ValueError(f"lm_mu must be a positive damping, got {self.lm_mu!r}")
 
 
 @dataclass(frozen=True)
@@ -88,18 +111,6 @@ def _warm_network(old: TrainedModel, spec: FeatureSpec, extra: int, seed: int) -
     return network
 
 
-def _envelope(old: TrainedModel, spec: FeatureSpec, m: Measurement,
-              train: np.ndarray) -> dict[str, tuple[float, float]]:
-    """Each input's range over the training rows, widened by the old model's envelope where it had the channel."""
-    envelope = {}
-    for c in spec.channels:
-        lo, hi = float(np.min(m[c][train])), float(np.max(m[c][train]))
-        if c in old.envelope:
-            lo, hi = min(lo, old.envelope[c][0]), max(hi, old.envelope[c][1])
-        envelope[c] = (lo, hi)
-    return envelope
-
-
 @dataclass(frozen=True)
 class _Problem:
     """The scaled training problem of one extended spec: all rows' features and target, the scaler, and the strided
@@ -113,7 +124,7 @@ class _Problem:
     train: torch.Tensor
     validation: torch.Tensor
 
-    def fit(self, network: MLP, settings: LoopSettings, mu: float) -> FitHistory:
+    def fit(self, network: MLP, settings: RetrainSettings, mu: float) -> FitHistory:
         """Levenberg-Marquardt on the training rows from `network`'s weights, early stopping on the validation rows."""
         lm = LMSettings(max_epochs=settings.max_epochs, patience=settings.patience, mu=mu)
         return fit_lm(network, (self.x[self.train], self.y[self.train]),
@@ -121,7 +132,7 @@ class _Problem:
 
 
 def _problem(old: TrainedModel, spec: FeatureSpec, m: Measurement, train: np.ndarray, validation: np.ndarray,
-             settings: LoopSettings) -> _Problem:
+             settings: RetrainSettings) -> _Problem:
     """`spec`'s features over the whole record, scaled as `_extended_scaler` says, with the rows LM may use."""
     features = spec.features({c: m[c] for c in spec.channels}, old.sample_period)
     target = np.asarray(m[spec.output], dtype=float)
@@ -134,7 +145,7 @@ def _problem(old: TrainedModel, spec: FeatureSpec, m: Measurement, train: np.nda
 
 def warm_start(
     old: TrainedModel, spec: FeatureSpec, m: Measurement, train: np.ndarray, validation: np.ndarray,
-    settings: LoopSettings, effect: str,
+    settings: RetrainSettings, effect: str,
 ) -> Retrained:
     """Retrain `old` on `spec` (an extension of its spec) over rows `train`, early stopping on rows `validation`;
     the extra hidden-unit counts of `settings.extra_hidden` are tried in rising order while each lowers the best
@@ -156,7 +167,7 @@ def warm_start(
 
 def fresh_start(
     old: TrainedModel, spec: FeatureSpec, m: Measurement, train: np.ndarray, validation: np.ndarray,
-    settings: LoopSettings, effect: str, hidden: int,
+    settings: RetrainSettings, effect: str, hidden: int,
 ) -> Retrained:
     """A network of `hidden` units on `spec` drawn at random under `settings.seed` (torch's default initialisation,
     as the first fit draws its restarts) and trained like a first fit (LM from trainlm's damping), with `old`'s
@@ -170,6 +181,19 @@ def fresh_start(
                       {extra: history.best_validation_loss}, len(history.train_loss) - 1, settings)
 
 
+def retrain(
+    old: TrainedModel, spec: FeatureSpec, m: Measurement, train: np.ndarray, validation: np.ndarray,
+    settings: RetrainSettings, label: str, start: str = "warm", hidden: int | None = None,
+) -> Retrained:
+    """Retrain `old` on `spec` from where it stands (`start` "warm") or from a random draw of `hidden` units
+    ("fresh"); `label` names what was added (recorded in the model's training settings)."""
+    if start == "warm":
+        return warm_start(old, spec, m, train, validation, settings, label)
+    if start == "fresh":
+        return fresh_start(old, spec, m, train, validation, settings, label, hidden or _hidden(old))
+    raise ValueError(f"start must be 'warm' or 'fresh', got {start!r}")
+
+
 def _hidden(model: TrainedModel) -> int:
     """Hidden units of a model's one-hidden-layer network (the loop extends MLPs only)."""
     network = model.network
@@ -179,7 +203,7 @@ def _hidden(model: TrainedModel) -> int:
 
 def _retrained(
     old: TrainedModel, problem: _Problem, network: MLP, m: Measurement, train: np.ndarray, validation: np.ndarray,
-    effect: str, start: str, scores: dict[int, float], epochs: int, settings: LoopSettings,
+    effect: str, start: str, scores: dict[int, float], epochs: int, settings: RetrainSettings,
 ) -> Retrained:
     """`network` packaged as the extended model, with its metrics and the loop's record of how it was trained."""
     spec, target = problem.spec, problem.target
@@ -192,22 +216,14 @@ def _retrained(
         name: split_metrics(output[rows], target[rows], old.target_scaler, largest).as_dict()
         for name, rows in (("train", train), ("validation", validation))
     }
-    model = TrainedModel(
-        spec=spec,
-        network=network,
-        feature_scaler=problem.scaler,
-        target_scaler=old.target_scaler,
-        sample_period=old.sample_period,
-        units={c: m.units[c] for c in (*spec.channels, spec.output)},
-        envelope=_envelope(old, spec, m, train),
-        metrics=metrics,
-        data_hash=data_hash(m, [*spec.channels, spec.output]),
-        settings={
+    model = trained_model(
+        spec, network, problem.scaler, old.target_scaler, m, train, old.sample_period, metrics,
+        {
             **{k: v for k, v in old.settings.items() if k not in FIRST_FIT_KEYS},
             "hidden": network.hidden.out_features,
             "optimizer_used": "lm",
             "source": m.source,
-            "loop": {
+            "retraining": {
                 "effect": effect,
                 "start": start,
                 "old_hidden": _hidden(old),
@@ -218,5 +234,6 @@ def _retrained(
                 "samples": {"train": int(len(train)), "validation": int(len(validation))},
             },
         },
+        old.envelope,
     )
     return Retrained(model=model, start=start, extra_hidden=extra, validation_mse=scores, epochs=epochs)
