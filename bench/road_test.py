@@ -1,13 +1,16 @@
 """The thesis's road-test cases at full length: quarter car and full vehicle on a 50 s class C drive (JSON out).
 
-Usage: python bench/road_test.py [MODELS_DIR] [OUT_DIR] [DURATION_S] [--bushings vehicle|lab]
+Usage: python bench/road_test.py [MODELS_DIR] [OUT_DIR] [DURATION_S] [--bushings vehicle|lab] [--dampers vehicle|lab]
 MODELS_DIR holds <preset>.onnx for the two damper and four bushing presets (e.g. a demo's models/ folder); when it
 does not exist they are trained there first on default rig records with the presets' default settings. With
 `--bushings vehicle` (the default, as in `nnfmu demo`) the road test's bushing networks are instead trained on a rig
 record derived from the vehicle's own bushing deflections on another drive seed (`train_vehicle_bushings`, in
-OUT_DIR/vehicle_bushing); `lab` keeps MODELS_DIR's. DURATION_S (default 50) shortens both systems' drives (20 s
-finishes in minutes on 2 cores). The co-simulations run the master and the FMUs at their defaults. Progress goes to
-stderr; the last stdout line is one JSON object: run times, which record the bushing networks were trained on,
+OUT_DIR/vehicle_bushing); `lab` keeps MODELS_DIR's. With `--dampers vehicle` (the default, as in `nnfmu demo`) both
+damper networks are trained on a dyno record whose random part follows the car's damper strokes in the same source
+reference (`train_vehicle_dampers`, in OUT_DIR/vehicle_damper; needs `--bushings vehicle`). DURATION_S (default
+50) shortens both systems' drives (20 s finishes in minutes on 2 cores). The co-simulations run the master and the
+FMUs at their defaults. Progress goes to stderr; the last stdout line is one JSON object: run times, which records
+the bushing and damper networks were trained on,
 `realtime_factor_full_vehicle` (simulated seconds per wall second of the full vehicle with the hysteresis damper
 networks), the error `budget` (per system, channel and damper model: nrmse_total, nrmse_network, nrmse_coupling,
 damage_ratio; see nnfmu/roadtest/budget.py), the thesis comparison, and the largest use of each network input's
@@ -25,7 +28,9 @@ from pathlib import Path
 from nnfmu.data.rigs import RigOptions, write_rig
 from nnfmu.demo import MOVING_MASS_BY_RIG, PRESETS_BY_RIG
 from nnfmu.models.workflow import TrainRequest, train_from_file
-from nnfmu.roadtest import BushingDriveSettings, RoadTestSettings, SystemRun, run_road_test, train_vehicle_bushings
+from nnfmu.roadtest import (
+    BushingDriveSettings, RoadTestSettings, SystemRun, run_road_test, train_vehicle_bushings, train_vehicle_dampers,
+)
 
 
 def models_in(folder: Path, durations: dict[str, float] | None = None, **training: int) -> dict[str, Path]:
@@ -59,7 +64,12 @@ def main() -> None:
     parser.add_argument("duration", nargs="?", type=float, default=50.0, help="drive length [s]")
     parser.add_argument("--bushings", choices=("vehicle", "lab"), default="vehicle",
                         help="train the bushing networks on a vehicle-derived rig record, or use MODELS_DIR's")
+    parser.add_argument("--dampers", choices=("vehicle", "lab"), default="vehicle",
+                        help="train the damper networks on a vehicle-derived dyno record, or use MODELS_DIR's")
     args = parser.parse_args()
+    if args.dampers == "vehicle" and args.bushings != "vehicle":
+        parser.error("--dampers vehicle derives the dyno drive from the bushing step's source reference: "
+                     "give --bushings vehicle too")
     out, duration = args.out, args.duration
     started = time.perf_counter()
     models = models_in(args.folder)
@@ -70,6 +80,14 @@ def main() -> None:
         models |= vehicle.models
         bushing_networks = {"trained_on": str(vehicle.rig), "source_reference": str(vehicle.source),
                             "seconds": {k: round(v, 1) for k, v in vehicle.seconds.items()}}
+    damper_networks: dict[str, object] = {"trained_on": "the damper dyno's lab record"}
+    if args.dampers == "vehicle":
+        dampers = train_vehicle_dampers(
+            vehicle.source, out / "vehicle_damper",
+            lambda preset: TrainRequest(preset=preset, moving_mass=MOVING_MASS_BY_RIG["damper"]), log=log)
+        models |= dampers.models
+        damper_networks = {"trained_on": str(dampers.rig), "source_reference": str(vehicle.source),
+                           "seconds": {k: round(v, 1) for k, v in dampers.seconds.items()}}
     train_seconds = time.perf_counter() - started
     result = run_road_test(out, models, settings, log=log)
     summary = json.loads(result.summary.read_text())
@@ -81,7 +99,7 @@ def main() -> None:
     full = next((s for s in summary["systems"] if s["system"] == "full-vehicle"), None)
     print(json.dumps({
         "duration_s": duration, "training_s": round(train_seconds, 1), "road_test_s": round(result.seconds, 1),
-        "bushing_networks": bushing_networks,
+        "bushing_networks": bushing_networks, "damper_networks": damper_networks,
         "realtime_factor_full_vehicle": round(full["duration_s"] / full["seconds"]["damper-hysteresis"], 2)
         if full else None,
         "budget": [row for s in summary["systems"] for row in s["budget"]],

@@ -88,11 +88,11 @@ def rig(
     noise: float = typer.Option(1.0, help="Multiplier of the realistic sensor noise (0: exact values)."),
     effects: Optional[str] = typer.Option(None, help="Comma-separated effects to switch on, or 'none' (default: the kind's defaults)."),
     excitation: Optional[str] = typer.Option(None, help="lab (default: sine series + random), random (held-out test data), sine, or vehicle (with --drive-from)."),
-    drive_from: Optional[Path] = typer.Option(None, "--drive-from", help="Bushing only: a vehicle result (co-simulation or monolithic reference) whose bushing deflections the drive is derived from."),
-    element: Optional[list[str]] = typer.Option(None, help="With --drive-from: bushing element(s) to derive the drive from, e.g. bushing_fl_front (repeat or comma-separate; the envelope covers them all)."),
+    drive_from: Optional[Path] = typer.Option(None, "--drive-from", help="A vehicle result (co-simulation or monolithic reference) whose bushing deflections (bushing rig) or damper strokes (damper dyno: after its sine series) the drive is derived from."),
+    element: Optional[list[str]] = typer.Option(None, help="With --drive-from: element(s) to derive the drive from, e.g. bushing_fl_front or damper_fl (repeat or comma-separate; the envelope covers them all)."),
     margin: float = typer.Option(1.2, help="With --drive-from: the drive's excursions over the simulated ones on each side of the working point."),
-    band: str = typer.Option("0.5:40", help="With --drive-from: the rig controller's pass band LOW:HIGH [Hz]."),
-    default_sensors: bool = typer.Option(False, "--default-sensors", help="With --drive-from: record with the rig's default transducers instead of ranges sized for the test."),
+    band: Optional[str] = typer.Option(None, help="With --drive-from: the rig controller's pass band LOW:HIGH [Hz] (default: bushing rig 0.5:40, damper dyno 0.5:100)."),
+    default_sensors: bool = typer.Option(False, "--default-sensors", help="Bushing rig with --drive-from: record with the rig's default transducers instead of ranges sized for the test (the damper dyno always records with its own)."),
 ) -> None:
     """Simulate a lab rig and write realistic "measured" data plus a separate truth file."""
     from nnfmu.data import DataError
@@ -115,23 +115,28 @@ def rig(
 
 
 def _vehicle_rig(kind: str, source: Optional[Path], elements: list[str], out: Path, options, margin: float,
-                 band: str, fit_sensors: bool) -> tuple[Path, Path]:
-    """`nnfmu rig bushing --drive-from`: check the combination of options, then write the vehicle-derived record."""
-    from nnfmu.data.rigs import DriveDesign, write_vehicle_rig
+                 band: Optional[str], fit_sensors: bool) -> tuple[Path, Path]:
+    """`nnfmu rig KIND --drive-from`: check the combination of options, then write the vehicle-derived record."""
+    from nnfmu.data.rigs import RIG_BANDS, DriveDesign, write_vehicle_damper_dyno, write_vehicle_rig
 
-    if kind != "bushing":
-        raise ValueError(f"--drive-from derives a bushing rig drive; the {kind} rig has none")
+    if kind not in RIG_BANDS:
+        raise ValueError(f"unknown rig kind {kind!r}; valid kinds: {', '.join(RIG_BANDS)}")
     if source is None:
         raise ValueError("excitation 'vehicle' needs --drive-from RESULT (a vehicle result file)")
     if options.excitation != "vehicle":
         raise ValueError(f"--drive-from sets the excitation to 'vehicle'; it cannot be {options.excitation!r} too")
     if not elements:
-        raise ValueError("--drive-from needs --element NAME (e.g. bushing_fl_front)")
+        raise ValueError(f"--drive-from needs --element NAME (e.g. {'damper_fl' if kind == 'damper' else 'bushing_fl_front'})")
+    if kind == "damper" and not fit_sensors:
+        raise ValueError("--default-sensors is for the bushing rig; the damper dyno always records with its own "
+                         "transducers")
     try:
-        low, high = (float(v) for v in band.split(":"))
+        low, high = (float(v) for v in band.split(":")) if band is not None else RIG_BANDS[kind]
     except ValueError:
         raise ValueError(f"--band must be LOW:HIGH in Hz, e.g. 0.5:40; got {band!r}") from None
     design = DriveDesign(margin=margin, band=(low, high), fit_sensors=fit_sensors)
+    if kind == "damper":
+        return write_vehicle_damper_dyno(source, elements, out, options, design)
     return write_vehicle_rig(source, elements, out, options, design)
 
 

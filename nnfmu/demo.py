@@ -6,7 +6,9 @@ held-out record with fmpy and validated against the measurement (NRMSE, R², pea
 Then the road test (`nnfmu.roadtest`): the damper and bushing networks as FMUs in the quarter car and the full
 vehicle on a generated ISO 8608 class C drive, against the monolithic reference with the rigs' truth physics, with
 the bushing networks trained on a rig record whose drive is derived from the vehicle's own bushing deflections on
-another drive (`nnfmu.roadtest.bushing_drive`, as the thesis designed its rig data), and with the thesis comparison
+another drive (`nnfmu.roadtest.bushing_drive`, as the thesis designed its rig data), the damper networks likewise on
+a dyno record whose random part follows the car's damper strokes (`nnfmu.roadtest.damper_drive`), and with the
+thesis comparison
 (spline vs hysteresis network vs reference) in a report per system. Last, the loop (`nnfmu.loop`): a damper whose
 rig record carries two effects the model was not told about (the gas spring of a monotube and the oil's warming), a
 hysteresis network trained on the record's fit blocks, and `run_loop` tracing the residual to the missing effects,
@@ -37,7 +39,8 @@ from nnfmu.models import TrainSettings, get_preset, train_model
 from nnfmu.models.workflow import TrainRequest, train_from_file
 from nnfmu.out_paths import check_output_dir, mark_output_dir
 from nnfmu.roadtest import (
-    BushingDriveSettings, RoadTestSettings, SystemRun, VehicleBushingModels, run_road_test, train_vehicle_bushings,
+    BushingDriveSettings, RoadTestSettings, SystemRun, VehicleBushingModels, VehicleDamperModels, run_road_test,
+    train_vehicle_bushings, train_vehicle_dampers,
 )
 from nnfmu.validate import ValidationSettings, compare, write_report
 
@@ -60,11 +63,14 @@ PRESETS_BY_RIG: dict[str, tuple[str, ...]] = {
 class DemoSettings:
     """seed: rig and training seed (the test records use seed + 1); quick: short records and short training, a smoke
     run of every stage (used by the tests), not results to quote; vehicle_bushings: the road test's bushing networks
-    are trained on a rig record derived from the vehicle (`train_vehicle_bushings`) instead of the lab record."""
+    are trained on a rig record derived from the vehicle (`train_vehicle_bushings`) instead of the lab record;
+    vehicle_dampers: its damper networks on a dyno record derived from the same vehicle result
+    (`train_vehicle_dampers`; needs vehicle_bushings, which makes that result)."""
 
     seed: int = 0
     quick: bool = False
     vehicle_bushings: bool = True
+    vehicle_dampers: bool = True
 
     def lab_duration(self, rig: str) -> float | None:
         return ({"damper": 40.0, "bushing": 20.0}[rig]) if self.quick else None
@@ -130,6 +136,7 @@ class DemoSummary:
     road_test: dict[str, Path]
     loop: LoopReport
     vehicle_bushings: VehicleBushingModels | None = None
+    vehicle_dampers: VehicleDamperModels | None = None
 
 
 def _single(m: Measurement, channel: str, label: str) -> Measurement:
@@ -158,12 +165,13 @@ def close_the_loop(out: Path, settings: DemoSettings, log: Callable[[str], None]
     return report
 
 
-def _bushing_origin(vehicle: VehicleBushingModels | None, onnx_files: dict[str, Path]) -> dict[str, object]:
-    """Which record the road test's bushing networks were trained on, and their files."""
+def _origin(rig: str, vehicle: VehicleBushingModels | VehicleDamperModels | None, source: Path | None,
+            onnx_files: dict[str, Path]) -> dict[str, object]:
+    """Which record the road test's networks of `rig` were trained on, and their files."""
     if vehicle is None:
-        return {"trained_on": "the bushing rig's lab record",
-                "models": {p: str(onnx_files[p]) for p in PRESETS_BY_RIG["bushing"]}}
-    return {"trained_on": str(vehicle.rig), "source_reference": str(vehicle.source), "truth": str(vehicle.truth),
+        return {"trained_on": f"the {rig} rig's lab record",
+                "models": {p: str(onnx_files[p]) for p in PRESETS_BY_RIG[rig]}}
+    return {"trained_on": str(vehicle.rig), "source_reference": str(source), "truth": str(vehicle.truth),
             "models": {p: str(path) for p, path in vehicle.models.items()},
             "seconds": {k: round(v, 1) for k, v in vehicle.seconds.items()}}
 
@@ -213,17 +221,28 @@ def run_demo(out: str | Path, settings: DemoSettings = DemoSettings(),
         vehicle_bushings = train_vehicle_bushings(out / "vehicle_bushing", settings.road_test, settings.bushing_drive,
                                                   lambda preset: settings.request(preset, "bushing"), log)
         onnx_files |= vehicle_bushings.models
+    vehicle_dampers = None
+    if settings.vehicle_dampers and vehicle_bushings is not None:
+        vehicle_dampers = train_vehicle_dampers(vehicle_bushings.source, out / "vehicle_damper",
+                                                lambda preset: settings.request(preset, "damper"),
+                                                rig_seed=settings.seed, rig_duration=settings.lab_duration("damper"),
+                                                log=log)
+        onnx_files |= vehicle_dampers.models
     road = run_road_test(out / "road_test", onnx_files, settings.road_test, log)
     for system, path in road.reports().items():
         log(f"road test {system}: report {path}")
     loop = close_the_loop(out, settings, log)
     summary = DemoSummary(out=out, report=report, models=results, seconds=time.perf_counter() - started,
-                          road_test=road.reports(), loop=loop, vehicle_bushings=vehicle_bushings)
+                          road_test=road.reports(), loop=loop, vehicle_bushings=vehicle_bushings,
+                          vehicle_dampers=vehicle_dampers)
     write_text_atomic(out / "summary.json", json.dumps(
         {"report": str(report), "seconds": round(summary.seconds, 1), "models": [asdict(r) for r in results],
          "road_test": {"summary": str(road.summary), "reports": {k: str(v) for k, v in road.reports().items()},
                        "seconds": round(road.seconds, 1),
-                       "bushing_networks": _bushing_origin(vehicle_bushings, onnx_files)},
+                       "bushing_networks": _origin("bushing", vehicle_bushings,
+                                                   vehicle_bushings.source if vehicle_bushings else None, onnx_files),
+                       "damper_networks": _origin("damper", vehicle_dampers,
+                                                  vehicle_bushings.source if vehicle_bushings else None, onnx_files)},
          "loop": {"report": str(out / "loop" / "report.json"), "effects_added": loop.effects_added,
                   "error_before": loop.error_before, "error_after": loop.error_after}},
         indent=2))

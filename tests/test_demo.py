@@ -27,6 +27,10 @@ def test_quick_demo_runs_every_stage(tmp_path: Path) -> None:
     bushings = written["road_test"]["bushing_networks"]  # trained on a rig record derived from the car's deflections
     assert summary.vehicle_bushings is not None and bushings["trained_on"] == str(summary.vehicle_bushings.rig)
     assert all(Path(path).is_file() and "vehicle_bushing" in path for path in bushings["models"].values())
+    dampers = written["road_test"]["damper_networks"]  # on a dyno record whose stroke follows the car's dampers
+    assert summary.vehicle_dampers is not None and dampers["trained_on"] == str(summary.vehicle_dampers.rig)
+    assert dampers["source_reference"] == bushings["source_reference"]
+    assert all(Path(path).is_file() and "vehicle_damper" in path for path in dampers["models"].values())
     road = json.loads(Path(written["road_test"]["summary"]).read_text())
     quarter = road["systems"][0]
     assert quarter["system"] == "quarter-car"

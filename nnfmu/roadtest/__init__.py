@@ -1,6 +1,7 @@
 """Virtual road test simulator runs: quarter car and full vehicle with network FMUs vs the monolithic reference."""
 
 from .bushing_drive import BushingDriveSettings, VehicleBushingModels, train_vehicle_bushings
+from .damper_drive import VehicleDamperModels, train_vehicle_dampers
 from .envelope import Excursion, excursion
 from .reference import Reference, actuator_inputs, monolithic_reference
 from .runs import RoadTestResult, RoadTestSettings, SystemResult, SystemRun, run_road_test
@@ -25,6 +26,7 @@ __all__ = [
     "SystemRun",
     "ThesisRow",
     "VehicleBushingModels",
+    "VehicleDamperModels",
     "actuator_inputs",
     "amplitude_ratio",
     "build_component_fmus",
@@ -35,5 +37,6 @@ __all__ = [
     "run_road_test",
     "thesis_row",
     "train_vehicle_bushings",
+    "train_vehicle_dampers",
     "write_system",
 ]

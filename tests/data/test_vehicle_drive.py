@@ -196,7 +196,10 @@ def test_cli_writes_the_record_and_the_design_into_the_truth(tmp_path: Path, sou
 
 @pytest.mark.parametrize("args, message", [
     (["rig", "bushing", "--drive-from", "{src}", "--out", "{out}"], "--element"),
-    (["rig", "damper", "--drive-from", "{src}", "--element", ELEMENT, "--out", "{out}"], "damper rig has none"),
+    (["rig", "damper", "--drive-from", "{src}", "--element", ELEMENT, "--out", "{out}"],
+     "no channel 'bushing_fl_front_displacement' for the stroke of bushing_fl_front"),
+    (["rig", "damper", "--drive-from", "{src}", "--element", ELEMENT, "--default-sensors", "--out", "{out}"],
+     "--default-sensors is for the bushing rig"),
     (["rig", "bushing", "--drive-from", "{src}", "--element", ELEMENT, "--excitation", "lab", "--out", "{out}"],
      "cannot be 'lab'"),
     (["rig", "bushing", "--excitation", "vehicle", "--out", "{out}"], "needs --drive-from"),

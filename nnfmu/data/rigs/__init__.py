@@ -9,7 +9,8 @@ from .excitation import Motion, SineLevel, SpectrumShape
 from .options import BUSHING_EFFECTS, DAMPER_EFFECTS, DEFAULT_EFFECTS, EXCITATIONS, KINDS, RigOptions
 from .run import RigRun, simulate_rig, write_rig
 from .truth import truth_path
-from .vehicle_drive import DriveDesign, VehicleDrive, design_vehicle_drive
+from .vehicle_drive import RIG_BANDS, DriveDesign, VehicleDrive, design_damper_drive, design_vehicle_drive
+from .vehicle_dyno import simulate_vehicle_damper_dyno, write_vehicle_damper_dyno
 from .vehicle_rig import simulate_vehicle_rig, write_vehicle_rig
 
 __all__ = [
@@ -28,16 +29,20 @@ __all__ = [
     "EXCITATIONS",
     "KINDS",
     "Motion",
+    "RIG_BANDS",
     "RigOptions",
     "RigRun",
     "SineLevel",
     "SpectrumShape",
     "ValveSide",
     "VehicleDrive",
+    "design_damper_drive",
     "design_vehicle_drive",
     "simulate_rig",
+    "simulate_vehicle_damper_dyno",
     "simulate_vehicle_rig",
     "truth_path",
     "write_rig",
+    "write_vehicle_damper_dyno",
     "write_vehicle_rig",
 ]

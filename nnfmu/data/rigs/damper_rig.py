@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -12,6 +13,10 @@ from .excitation import Motion, SineLevel, SpectrumShape, random_motion, sine_se
 from .sensors import Sensor, record
 
 UNITS = {"displacement": "m", "velocity": "m/s", "force": "N", "temperature": "K"}
+
+
+# A stroke made elsewhere (a vehicle-derived drive): (rate [Hz], samples) -> (motion, its description).
+DerivedPart = Callable[[float, int], tuple[Motion, dict]]
 
 
 def _default_sensors() -> dict[str, Sensor]:
@@ -66,8 +71,10 @@ class DamperDyno:
         }
         return motion, described
 
-    def motion(self, excitation: str, rate: float, n: int, rng: np.random.Generator) -> tuple[Motion, list[dict]]:
-        """The prescribed stroke of `n` samples at `rate` [Hz] for excitation "lab", "random" or "sine"."""
+    def motion(self, excitation: str, rate: float, n: int, rng: np.random.Generator,
+               derived: DerivedPart | None = None) -> tuple[Motion, list[dict]]:
+        """The prescribed stroke of `n` samples at `rate` [Hz] for excitation "lab", "random", "sine" or "vehicle"
+        (the sine series as in "lab", then `derived`'s stroke for the rest instead of the band-limited random)."""
         duration = n / rate
         if excitation == "random":
             motion, described = self.random(rate, n, rng)
@@ -89,19 +96,26 @@ class DamperDyno:
                 f"damper 'lab' excitation of {duration:g} s leaves {remaining / rate:g} s for the random part "
                 f"after the sine series; at least {2 * self.fade:g} s are needed"
             )
-        motion, described = self.random(rate, remaining, rng)
+        if excitation == "vehicle":
+            if derived is None:
+                raise ValueError("the damper's 'vehicle' excitation needs a stroke derived from a vehicle result "
+                                 "(nnfmu rig damper --drive-from RESULT --element NAME)")
+            motion, described = derived(rate, remaining)
+        else:
+            motion, described = self.random(rate, remaining, rng)
         parts.append(dict(described, start_s=len(sine) / rate, end_s=duration))
         return Motion.concatenate([sine, motion]), parts
 
 
 def run_damper_dyno(
     params: DamperParams, effects: tuple[str, ...], dyno: DamperDyno, rate: float, n: int, excitation: str,
-    noise: float, seed: int,
+    noise: float, seed: int, derived: DerivedPart | None = None,
 ) -> tuple[np.ndarray, dict[str, np.ndarray], dict]:
-    """Time [s], recorded channels (SI) and the truth's description of the excitation of one dyno run."""
+    """Time [s], recorded channels (SI) and the truth's description of the excitation of one dyno run (`derived`: the
+    vehicle-derived stroke of a "vehicle" excitation)."""
     substeps = max(1, math.ceil(1 / (rate * dyno.internal_step)))
     fine_rate = rate * substeps
-    motion, parts = dyno.motion(excitation, fine_rate, n * substeps, np.random.default_rng([seed, 0]))
+    motion, parts = dyno.motion(excitation, fine_rate, n * substeps, np.random.default_rng([seed, 0]), derived)
     truth = DamperTruth(params, effects)
     force, states = truth.simulate(1 / fine_rate, motion.x, motion.v, motion.a)
     true = {"displacement": motion.x, "velocity": motion.v, "force": force}

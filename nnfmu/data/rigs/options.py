@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 KINDS = ("damper", "bushing")
 EXCITATIONS = ("lab", "random", "sine", "vehicle")
-VEHICLE_EXCITATION = "vehicle"  # a bushing drive derived from a vehicle result (`vehicle_rig`), never self-made
+VEHICLE_EXCITATION = "vehicle"  # a drive derived from a vehicle result (`vehicle_rig`), never self-made
 
 DAMPER_EFFECTS = ("hysteresis", "gas_force", "seal_friction", "temperature", "inertia")
 BUSHING_EFFECTS = ("viscoelastic", "friction")
@@ -32,8 +32,8 @@ class RigOptions:
     multiplies the realistic sensor noise (0: exact truth values, no noise and no quantisation); `effects` (None: the
     kind's defaults, (): only the base characteristic); `excitation`: "lab" (damper: sine series at standard peak
     velocities, then band-limited random; bushing: target-spectrum random beyond the vehicle range), "random" (only
-    band-limited random, for held-out test data), "sine" (only the sine series) or "vehicle" (bushing only: a drive
-    derived from a vehicle simulation's deflections, see `vehicle_rig`).
+    band-limited random, for held-out test data), "sine" (only the sine series) or "vehicle" (a drive derived from a
+    vehicle simulation's deflections, see `vehicle_rig`; damper: the sine series, then the derived random).
     """
 
     sample_rate: float = 1000.0
@@ -77,8 +77,6 @@ def check_options(kind: str, options: RigOptions) -> None:
     resolve_effects(kind, options.effects)
     if options.excitation not in EXCITATIONS:
         raise ValueError(f"unknown excitation {options.excitation!r}; valid excitations: {', '.join(EXCITATIONS)}")
-    if options.excitation == VEHICLE_EXCITATION and kind != "bushing":
-        raise ValueError(f"excitation {VEHICLE_EXCITATION!r} is for the bushing rig only, not the {kind} rig")
     if not (math.isfinite(options.sample_rate) and options.sample_rate >= MIN_SAMPLE_RATE):
         raise ValueError(
             f"sample_rate must be at least {MIN_SAMPLE_RATE:g} Hz (the drives reach 40 Hz), got {options.sample_rate!r}"

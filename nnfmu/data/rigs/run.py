@@ -38,8 +38,8 @@ def simulate_rig(kind: str, options: RigOptions, params: DamperParams | BushingP
     """
     check_options(kind, options)
     if options.excitation == VEHICLE_EXCITATION:
-        raise ValueError("a vehicle-derived bushing drive needs the vehicle's result: use simulate_vehicle_rig "
-                         "(nnfmu rig bushing --drive-from RESULT --element NAME)")
+        raise ValueError(f"a vehicle-derived {kind} drive needs the vehicle's result: use simulate_vehicle_rig "
+                         f"(nnfmu rig {kind} --drive-from RESULT --element NAME)")
     effects = resolve_effects(kind, options.effects)
     duration = resolve_duration(kind, options)
     n = int(round(duration * options.sample_rate))
