@@ -237,7 +237,8 @@ def demo(
     out: Path = typer.Option(Path("demo-out"), "--out", "-o", help="Folder for everything the demo writes."),
     seed: int = typer.Option(0, help="Seed of the rig records and the training."),
     quick: bool = typer.Option(False, help="Short records and training: checks every stage runs, not results to quote."),
-    lab_bushings: bool = typer.Option(False, "--lab-bushings", help="Road test with the bushing networks of the lab record instead of ones trained on a vehicle-derived rig record."),
+    lab_bushings: bool = typer.Option(False, "--lab-bushings", help="Road test with the bushing networks of the lab record instead of ones trained on a vehicle-derived rig record (the damper networks then too: their drive comes from the same vehicle result)."),
+    lab_dampers: bool = typer.Option(False, "--lab-dampers", help="Road test with the damper networks of the lab record instead of ones trained on a vehicle-derived dyno record."),
 ) -> None:
     """Run the pipeline end to end on built-in data: rig data, networks, ONNX, FMUs, replay, road test, loop."""
     from rich.console import Console
@@ -248,8 +249,8 @@ def demo(
     console = Console(markup=False)  # diagnosis test names carry brackets: test[velocity]
     try:
         with _warnings_as_lines():
-            summary = run_demo(out, DemoSettings(seed=seed, quick=quick, vehicle_bushings=not lab_bushings),
-                               log=console.print)
+            summary = run_demo(out, DemoSettings(seed=seed, quick=quick, vehicle_bushings=not lab_bushings,
+                                                 vehicle_dampers=not lab_dampers), log=console.print)
     except OutputPathError as error:
         _fail(error)
     table = Table(title="component FMUs replayed on held-out random rig records")

@@ -38,8 +38,9 @@ from .excitation import Motion, preload, random_motion
 
 # The rig controller's pass band [Hz] by rig: the bushing rig's lab drive reaches 40 Hz; a servo-hydraulic damper
 # dyno follows small strokes to about 100 Hz, and the car moves its dampers there (wheel hop ~12 Hz, the road's
-# short waves above): a damper network trained up to the lab drive's 20 Hz was off by 2.2 % in spindle acceleration
-# in the road test, one trained on the car's spectrum up to 100 Hz by 1.8 % (bench/road_test.py, 50 s).
+# short waves above): the hysteresis network trained on the lab drive (flat in velocity over 1-20 Hz) was off by
+# 2.1-2.2 % in spindle acceleration in the road test, trained on the car's spectrum up to 100 Hz by 1.8-1.9 %
+# (bench/road_test.py, 50 s).
 RIG_BANDS: dict[str, tuple[float, float]] = {"bushing": (0.5, 40.0), "damper": (0.5, 100.0)}
 WELCH_SECONDS = 4.0  # Welch segment length: 0.25 Hz resolution, enough below the band's 0.5 Hz edge
 SMOOTHING_OCTAVES = 1 / 3  # width of the fractional-octave average applied to the Welch estimate
