@@ -30,6 +30,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.signal import welch
 
+from ...errors import SettingsError
 from ..errors import DataError
 from ..measurement import Measurement
 from .bushing_rig import CHANNELS
@@ -56,15 +57,15 @@ class DriveDesign:
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.margin) and self.margin >= 1.0):
-            raise ValueError("margin must be a number >= 1 (the drive's peaks over the simulated ones), "
-                             f"got {self.margin!r}")
+            raise SettingsError("margin must be a number >= 1 (the drive's peaks over the simulated ones), "
+                                f"got {self.margin!r}")
         low, high = self.band
         if not (math.isfinite(low) and math.isfinite(high) and 0 <= low < high):
-            raise ValueError(f"band must be (low, high) [Hz] with 0 <= low < high, got {self.band!r}")
+            raise SettingsError(f"band must be (low, high) [Hz] with 0 <= low < high, got {self.band!r}")
         if not (math.isfinite(self.fade) and self.fade > 0):
-            raise ValueError(f"fade must be a positive time [s], got {self.fade!r}")
+            raise SettingsError(f"fade must be a positive time [s], got {self.fade!r}")
         if not (math.isfinite(self.headroom) and self.headroom >= 1.0):
-            raise ValueError(f"headroom must be a number >= 1, got {self.headroom!r}")
+            raise SettingsError(f"headroom must be a number >= 1, got {self.headroom!r}")
 
 
 @dataclass(frozen=True)
@@ -234,7 +235,7 @@ def design_vehicle_drive(source: Measurement, elements: Sequence[str], rate: flo
     """
     elements = tuple(elements)
     if not elements:
-        raise ValueError("name at least one bushing element (e.g. bushing_fl_front) to derive the drive from")
+        raise SettingsError("name at least one bushing element (e.g. bushing_fl_front) to derive the drive from")
     streams = np.random.SeedSequence([seed, 2]).spawn(len(CHANNELS))
     motions: dict[str, Motion] = {}
     channels: dict[str, ChannelDesign] = {}
