@@ -1,0 +1,59 @@
+"""The command line reports an NnfmuError as one `error:` line with exit status 2 and nothing else: a programming
+error inside a command (a plain ValueError included) keeps its traceback instead of passing for the user's mistake."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from nnfmu.cli import app
+from nnfmu.errors import SettingsError
+
+runner = CliRunner()
+
+# (command line with {tmp} for the test's folder, the function the command calls: module, name)
+COMMANDS = {
+    "rig": (["rig", "damper", "--out", "{tmp}/d.csv"], ("nnfmu.data.rigs", "write_rig")),
+    "train": (["train", "{tmp}/d.csv", "--preset", "damper-spline", "--out", "{tmp}/m.onnx"],
+              ("nnfmu.models.workflow", "train_from_file")),
+    "cosim": (["cosim", "{tmp}/system", "--drive", "{tmp}/drive.csv", "--out", "{tmp}/r.csv"],
+              ("nnfmu.cosim.master", "run_cosim")),
+    "validate": (["validate", "{tmp}/a.csv", "{tmp}/b.csv", "--out", "{tmp}/report"],
+                 ("nnfmu.validate", "validate_files")),
+    "data check": (["data", "check", "{tmp}/d.csv"], ("nnfmu.data", "load_measurement")),
+    "build": (["build", "{tmp}/m.onnx", "--out", "{tmp}/m.fmu"], ("nnfmu.fmu.build", "build_fmu")),
+}
+
+
+def invoke_raising(monkeypatch: pytest.MonkeyPatch, tmp_path: Path, command: str, error: BaseException):
+    """Run `command` with the function it calls replaced by one raising `error`."""
+    args, (module, name) = COMMANDS[command]
+
+    def broken(*_args: object, **_kwargs: object) -> None:
+        raise error
+
+    monkeypatch.setattr(f"{module}.{name}", broken)
+    return runner.invoke(app, [a.format(tmp=tmp_path) for a in args])
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+@pytest.mark.parametrize("error", [ZeroDivisionError("division by zero"), ValueError("a bug's message")],
+                         ids=["ZeroDivisionError", "ValueError"])
+def test_a_programming_error_inside_a_command_propagates(monkeypatch: pytest.MonkeyPatch, tmp_path: Path,
+                                                         command: str, error: Exception) -> None:
+    result = invoke_raising(monkeypatch, tmp_path, command, error)
+    assert result.exception is error, result.output
+    assert result.exit_code != 2
+    assert "error:" not in result.output
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_an_nnfmu_error_inside_a_command_is_one_error_line(monkeypatch: pytest.MonkeyPatch, tmp_path: Path,
+                                                           command: str) -> None:
+    """The control: the same place raising an NnfmuError ends in exit status 2 and its message, no traceback."""
+    result = invoke_raising(monkeypatch, tmp_path, command, SettingsError("--knob 7 is out of range"))
+    assert result.exit_code == 2, result.output
+    assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
+    assert result.output.strip() == "error: --knob 7 is out of range"
