@@ -5,10 +5,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import onnx
 import pytest
 from typer.testing import CliRunner
 
 from nnfmu.cli import app
+from nnfmu.component import METADATA_KEY, replace_metadata
+from nnfmu.cosim.linear_damper import linear_damper_graph
 from nnfmu.errors import SettingsError
 
 runner = CliRunner()
@@ -57,3 +60,19 @@ def test_an_nnfmu_error_inside_a_command_is_one_error_line(monkeypatch: pytest.M
     assert result.exit_code == 2, result.output
     assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
     assert result.output.strip() == "error: --knob 7 is out of range"
+
+
+def test_loop_on_a_model_with_malformed_metadata_is_one_error_line(tmp_path: Path) -> None:
+    """A user's file that once surfaced as a bare ValueError (and a traceback) is reported as the user's input."""
+    model = linear_damper_graph(2400.0, name="damper")
+    replace_metadata(model, METADATA_KEY, "[1, 2]")
+    onnx.save(model, tmp_path / "odd.onnx")
+    data = tmp_path / "dyno.csv"
+    assert runner.invoke(app, ["rig", "damper", "--out", str(data), "--duration", "20",
+                               "--excitation", "random"]).exit_code == 0
+    result = runner.invoke(app, ["loop", str(data), "--model", str(tmp_path / "odd.onnx"), "--out",
+                                 str(tmp_path / "loop")])
+    assert result.exit_code == 2, result.output
+    assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
+    assert result.output.startswith("error: ") and "odd.onnx: cannot read the component description" in result.output
+    assert not (tmp_path / "loop").exists()
