@@ -15,7 +15,8 @@ from typing import Optional
 
 import typer
 
-from nnfmu.out_paths import OutputPathError, check_output_file
+from nnfmu.errors import NnfmuError, SettingsError
+from nnfmu.out_paths import check_output_file
 
 app = typer.Typer(no_args_is_help=True, add_completion=False,
                   help="Neural-network component models from rig data, shipped as FMI co-simulation FMUs.")
@@ -41,8 +42,10 @@ def _on_start() -> None:
         signal.signal(signal.SIGTERM, _interrupt)
 
 
-def _fail(error: Exception) -> None:
-    """Print a user-facing error and exit with status 2."""
+def _fail(error: NnfmuError) -> None:
+    """Print an error in the user's input or environment as one `error:` line and exit with status 2.
+
+    Commands pass only NnfmuError here: any other exception is a programming error and keeps its traceback."""
     typer.echo(f"error: {error}", err=True)
     raise typer.Exit(code=2)
 
@@ -95,7 +98,6 @@ def rig(
     default_sensors: bool = typer.Option(False, "--default-sensors", help="Bushing rig with --drive-from: record with the rig's default transducers instead of ranges sized for the test (the damper dyno always records with its own)."),
 ) -> None:
     """Simulate a lab rig and write realistic "measured" data plus a separate truth file."""
-    from nnfmu.data import DataError
     from nnfmu.data.rigs import RigOptions, write_rig
 
     chosen = None if effects is None else () if effects.strip() == "none" else tuple(_split([effects]))
@@ -109,7 +111,7 @@ def rig(
                                                  not default_sensors)
         else:
             data_path, truth_path = write_rig(kind, target, options)
-    except (ValueError, DataError) as error:
+    except NnfmuError as error:
         _fail(error)
     typer.echo(f"data: {data_path}\ntruth (for evaluation only, never for training): {truth_path}")
 
@@ -120,20 +122,20 @@ def _vehicle_rig(kind: str, source: Optional[Path], elements: list[str], out: Pa
     from nnfmu.data.rigs import RIG_BANDS, DriveDesign, write_vehicle_damper_dyno, write_vehicle_rig
 
     if kind not in RIG_BANDS:
-        raise ValueError(f"unknown rig kind {kind!r}; valid kinds: {', '.join(RIG_BANDS)}")
+        raise SettingsError(f"unknown rig kind {kind!r}; valid kinds: {', '.join(RIG_BANDS)}")
     if source is None:
-        raise ValueError("excitation 'vehicle' needs --drive-from RESULT (a vehicle result file)")
+        raise SettingsError("excitation 'vehicle' needs --drive-from RESULT (a vehicle result file)")
     if options.excitation != "vehicle":
-        raise ValueError(f"--drive-from sets the excitation to 'vehicle'; it cannot be {options.excitation!r} too")
+        raise SettingsError(f"--drive-from sets the excitation to 'vehicle'; it cannot be {options.excitation!r} too")
     if not elements:
-        raise ValueError(f"--drive-from needs --element NAME (e.g. {'damper_fl' if kind == 'damper' else 'bushing_fl_front'})")
+        raise SettingsError(f"--drive-from needs --element NAME (e.g. {'damper_fl' if kind == 'damper' else 'bushing_fl_front'})")
     if kind == "damper" and not fit_sensors:
-        raise ValueError("--default-sensors is for the bushing rig; the damper dyno always records with its own "
-                         "transducers")
+        raise SettingsError("--default-sensors is for the bushing rig; the damper dyno always records with its own "
+                            "transducers")
     try:
         low, high = (float(v) for v in band.split(":")) if band is not None else RIG_BANDS[kind]
     except ValueError:
-        raise ValueError(f"--band must be LOW:HIGH in Hz, e.g. 0.5:40; got {band!r}") from None
+        raise SettingsError(f"--band must be LOW:HIGH in Hz, e.g. 0.5:40; got {band!r}") from None
     design = DriveDesign(margin=margin, band=(low, high), fit_sensors=fit_sensors)
     if kind == "damper":
         return write_vehicle_damper_dyno(source, elements, out, options, design)
@@ -146,7 +148,7 @@ def _channel_map(items: Optional[list[str]]) -> dict[str, str]:
 
     try:
         return parse_channel_map(items or [])
-    except ValueError as error:
+    except SettingsError as error:
         raise typer.BadParameter(f"--map: {error}") from None
 
 
@@ -187,8 +189,6 @@ def train(
     from rich.table import Table
     from rich.text import Text
 
-    from nnfmu.data import DataError
-    from nnfmu.export import ExportError
     from nnfmu.models.workflow import TrainRequest, train_from_file
 
     request = TrainRequest(preset=preset, output=output, inputs=tuple(_split(inputs)),
@@ -202,7 +202,7 @@ def train(
             task = bar.add_task("training", total=1.0)
             outcome = train_from_file(data, request, check_output_file(out, [data]),
                                       lambda what, done: bar.update(task, description=what, completed=done))
-    except (DataError, ExportError, ValueError) as error:
+    except NnfmuError as error:
         _fail(error)
     if outcome.selection is not None:
         ranking = Table(title="input sensitivity ranking (validation MSE increase when shuffled)")
@@ -251,7 +251,7 @@ def demo(
         with _warnings_as_lines():
             summary = run_demo(out, DemoSettings(seed=seed, quick=quick, vehicle_bushings=not lab_bushings,
                                                  vehicle_dampers=not lab_dampers), log=console.print)
-    except OutputPathError as error:
+    except NnfmuError as error:
         _fail(error)
     table = Table(title="component FMUs replayed on held-out random rig records")
     for column in ("preset", "train [s]", "test-split NRMSE", "FMU NRMSE", "R²", "peak error", "pseudo-damage ratio"):
@@ -289,7 +289,6 @@ def build(
 ) -> None:
     """Build a standalone FMI co-simulation FMU from an ONNX model."""
     from nnfmu.fmu.build import build_fmu
-    from nnfmu.fmu.errors import FmuBuildError
     from nnfmu.fmu.options import BuildOptions
 
     try:
@@ -297,7 +296,7 @@ def build(
         with _warnings_as_lines():
             path = build_fmu(model, BuildOptions(out=target, backend=backend, fmi_version=fmi, name=name,
                                                  filter_cutoff=filter_cutoff, platforms=_platforms(platforms)))
-    except (FmuBuildError, OutputPathError) as error:
+    except NnfmuError as error:
         _fail(error)
     typer.echo(f"FMU: {path}")
     _echo_reference_results(path)
@@ -319,11 +318,11 @@ def check(
     tolerance: Optional[float] = typer.Option(None, help="Allowed max error of each output as a fraction of its peak (default: the experiment's)."),
 ) -> None:
     """Replay the reference results an FMU carries with fmpy and report pass/fail per output (exit 1 on failure)."""
-    from nnfmu.fmu.check import CheckError, check_fmu, report_lines
+    from nnfmu.fmu.check import check_fmu, report_lines
 
     try:
         report = check_fmu(fmu, tolerance)
-    except CheckError as error:
+    except NnfmuError as error:
         _fail(error)
     for line in report_lines(report):
         typer.echo(line)
@@ -348,9 +347,7 @@ def vehicle_build(
 
     quarter-car takes a quarter-car file or a full-vehicle file (one corner derived); full-vehicle a full-vehicle file.
     """
-    from nnfmu.fmu.errors import FmuBuildError
     from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
-    from nnfmu.vehicle.models.errors import VehicleModelError
 
     try:
         settings = VehicleBuildSettings(params_path=params, components={n: "reference" for n in _split(reference)}
@@ -359,7 +356,7 @@ def vehicle_build(
                                         platforms=_platforms(platforms))
         with _warnings_as_lines():
             path = build_vehicle_fmu(model, check_output_file(out, [params] if params else []), settings)
-    except (VehicleModelError, FmuBuildError, OutputPathError) as error:
+    except NnfmuError as error:
         _fail(error)
     typer.echo(f"FMU: {path}")
 
@@ -383,11 +380,8 @@ def cosim(
     """Co-simulate a vehicle FMU with component FMUs on a drive file."""
     from rich.progress import Progress
 
-    from nnfmu.cosim.drive_inputs import DriveInputError
-    from nnfmu.cosim.master import CosimError, CosimSettings, run_cosim
+    from nnfmu.cosim.master import CosimSettings, run_cosim
     from nnfmu.cosim.results import save_result
-    from nnfmu.cosim.ssp import SspError
-    from nnfmu.data import DataError
     from nnfmu.vehicle.drive import read_drive
 
     try:
@@ -405,8 +399,8 @@ def cosim(
                 result = run_cosim(system, drive, settings, target,
                                    progress=lambda done, total: bar.update(task, completed=done, total=total))
         else:
-            raise CosimError(f"unknown master {master!r}; use fmpy or libcosim")
-    except (CosimError, SspError, DriveInputError, DataError, ValueError) as error:
+            raise SettingsError(f"unknown master {master!r}; use fmpy or libcosim")
+    except NnfmuError as error:
         _fail(error)
     typer.echo(f"{result.steps} steps of {step:g} s; result: {out}")
     if iterations:
@@ -423,7 +417,7 @@ def batch(
     reuse_instances: bool = typer.Option(True, help="Keep FMU instances between cases and reset them (fmi2Reset/fmi3Reset) instead of opening them again; --no-reuse-instances for FMUs whose reset is unreliable."),
 ) -> None:
     """Run a road-test campaign (events x variants) on Dask into one Parquet table of pseudo-damage per channel."""
-    from nnfmu.campaign import CampaignError, run_campaign
+    from nnfmu.campaign import run_campaign
     from nnfmu.campaign.progress import CaseProgress
 
     if workers is not None and workers < 0:
@@ -431,7 +425,7 @@ def batch(
     try:
         run = run_campaign(campaign, out, scheduler=scheduler, workers=workers, retry_failed=retry_failed,
                            reuse_instances=reuse_instances, progress=CaseProgress())
-    except CampaignError as error:
+    except NnfmuError as error:
         _fail(error)
     typer.echo(f"{run.cases} cases: {run.ok} ok, {run.failed} failed, {run.skipped} finished before "
                f"({run.wall_s:.1f} s on {run.engine.kind})")
@@ -447,16 +441,13 @@ def loop(
     max_effects: int = typer.Option(3, help="Most effects to add."),
 ) -> None:
     """Replay the model's FMU on measured data, trace the residual to missing physical effects, add them, report."""
-    from nnfmu.data import DataError
-    from nnfmu.fmu.errors import FmuBuildError
-    from nnfmu.loop import DiagnosisError
-    from nnfmu.loop.loop_settings import LoopError, LoopSettings
+    from nnfmu.loop.loop_settings import LoopSettings
     from nnfmu.loop.run import run_loop
 
     try:
         with _warnings_as_lines():
             report = run_loop(data, model, output, out, LoopSettings(max_effects=max_effects))
-    except (LoopError, DiagnosisError, DataError, FmuBuildError, OutputPathError) as error:
+    except NnfmuError as error:
         _fail(error)
     typer.echo(report.summary)
     typer.echo(f"effects added: {', '.join(report.effects_added) or 'none'}")
@@ -474,12 +465,12 @@ def data_check(
     channel_map: Optional[list[str]] = typer.Option(None, "--map", help=MAP_HELP),
 ) -> None:
     """Load a measurement, convert it to SI units and report its channels, or say exactly what is wrong."""
-    from nnfmu.data import DataError, load_measurement
+    from nnfmu.data import load_measurement
 
     mapping = _channel_map(channel_map)
     try:
         m = load_measurement(path, required=_split(require), channel_map=mapping)
-    except DataError as error:
+    except NnfmuError as error:
         _fail(error)
     typer.echo(f"{path}: {len(m)} samples, sample period {m.sample_period:.6g} s")
     for name in m.names:
@@ -519,8 +510,7 @@ def drive_generate(
     rpc_data_type: str = typer.Option("int16", help="RPC III sample type: int16 or float32."),
 ) -> None:
     """Write four actuator displacement channels from an ISO 8608 road at a given speed, with optional events."""
-    from nnfmu.data import DataError
-    from nnfmu.vehicle.drive import DriveError, DriveSettings, KerbStrike, Pothole, generate_drive, write_drive
+    from nnfmu.vehicle.drive import DriveSettings, KerbStrike, Pothole, generate_drive, write_drive
 
     events = [Pothole(**_event_fields(p, "--pothole", ("time", "depth", "length", "side"))) for p in pothole or []]
     events += [KerbStrike(**_event_fields(k, "--kerb", ("time", "height", "ramp_length", "length", "side")))
@@ -531,7 +521,7 @@ def drive_generate(
     try:
         target = check_output_file(out, [])
         path = write_drive(generate_drive(settings), target, rpc_data_type=rpc_data_type)
-    except (DriveError, DataError, OutputPathError) as error:
+    except NnfmuError as error:
         _fail(error)
     typer.echo(f"drive file: {path}")
 
@@ -543,13 +533,12 @@ def drive_convert(
     rpc_data_type: str = typer.Option("int16", help="RPC III sample type: int16 or float32."),
 ) -> None:
     """Convert a drive file between CSV, MDF4 and RPC III, keeping channel names and units."""
-    from nnfmu.data import DataError
-    from nnfmu.vehicle.drive import DriveError, read_drive, write_drive
+    from nnfmu.vehicle.drive import read_drive, write_drive
 
     try:
         path = write_drive(read_drive(source), check_output_file(target, [source], "TARGET"),
                            rpc_data_type=rpc_data_type)
-    except (DriveError, DataError, OutputPathError) as error:
+    except NnfmuError as error:
         _fail(error)
     typer.echo(f"drive file: {path}")
 
@@ -598,7 +587,7 @@ def validate(
                                       psd_resolution=psd_resolution, window_length=window_length,
                                       window=_window(window))
         report = validate_files(result, reference, _split(channels) or None, out, settings)
-    except ValueError as error:  # DataError and bad settings alike
+    except NnfmuError as error:
         _fail(error)
     for c in report.comparisons:
         m = c.metrics

@@ -11,10 +11,12 @@ import os
 from collections.abc import Iterable
 from pathlib import Path
 
+from nnfmu.errors import NnfmuError
+
 MARKER = ".nnfmu-output"  # one line inside every result folder: the kind of output (loop, validate, batch, demo)
 
 
-class OutputPathError(ValueError):
+class OutputPathError(NnfmuError, ValueError):
     """An output path that would overwrite an input or someone else's files, or that cannot be a file or folder."""
 
 

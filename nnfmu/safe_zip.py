@@ -12,6 +12,8 @@ import shutil
 import zipfile
 from pathlib import Path, PurePosixPath
 
+from nnfmu.errors import NnfmuError
+
 MAX_TOTAL_BYTES = 256 * 1024 * 1024  # uncompressed size of all members: FMUs of a few MB each fit hundreds of times
 MAX_MEMBERS = 10_000  # an FMU or a system has tens
 MAX_RATIO = 100.0  # uncompressed / compressed size of a member above RATIO_FLOOR: XML and FMUs stay far below
@@ -19,7 +21,7 @@ RATIO_FLOOR = 1024 * 1024  # [bytes] smaller members may compress as well as the
 _SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*:")  # a URI scheme or a Windows drive letter
 
 
-class ArchiveError(ValueError):
+class ArchiveError(NnfmuError, ValueError):
     """An archive member or a path named inside the archive that would reach outside it, or an archive too large to
     unpack."""
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from nnfmu.errors import NnfmuError
 
-class CampaignError(ValueError):
+
+class CampaignError(NnfmuError, ValueError):
     """A campaign file or folder that cannot be run as given; the message names the file, the entry and the key."""

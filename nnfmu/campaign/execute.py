@@ -28,6 +28,7 @@ from nnfmu.cosim.instances import InstancePool
 from nnfmu.cosim.master import CosimSettings, cosimulate
 from nnfmu.cosim.ssp import Connection, Connector, Element, SystemStructure
 from nnfmu.data import Measurement
+from nnfmu.errors import NnfmuError
 from nnfmu.validate.compare import ValidationSettings
 from nnfmu.validate.damage import pseudo_damage
 from nnfmu.validate.metrics import rms
@@ -72,7 +73,7 @@ class CaseOutcome:
     rows: tuple[ChannelRow, ...] = field(default=())
 
 
-class CaseError(RuntimeError):
+class CaseError(NnfmuError, RuntimeError):
     """A case ran but its result cannot be scored (a missing or non-finite channel); the message names it."""
 
 

@@ -13,6 +13,7 @@ from ctypes import CFUNCTYPE, POINTER, byref, c_bool, c_double, c_int, c_size_t,
 
 import numpy as np
 
+from ..errors import NnfmuError
 from .slave import FmuSlave
 
 WARNING = 1  # fmi2Warning = fmi3Warning: a status above it means the call failed
@@ -29,7 +30,7 @@ _DO_STEP3 = CFUNCTYPE(c_int, c_void_p, c_double, c_double, c_bool, POINTER(c_boo
                       POINTER(c_bool), _DOUBLES)
 
 
-class FmiStatusError(RuntimeError):
+class FmiStatusError(NnfmuError, RuntimeError):
     """An FMI call returned Discard, Error or Fatal; the message names the instance, the function, the status and
     what the FMU logged last."""
 

@@ -15,11 +15,12 @@ import numpy as np
 
 from ..data import Measurement
 from ..data.derive import derive_rates
+from ..errors import NnfmuError
 
 TIME_TOLERANCE = 1e-9  # relative to the drive's sample period: how far outside the drive a time may lie
 
 
-class DriveInputError(ValueError):
+class DriveInputError(NnfmuError, ValueError):
     """The drive cannot feed the vehicle: a missing channel or a time outside the drive; names file and channel."""
 
 

@@ -47,6 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..data import Measurement
+from ..errors import NnfmuError
 from .direct import FmiStatusError, RealBlock, SlopeBlock, Stepper
 from .drive_inputs import DriveInputs
 from .inner_loop import CompiledLoop, LoopFailure
@@ -65,7 +66,7 @@ Progress = Callable[[int, int], None]  # (steps done, steps in all)
 MAX_RESULT_BYTES = 2 * 1024**3  # the result table a run holds in memory: one float64 per step and channel
 
 
-class CosimError(ValueError):
+class CosimError(NnfmuError, ValueError):
     """The system or settings cannot be co-simulated; the message names the element, connector or setting."""
 
 

@@ -14,11 +14,12 @@ import numpy as np
 
 from nnfmu.cosim.slave import FmuSlave
 from nnfmu.data.measurement import Measurement
+from nnfmu.errors import NnfmuError
 
 PERIOD_TOLERANCE = 1e-6  # relative mismatch allowed between the FMU's sample period and the measurement's
 
 
-class ReplayError(ValueError):
+class ReplayError(NnfmuError, ValueError):
     """The measurement cannot drive the FMU (missing input channel, other sample rate, ...)."""
 
 

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..atomic import atomic_path
+from ..errors import NnfmuError
 from ..safe_zip import ArchiveError, check_zip, confined_source, extract_zip
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
@@ -35,7 +36,7 @@ ET.register_namespace("ssc", SSC)
 ET.register_namespace("ssv", SSV)
 
 
-class SspError(ValueError):
+class SspError(NnfmuError, ValueError):
     """A system file that cannot be read or does not fit its FMUs; the message names file, element and connector."""
 
 

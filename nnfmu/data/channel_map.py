@@ -11,6 +11,7 @@ from __future__ import annotations
 import re
 from collections.abc import Iterable, Mapping, Sequence
 
+from ..errors import SettingsError
 from .errors import DataError
 from .raw import RawTable
 
@@ -35,12 +36,12 @@ def first_duplicate(names: Sequence[str]) -> tuple[int, int] | None:
 
 
 def parse_channel_map(items: Iterable[str]) -> dict[str, str]:
-    """`'FILE CHANNEL=name'` items (from `--map`) as {file channel: nnfmu name}; ValueError for a malformed item."""
+    """`'FILE CHANNEL=name'` items (from `--map`) as {file channel: nnfmu name}; SettingsError for a malformed item."""
     mapping: dict[str, str] = {}
     for item in items:
         source, equals, target = item.rpartition("=")
         if not equals or not source.strip() or not target.strip():
-            raise ValueError(f"channel map {item!r}: write it as 'FILE CHANNEL=name', e.g. 'Axial Force=force'")
+            raise SettingsError(f"channel map {item!r}: write it as 'FILE CHANNEL=name', e.g. 'Axial Force=force'")
         mapping[source.strip()] = target.strip()
     return mapping
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from nnfmu.errors import NnfmuError
 
-class DataError(ValueError):
+
+class DataError(NnfmuError, ValueError):
     """A problem with measured or simulated rig data; the message names the file and the channel, value or row."""

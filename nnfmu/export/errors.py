@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from nnfmu.errors import NnfmuError
 
-class ExportError(ValueError):
+
+class ExportError(NnfmuError, ValueError):
     """Export failed; the message names the node, channel or value and the measured disagreement."""

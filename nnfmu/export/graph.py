@@ -1,6 +1,7 @@
 """A small ONNX graph builder with readable, unique names and nnfmu's fixed operator set.
 
-The native C backend implements exactly `ALLOWED_OPS`, so the builder refuses any other operator. Needs only onnx.
+The builder refuses any operator outside `ALLOWED_OPS`, each of which the native C backend translates (Constant by
+folding it; tests/export/test_graph_ops.py); the backend takes more, for foreign graphs. Needs only onnx.
 """
 
 from __future__ import annotations

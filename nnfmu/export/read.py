@@ -29,9 +29,9 @@ def _scaler(low: np.ndarray, gain: np.ndarray) -> MinMaxScaler:
 
 
 def read_step_graph(path: str | os.PathLike[str]) -> tuple[TrainedModel, Component]:
-    """(the MLP step graph at `path` as a TrainedModel, its Component). ExportError names what is missing: no file,
-    no nnfmu metadata (another tool's graph has no feature spec), a recurrent network, or an initializer the exporter
-    writes."""
+    """(the MLP step graph at `path` as a TrainedModel, its Component). ExportError names what is missing or wrong:
+    no file, malformed or no nnfmu metadata (another tool's graph has no feature spec), a recurrent network, or an
+    initializer the exporter writes."""
     path = Path(path)
     if not path.is_file():
         raise ExportError(f"{path}: no such model file")
@@ -39,7 +39,10 @@ def read_step_graph(path: str | os.PathLike[str]) -> tuple[TrainedModel, Compone
         graph = onnx.load(str(path))
     except Exception as err:  # onnx raises DecodeError, ValueError and others for a file that is not ONNX
         raise ExportError(f"{path}: not a readable ONNX file ({err})") from None
-    component = Component.from_onnx(graph)
+    try:
+        component = Component.from_onnx(graph)
+    except (ValueError, KeyError, TypeError) as err:  # malformed or too new `nnfmu.component` metadata
+        raise ExportError(f"{path}: cannot read the component description: {err}") from None
     meta = component.metadata
     if "feature_spec" not in meta or "network" not in meta:
         raise ExportError(f"{path}: no nnfmu feature spec in the ONNX metadata: only graphs exported by nnfmu "
@@ -47,7 +50,10 @@ def read_step_graph(path: str | os.PathLike[str]) -> tuple[TrainedModel, Compone
     kind = meta["network"].get("kind")
     if kind != "mlp":
         raise ExportError(f"{path}: network kind {kind!r}; only MLP step graphs are read back into a model")
-    spec = FeatureSpec.from_dict(meta["feature_spec"])
+    try:
+        spec = FeatureSpec.from_dict(meta["feature_spec"])
+    except ValueError as err:
+        raise ExportError(f"{path}: cannot read the feature spec: {err}") from None
     tensors = {t.name: numpy_helper.to_array(t) for t in graph.graph.initializer}
     absent = [name for name in (*MLP_INITIALIZERS, *SCALER_INITIALIZERS) if name not in tensors]
     if absent:

@@ -27,6 +27,7 @@ from urllib.parse import unquote, urlparse
 import numpy as np
 from fmpy import read_model_description, simulate_fmu
 
+from nnfmu.errors import NnfmuError
 from nnfmu.fmu.reference_results import EXPERIMENTS_TYPE, LS_FOLDER, MANIFEST
 from nnfmu.safe_zip import ArchiveError, check_members, extract_zip
 
@@ -37,7 +38,7 @@ CHECKSUMS = {"SHA3-224": hashlib.sha3_224, "SHA3-256": hashlib.sha3_256, "SHA3-3
 MANIFEST_PATH = f"{LS_FOLDER}/{MANIFEST}"
 
 
-class CheckError(Exception):
+class CheckError(NnfmuError):
     """The FMU or its reference data cannot be read; the message names the file and what is wrong."""
 
 

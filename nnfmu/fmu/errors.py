@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+from nnfmu.errors import NnfmuError
 
-class FmuBuildError(Exception):
+
+class FmuBuildError(NnfmuError):
     """Building an FMU failed; no `.fmu` was written."""
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from ..errors import NnfmuError
 
-class DiagnosisError(ValueError):
+
+class DiagnosisError(NnfmuError, ValueError):
     """Unusable input to the diagnosis; the message names the source, channel or value and what was expected."""

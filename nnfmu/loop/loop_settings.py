@@ -5,12 +5,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from nnfmu.errors import NnfmuError
 from nnfmu.models.retrain import RetrainSettings
 
 from .settings import DiagnosisSettings
 
 
-class LoopError(ValueError):
+class LoopError(NnfmuError, ValueError):
     """The loop cannot run on this data or model; the message names the file, channel or value at fault."""
 
 

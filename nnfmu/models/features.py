@@ -19,6 +19,8 @@ from typing import Any, ClassVar, Protocol
 import numpy as np
 from scipy.signal import lfilter
 
+from nnfmu.errors import SettingsError
+
 
 class NodeSink(Protocol):
     """What `emit` needs from a graph builder (the exporter's `nnfmu.export.graph.GraphBuilder` provides it)."""
@@ -44,13 +46,13 @@ class StateSlot:
 
 def _check_channel_name(channel: object, what: str) -> str:
     if not isinstance(channel, str) or not channel.strip():
-        raise ValueError(f"{what}: channel name must be a non-empty string, got {channel!r}")
+        raise SettingsError(f"{what}: channel name must be a non-empty string, got {channel!r}")
     return channel
 
 
 def _check_positive(value: object, what: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
-        raise ValueError(f"{what} must be a finite number > 0, got {value!r}")
+        raise SettingsError(f"{what} must be a finite number > 0, got {value!r}")
     return float(value)
 
 
@@ -65,12 +67,12 @@ class Tap:
         _check_channel_name(self.channel, "tap")
         delays = tuple(self.delays)
         if not delays:
-            raise ValueError(f"tap {self.channel!r}: no delays given")
+            raise SettingsError(f"tap {self.channel!r}: no delays given")
         for d in delays:
             if isinstance(d, bool) or not isinstance(d, (int, np.integer)) or d < 0:
-                raise ValueError(f"tap {self.channel!r}: delay {d!r} is not an integer >= 0")
+                raise SettingsError(f"tap {self.channel!r}: delay {d!r} is not an integer >= 0")
         if len(set(delays)) != len(delays):
-            raise ValueError(f"tap {self.channel!r}: duplicate delay in {delays}")
+            raise SettingsError(f"tap {self.channel!r}: duplicate delay in {delays}")
         object.__setattr__(self, "delays", tuple(int(d) for d in delays))
 
     @property
@@ -266,7 +268,7 @@ class Difference(Derived):
         super().__post_init__()
         d = self.delay
         if isinstance(d, bool) or not isinstance(d, (int, np.integer)) or d < 1:
-            raise ValueError(f"difference({self.channel}) delay must be an integer >= 1, got {d!r}")
+            raise SettingsError(f"difference({self.channel}) delay must be an integer >= 1, got {d!r}")
         object.__setattr__(self, "delay", int(d))
 
     @property
@@ -373,23 +375,23 @@ class FeatureSpec:
         object.__setattr__(self, "derived", tuple(self.derived))
         _check_channel_name(self.output, "output")
         if not self.taps and not self.derived:
-            raise ValueError("feature spec has no features: give at least one tap or derived feature")
+            raise SettingsError("feature spec has no features: give at least one tap or derived feature")
         seen: set[str] = set()
         for tap in self.taps:
             if not isinstance(tap, Tap):
-                raise ValueError(f"tap must be a Tap, got {tap!r}")
+                raise SettingsError(f"tap must be a Tap, got {tap!r}")
             if tap.channel in seen:
-                raise ValueError(f"channel {tap.channel!r} is tapped twice; list all its delays in one Tap")
+                raise SettingsError(f"channel {tap.channel!r} is tapped twice; list all its delays in one Tap")
             seen.add(tap.channel)
         for d in self.derived:
             if not isinstance(d, Derived):
-                raise ValueError(f"derived feature must be a Derived, got {d!r}")
+                raise SettingsError(f"derived feature must be a Derived, got {d!r}")
         names = self.feature_names
         duplicates = sorted({n for n in names if names.count(n) > 1})
         if duplicates:
-            raise ValueError(f"duplicate feature names {duplicates}")
+            raise SettingsError(f"duplicate feature names {duplicates}")
         if self.output in self.channels:
-            raise ValueError(f"output channel {self.output!r} is also an input channel")
+            raise SettingsError(f"output channel {self.output!r} is also an input channel")
 
     @property
     def channels(self) -> list[str]:

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+from nnfmu.errors import SettingsError
 from nnfmu.models.features import Derived, Difference, FeatureSpec, Highpass, SmoothSign, Stop, Tap
 from nnfmu.models.train import Architecture, TrainSettings
 
@@ -137,11 +138,11 @@ PRESETS: dict[str, Preset] = {
 
 
 def get_preset(name: str) -> Preset:
-    """The preset called `name`; ValueError listing the known names otherwise."""
+    """The preset called `name`; SettingsError listing the known names otherwise."""
     try:
         return PRESETS[name]
     except KeyError:
-        raise ValueError(f"unknown preset {name!r}; known presets: {', '.join(PRESETS)}") from None
+        raise SettingsError(f"unknown preset {name!r}; known presets: {', '.join(PRESETS)}") from None
 
 
 def custom_spec(

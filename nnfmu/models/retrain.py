@@ -17,6 +17,7 @@ import numpy as np
 import torch
 
 from nnfmu.data import Measurement
+from nnfmu.errors import SettingsError
 
 from .features import FeatureSpec
 from .lm import LMSettings, fit_lm
@@ -46,14 +47,14 @@ class RetrainSettings:
 
     def __post_init__(self) -> None:
         if self.max_epochs < 1 or self.patience < 1 or self.lm_max_samples < 1:
-            raise ValueError(f"max_epochs, patience and lm_max_samples must be >= 1, got {self.max_epochs}, "
-                             f"{self.patience} and {self.lm_max_samples}")
+            raise SettingsError(f"max_epochs, patience and lm_max_samples must be >= 1, got {self.max_epochs}, "
+                                f"{self.patience} and {self.lm_max_samples}")
         if not self.extra_hidden or self.extra_hidden[0] < 0 or any(
                 a >= b for a, b in zip(self.extra_hidden, self.extra_hidden[1:])):
-            raise ValueError(f"extra_hidden must be non-negative unit counts in rising order, got "
-                             f"{self.extra_hidden!r}")
+            raise SettingsError(f"extra_hidden must be non-negative unit counts in rising order, got "
+                                f"{self.extra_hidden!r}")
         if not (math.isfinite(self.lm_mu) and self.lm_mu > 0):
-            raise ValueError(f"lm_mu must be a positive damping, got {self.lm_mu!r}")
+            raise SettingsError(f"lm_mu must be a positive damping, got {self.lm_mu!r}")
 
 
 @dataclass(frozen=True)
@@ -191,7 +192,7 @@ def retrain(
         return warm_start(old, spec, m, train, validation, settings, label)
     if start == "fresh":
         return fresh_start(old, spec, m, train, validation, settings, label, hidden or _hidden(old))
-    raise ValueError(f"start must be 'warm' or 'fresh', got {start!r}")
+    raise SettingsError(f"start must be 'warm' or 'fresh', got {start!r}")
 
 
 def _hidden(model: TrainedModel) -> int:

@@ -12,7 +12,9 @@ from dataclasses import dataclass, field
 
 import torch
 
+from nnfmu.data.errors import DataError
 from nnfmu.data.measurement import Measurement
+from nnfmu.errors import SettingsError
 from nnfmu.models.features import FeatureSpec, Tap
 from nnfmu.models.train import Architecture, PreparedData, Progress, TrainSettings, fit_best, prepare_data
 
@@ -59,11 +61,11 @@ def candidate_taps(measurement: Measurement, output: str, delays: tuple[int, ...
             prefix = output[: -len(quantity)]
             break
     else:
-        raise ValueError(f"input selection knows force and torque outputs; {output!r} is neither")
+        raise SettingsError(f"input selection knows force and torque outputs; {output!r} is neither")
     taps = [Tap(prefix + k, delays) for k in kinematics if prefix + k in measurement]
     taps += [Tap(c) for c in EXTRA_CANDIDATES if c in measurement and c != output]
     if not taps:
-        raise ValueError(
+        raise DataError(
             f"{measurement.source}: none of the candidate inputs {[prefix + k for k in kinematics]}"
             " is in the measurement"
         )

@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nnfmu.errors import SettingsError
+
 
 @dataclass(frozen=True)
 class SplitFractions:
@@ -25,14 +27,14 @@ class SplitFractions:
         for name in ("train", "validation", "test"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise ValueError(f"split fraction {name} must be a number > 0, got {value!r}")
+                raise SettingsError(f"split fraction {name} must be a number > 0, got {value!r}")
         total = self.train + self.validation + self.test
         if abs(total - 1.0) > 1e-9:
-            raise ValueError(
+            raise SettingsError(
                 f"split fractions must add up to 1, got {self.train} + {self.validation} + {self.test} = {total}"
             )
         if isinstance(self.blocks, bool) or not isinstance(self.blocks, int) or self.blocks < 1:
-            raise ValueError(f"blocks must be an integer >= 1, got {self.blocks!r}")
+            raise SettingsError(f"blocks must be an integer >= 1, got {self.blocks!r}")
 
 
 @dataclass(frozen=True)
@@ -57,7 +59,7 @@ class Splits:
 def contiguous_splits(n: int, fractions: SplitFractions = SplitFractions(), min_samples: int = 8) -> Splits:
     """Cut n samples into `fractions.blocks` segments, each into consecutive train, validation and test ranges.
 
-    Raises ValueError naming the split when any of its ranges would get fewer than `min_samples` samples.
+    Raises SettingsError naming the split when any of its ranges would get fewer than `min_samples` samples.
     """
     parts: dict[str, list[slice]] = {"train": [], "validation": [], "test": []}
     edges = np.linspace(0, n, fractions.blocks + 1).round().astype(int)
@@ -72,7 +74,7 @@ def contiguous_splits(n: int, fractions: SplitFractions = SplitFractions(), min_
         }
         for name, (start, stop) in cuts.items():
             if stop - start < min_samples:
-                raise ValueError(
+                raise SettingsError(
                     f"{n} samples in {fractions.blocks} block(s) give the {name} split only {stop - start} samples per "
                     f"block (at least {min_samples} needed); use a longer record, fewer blocks or other split fractions"
                 )

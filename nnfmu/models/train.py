@@ -11,7 +11,9 @@ from typing import Literal
 import numpy as np
 import torch
 
+from nnfmu.data.errors import DataError
 from nnfmu.data.measurement import Measurement
+from nnfmu.errors import SettingsError
 from nnfmu.models.features import FeatureSpec
 from nnfmu.models.lm import LMSettings, fit_lm
 from nnfmu.models.metrics import SplitMetrics, max_abs_weight, split_metrics, weight_warning
@@ -41,13 +43,13 @@ class Architecture:
 
     def __post_init__(self) -> None:
         if self.kind not in ("mlp", "gru"):
-            raise ValueError(f"network kind must be 'mlp' or 'gru', got {self.kind!r}")
+            raise SettingsError(f"network kind must be 'mlp' or 'gru', got {self.kind!r}")
         hidden = tuple(self.hidden)
         if not hidden or any(isinstance(h, bool) or not isinstance(h, (int, np.integer)) or h < 1 for h in hidden):
-            raise ValueError(f"hidden sizes must be integers >= 1, got {self.hidden!r}")
+            raise SettingsError(f"hidden sizes must be integers >= 1, got {self.hidden!r}")
         if max(hidden) > MAX_HIDDEN:
-            raise ValueError(f"hidden size {max(hidden)} is more than the limit of {MAX_HIDDEN} units (component "
-                             f"networks need tens)")
+            raise SettingsError(f"hidden size {max(hidden)} is more than the limit of {MAX_HIDDEN} units (component "
+                                f"networks need tens)")
         object.__setattr__(self, "hidden", tuple(sorted(set(int(h) for h in hidden))))
 
 
@@ -79,16 +81,16 @@ class TrainSettings:
 
     def __post_init__(self) -> None:
         if self.optimizer not in ("auto", "lm", "adam", "lbfgs"):
-            raise ValueError(f"optimizer must be auto, lm, adam or lbfgs, got {self.optimizer!r}")
+            raise SettingsError(f"optimizer must be auto, lm, adam or lbfgs, got {self.optimizer!r}")
         for name in (
             "max_epochs", "patience", "restarts", "lm_max_samples", "batch_size", "chunk_length", "sequences_per_batch"
         ):
             if getattr(self, name) < 1:
-                raise ValueError(f"{name} must be >= 1, got {getattr(self, name)!r}")
+                raise SettingsError(f"{name} must be >= 1, got {getattr(self, name)!r}")
         if not 0 <= self.burn_in < self.chunk_length:
-            raise ValueError(f"burn_in must be in [0, chunk_length={self.chunk_length}), got {self.burn_in}")
+            raise SettingsError(f"burn_in must be in [0, chunk_length={self.chunk_length}), got {self.burn_in}")
         if not (self.hidden_tolerance >= 0 and self.learning_rate > 0):
-            raise ValueError("hidden_tolerance must be >= 0 and learning_rate > 0")
+            raise SettingsError("hidden_tolerance must be >= 0 and learning_rate > 0")
 
     def as_dict(self) -> dict[str, object]:
         d = asdict(self)
@@ -138,7 +140,7 @@ def prepare_data(measurement: Measurement, spec: FeatureSpec, fractions: SplitFr
     """Features of `spec` over the record, split in time, scaled with the training split's extremes."""
     missing = [c for c in (*spec.channels, spec.output) if c not in measurement]
     if missing:
-        raise ValueError(
+        raise DataError(
             f"{measurement.source}: channel(s) {missing} needed by the feature spec are missing"
             f" (has {measurement.names})"
         )
@@ -147,7 +149,7 @@ def prepare_data(measurement: Measurement, spec: FeatureSpec, fractions: SplitFr
     splits = contiguous_splits(len(target), fractions)
     train = splits.index("train")
     if np.ptp(target[train]) == 0:
-        raise ValueError(f"{measurement.source}: output channel {spec.output!r} is constant over the training split")
+        raise DataError(f"{measurement.source}: output channel {spec.output!r} is constant over the training split")
     feature_scaler = MinMaxScaler.fit(features[train])
     target_scaler = MinMaxScaler.fit(target[train])
     return PreparedData(
@@ -169,7 +171,7 @@ def restart_seed(seed: int, hidden: int, restart: int) -> int:
 def _resolve_optimizer(kind: NetworkKind, n_in: int, hidden: int, optimizer: Optimizer) -> str:
     if kind == "gru":
         if optimizer in ("lm", "lbfgs"):
-            raise ValueError(f"optimizer {optimizer!r} is for MLPs; a GRU trains with Adam ('adam' or 'auto')")
+            raise SettingsError(f"optimizer {optimizer!r} is for MLPs; a GRU trains with Adam ('adam' or 'auto')")
         return "adam"
     if optimizer != "auto":
         return optimizer

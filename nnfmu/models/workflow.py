@@ -100,7 +100,7 @@ def train_from_file(
 ) -> TrainOutcome:
     """Train on the rig file `data` as `request` says, export the verified step graph to `out`, return the outcome.
 
-    Raises nnfmu.data.DataError for bad data, ValueError for a bad request, ExportError if the graph does not
+    Raises nnfmu.data.DataError for bad data, SettingsError for a bad request, ExportError if the graph does not
     reproduce the torch model; nothing is written to `out` then.
     """
     started = time.perf_counter()

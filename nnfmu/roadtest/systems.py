@@ -22,6 +22,7 @@ import onnx
 from nnfmu.atomic import atomic_path
 from nnfmu.cosim.ssp import connect_by_name, write_ssd
 from nnfmu.data.rigs import BUSHING_CHANNELS
+from nnfmu.errors import NnfmuError
 from nnfmu.export.merge import merge_step_graphs
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
@@ -39,7 +40,7 @@ DAMPER_MODELS = ("damper-spline", "damper-hysteresis")
 BUSHING_MODELS = ("bushing-axial-force", "bushing-radial-force", "bushing-axial-torque", "bushing-conical-torque")
 
 
-class RoadTestError(ValueError):
+class RoadTestError(NnfmuError, ValueError):
     """A road test cannot be set up or run as asked; the message names the system, model file or setting."""
 
 

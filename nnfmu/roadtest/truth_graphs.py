@@ -24,12 +24,13 @@ import onnx
 from nnfmu.component import Component, Port, StatePort
 from nnfmu.data.rigs import BUSHING_CHANNELS, BushingChannelTruth, DamperTruth
 from nnfmu.data.rigs.damper import ValveSide
+from nnfmu.errors import NnfmuError
 from nnfmu.export.graph import GraphBuilder
 
 DAMPER_SUBSTEPS = 10  # RK4 steps per sample: 0.1 ms at 1 kHz, the monolithic reference's step
 
 
-class TruthGraphError(ValueError):
+class TruthGraphError(NnfmuError, ValueError):
     """The truth physics asked for cannot be written as a step graph; the message names the effect."""
 
 

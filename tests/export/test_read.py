@@ -3,6 +3,7 @@ and exports to the same graph again; graphs it cannot read back are refused nami
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 
@@ -14,6 +15,7 @@ from onnx import numpy_helper
 sys.path.insert(0, str(Path(__file__).parent))
 from test_export import MLP_SPEC, make_model, signals  # noqa: E402
 
+from nnfmu.component import METADATA_KEY, replace_metadata  # noqa: E402
 from nnfmu.export import ExportError, export_onnx, read_step_graph, run_step_graph  # noqa: E402
 from nnfmu.export.initializers import MLP_INITIALIZERS, SCALER_INITIALIZERS  # noqa: E402
 
@@ -58,3 +60,21 @@ def test_graphs_that_cannot_be_read_back_are_refused_naming_why(tmp_path):
     onnx.save(graph, str(tmp_path / "cut.onnx"))
     with pytest.raises(ExportError, match=f"initializer\\(s\\) {MLP_INITIALIZERS[0]} missing"):
         read_step_graph(tmp_path / "cut.onnx")
+
+
+def test_malformed_metadata_is_refused_as_an_export_error(tmp_path):
+    """A description or feature spec another tool (or a hand edit) broke is an ExportError naming the file and the
+    field, not a bare ValueError: the loop reports it as the user's input."""
+    path = tmp_path / "mlp.onnx"
+    export_onnx(make_model(MLP_SPEC, recurrent=False), path)
+    graph = onnx.load(str(path))
+    description = json.loads(next(p.value for p in graph.metadata_props if p.key == METADATA_KEY))
+    replace_metadata(graph, METADATA_KEY, "[1, 2]")
+    onnx.save(graph, str(tmp_path / "list.onnx"))
+    with pytest.raises(ExportError, match=r"list\.onnx: cannot read the component description: .*JSON list"):
+        read_step_graph(tmp_path / "list.onnx")
+    description["metadata"]["feature_spec"] = {"output": "force"}
+    replace_metadata(graph, METADATA_KEY, json.dumps(description))
+    onnx.save(graph, str(tmp_path / "spec.onnx"))
+    with pytest.raises(ExportError, match=r"spec\.onnx: cannot read the feature spec: .*'taps'"):
+        read_step_graph(tmp_path / "spec.onnx")

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.signal import lfilter
 
+from ...errors import SettingsError
 from .options import BUSHING_EFFECTS, DEFAULT_EFFECTS
 
 IWAN_ELEMENTS = 12  # Jenkins elements approximating Berg's friction curve
@@ -40,9 +41,9 @@ class BushingChannelParams:
 
     def __post_init__(self) -> None:
         if len(self.maxwell_stiffness) != len(self.maxwell_time) or min(self.maxwell_time, default=1.0) <= 0:
-            raise ValueError(f"each Maxwell branch needs a stiffness and a positive time constant; got {self}")
+            raise SettingsError(f"each Maxwell branch needs a stiffness and a positive time constant; got {self}")
         if not (self.friction_max > 0 and self.friction_x2 > 0):
-            raise ValueError(f"Berg friction needs friction_max > 0 and friction_x2 > 0; got {self}")
+            raise SettingsError(f"Berg friction needs friction_max > 0 and friction_x2 > 0; got {self}")
 
     def describe(self) -> dict:
         pos, frc = self.position_unit, self.force_unit
@@ -114,7 +115,7 @@ class BushingChannelTruth:
     def __post_init__(self) -> None:
         unknown = [e for e in self.effects if e not in BUSHING_EFFECTS]
         if unknown:
-            raise ValueError(f"unknown bushing effect(s) {unknown}; valid: {', '.join(BUSHING_EFFECTS)}")
+            raise SettingsError(f"unknown bushing effect(s) {unknown}; valid: {', '.join(BUSHING_EFFECTS)}")
         k, slip = iwan_elements(self.params.friction_max, self.params.friction_x2)
         object.__setattr__(self, "iwan", (k[: self.n_friction], slip[: self.n_friction]))
         maxwell = (np.asarray(self.params.maxwell_stiffness[: self.n_maxwell], dtype=float),

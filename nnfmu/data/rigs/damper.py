@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...errors import SettingsError
 from .options import DAMPER_EFFECTS, DEFAULT_EFFECTS
 from .parameters import param
 
@@ -34,7 +35,7 @@ class ValveSide:
 
     def __post_init__(self) -> None:
         if not (self.c_low > self.c_high > 0 and self.knee_velocity > 0 and self.rounding > 0):
-            raise ValueError(
+            raise SettingsError(
                 f"a digressive valve needs c_low > c_high > 0, knee_velocity > 0 and rounding > 0; got {self}"
             )
 
@@ -107,7 +108,7 @@ class DamperTruth:
     def __post_init__(self) -> None:
         unknown = [e for e in self.effects if e not in DAMPER_EFFECTS]
         if unknown:
-            raise ValueError(f"unknown damper effect(s) {unknown}; valid: {', '.join(DAMPER_EFFECTS)}")
+            raise SettingsError(f"unknown damper effect(s) {unknown}; valid: {', '.join(DAMPER_EFFECTS)}")
 
     @property
     def state_names(self) -> tuple[str, ...]:

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...errors import SettingsError
 from .damper import DamperParams, DamperTruth
 from .excitation import Motion, SineLevel, SpectrumShape, random_motion, sine_series, sine_series_cycles
 from .sensors import Sensor, record
@@ -83,23 +84,23 @@ class DamperDyno:
         share = 1.0 if excitation == "sine" else self.sine_share
         try:
             cycles = sine_series_cycles(levels, share * duration, self.rest)
-        except ValueError as err:
+        except SettingsError as err:
             where = f"damper {excitation!r} excitation of {duration:g} s"
-            raise ValueError(f"{where}: {err} ({share:.0%} of the duration)") from None
+            raise SettingsError(f"{where}: {err} ({share:.0%} of the duration)") from None
         sine, sine_described = sine_series(levels, cycles, rate, self.rest)
         parts = [{"type": "sine series", "levels": sine_described, "start_s": 0.0, "end_s": len(sine) / rate}]
         if excitation == "sine":
             return sine.fit(n), parts
         remaining = n - len(sine)
         if remaining < 2 * self.fade * rate:
-            raise ValueError(
+            raise SettingsError(
                 f"damper 'lab' excitation of {duration:g} s leaves {remaining / rate:g} s for the random part "
                 f"after the sine series; at least {2 * self.fade:g} s are needed"
             )
         if excitation == "vehicle":
             if derived is None:
-                raise ValueError("the damper's 'vehicle' excitation needs a stroke derived from a vehicle result "
-                                 "(nnfmu rig damper --drive-from RESULT --element NAME)")
+                raise SettingsError("the damper's 'vehicle' excitation needs a stroke derived from a vehicle result "
+                                    "(nnfmu rig damper --drive-from RESULT --element NAME)")
             motion, described = derived(rate, remaining)
         else:
             motion, described = self.random(rate, remaining, rng)

@@ -12,6 +12,8 @@ from typing import Protocol
 
 import numpy as np
 
+from ...errors import SettingsError
+
 RAMP_CYCLES = 0.5  # raised-cosine amplitude ramp at each end of a sine level, in cycles
 MIN_SINE_CYCLES = 3  # cycles per sine level; with the ramps at least two full-amplitude cycles remain
 
@@ -113,7 +115,7 @@ def sine_series_cycles(levels: list[SineLevel], budget: float, rest: float) -> i
     cycles = int((budget - rest * len(levels)) / per_cycle)
     if cycles < MIN_SINE_CYCLES:
         needed = MIN_SINE_CYCLES * per_cycle + rest * len(levels)
-        raise ValueError(f"the sine series needs at least {needed:.3g} s, only {budget:.3g} s are available for it")
+        raise SettingsError(f"the sine series needs at least {needed:.3g} s, only {budget:.3g} s are available for it")
     return cycles
 
 
@@ -161,7 +163,7 @@ def random_motion(shape: Spectrum, rate: float, n: int, rng: np.random.Generator
     x, v, a = (np.fft.irfft(coeff * jw**k, n) for k in range(3))
     rms = float(np.sqrt(np.mean(x**2)))
     if rms == 0:
-        raise ValueError(f"the target spectrum {shape.describe()} has no frequency on a {n / rate:g} s grid")
+        raise SettingsError(f"the target spectrum {shape.describe()} has no frequency on a {n / rate:g} s grid")
     t = np.arange(n) / rate
     w, dw, ddw = _ramp(t, fade, n / rate)
     return Motion(w * x, dw * x + w * v, ddw * x + 2 * dw * v + w * a).scaled(1 / rms)

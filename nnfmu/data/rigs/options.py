@@ -5,6 +5,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ...errors import SettingsError
+
 KINDS = ("damper", "bushing")
 EXCITATIONS = ("lab", "random", "sine", "vehicle")
 VEHICLE_EXCITATION = "vehicle"  # a drive derived from a vehicle result (`vehicle_rig`), never self-made
@@ -45,22 +47,22 @@ class RigOptions:
 
 
 def check_kind(kind: str) -> str:
-    """Return `kind` if it is a known rig kind, else raise ValueError naming the valid ones."""
+    """Return `kind` if it is a known rig kind, else raise SettingsError naming the valid ones."""
     if kind not in KINDS:
-        raise ValueError(f"unknown rig kind {kind!r}; valid kinds: {', '.join(KINDS)}")
+        raise SettingsError(f"unknown rig kind {kind!r}; valid kinds: {', '.join(KINDS)}")
     return kind
 
 
 def resolve_effects(kind: str, effects: tuple[str, ...] | None) -> tuple[str, ...]:
-    """The effects switched on for `kind`, in canonical order; unknown names raise ValueError naming the valid ones."""
+    """The effects switched on for `kind`, in canonical order; an unknown name: SettingsError naming the valid ones."""
     valid = EFFECTS[check_kind(kind)]
     if effects is None:
         return DEFAULT_EFFECTS[kind]
     if isinstance(effects, str):
-        raise ValueError(f"effects must be a tuple of names, not the string {effects!r}")
+        raise SettingsError(f"effects must be a tuple of names, not the string {effects!r}")
     unknown = [name for name in effects if name not in valid]
     if unknown:
-        raise ValueError(
+        raise SettingsError(
             f"unknown {kind} effect(s) {', '.join(map(repr, unknown))}; valid {kind} effects: {', '.join(valid)}"
         )
     return tuple(name for name in valid if name in effects)
@@ -72,25 +74,25 @@ def resolve_duration(kind: str, options: RigOptions) -> float:
 
 
 def check_options(kind: str, options: RigOptions) -> None:
-    """Raise ValueError naming the bad option value, else return None."""
+    """Raise SettingsError naming the bad option value, else return None."""
     check_kind(kind)
     resolve_effects(kind, options.effects)
     if options.excitation not in EXCITATIONS:
-        raise ValueError(f"unknown excitation {options.excitation!r}; valid excitations: {', '.join(EXCITATIONS)}")
+        raise SettingsError(f"unknown excitation {options.excitation!r}; valid excitations: {', '.join(EXCITATIONS)}")
     if not (math.isfinite(options.sample_rate) and options.sample_rate >= MIN_SAMPLE_RATE):
-        raise ValueError(
+        raise SettingsError(
             f"sample_rate must be at least {MIN_SAMPLE_RATE:g} Hz (the drives reach 40 Hz), got {options.sample_rate!r}"
         )
     duration = resolve_duration(kind, options)
     if not (math.isfinite(duration) and duration * options.sample_rate >= 16):
-        raise ValueError(
+        raise SettingsError(
             f"duration {duration!r} s gives fewer than 16 samples at {options.sample_rate:g} Hz; choose a longer one"
         )
     samples = duration * options.sample_rate
     if samples > MAX_SAMPLES:
-        raise ValueError(f"duration {duration:g} s at {options.sample_rate:g} Hz gives {samples:.4g} samples, more "
-                         f"than the limit of {MAX_SAMPLES} per record; record in shorter parts")
+        raise SettingsError(f"duration {duration:g} s at {options.sample_rate:g} Hz gives {samples:.4g} samples, more "
+                            f"than the limit of {MAX_SAMPLES} per record; record in shorter parts")
     if not (math.isfinite(options.noise) and options.noise >= 0):
-        raise ValueError(f"noise must be a non-negative multiplier of realistic sensor noise, got {options.noise!r}")
+        raise SettingsError(f"noise must be a non-negative multiplier of realistic sensor noise, got {options.noise!r}")
     if not isinstance(options.seed, int) or options.seed < 0:
-        raise ValueError(f"seed must be a non-negative integer, got {options.seed!r}")
+        raise SettingsError(f"seed must be a non-negative integer, got {options.seed!r}")

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from ...atomic import atomic_path
+from ...errors import SettingsError
 from ..errors import DataError
 from ..measurement import Measurement
 from ..save import save_measurement
@@ -34,12 +35,12 @@ class RigRun:
 def simulate_rig(kind: str, options: RigOptions, params: DamperParams | BushingParams | None = None) -> RigRun:
     """Simulate `kind` ("damper" or "bushing") under `options`; `params` (default: realistic defaults) are the truth.
 
-    Raises ValueError naming an unknown kind, effect, excitation or an unusable option value.
+    Raises SettingsError naming an unknown kind, effect, excitation or an unusable option value.
     """
     check_options(kind, options)
     if options.excitation == VEHICLE_EXCITATION:
-        raise ValueError(f"a vehicle-derived {kind} drive needs the vehicle's result: use simulate_vehicle_rig "
-                         f"(nnfmu rig {kind} --drive-from RESULT --element NAME)")
+        raise SettingsError(f"a vehicle-derived {kind} drive needs the vehicle's result: use simulate_vehicle_rig "
+                            f"(nnfmu rig {kind} --drive-from RESULT --element NAME)")
     effects = resolve_effects(kind, options.effects)
     duration = resolve_duration(kind, options)
     n = int(round(duration * options.sample_rate))

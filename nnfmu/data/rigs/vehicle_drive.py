@@ -31,6 +31,7 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 from scipy.signal import welch
 
+from ...errors import SettingsError
 from ..errors import DataError
 from ..measurement import Measurement
 from .bushing_rig import CHANNELS
@@ -63,15 +64,15 @@ class DriveDesign:
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.margin) and self.margin >= 1.0):
-            raise ValueError("margin must be a number >= 1 (the drive's peaks over the simulated ones), "
-                             f"got {self.margin!r}")
+            raise SettingsError("margin must be a number >= 1 (the drive's peaks over the simulated ones), "
+                                f"got {self.margin!r}")
         low, high = self.band
         if not (math.isfinite(low) and math.isfinite(high) and 0 <= low < high):
-            raise ValueError(f"band must be (low, high) [Hz] with 0 <= low < high, got {self.band!r}")
+            raise SettingsError(f"band must be (low, high) [Hz] with 0 <= low < high, got {self.band!r}")
         if not (math.isfinite(self.fade) and self.fade > 0):
-            raise ValueError(f"fade must be a positive time [s], got {self.fade!r}")
+            raise SettingsError(f"fade must be a positive time [s], got {self.fade!r}")
         if not (math.isfinite(self.headroom) and self.headroom >= 1.0):
-            raise ValueError(f"headroom must be a number >= 1, got {self.headroom!r}")
+            raise SettingsError(f"headroom must be a number >= 1, got {self.headroom!r}")
 
 
 @dataclass(frozen=True)
@@ -262,7 +263,7 @@ def design_vehicle_drive(source: Measurement, elements: Sequence[str], rate: flo
     """
     elements = tuple(elements)
     if not elements:
-        raise ValueError("name at least one bushing element (e.g. bushing_fl_front) to derive the drive from")
+        raise SettingsError("name at least one bushing element (e.g. bushing_fl_front) to derive the drive from")
     streams = np.random.SeedSequence([seed, 2]).spawn(len(CHANNELS))
     motions: dict[str, Motion] = {}
     channels: dict[str, ChannelDesign] = {}
@@ -278,10 +279,10 @@ def design_damper_drive(source: Measurement, elements: Sequence[str], rate: floa
     series) and fades to the simulated working point. DataError names a missing, misunited or still stroke."""
     elements = tuple(elements)
     if not elements:
-        raise ValueError("name at least one damper element (e.g. damper_fl) to derive the drive from")
+        raise SettingsError("name at least one damper element (e.g. damper_fl) to derive the drive from")
     if design.band[1] >= rate / 2:
-        raise ValueError(f"band {design.band[0]:g}-{design.band[1]:g} Hz reaches the Nyquist frequency of "
-                         f"{rate:g} Hz sampling; sample faster or narrow the band")
+        raise SettingsError(f"band {design.band[0]:g}-{design.band[1]:g} Hz reaches the Nyquist frequency of "
+                            f"{rate:g} Hz sampling; sample faster or narrow the band")
     simulated = {element: damper_stroke(source, element) for element in elements}
     rng = np.random.default_rng(np.random.SeedSequence([seed, 3]))
     motion, channel = derive_channel(source, simulated, "displacement", "m", rate, n, rng,

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from nnfmu.errors import NnfmuError
 
-class DriveError(ValueError):
+
+class DriveError(NnfmuError, ValueError):
     """Bad drive-generator settings or events; the message names the setting or event and its value."""

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+from nnfmu.errors import NnfmuError
 
-class VehicleModelError(ValueError):
+
+class VehicleModelError(NnfmuError, ValueError):
     """A vehicle model cannot be built or run as asked; the message names the port, component or value."""
 
 

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+from nnfmu.errors import NnfmuError
+
 FALLBACK_HINT = "build this graph with `--backend pythonfmu` instead"
 
 
-class UnsupportedGraphError(ValueError):
+class UnsupportedGraphError(NnfmuError, ValueError):
     """A graph, node or tensor the native backend cannot translate to C; names the op and node where known."""
 
     def __init__(self, reason: str, *, op_type: str | None = None, node_name: str | None = None) -> None:

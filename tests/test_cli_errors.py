@@ -1,0 +1,78 @@
+"""The command line reports an NnfmuError as one `error:` line with exit status 2 and nothing else: a programming
+error inside a command (a plain ValueError included) keeps its traceback instead of passing for the user's mistake."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import onnx
+import pytest
+from typer.testing import CliRunner
+
+from nnfmu.cli import app
+from nnfmu.component import METADATA_KEY, replace_metadata
+from nnfmu.cosim.linear_damper import linear_damper_graph
+from nnfmu.errors import SettingsError
+
+runner = CliRunner()
+
+# (command line with {tmp} for the test's folder, the function the command calls: module, name)
+COMMANDS = {
+    "rig": (["rig", "damper", "--out", "{tmp}/d.csv"], ("nnfmu.data.rigs", "write_rig")),
+    "train": (["train", "{tmp}/d.csv", "--preset", "damper-spline", "--out", "{tmp}/m.onnx"],
+              ("nnfmu.models.workflow", "train_from_file")),
+    "cosim": (["cosim", "{tmp}/system", "--drive", "{tmp}/drive.csv", "--out", "{tmp}/r.csv"],
+              ("nnfmu.cosim.master", "run_cosim")),
+    "validate": (["validate", "{tmp}/a.csv", "{tmp}/b.csv", "--out", "{tmp}/report"],
+                 ("nnfmu.validate", "validate_files")),
+    "data check": (["data", "check", "{tmp}/d.csv"], ("nnfmu.data", "load_measurement")),
+    "build": (["build", "{tmp}/m.onnx", "--out", "{tmp}/m.fmu"], ("nnfmu.fmu.build", "build_fmu")),
+}
+
+
+def invoke_raising(monkeypatch: pytest.MonkeyPatch, tmp_path: Path, command: str, error: BaseException):
+    """Run `command` with the function it calls replaced by one raising `error`."""
+    args, (module, name) = COMMANDS[command]
+
+    def broken(*_args: object, **_kwargs: object) -> None:
+        raise error
+
+    monkeypatch.setattr(f"{module}.{name}", broken)
+    return runner.invoke(app, [a.format(tmp=tmp_path) for a in args])
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+@pytest.mark.parametrize("error", [ZeroDivisionError("division by zero"), ValueError("a bug's message")],
+                         ids=["ZeroDivisionError", "ValueError"])
+def test_a_programming_error_inside_a_command_propagates(monkeypatch: pytest.MonkeyPatch, tmp_path: Path,
+                                                         command: str, error: Exception) -> None:
+    result = invoke_raising(monkeypatch, tmp_path, command, error)
+    assert result.exception is error, result.output
+    assert result.exit_code != 2
+    assert "error:" not in result.output
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_an_nnfmu_error_inside_a_command_is_one_error_line(monkeypatch: pytest.MonkeyPatch, tmp_path: Path,
+                                                           command: str) -> None:
+    """The control: the same place raising an NnfmuError ends in exit status 2 and its message, no traceback."""
+    result = invoke_raising(monkeypatch, tmp_path, command, SettingsError("--knob 7 is out of range"))
+    assert result.exit_code == 2, result.output
+    assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
+    assert result.output.strip() == "error: --knob 7 is out of range"
+
+
+def test_loop_on_a_model_with_malformed_metadata_is_one_error_line(tmp_path: Path) -> None:
+    """A user's file that once surfaced as a bare ValueError (and a traceback) is reported as the user's input."""
+    model = linear_damper_graph(2400.0, name="damper")
+    replace_metadata(model, METADATA_KEY, "[1, 2]")
+    onnx.save(model, tmp_path / "odd.onnx")
+    data = tmp_path / "dyno.csv"
+    assert runner.invoke(app, ["rig", "damper", "--out", str(data), "--duration", "20",
+                               "--excitation", "random"]).exit_code == 0
+    result = runner.invoke(app, ["loop", str(data), "--model", str(tmp_path / "odd.onnx"), "--out",
+                                 str(tmp_path / "loop")])
+    assert result.exit_code == 2, result.output
+    assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
+    assert result.output.startswith("error: ") and "odd.onnx: cannot read the component description" in result.output
+    assert not (tmp_path / "loop").exists()
