@@ -4,9 +4,8 @@ The files a case needs arrive as bytes keyed by SHA-256 and are written once per
 Dask worker's local directory, removed with the worker; else a temporary folder removed at exit), each under its
 hash and its original name, so FMU and drive error messages name the user's file. FMU instances are kept in a
 per-process pool and reset between cases (nnfmu.cosim.instances): opening an FMU costs about as much as a short
-quarter-car case. Whatever goes wrong inside the
-case (a diverging coupling, a bad drive file, an FMU error, a missing channel) becomes a failed outcome with its
-message; the caller records it and the campaign goes on.
+quarter-car case. Whatever goes wrong inside the case (a diverging coupling, a bad drive file, an FMU error, a
+missing channel) becomes a failed outcome with its message; the caller records it and the campaign goes on.
 """
 
 from __future__ import annotations
