@@ -23,6 +23,13 @@ METADATA_KEY = "nnfmu.component"
 FORMAT_VERSION = 1
 # Sample periods a component may have [s]: shorter ones would make an FMU evaluate billions of samples per second.
 SAMPLE_PERIOD_RANGE = (1e-9, 1e4)
+PERIOD_TOLERANCE = 1e-6  # relative: a record's fitted period vs a model's (8-digit stamps resolve ~1e-8 of it)
+
+
+def same_period(a: float, b: float) -> bool:
+    """Whether two sample periods [s] name the same clock (within PERIOD_TOLERANCE, relative): the one test every
+    comparison of a record's period with a model's, or of two models', uses."""
+    return abs(a - b) <= PERIOD_TOLERANCE * max(abs(a), abs(b))
 # Most ports (tensor elements) one graph from another tool may have: each becomes an FMU variable, so a declared
 # input of a billion elements is refused before any port is made.
 MAX_PORTS = 100_000

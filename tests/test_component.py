@@ -62,3 +62,11 @@ def test_the_command_line_prints_one_error_line(tmp_path: Path) -> None:
     result = CliRunner().invoke(app, ["build", str(tmp_path / "odd.onnx"), "--out", str(tmp_path / "odd.fmu")])
     assert result.exit_code == 2 and result.output.startswith("error: "), result.output
     assert result.exception is None or isinstance(result.exception, SystemExit)
+
+
+def test_one_period_test_serves_records_and_models():
+    from nnfmu.component import PERIOD_TOLERANCE, same_period
+
+    assert same_period(1e-3, 1e-3 * (1 + 0.5 * PERIOD_TOLERANCE)) and same_period(1e-3 * (1 + 0.5e-6), 1e-3)
+    assert not same_period(1e-3, 1e-3 * (1 + 2 * PERIOD_TOLERANCE))
+    assert not same_period(1e-3, 1.0 / 1024)  # 1 kHz is not 1024 Hz

@@ -12,11 +12,11 @@ from pathlib import Path
 
 import numpy as np
 
+from nnfmu.component import same_period
 from nnfmu.cosim.slave import FmuSlave
 from nnfmu.data.measurement import Measurement
 from nnfmu.errors import NnfmuError
 
-PERIOD_TOLERANCE = 1e-6  # relative mismatch allowed between the FMU's sample period and the measurement's
 
 
 class ReplayError(NnfmuError, ValueError):
@@ -50,7 +50,7 @@ def replay_fmu(
         dt = measurement.sample_period
         experiment = slave.description.defaultExperiment
         period = float(experiment.stepSize) if experiment is not None and experiment.stepSize else None
-        if period is not None and abs(period - dt) > PERIOD_TOLERANCE * period:
+        if period is not None and not same_period(period, dt):
             raise ReplayError(f"{measurement.source}: sample period {dt:.9g} s differs from the period {period:.9g} s "
                               f"{fmu_path} was trained at; resample the data first")
         outputs = [name for name in slave.names("output") if slave.variables[name].type in ("Real", "Float64")]

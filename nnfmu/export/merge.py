@@ -11,21 +11,19 @@ Needs only onnx and `nnfmu.component` (no torch).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
 import numpy as np
 import onnx
 from onnx import TensorProto, helper, numpy_helper
 
-from nnfmu.component import Component, Port, StatePort
+from nnfmu.component import Component, Port, StatePort, same_period
 from nnfmu.export.errors import ExportError
 from nnfmu.export.graph import IR_VERSION, OPSET
 from nnfmu.reference_stimulus import ReferenceStimulus, merge_stimuli
 
 STATE = "state"
 STATE_NEXT = "state_next"
-PERIOD_TOLERANCE = 1e-12  # relative difference of sample periods that still counts as equal
 
 
 class MergeError(ExportError):
@@ -43,7 +41,7 @@ def _sample_period(components: Sequence[Component]) -> float | None:
     first = periods[0]
     for component, period in zip(components, periods):
         same = (period is None and first is None) or (
-            period is not None and first is not None and math.isclose(period, first, rel_tol=PERIOD_TOLERANCE))
+            period is not None and first is not None and same_period(period, first))
         if not same:
             listed = ", ".join(f"{c.name}: {p!r} s" for c, p in zip(components, periods))
             raise MergeError(f"sample periods differ ({listed}); merged networks must share one sample clock")

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from nnfmu.atomic import staging_dir
+from nnfmu.component import same_period
 from nnfmu.cosim.replay import replay_fmu
 from nnfmu.data import DataError, Measurement, check_measurement, load_measurement
 from nnfmu.export import ExportError, export_onnx, read_step_graph
@@ -36,7 +37,6 @@ from .loop_report import write_loop_report
 from .loop_settings import LoopError, LoopSettings
 from .trials import TRIAL_TIE, nrmse, retrain_rivals, trial_group
 
-PERIOD_TOLERANCE = 1e-6  # relative sample-period mismatch accepted between data and model
 
 
 @dataclass
@@ -165,7 +165,7 @@ def _check(m: Measurement, model: TrainedModel, model_path: Path, output: str, s
     except DataError as err:
         raise LoopError(f"unusable data: {err}") from None
     dt, period = m.sample_period, model.sample_period
-    if abs(dt - period) > PERIOD_TOLERANCE * period:
+    if not same_period(dt, period):
         raise LoopError(
             f"{m.source}: sample period {dt:.9g} s ({1 / dt:.6g} Hz) differs from the {period:.9g} s ({1 / period:.6g} "
             f"Hz) {model_path.name} was trained at; its delay lines and filters count samples, so resample the data "
