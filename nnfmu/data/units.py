@@ -2,17 +2,18 @@
 
 A channel's quantity comes from its *base name*: the longest `_`-separated tail of the name that is a known base
 (`displacement`, `velocity`, `acceleration`, `force`, `torque`, `rotation`, `angle`, `angular_velocity`,
-`angular_acceleration`, `temperature`, `pressure`, `mass`, `time`), compared case-insensitively; whatever precedes it
-is the direction prefix (`axial_`, `conical_`, `front_left_damper_`, ...). A unit is read as the channel's quantity
-says: `g` is a gram for a `mass` channel and standard gravity for an `acceleration` channel, `lb` a pound-mass or a
-pound-force. A channel whose name has no known base keeps any known unit and is converted by that unit's own quantity
-(`supply [bar]` -> Pa, `stroke [mm]` -> m, `gain [-]` -> 1); a unit of several quantities (AMBIGUOUS_UNITS: `g`, `lb`)
+`angular_acceleration`, `temperature`, `pressure`, `mass`, `time`, `voltage`, `current`), compared
+case-insensitively; whatever precedes it is the direction prefix (`axial_`, `conical_`, `front_left_damper_`, ...).
+A unit is read as the channel's quantity says: `g` is a gram for a `mass` channel and standard gravity for an
+`acceleration` channel, `lb` a pound-mass or a pound-force. A channel whose name has no known base keeps any known
+unit and is converted by that unit's own quantity (`supply [bar]` -> Pa, `stroke [mm]` -> m, `gain [-]` -> 1,
+`command [mV]` -> V, `valve [%]` -> 1 as a fraction); a unit of several quantities (AMBIGUOUS_UNITS: `g`, `lb`)
 is refused there, since nothing tells which is meant.
 
 Unit spellings are case-sensitive (`K` is kelvin, `kN` is kilonewton); before lookup surrounding whitespace is
 stripped, spaces around `/` and `^` are dropped, `*`, `·` and other inner spaces become `.` (so `N*m`, `N m`, `N·m`
 all read as `N.m`), `²` becomes `^2` and `µ`/`μ` become `u`. SI unit strings: m, m/s, m/s^2, N, N.m, rad, rad/s,
-rad/s^2, K, s, Pa, kg, 1.
+rad/s^2, K, s, Pa, kg, V, A, 1 (the command signals of semi-active dampers come in V or A, valve openings in %).
 """
 
 from __future__ import annotations
@@ -119,7 +120,9 @@ QUANTITIES: dict[str, Quantity] = {
             ),
         ),
         Quantity("mass", "kg", _linear({"kg": 1.0, "g": 1e-3, "mg": 1e-6, "lbm": POUND_MASS, "lb": POUND_MASS})),
-        Quantity("dimensionless", "1", _linear({"1": 1.0, "-": 1.0})),
+        Quantity("voltage", "V", _linear({"V": 1.0, "mV": 1e-3, "uV": 1e-6, "kV": 1e3})),
+        Quantity("current", "A", _linear({"A": 1.0, "mA": 1e-3, "uA": 1e-6})),
+        Quantity("dimensionless", "1", _linear({"1": 1.0, "-": 1.0, "%": 1e-2})),
     )
 }
 
@@ -138,6 +141,8 @@ CHANNEL_BASES: dict[str, str] = {
     "pressure": "pressure",
     "mass": "mass",
     "time": "time",
+    "voltage": "voltage",
+    "current": "current",
 }
 
 SI_UNITS: frozenset[str] = frozenset(q.si for q in QUANTITIES.values())

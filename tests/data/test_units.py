@@ -46,6 +46,11 @@ LBF = 0.45359237 * 9.80665  # N: one pound mass under standard gravity, both exa
         ("payload_mass", "lb", [1.0], [0.45359237], "kg"),
         ("force", "lb", [1.0], [LBF], "N"),
         ("body_acceleration", "g", [1.0], [9.80665], "m/s^2"),
+        ("voltage", "V", [2.5], [2.5], "V"),  # a semi-active damper's command, as an MR-damper record has it
+        ("coil_voltage", "mV", [250.0], [0.25], "V"),
+        ("valve_current", "mA", [1500.0], [1.5], "A"),
+        ("command", "kV", [0.002], [2.0], "V"),  # no base name: the unit's own quantity
+        ("valve_opening", "%", [50.0, 100.0], [0.5, 1.0], "1"),
     ],
 )
 def test_to_si_matches_hand_values(channel, unit, values, expected, si):
@@ -112,3 +117,8 @@ def test_unknown_unit_of_unknown_channel_lists_all_units():
 def test_units_are_case_sensitive():
     with pytest.raises(DataError, match="unknown force unit 'kn'"):
         to_si(np.ones(1), "kn", "force")
+
+
+def test_a_voltage_channel_refuses_a_current_unit():
+    with pytest.raises(DataError, match=r"channel 'coil_voltage' is a voltage but its unit 'mA' is a current"):
+        to_si(np.array([1.0]), "mA", "coil_voltage")
