@@ -9,7 +9,7 @@ import numpy as np
 from .errors import DataError
 from .measurement import Measurement
 from .timebase import Resolution, check_uniform
-from .units import SI_UNITS, channel_quantity
+from .units import SI_UNITS, channel_quantity, kept_unit
 
 MIN_TEMPERATURE = 150.0  # K; rig temperatures lie far above (-123 degC), a value below is degC or degF labelled K
 
@@ -55,9 +55,10 @@ def _check_layout(m: Measurement, where: str) -> None:
             raise DataError(
                 f"{where}: channel {name!r} is a {quantity.name} in {unit!r}; it must be in {quantity.si!r}"
             )
-        if quantity is None and unit not in SI_UNITS:
+        if quantity is None and unit not in SI_UNITS and not kept_unit(unit):
             raise DataError(
-                f"{where}: channel {name!r} has unit {unit!r}, not one of the SI units {sorted(SI_UNITS)}"
+                f"{where}: channel {name!r} has unit {unit!r}, not one of the SI units {sorted(SI_UNITS)} nor a unit "
+                "nnfmu keeps as declared"
             )
 
 

@@ -17,7 +17,7 @@ from .measurement import Measurement
 from .mts_io import is_mts_export, read_mts
 from .raw import RawTable
 from .timebase import Resolution, uniform_time
-from .units import to_si
+from .units import SI_UNITS, to_si
 
 READERS: dict[str, Callable[[Path], RawTable]] = {".csv": read_csv, ".mf4": read_mdf, ".mdf": read_mdf}
 MTS_SUFFIXES = (".dat", ".txt")  # read only as MTS 793 exports; a `.csv` starting `MTS793|` is one too
@@ -35,7 +35,11 @@ def to_measurement(raw: RawTable, source: str) -> tuple[Measurement, Resolution 
     units = {}
     for name, values in raw.channels.items():
         channels[name], units[name] = to_si(values, raw.units[name], name, source)
-    measurement = Measurement(time=time, channels=channels, units=units, source=source, notes=dict(raw.notes))
+    notes = dict(raw.notes)
+    kept = [f"{name} [{units[name]}]" for name in channels if units[name] not in SI_UNITS]
+    if kept:
+        notes["units"] = f"kept as declared (quantities nnfmu does not convert): {', '.join(kept)}"
+    measurement = Measurement(time=time, channels=channels, units=units, source=source, notes=notes)
     return measurement, resolution
 
 

@@ -8,7 +8,9 @@ A unit is read as the channel's quantity says: `g` is a gram for a `mass` channe
 `acceleration` channel, `lb` a pound-mass or a pound-force. A channel whose name has no known base keeps any known
 unit and is converted by that unit's own quantity (`supply [bar]` -> Pa, `stroke [mm]` -> m, `gain [-]` -> 1,
 `command [mV]` -> V, `valve [%]` -> 1 as a fraction); a unit of several quantities (AMBIGUOUS_UNITS: `g`, `lb`)
-is refused there, since nothing tells which is meant.
+is refused there, since nothing tells which is meant. Such a channel with a unit nnfmu does not know either (`coil
+[ohm]`, `pump [1/min]`) keeps the unit as declared, so that it never blocks the channels nnfmu needs; only a unit text
+that is no unit at all (`[3x]`, `[?]`: UNIT_SYNTAX) is refused.
 
 Unit spellings are case-sensitive (`K` is kelvin, `kN` is kilonewton); before lookup surrounding whitespace is
 stripped, spaces around `/` and `^` are dropped, `*`, `·` and other inner spaces become `.` (so `N*m`, `N m`, `N·m`
@@ -160,6 +162,8 @@ def _owners() -> dict[str, tuple[Quantity, ...]]:
 _UNIT_QUANTITIES = _owners()
 AMBIGUOUS_UNITS: frozenset[str] = frozenset(s for s, owners in _UNIT_QUANTITIES.items() if len(owners) > 1)
 
+# A unit text: a letter (or %, °, Ω) then letters, digits and the operators . / ^ -, after `normalise_unit`.
+UNIT_SYNTAX = re.compile(r"[A-Za-z%°Ω1][A-Za-z0-9%°Ω.^/\-]*")
 _AROUND_DIVISION = re.compile(r"\s*([/^])\s*")
 _PRODUCT = re.compile(r"\s*[*·]\s*|\s+")
 
@@ -168,6 +172,12 @@ def normalise_unit(unit: str) -> str:
     """The lookup spelling of a unit text (see the module docstring): `' N * m '` -> `'N.m'`, `'m/s²'` -> `'m/s^2'`."""
     text = unit.strip().replace("²", "^2").replace("µ", "u").replace("μ", "u")
     return _PRODUCT.sub(".", _AROUND_DIVISION.sub(r"\1", text))
+
+
+def kept_unit(unit: str) -> bool:
+    """Whether a channel of unknown quantity keeps `unit` as declared: a well-formed unit text nnfmu does not know."""
+    spelling = normalise_unit(unit)
+    return spelling not in _UNIT_QUANTITIES and UNIT_SYNTAX.fullmatch(spelling) is not None
 
 
 def unit_quantities(unit: str) -> tuple[Quantity, ...]:
@@ -215,8 +225,9 @@ def to_si(values: np.ndarray, unit: str, channel: str, source: str | None = None
 
     The channel name fixes the quantity (see the module docstring), and the unit must belong to it (`force [m]` is
     an error); a channel with an unknown name is converted by the unit's own quantity, unless the unit belongs to
-    several (`mystery [g]`). `source` (a file) prefixes error messages. Raises DataError for an unknown, ambiguous or
-    wrong unit.
+    several (`mystery [g]`), and keeps a well-formed unit nnfmu does not know as declared (`kept_unit`). `source` (a
+    file) prefixes error messages. Raises DataError for an unknown unit of a known quantity, an ambiguous or wrong
+    unit, or a unit text that is no unit.
     """
     where = f"{source}: " if source else ""
     spelling = normalise_unit(unit)
@@ -229,7 +240,10 @@ def to_si(values: np.ndarray, unit: str, channel: str, source: str | None = None
         )
     quantity = quantity or (of_unit[0] if of_unit else None)
     if quantity is None:
-        raise DataError(f"{where}channel {channel!r}: unknown unit {unit!r}; known units are {_all_units()}")
+        if kept_unit(unit):
+            return np.array(values, dtype=np.float64), spelling
+        raise DataError(f"{where}channel {channel!r}: {unit!r} is not a unit (a letter, then letters, digits and "
+                        f". / ^ -); known units are {_all_units()}")
     if spelling not in quantity.units:
         if of_unit:
             raise DataError(

@@ -151,7 +151,7 @@ def test_mdf_invalid_file_is_named(tmp_path):
         ("time [s],displacement [m],force [lbs]", r"channel 'force': unknown force unit 'lbs'; force units are N, kN"),
         ("time [s],displacement [m],force [m]", r"channel 'force' is a force but its unit 'm' is a length"),
         ("time [m],displacement [m],force [N]", r"channel 'time' is a time but its unit 'm' is a length"),
-        ("time [s],displacement [m],gizmo [zorks]", r"channel 'gizmo': unknown unit 'zorks'; known units are"),
+        ("time [s],displacement [m],gizmo [#]", r"channel 'gizmo': '#' is not a unit .*; known units are"),
     ],
 )
 def test_bad_header_names_file_and_column(tmp_path, header, message):
@@ -380,3 +380,14 @@ def test_an_mr_damper_record_with_a_command_voltage_loads_in_si(tmp_path):
     np.testing.assert_allclose(m["displacement"][:3], [0.0, 0.005 * np.sin(1 / 50), 0.005 * np.sin(2 / 50)],
                                rtol=0, atol=1e-8)  # printed to 1e-6 cm
     assert m["voltage"][0] == 0.0 and m["voltage"][-1] == 2.5
+
+
+def test_a_channel_nnfmu_cannot_convert_keeps_its_unit_and_blocks_nothing(tmp_path):
+    rows = [[i / RATE, 1e-3 * i, 2.0 * i, 4.7] for i in range(N)]
+    path = _write_csv(tmp_path / "coil.csv", "time [s],displacement [mm],force [kN],coil [ohm]", rows)
+    m = load_measurement(path, required=("displacement", "force"))
+    assert (m.units["displacement"], m.units["force"], m.units["coil"]) == ("m", "N", "ohm")
+    assert m.notes["units"] == "kept as declared (quantities nnfmu does not convert): coil [ohm]"
+    np.testing.assert_array_equal(m["coil"], 4.7)
+    again = load_measurement(save_measurement(m, tmp_path / "again.csv"))
+    assert again.units["coil"] == "ohm"

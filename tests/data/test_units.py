@@ -109,9 +109,16 @@ def test_unknown_unit_of_known_channel_lists_its_units():
         to_si(np.ones(3), "furlong", "axial_displacement")
 
 
-def test_unknown_unit_of_unknown_channel_lists_all_units():
-    with pytest.raises(DataError, match=r"channel 'mystery': unknown unit 'zorks'; known units are length: m"):
-        to_si(np.ones(3), "zorks", "mystery")
+def test_an_unknown_unit_of_an_unknown_quantity_is_kept_as_declared():
+    values = np.array([1.0, 2.0])
+    converted, unit = to_si(values, " 1 / min ", "pump_speed")
+    assert unit == "1/min" and np.array_equal(converted, values) and converted is not values
+    assert to_si(values, "ohm", "coil")[1] == "ohm"
+
+
+def test_a_unit_text_that_is_no_unit_is_refused_listing_the_known_units():
+    with pytest.raises(DataError, match=r"channel 'mystery': '3x' is not a unit .*; known units are length: m"):
+        to_si(np.ones(3), "3x", "mystery")
 
 
 def test_units_are_case_sensitive():
