@@ -80,10 +80,14 @@ def test_rpc_file_in_millimetres_is_read_in_metres(tmp_path):
 
 
 def test_rpc_file_with_an_unknown_unit_names_file_and_channel(tmp_path):
-    channel = rpc3_file.Channel(name="post", unit="furlong", dt=0.001, data=np.zeros(50))
+    """A displacement in an unknown unit is refused; a channel whose name and unit nnfmu both do not know is kept."""
+    channel = rpc3_file.Channel(name="post_displacement", unit="furlong", dt=0.001, data=np.zeros(50))
     rpc3_file.write(str(tmp_path / "odd.rsp"), [channel], datatype=float)
-    with pytest.raises(DataError, match=r"odd\.rsp.*'post'.*'furlong'"):
+    with pytest.raises(DataError, match=r"odd\.rsp.*'post_displacement'.*'furlong'"):
         read_drive(tmp_path / "odd.rsp")
+    channel = rpc3_file.Channel(name="post", unit="furlong", dt=0.001, data=np.zeros(50))
+    rpc3_file.write(str(tmp_path / "kept.rsp"), [channel], datatype=float)
+    assert read_drive(tmp_path / "kept.rsp").units["post"] == "furlong"
 
 
 @pytest.mark.parametrize("name", ["garbage.rsp", "garbage.tim", "garbage.csv", "garbage.mf4"])
