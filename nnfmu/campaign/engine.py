@@ -148,8 +148,8 @@ def run_dask(client: Any, cases: Sequence[Case], blobs: Mapping[str, bytes | Pat
         elif future.status == "finished":
             outcomes = future.result()
         else:
-            raise CampaignError(f"the Dask cluster lost the cases from {group[0].event.name} x "
-                                f"{group[0].variant.name} on ({future.status}); run the campaign again to resume")
+            raise CampaignError(f"the Dask cluster lost {len(group)} case(s), the first {group[0].event.name} x "
+                                f"{group[0].variant.name} ({future.status}); run the campaign again to resume")
         future.release()
         for case, outcome in zip(group, outcomes):
             on_outcome(case, outcome)

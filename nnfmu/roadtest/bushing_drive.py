@@ -22,11 +22,12 @@ from nnfmu.data import Measurement, save_measurement
 from nnfmu.data.rigs import DriveDesign, RigOptions, write_vehicle_rig
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.models.workflow import TrainRequest, train_from_file
+from nnfmu.models.workflow import TrainRequest
 from nnfmu.validate import ChannelComparison, ValidationSettings, compare
 from nnfmu.vehicle.drive import DriveSettings, generate_drive, write_drive
 
 from .envelope import Excursion, excursion
+from .record_training import train_on_record
 from .reference import monolithic_reference
 from .runs import RoadTestSettings, _open_loop, _ports
 from .systems import BUSHING_MODELS, RoadTestError, bushing_elements, bushing_onnx, vehicle_components
@@ -94,13 +95,7 @@ def train_vehicle_bushings(out: str | Path, road: RoadTestSettings,
                                    DriveDesign(margin=settings.margin))
     seconds["rig"] = time.perf_counter() - started
     log(f"bushing rig drive: record {rig} derived from {', '.join(elements)} (margin {settings.margin:g})")
-    models: dict[str, Path] = {}
-    for preset in BUSHING_MODELS:
-        trained = train_from_file(rig, request(preset), out / "models" / f"{preset}.onnx")
-        models[preset] = trained.path
-        seconds[preset] = trained.seconds
-        log(f"{preset} on the vehicle-derived record: trained in {trained.seconds:.1f} s, test-split NRMSE "
-            f"{trained.metrics['test'].nrmse:.4f}")
+    models = train_on_record(rig, BUSHING_MODELS, request, out / "models", seconds, log)
     return VehicleBushingModels(models, drive_path, source, rig, truth, seconds)
 
 

@@ -14,8 +14,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from nnfmu.data.rigs import RIG_BANDS, DriveDesign, RigOptions, write_vehicle_damper_dyno
-from nnfmu.models.workflow import TrainRequest, train_from_file
+from nnfmu.models.workflow import TrainRequest
 
+from .record_training import train_on_record
 from .systems import DAMPER_MODELS, damper_elements
 
 SYSTEM = "full-vehicle"
@@ -46,11 +47,5 @@ def train_vehicle_dampers(source: Path, out: str | Path, request: Callable[[str]
                                            DriveDesign(margin=margin, band=RIG_BANDS["damper"]))
     seconds["rig"] = time.perf_counter() - started
     log(f"damper dyno drive: record {rig} derived from {', '.join(elements)} (margin {margin:g})")
-    models: dict[str, Path] = {}
-    for preset in DAMPER_MODELS:
-        trained = train_from_file(rig, request(preset), out / "models" / f"{preset}.onnx")
-        models[preset] = trained.path
-        seconds[preset] = trained.seconds
-        log(f"{preset} on the vehicle-derived record: trained in {trained.seconds:.1f} s, test-split NRMSE "
-            f"{trained.metrics['test'].nrmse:.4f}")
+    models = train_on_record(rig, DAMPER_MODELS, request, out / "models", seconds, log)
     return VehicleDamperModels(models, rig, truth, seconds)
