@@ -404,9 +404,10 @@ NNStatus nn_refuse_type(const NNInstance *instance, const char *function, const 
     return NN_ERROR;
 }
 
-NNStatus nn_setup_experiment(NNInstance *instance, double start_time) {
+/* Sets the instance's start time and current time to `start_time`, or logs (naming `function`) why not. */
+static NNStatus set_start_time(NNInstance *instance, const char *function, double start_time) {
     if (!isfinite(start_time)) {
-        nn_log(instance, NN_ERROR, NN_LOG_ERROR, "SetupExperiment: start time %g is not finite", start_time);
+        nn_log(instance, NN_ERROR, NN_LOG_ERROR, "%s: start time %g is not finite", function, start_time);
         return NN_ERROR;
     }
     instance->data.start_time = start_time;
@@ -414,13 +415,12 @@ NNStatus nn_setup_experiment(NNInstance *instance, double start_time) {
     return NN_OK;
 }
 
+NNStatus nn_setup_experiment(NNInstance *instance, double start_time) {
+    return set_start_time(instance, "SetupExperiment", start_time);
+}
+
 NNStatus nn_enter_initialization(NNInstance *instance, double start_time) {
-    if (!isfinite(start_time)) {
-        nn_log(instance, NN_ERROR, NN_LOG_ERROR, "start time %g is not finite", start_time);
-        return NN_ERROR;
-    }
-    instance->data.start_time = start_time;
-    instance->data.time = start_time;
+    if (set_start_time(instance, "EnterInitializationMode", start_time) != NN_OK) return NN_ERROR;
     instance->data.elapsed = 0.0;
     instance->mode = NN_INITIALIZATION;
     instance->preview_stale = 1;
