@@ -23,7 +23,7 @@ import onnx
 
 from nnfmu.component import Component, Port, StatePort
 from nnfmu.data.rigs import BUSHING_CHANNELS, BushingChannelTruth, DamperTruth
-from nnfmu.data.rigs.damper import ValveSide
+from nnfmu.physics.damper import ValveSide
 from nnfmu.errors import NnfmuError
 from nnfmu.export.graph import GraphBuilder
 

@@ -11,7 +11,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from nnfmu.data.rigs import BUSHING_CHANNELS, BushingChannelTruth, BushingParams, RigOptions, simulate_rig, write_rig
-from nnfmu.data.rigs.bushing import iwan_elements
+from nnfmu.physics.bushing import iwan_elements
 
 RATE = 2000.0
 

@@ -1,12 +1,21 @@
 """Rig simulators that make realistic "measured" data from known physics, with the truth written beside it."""
 
-from .bushing import BushingChannelParams, BushingChannelTruth, BushingParams
 from .bushing_rig import CHANNELS as BUSHING_CHANNELS
 from .bushing_rig import BushingRig
-from .damper import DamperParams, DamperTruth, ValveSide
 from .damper_rig import DamperDyno
 from .excitation import Motion, SineLevel, SpectrumShape
-from .options import BUSHING_EFFECTS, DAMPER_EFFECTS, DEFAULT_EFFECTS, EXCITATIONS, KINDS, RigOptions
+from ...physics import (
+    BUSHING_EFFECTS,
+    DAMPER_EFFECTS,
+    DEFAULT_EFFECTS,
+    BushingChannelParams,
+    BushingChannelTruth,
+    BushingParams,
+    DamperParams,
+    DamperTruth,
+    ValveSide,
+)
+from .options import EXCITATIONS, KINDS, RigOptions
 from .run import RigRun, simulate_rig, write_rig
 from .truth import truth_path
 from .vehicle_drive import RIG_BANDS, DriveDesign, VehicleDrive, design_damper_drive, design_vehicle_drive

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from .bushing import IWAN_ELEMENTS, IWAN_SPAN, BushingChannelTruth, BushingParams
+from ...physics.bushing import IWAN_ELEMENTS, IWAN_SPAN, BushingChannelTruth, BushingParams
 from .excitation import Motion, SineLevel, SpectrumShape, random_motion, sine_series, sine_series_cycles
 from .sensors import Sensor, record
 

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...errors import SettingsError
-from .damper import DamperParams, DamperTruth
+from ...physics.damper import DamperParams, DamperTruth
 from .excitation import Motion, SineLevel, SpectrumShape, random_motion, sine_series, sine_series_cycles
 from .sensors import Sensor, record
 

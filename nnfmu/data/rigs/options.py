@@ -6,21 +6,12 @@ import math
 from dataclasses import dataclass
 
 from ...errors import SettingsError
+from ...physics.effects import DEFAULT_EFFECTS, EFFECTS
 
 KINDS = ("damper", "bushing")
 EXCITATIONS = ("lab", "random", "sine", "vehicle")
 VEHICLE_EXCITATION = "vehicle"  # a drive derived from a vehicle result (`vehicle_rig`), never self-made
 
-DAMPER_EFFECTS = ("hysteresis", "gas_force", "seal_friction", "temperature", "inertia")
-BUSHING_EFFECTS = ("viscoelastic", "friction")
-EFFECTS: dict[str, tuple[str, ...]] = {"damper": DAMPER_EFFECTS, "bushing": BUSHING_EFFECTS}
-
-# The damper default holds what a velocity-history network can represent; gas force and temperature fade are the
-# undeclared effects a later stage must discover.
-DEFAULT_EFFECTS: dict[str, tuple[str, ...]] = {
-    "damper": ("hysteresis", "seal_friction", "inertia"),
-    "bushing": ("viscoelastic", "friction"),
-}
 DEFAULT_DURATION: dict[str, float] = {"damper": 70.0, "bushing": 60.0}  # s
 MIN_SAMPLE_RATE = 100.0  # Hz: the drives reach 40 Hz, and the recorder has no anti-alias filter
 MAX_SAMPLES = 10_000_000  # per record (2.8 h at 1 kHz): a rig run holds a dozen arrays of this length in memory

@@ -13,14 +13,14 @@ from ...errors import SettingsError
 from ..errors import DataError
 from ..measurement import Measurement
 from ..save import save_measurement
-from .bushing import BushingParams
+from ...physics.bushing import BushingParams
 from .bushing_rig import UNITS as BUSHING_UNITS
 from .bushing_rig import BushingRig, describe_params, run_bushing_rig
-from .damper import DamperParams
+from ...physics.damper import DamperParams
 from .damper_rig import UNITS as DAMPER_UNITS
 from .damper_rig import DamperDyno, run_damper_dyno
 from .options import VEHICLE_EXCITATION, RigOptions, check_options, resolve_duration, resolve_effects
-from .parameters import describe
+from ...physics.parameters import describe
 from .truth import build_truth, truth_path, truth_text
 
 

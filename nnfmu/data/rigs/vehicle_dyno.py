@@ -19,11 +19,11 @@ import numpy as np
 
 from ..load import load_measurement
 from ..measurement import Measurement
-from .damper import DamperParams
+from ...physics.damper import DamperParams
 from .damper_rig import UNITS, DamperDyno, run_damper_dyno
 from .excitation import Motion
 from .options import VEHICLE_EXCITATION, RigOptions, check_options, resolve_duration, resolve_effects
-from .parameters import describe
+from ...physics.parameters import describe
 from .run import RigRun, write_run
 from .truth import build_truth
 from .vehicle_drive import DriveDesign, VehicleDrive, design_damper_drive

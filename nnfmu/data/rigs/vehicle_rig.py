@@ -19,7 +19,7 @@ import numpy as np
 
 from ..load import load_measurement
 from ..measurement import Measurement
-from .bushing import BushingParams
+from ...physics.bushing import BushingParams
 from .bushing_rig import RUN_NOTES, UNITS, BushingRig, describe_params, true_signals
 from .options import VEHICLE_EXCITATION, RigOptions, check_options, resolve_duration, resolve_effects
 from .run import RigRun, write_run

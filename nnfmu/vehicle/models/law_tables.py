@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...data.rigs import BushingChannelTruth, DamperTruth, ValveSide
+from ...physics import BushingChannelTruth, DamperTruth, ValveSide
 from .laws import BushingTruthLaw, ComponentLaw, DamperTruthLaw, LinearLaw
 from .reference import SplineDamper
 

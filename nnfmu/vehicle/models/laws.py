@@ -12,7 +12,7 @@ from typing import Protocol
 
 import numpy as np
 
-from ...data.rigs import BushingChannelTruth, BushingParams, DamperParams, DamperTruth, DEFAULT_EFFECTS
+from ...physics import BushingChannelTruth, BushingParams, DamperParams, DamperTruth, DEFAULT_EFFECTS
 from .errors import VehicleModelError
 from .ports import component_channels
 

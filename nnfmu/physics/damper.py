@@ -14,8 +14,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...errors import SettingsError
-from .options import DAMPER_EFFECTS, DEFAULT_EFFECTS
+from ..errors import SettingsError
+from .effects import DAMPER_EFFECTS, DEFAULT_EFFECTS
 from .parameters import param
 
 
