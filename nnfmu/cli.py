@@ -382,7 +382,7 @@ def cosim(
 
     from nnfmu.cosim.master import CosimSettings, run_cosim
     from nnfmu.cosim.results import save_result
-    from nnfmu.vehicle.drive import read_drive
+    from nnfmu.data.drive_files import read_drive
 
     try:
         target = check_output_file(out, [system, drive])
@@ -510,7 +510,8 @@ def drive_generate(
     rpc_data_type: str = typer.Option("int16", help="RPC III sample type: int16 or float32."),
 ) -> None:
     """Write four actuator displacement channels from an ISO 8608 road at a given speed, with optional events."""
-    from nnfmu.vehicle.drive import DriveSettings, KerbStrike, Pothole, generate_drive, write_drive
+    from nnfmu.vehicle.drive import DriveSettings, KerbStrike, Pothole, generate_drive
+    from nnfmu.data.drive_files import write_drive
 
     events = [Pothole(**_event_fields(p, "--pothole", ("time", "depth", "length", "side"))) for p in pothole or []]
     events += [KerbStrike(**_event_fields(k, "--kerb", ("time", "height", "ramp_length", "length", "side")))
@@ -533,7 +534,7 @@ def drive_convert(
     rpc_data_type: str = typer.Option("int16", help="RPC III sample type: int16 or float32."),
 ) -> None:
     """Convert a drive file between CSV, MDF4 and RPC III, keeping channel names and units."""
-    from nnfmu.vehicle.drive import read_drive, write_drive
+    from nnfmu.data.drive_files import read_drive, write_drive
 
     try:
         path = write_drive(read_drive(source), check_output_file(target, [source], "TARGET"),

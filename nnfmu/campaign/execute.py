@@ -31,7 +31,8 @@ from nnfmu.errors import NnfmuError
 from nnfmu.validate.compare import ValidationSettings
 from nnfmu.validate.damage import pseudo_damage
 from nnfmu.validate.metrics import rms
-from nnfmu.vehicle.drive import generate_drive, read_drive
+from nnfmu.vehicle.drive import generate_drive
+from nnfmu.data.drive_files import read_drive
 
 from .cases import Case
 from .hashing import json_sha256

@@ -517,7 +517,7 @@ def cosimulate(system: SystemStructure, drive: Measurement, settings: CosimSetti
 def run_cosim(ssd_path: str | os.PathLike[str], drive_path: str | os.PathLike[str], settings: CosimSettings,
               out_path: str | os.PathLike[str] | None = None, progress: Progress | None = None) -> CosimResult:
     """`nnfmu cosim`: read the system (.ssd, folder or .ssp) and the drive file, co-simulate, write the result."""
-    from ..vehicle.drive import read_drive
+    from ..data.drive_files import read_drive
     from .results import save_result
     from .ssp import open_system
 

@@ -24,7 +24,8 @@ from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.models.workflow import TrainRequest
 from nnfmu.validate import ChannelComparison, ValidationSettings, compare
-from nnfmu.vehicle.drive import DriveSettings, generate_drive, write_drive
+from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.data.drive_files import write_drive
 
 from .envelope import Excursion, excursion
 from .record_training import train_on_record

@@ -29,7 +29,8 @@ from nnfmu.cosim.replay import replay_fmu
 from nnfmu.cosim.ssp import open_system
 from nnfmu.data import Measurement, save_measurement
 from nnfmu.validate import ChannelComparison, ValidationSettings, compare, write_report
-from nnfmu.vehicle.drive import DriveSettings, generate_drive, write_drive
+from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.data.drive_files import write_drive
 
 from .budget import BudgetRow, budget_rows
 from .envelope import Excursion, excursion

@@ -22,7 +22,7 @@ from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd
 from nnfmu.data import Measurement, load_measurement
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.vehicle.drive import write_drive
+from nnfmu.data.drive_files import write_drive
 
 DURATION = 2.0  # [s]
 DRIVE = drive(DURATION, 0.5e-3)

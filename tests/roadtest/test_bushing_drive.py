@@ -17,7 +17,8 @@ from nnfmu.roadtest import (
     train_vehicle_bushings,
 )
 from nnfmu.roadtest.systems import bushing_elements
-from nnfmu.vehicle.drive import DriveSettings, generate_drive, read_drive
+from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.data.drive_files import read_drive
 
 
 @pytest.fixture(scope="module")
