@@ -32,7 +32,7 @@ from nnfmu.loop.loop_settings import LoopSettings
 from nnfmu.loop.run import LoopReport, run_loop
 from nnfmu.loop.settings import DiagnosisSettings
 from nnfmu.models import train_model
-from nnfmu.models.workflow import TrainRequest, resolve
+from nnfmu.workflows.train import TrainRequest, resolve
 
 PRESET = "damper-hysteresis"
 

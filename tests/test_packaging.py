@@ -17,5 +17,5 @@ def test_wheel_ships_templates_and_package_data(tmp_path: Path) -> None:
         if template.is_file():
             assert f"nnfmu/templates/{template.relative_to(ROOT / 'templates').as_posix()}" in names
     assert "nnfmu/validate/report.html.j2" in names
-    assert "nnfmu/campaign/summary.html.j2" in names
+    assert "nnfmu/workflows/campaign/summary.html.j2" in names
     assert not any(n.startswith(("tests/", "bench/", "exported/")) for n in names)

@@ -1,9 +1,7 @@
 """Networks from rig data: feature specs, presets, training (Levenberg–Marquardt, Adam, L-BFGS), metrics, input
-selection, and the `train` workflow (`nnfmu.models.workflow`, imported on use: it pulls in the exporter)."""
+selection. The `nnfmu train` use case (load, train, export) is `nnfmu.workflows.train`."""
 
 from __future__ import annotations
-
-from typing import Any
 
 from nnfmu.models.metrics import SplitMetrics
 from nnfmu.models.presets import PRESETS, Preset, get_preset
@@ -19,20 +17,10 @@ __all__ = [
     "SelectionSettings",
     "SplitFractions",
     "SplitMetrics",
-    "TrainOutcome",
-    "TrainRequest",
     "TrainResult",
     "TrainSettings",
     "get_preset",
     "select_inputs",
-    "train_from_file",
     "train_model",
 ]
 
-
-def __getattr__(name: str) -> Any:
-    if name in ("TrainOutcome", "TrainRequest", "train_from_file"):
-        from nnfmu.models import workflow
-
-        return getattr(workflow, name)
-    raise AttributeError(f"module 'nnfmu.models' has no attribute {name!r}")
