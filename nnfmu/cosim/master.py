@@ -213,7 +213,6 @@ class _System:
                 if free:
                     raise CosimError(f"system {system.name!r}: element {name!r}: input(s) {', '.join(free)} are "
                                      "connected to nothing")
-            self._check_periods(system.name, settings.step)
             self.outputs = {name: [n for n in slave.names("output") if slave.variables[n].type in ("Real", "Float64")]
                             for name, slave in self.slaves.items()}
             self.elements = self._wire(system.name)
@@ -229,7 +228,7 @@ class _System:
         self.before = self.values.copy()
         self.peak = np.zeros(len(self.links))
 
-    def _check_periods(self, system_name: str, h: float) -> None:
+    def check_periods(self, system_name: str, h: float) -> None:
         """Refuse a step an element cannot honour: one with feedthrough makes its outputs follow inputs set at a
         sample time, so the communication points must be sample times (h a whole multiple of its period T). An
         element without feedthrough honours any h (it evaluates every sample a step reaches)."""
@@ -488,6 +487,7 @@ def cosimulate(system: SystemStructure, drive: Measurement, settings: CosimSetti
         parts.drive.at(t0 + n_steps * h)  # a drive that ends early fails here, before the run
         channels = parts.channels()
         rows = result_table(n_steps, len(channels))
+        parts.check_periods(system.name, h)
         parts.initialise(t0, parts.drive.at(t0))
         rows[0] = parts.values
         loop = _compiled_loop(parts, settings)
