@@ -46,8 +46,7 @@ def known_command(name: str, soft: float | None = None, hard: float | None = Non
     """The command `name` ('voltage' or 'current') with its unit, over its working range unless `soft` or `hard`
     are given; SettingsError naming the name when it is neither."""
     if name not in KNOWN_COMMANDS:
-        raise SettingsError(f"unknown damper command {name!r}; use {' or '.join(KNOWN_COMMANDS)} (or give a "
-                            "Command with its unit)")
+        raise SettingsError(f"unknown damper command {name!r}; use {' or '.join(KNOWN_COMMANDS)}")
     unit, (low, high) = KNOWN_COMMANDS[name]
     return Command(name, unit, low if soft is None else soft, high if hard is None else hard)
 

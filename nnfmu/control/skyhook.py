@@ -72,6 +72,11 @@ class SkyhookSettings:
         return (self.command.hard - self.command.soft) / (self.c_max - self.c_min)
 
 
+def _scalar(g: GraphBuilder, name: str, value: float) -> str:
+    """A float64 constant of shape [1] (an int given in the settings must not make an int64 tensor)."""
+    return g.constant(name, np.array([float(value)]))
+
+
 def skyhook_graph(settings: SkyhookSettings | None = None, name: str = "skyhook") -> onnx.ModelProto:
     """Step graph `body_velocity`, `damper_velocity` [m/s] -> the command (settings.command's name and unit),
     sampled every settings.sample_period; the `Component` attached (see the module docstring for the law)."""
@@ -79,19 +84,19 @@ def skyhook_graph(settings: SkyhookSettings | None = None, name: str = "skyhook"
     out = s.command.name
     g = GraphBuilder(reserved=(BODY_VELOCITY, DAMPER_VELOCITY, out))
     product = g.node("Mul", [BODY_VELOCITY, DAMPER_VELOCITY], "body_times_stroke_rate")
-    numerator = g.node("Mul", [product, g.constant("c_sky", np.array([s.c_sky]))], "sky_numerator")
+    numerator = g.node("Mul", [product, _scalar(g, "c_sky", s.c_sky)], "sky_numerator")
     stroke_squared = g.node("Mul", [DAMPER_VELOCITY, DAMPER_VELOCITY], "stroke_rate_squared")
-    denominator = g.node("Add", [stroke_squared, g.constant("epsilon_squared", np.array([s.epsilon ** 2]))],
+    denominator = g.node("Add", [stroke_squared, _scalar(g, "epsilon_squared", s.epsilon ** 2)],
                          "regularised_stroke_rate_squared")
     desired = g.node("Div", [numerator, denominator], "desired_damping")
-    above_min = g.node("Relu", [g.node("Sub", [desired, g.constant("c_min", np.array([s.c_min]))], "over_c_min")],
+    above_min = g.node("Relu", [g.node("Sub", [desired, _scalar(g, "c_min", s.c_min)], "over_c_min")],
                        "above_c_min")
-    above_max = g.node("Relu", [g.node("Sub", [desired, g.constant("c_max", np.array([s.c_max]))], "over_c_max")],
+    above_max = g.node("Relu", [g.node("Sub", [desired, _scalar(g, "c_max", s.c_max)], "over_c_max")],
                        "above_c_max")
     span = g.node("Sub", [above_min, above_max], "clipped_damping_above_c_min")
-    gain = g.constant("command_per_damping", np.array([s.command_per_damping]))
+    gain = _scalar(g, "command_per_damping", s.command_per_damping)
     scaled = g.node("Mul", [span, gain], "command_change")
-    command = g.node("Add", [scaled, g.constant("soft_command", np.array([s.command.soft]))], "command")
+    command = g.node("Add", [scaled, _scalar(g, "soft_command", s.command.soft)], "command")
     g.output(command, out)
     law = (f"skyhook: c = clip(c_sky v_b v_r / (v_r^2 + eps^2), c_min, c_max), c_sky = {s.c_sky:g} N.s/m, "
            f"eps = {s.epsilon:g} m/s, c in [{s.c_min:g}, {s.c_max:g}] N.s/m -> {out} {s.command.soft:g} to "

@@ -38,12 +38,10 @@ def semiactive_damper_graph(c0: float = 1000.0, c1: float = 600.0, tau: float = 
         raise SettingsError(f"semi-active damper command name {command!r} clashes with its other ports")
     a = 1.0 - math.exp(-sample_period / tau)
     g = GraphBuilder(reserved=("velocity", command, "force", STATE, STATE_NEXT))
-    lag = g.node("Mul", [g.node("Sub", [command, STATE], "command_minus_lagged"), g.constant("a", np.array([a]))],
-                 "lag_increment")
+    gain, base, slope = (g.constant(n, np.array([v], dtype=float)) for n, v in (("a", a), ("c0", c0), ("c1", c1)))
+    lag = g.node("Mul", [g.node("Sub", [command, STATE], "command_minus_lagged"), gain], "lag_increment")
     lagged = g.node("Add", [STATE, lag], "lagged_command")
-    damping = g.node("Add", [g.constant("c0", np.array([c0])),
-                             g.node("Mul", [lagged, g.constant("c1", np.array([c1]))], "controlled_damping")],
-                     "damping")
+    damping = g.node("Add", [base, g.node("Mul", [lagged, slope], "controlled_damping")], "damping")
     g.output(g.node("Mul", [damping, "velocity"], "viscous"), "force")
     g.output(lagged, STATE_NEXT)
     doc = f"semi-active damper F = ({c0:g} + {c1:g} u_f) v, u_f = {command} through a {tau:g} s lag"

@@ -18,13 +18,15 @@ from pathlib import Path
 import onnx
 
 from nnfmu.control import Command, SkyhookSettings, fixed_command_graph, known_command, skyhook_graph
+from nnfmu.errors import SettingsError
 from nnfmu.cosim.ssp import Connection, Connector, Element, SspError, SystemStructure, write_ssd
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions, FmiVersion
 
-__all__ = ["Command", "SkyhookSettings", "build_fixed_command_fmu", "build_graph_fmu", "build_skyhook_fmu",
-           "closed_loop_system", "known_command", "write_closed_loop"]
+__all__ = ["CONTROLLERS", "Command", "SkyhookSettings", "build_controller_fmu", "build_fixed_command_fmu",
+           "build_graph_fmu", "build_skyhook_fmu", "closed_loop_system", "known_command", "write_closed_loop"]
 
+CONTROLLERS = ("skyhook",)  # the control laws `nnfmu controller build` knows
 VEHICLE, DAMPER, CONTROLLER = "vehicle", "damper", "controller"
 DAMPER_PORT = "damper"  # the quarter car's damper port prefix: damper_force in, damper_velocity / _displacement out
 
@@ -40,6 +42,15 @@ def build_graph_fmu(graph: onnx.ModelProto, out: str | os.PathLike[str], fmi_ver
 def build_skyhook_fmu(settings: SkyhookSettings, out: str | os.PathLike[str], fmi_version: FmiVersion = 2) -> Path:
     """The skyhook controller of `settings` as a native FMU at `out`; return its path."""
     return build_graph_fmu(skyhook_graph(settings), out, fmi_version)
+
+
+def build_controller_fmu(law: str, settings: SkyhookSettings, out: str | os.PathLike[str],
+                         fmi_version: FmiVersion = 2) -> Path:
+    """`nnfmu controller build LAW`: the controller `law` (one of CONTROLLERS) as a native FMU at `out`;
+    SettingsError naming an unknown law."""
+    if law not in CONTROLLERS:
+        raise SettingsError(f"unknown controller {law!r}; use {' or '.join(CONTROLLERS)}")
+    return build_skyhook_fmu(settings, out, fmi_version)
 
 
 def build_fixed_command_fmu(command: Command, value: float, out: str | os.PathLike[str],

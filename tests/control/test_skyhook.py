@@ -47,7 +47,7 @@ def _onnxruntime(model: onnx.ModelProto, vb: np.ndarray, vr: np.ndarray, out: st
 SETTINGS = {
     "mr": SkyhookSettings(),
     # a CDC valve that softens with more current: the command runs from 1.8 A at c_min down to 0.3 A at c_max
-    "cdc-reversed": SkyhookSettings(c_sky=5000.0, c_min=800.0, c_max=3000.0, epsilon=0.02,
+    "cdc-reversed": SkyhookSettings(c_sky=5000, c_min=800, c_max=3000, epsilon=0.02,  # ints: float64 constants
                                     command=known_command("current", soft=1.8, hard=0.3)),
 }
 

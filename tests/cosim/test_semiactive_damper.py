@@ -42,7 +42,7 @@ def test_fmu_equals_onnxruntime(tmp_path: Path, fmi: int) -> None:
     rng = np.random.default_rng(5)
     n = 200
     velocity, current = rng.normal(0.0, 0.3, n), rng.uniform(0.3, 1.8, n)
-    law = {"c0": 800.0, "c1": 1500.0, "tau": 0.008}
+    law = {"c0": 800, "c1": 1500, "tau": 0.008}  # ints must still give float64 constants (the C backend's only kind)
     expected = _onnxruntime("current", velocity, current, **law)
     fmu = build_graph_fmu(semiactive_damper_graph(command="current", unit="A", **law), tmp_path / "damper.fmu", fmi)
     with FmuSlave(fmu) as slave:
