@@ -1,11 +1,13 @@
 """The command a semi-active damper takes, named after its channel: an MR damper's coil `voltage` [V] or a CDC
-damper's valve `current` [A], with the working range of each (the rig simulators' ranges, nnfmu/physics)."""
+damper's valve `current` [A], with the working range of each (those of issue 19's MR and CDC rig simulators); and
+the component description every controller shares (the vehicle's sensor ports in, the command out)."""
 
 from __future__ import annotations
 
 import math
 import re
 from dataclasses import dataclass
+from typing import Any
 
 from nnfmu.component import Component, Port
 from nnfmu.errors import SettingsError
@@ -52,7 +54,7 @@ def known_command(name: str, soft: float | None = None, hard: float | None = Non
 
 
 def controller_component(name: str, command: Command, what: str, sample_period: float, description: str,
-                         metadata: dict) -> Component:
+                         metadata: dict[str, Any]) -> Component:
     """The component of a damper controller: the two sensor inputs (the vehicle's sign convention) and the command
     output, sampled every `sample_period` [s], stateless."""
     body, stroke = SENSOR_PORTS

@@ -11,6 +11,7 @@ import math
 import numpy as np
 import onnx
 
+from nnfmu.component import SAMPLE_PERIOD_RANGE
 from nnfmu.errors import SettingsError
 from nnfmu.export.graph import GraphBuilder
 
@@ -22,9 +23,14 @@ DEFAULT_SAMPLE_PERIOD = 1e-3  # [s]: the skyhook controller's
 def fixed_command_graph(command: Command, value: float, sample_period: float = DEFAULT_SAMPLE_PERIOD,
                         name: str = "fixed_command") -> onnx.ModelProto:
     """Step graph `body_velocity`, `damper_velocity` [m/s] (read, not used) -> `command.name` = `value` in
-    command.unit, every sample; SettingsError naming the value when it is not a finite number."""
+    command.unit, every `sample_period` [s]; SettingsError naming the value when either is out of range."""
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise SettingsError(f"fixed command {command.name} {value!r} {command.unit} must be a finite number")
+    low, high = SAMPLE_PERIOD_RANGE
+    number = isinstance(sample_period, (int, float)) and not isinstance(sample_period, bool)
+    if not number or not low <= sample_period <= high:
+        raise SettingsError(f"fixed command sample_period {sample_period!r} s must be a number from {low:g} to "
+                            f"{high:g} s")
     g = GraphBuilder(reserved=(*SENSOR_PORTS, command.name))
     g.output(g.constant("held_command", np.array([float(value)])), command.name)
     doc = f"fixed damper command {command.name} = {value:g} {command.unit}"

@@ -111,6 +111,8 @@ def test_fixed_command_holds_its_value(tmp_path: Path) -> None:
     np.testing.assert_array_equal(_fmu_outputs(build_graph_fmu(model, tmp_path / "fixed.fmu"), vb, vr, "voltage"), 2.5)
     with pytest.raises(SettingsError, match="fixed command voltage nan V"):
         fixed_command_graph(known_command("voltage"), float("nan"))
+    with pytest.raises(SettingsError, match="fixed command sample_period 0 s"):
+        fixed_command_graph(known_command("voltage"), 1.0, sample_period=0)
 
 
 @pytest.mark.parametrize(("changes", "message"), [
