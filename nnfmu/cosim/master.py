@@ -48,6 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..data import Measurement
+from ..component import same_period
 from ..errors import NnfmuError
 from .direct import FmiStatusError, RealBlock, SlopeBlock, Stepper
 from .binding import DriveBinding, bind_free_inputs
@@ -212,6 +213,7 @@ class _System:
                 if free:
                     raise CosimError(f"system {system.name!r}: element {name!r}: input(s) {', '.join(free)} are "
                                      "connected to nothing")
+            self._check_periods(system.name, settings.step)
             self.outputs = {name: [n for n in slave.names("output") if slave.variables[n].type in ("Real", "Float64")]
                             for name, slave in self.slaves.items()}
             self.elements = self._wire(system.name)
@@ -226,6 +228,20 @@ class _System:
         self.now = self.values.copy()
         self.before = self.values.copy()
         self.peak = np.zeros(len(self.links))
+
+    def _check_periods(self, system_name: str, h: float) -> None:
+        """Refuse a step an element cannot honour: one with feedthrough makes its outputs follow inputs set at a
+        sample time, so the communication points must be sample times (h a whole multiple of its period T). An
+        element without feedthrough honours any h (it evaluates every sample a step reaches)."""
+        for name, slave in self.slaves.items():
+            period = slave.sample_period
+            if period is None or not slave.feedthrough:
+                continue
+            samples = round(h / period)
+            if samples < 1 or not same_period(samples * period, h):
+                raise CosimError(f"system {system_name!r}: element {name!r} samples every {period:.9g} s and its "
+                                 f"outputs follow inputs set at its sample times (feedthrough), so the communication "
+                                 f"step must be a whole multiple of {period:.9g} s; it is {h:.9g} s")
 
     def _check_binding(self, system_name: str, binding: DriveBinding, connected: set[tuple[str, str]]) -> None:
         """The bound element exists and every bound input is one of its inputs that no connection reaches."""

@@ -72,3 +72,4 @@ def test_no_or_several_driven_elements_are_refused_naming_them(systems: dict[flo
         unwired = dataclasses.replace(system, connections=[])
         with pytest.raises(DriveInputError, match="exactly one element; elements with free inputs: vehicle: .*; damp"):
             bind_free_inputs(unwired)
+
