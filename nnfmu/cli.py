@@ -26,6 +26,8 @@ vehicle_app = typer.Typer(no_args_is_help=True, help="Vehicle models for the vir
 app.add_typer(vehicle_app, name="vehicle")
 drive_app = typer.Typer(no_args_is_help=True, help="Drive files for a four-post road test simulator.")
 app.add_typer(drive_app, name="drive")
+controller_app = typer.Typer(no_args_is_help=True, help="Controllers of semi-active dampers, as FMUs.")
+app.add_typer(controller_app, name="controller")
 PLATFORMS_HELP = ("Binaries of the native backend, comma-separated: linux64, win64 (default: linux64, plus win64 when "
                   "the MinGW-w64 cross compiler x86_64-w64-mingw32-gcc is installed).")
 
@@ -326,6 +328,37 @@ def vehicle_build(
                                         platforms=_platforms(platforms))
         with _warnings_as_lines():
             path = build_vehicle_fmu(model, check_output_file(out, [params] if params else []), settings)
+    except NnfmuError as error:
+        _fail(error)
+    typer.echo(f"FMU: {path}")
+
+
+@controller_app.command("build")
+def controller_build(
+    law: str = typer.Argument(..., help="Control law: skyhook."),
+    out: str = typer.Option(..., "--out", "-o", help="FMU path to write."),
+    c_sky: float = typer.Option(3000.0, help="Skyhook damping [N.s/m] along the damper's stroke."),
+    c_min: float = typer.Option(1000.0, help="Least damping the damper gives [N.s/m] (at --command-min)."),
+    c_max: float = typer.Option(4000.0, help="Greatest damping the damper gives [N.s/m] (at --command-max)."),
+    epsilon: float = typer.Option(0.01, help="Regularising stroke velocity [m/s] of the law near zero stroke rate."),
+    command: str = typer.Option("voltage", help="The damper's command input: voltage [V] (MR) or current [A] (CDC)."),
+    command_min: Optional[float] = typer.Option(None, help="Command giving --c-min (default: 0 V, or 0.3 A)."),
+    command_max: Optional[float] = typer.Option(None, help="Command giving --c-max (default: 5 V, or 1.8 A)."),
+    sample_period: float = typer.Option(1e-3, help="Controller sample period [s]."),
+    fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
+) -> None:
+    """Build a semi-active damper controller into a co-simulation FMU.
+
+    Inputs body_velocity and damper_velocity [m/s] (the quarter car's outputs), output the damper command.
+    """
+    from nnfmu.workflows.controller import SkyhookSettings, build_controller_fmu, known_command
+
+    try:
+        settings = SkyhookSettings(c_sky=c_sky, c_min=c_min, c_max=c_max, epsilon=epsilon,
+                                   command=known_command(command, command_min, command_max),
+                                   sample_period=sample_period)
+        with _warnings_as_lines():
+            path = build_controller_fmu(law, settings, check_output_file(out, []), fmi)
     except NnfmuError as error:
         _fail(error)
     typer.echo(f"FMU: {path}")

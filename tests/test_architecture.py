@@ -17,6 +17,7 @@ FLOORS: tuple[tuple[str, ...], ...] = (
     ("data",),
     ("models",),
     ("export",),
+    ("control",),
     ("fmu",),
     ("vehicle",),
     ("cosim",),

@@ -215,6 +215,26 @@ def test_every_port_has_a_unit_and_a_description(params: QuarterCarParameters) -
         assert port.unit in SI_UNITS and port.description, port
 
 
+def test_body_velocity_is_the_rate_of_body_displacement_and_ties_to_the_stroke(params: QuarterCarParameters) -> None:
+    """The skyhook sensor: body_velocity integrates to body_displacement along a simulated drive, and the stroke rate
+    is the motion ratio times body minus spindle velocity (rebound positive), whatever the state."""
+    car = build_quarter_car(_linear_damper(params), {"damper": "reference"})
+    dt, n = 1e-3, 2001
+    t = np.arange(n) * dt
+    inputs = {"actuator_fl_displacement": _road(t), "actuator_fl_velocity": _road_rate(t)}
+    result = simulate(car, inputs, SimulationSettings(dt=dt, hold="foh"), x0=np.zeros(4))
+    integrated = np.concatenate([[0.0], np.cumsum(0.5 * (result["body_velocity"][1:] + result["body_velocity"][:-1]))
+                                 * dt])
+    scale = np.ptp(result["body_displacement"])
+    assert scale > 1e-3 and np.max(np.abs(integrated - result["body_displacement"])) < 1e-4 * scale
+    x = np.random.default_rng(0).standard_normal(4)
+    y = car.output_vector(x, car.input_vector({}))
+    spindle_rate = x[3]  # states [body, spindle, body rate, spindle rate]
+    assert y[car.output_index("body_velocity")] == x[2]
+    assert y[car.output_index("damper_velocity")] == pytest.approx(
+        params.damper_motion_ratio * (y[car.output_index("body_velocity")] - spindle_rate), rel=1e-12)
+
+
 def test_reference_damper_removes_the_force_input(params: QuarterCarParameters) -> None:
     assert "damper_force" not in build_quarter_car(params, {"damper": "reference"}).input_names
     with pytest.raises(VehicleModelError, match="unknown component"):
