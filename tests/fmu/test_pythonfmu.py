@@ -24,8 +24,9 @@ from onnx import TensorProto, helper
 from nnfmu.component import Component, Port
 from nnfmu.cosim.slave import FmuSlave
 from nnfmu.fmu.model_description import FmuIdentity, ModelDescriptionView, tensor_dependencies
+from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.fmu.pythonfmu import PythonFmuBuildError, build_pythonfmu
+from nnfmu.fmu.pythonfmu import PythonFmuBuildError
 from nnfmu.fmu.pythonfmu.runtimes import runtime
 from nnfmu.fmu.pythonfmu.fmi2_slave import NnfmuSlave
 from nnfmu.fmu.pythonfmu.model_description_fix import DescriptionFix, fix_model_description
@@ -272,7 +273,7 @@ def test_graph_without_component_gets_a_generic_description_evaluated_each_step(
     model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)], ir_version=9)
     onnx.save(model, str(tmp_path / "plain.onnx"))
     monkeypatch.chdir(tmp_path)
-    fmu = build_pythonfmu(tmp_path / "plain.onnx", BuildOptions(backend="pythonfmu", fmi_version=fmi_version))
+    fmu = build_fmu(tmp_path / "plain.onnx", BuildOptions(backend="pythonfmu", fmi_version=fmi_version))
     assert fmu == Path("exported/plain.fmu")
     assert validate_fmu(str(fmu)) == []
     md = read_model_description(str(fmu))
@@ -325,7 +326,7 @@ def test_the_fmu_runs_in_a_python_without_nnfmu(damper):
 def test_the_same_graph_builds_the_same_fmu_bytes(damper, tmp_path):
     onnx_path, fmu = damper
     version = int(read_model_description(str(fmu)).fmiVersion[0])
-    again = build_pythonfmu(onnx_path, BuildOptions(out=tmp_path / "again.fmu", backend="pythonfmu",
+    again = build_fmu(onnx_path, BuildOptions(out=tmp_path / "again.fmu", backend="pythonfmu",
                                                     fmi_version=version))
     assert again.read_bytes() == fmu.read_bytes()
 
@@ -390,7 +391,7 @@ def test_a_component_that_does_not_fit_its_graph_is_refused_at_build_time(tmp_pa
 
 def test_name_option_renames_the_component_and_gives_a_c_model_identifier(damper2, tmp_path):
     onnx_path, _ = damper2
-    fmu = build_pythonfmu(onnx_path, BuildOptions(out=tmp_path / "fl.fmu", backend="pythonfmu", name="front-left 1"))
+    fmu = build_fmu(onnx_path, BuildOptions(out=tmp_path / "fl.fmu", backend="pythonfmu", name="front-left 1"))
     md = read_model_description(str(fmu))
     assert (md.modelName, md.coSimulation.modelIdentifier) == ("front-left 1", "front_left_1")
     assert zipfile.ZipFile(fmu).getinfo("binaries/linux64/front_left_1.so").file_size > 0
@@ -401,5 +402,5 @@ def test_bad_files_are_refused_clearly(tmp_path):
     junk = tmp_path / "junk.onnx"
     junk.write_bytes(b"not an onnx model")
     with pytest.raises(PythonFmuBuildError, match="junk.onnx"):
-        build_pythonfmu(junk, BuildOptions(out=tmp_path / "y.fmu", backend="pythonfmu"))
+        build_fmu(junk, BuildOptions(out=tmp_path / "y.fmu", backend="pythonfmu"))
     assert not (tmp_path / "y.fmu").exists()

@@ -15,8 +15,9 @@ from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
 from nnfmu.component import Component, Port
+from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.fmu.pythonfmu import PythonFmuBuildError, build_pythonfmu
+from nnfmu.fmu.pythonfmu import PythonFmuBuildError
 from nnfmu.fmu.pythonfmu.fmi3_slave import NnfmuSlave3
 from nnfmu.fmu.pythonfmu.model_description_fix import DescriptionFix, fix_model_description
 from nnfmu.fmu.pythonfmu.runtimes import runtime
@@ -114,5 +115,5 @@ def test_a_missing_pythonfmu3_is_reported_with_the_package_to_install(damper, tm
     onnx_path, _ = damper
     monkeypatch.setitem(sys.modules, "pythonfmu3", None)  # `import pythonfmu3` now raises ImportError
     with pytest.raises(PythonFmuBuildError, match=r"pythonfmu3==0\.3\.4"):
-        build_pythonfmu(onnx_path, BuildOptions(out=tmp_path / "x.fmu", backend="pythonfmu", fmi_version=3))
+        build_fmu(onnx_path, BuildOptions(out=tmp_path / "x.fmu", backend="pythonfmu", fmi_version=3))
     assert not (tmp_path / "x.fmu").exists()
