@@ -1,4 +1,4 @@
-"""Build a native FMU: generated C for the graph + the fixed FMI glue from `templates/`, compiled for each platform.
+"""The native backend of the FMU factory: generated C for the graph + the fixed FMI glue from `templates/`, compiled.
 
 FMU layout: `modelDescription.xml`, `binaries/<platform>/<identifier>.so|.dll` (this machine's, and win64 when the
 MinGW-w64 cross compiler is installed or asked for), `sources/` (glue, config.h, graph.c/.h, FMI headers copied from

@@ -1,4 +1,4 @@
-"""Package an ONNX step graph as a pythonfmu FMU (FMI 2.0, pythonfmu) or pythonfmu3 FMU (FMI 3.0) co-simulation.
+"""The pythonfmu backend of the FMU factory: the step graph as a pythonfmu (FMI 2.0) or pythonfmu3 (FMI 3.0) FMU.
 
 The FMU holds `resources/model.onnx` (with the component description in its metadata), `resources/variables.json`
 (nnfmu's variable table), the fixed slave module of its FMI version (`fmi2_slave.py` or `fmi3_slave.py`) copied as
