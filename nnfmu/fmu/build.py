@@ -1,25 +1,47 @@
-"""`nnfmu build`: turn an ONNX step graph into an FMU with the chosen backend (native C by default)."""
+"""`nnfmu build`: turn an ONNX step graph into an FMU with the chosen backend (native C by default).
+
+Two entries, one factory (`nnfmu.fmu.factory`): `build_fmu` reads an ONNX file (errors name the file),
+`build_fmu_from_model` takes the graph in memory (the vehicle build); both plan the build once and hand the plan to
+the backend of `options.backend`.
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from nnfmu.fmu.errors import FmuBuildError
+import onnx
+
+from nnfmu.component import Component
+from nnfmu.fmu.factory import Backend, BuildPlan, assemble, load_onnx, plan_build
 from nnfmu.fmu.options import BuildOptions
 
 
-def build_fmu(onnx_path: Path, options: BuildOptions | None = None) -> Path:
-    """Build an FMU from `onnx_path` and return its path; any failure raises FmuBuildError and writes no `.fmu`."""
-    options = options or BuildOptions()
-    if not Path(onnx_path).is_file():
-        raise FmuBuildError(f"{onnx_path}: no such ONNX file")
+def backend_of(options: BuildOptions) -> Backend:
+    """The backend function of `options.backend` (imported on use: pythonfmu needs onnxruntime, native a compiler)."""
     if options.backend == "pythonfmu":
-        from nnfmu.fmu.pythonfmu import PythonFmuBuildError, build_pythonfmu
+        from nnfmu.fmu.pythonfmu import write_pythonfmu
 
-        try:
-            return build_pythonfmu(Path(onnx_path), options)
-        except PythonFmuBuildError as err:
-            raise FmuBuildError(str(err)) from err
-    from nnfmu.fmu.native.build import build_native
+        return write_pythonfmu
+    from nnfmu.fmu.native.build import write_native
 
-    return build_native(Path(onnx_path), options)
+    return write_native
+
+
+def build_fmu(onnx_path: Path, options: BuildOptions | None = None) -> Path:
+    """Build an FMU from the ONNX file `onnx_path` and return its path; any failure raises FmuBuildError naming the
+    file and writes no `.fmu`."""
+    options = options or BuildOptions()
+    onnx_path = Path(onnx_path)
+    plan = plan_build(load_onnx(onnx_path), options, source=str(onnx_path), source_name=onnx_path.name)
+    return _build(plan)
+
+
+def build_fmu_from_model(model: onnx.ModelProto, options: BuildOptions | None = None,
+                         component: Component | None = None) -> Path:
+    """Build an FMU from the in-memory graph `model` (described by `component`, default the graph's own metadata)
+    and return its path; any failure raises FmuBuildError and writes no `.fmu`. `model` is not modified."""
+    return _build(plan_build(model, options or BuildOptions(), component))
+
+
+def _build(plan: BuildPlan) -> Path:
+    return assemble(plan, backend_of(plan.options))

@@ -45,11 +45,17 @@ class BuildOptions:
         if cutoff is not None and not (isinstance(cutoff, (int, float)) and math.isfinite(cutoff) and cutoff >= 0):
             raise FmuBuildError(f"filter cut-off {cutoff!r} Hz must be a finite number >= 0 (0 turns the filter off)")
 
-    def component_of(self, model: onnx.ModelProto, source: Path) -> Component:
+    def component_of(self, model: onnx.ModelProto, source: str | Path) -> Component:
         """The component description the FMU is built from: the graph's, with this build's name and filter start
         value; FmuBuildError naming `source` when the graph's description cannot be read."""
         try:
             component = Component.from_onnx(model, self.name)
         except (ValueError, KeyError, TypeError) as err:  # malformed or too new `nnfmu.component` metadata
             raise FmuBuildError(f"{source}: cannot read the component description: {err}") from err
+        return self.describe(component)
+
+    def describe(self, component: Component) -> Component:
+        """`component` with this build's name and filter start value, where the options set them."""
+        if self.name:
+            component = replace(component, name=self.name)
         return component if self.filter_cutoff is None else replace(component, filter_cutoff=float(self.filter_cutoff))

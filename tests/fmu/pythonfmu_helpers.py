@@ -19,7 +19,7 @@ from nnfmu.cosim.slave import FmuSlave
 from nnfmu.fmu.model_description import (FmuIdentity, ModelDescriptionView, render_model_description,
                                          tensor_dependencies)
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.fmu.pythonfmu import build_pythonfmu
+from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.variables import fmu_variables
 
 T = 1e-3  # sample period of the test graphs [s]
@@ -73,7 +73,7 @@ def build(tmp_path: Path, model: onnx.ModelProto, stem: str, fmi_version: int = 
     onnx_path = tmp_path / f"{stem}.onnx"
     onnx.save(model, str(onnx_path))
     options = BuildOptions(out=tmp_path / f"{stem}.fmu", backend="pythonfmu", fmi_version=fmi_version)
-    return onnx_path, build_pythonfmu(onnx_path, options)
+    return onnx_path, build_fmu(onnx_path, options)
 
 
 def unzip(fmu: Path) -> str:

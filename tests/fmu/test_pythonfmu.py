@@ -1,14 +1,13 @@
-"""The pythonfmu backend, run in fmpy and checked sample by sample against onnxruntime on the same step graph: the
-behaviour both FMI versions share (each test runs for FMI 2 and FMI 3), then what is particular to FMI 2 (pythonfmu).
-FMI 3's own tests are in test_pythonfmu3.py."""
+"""What only the pythonfmu backend has, run in fmpy against onnxruntime on the same step graph: per-FMU slave modules,
+JSON FMU states, a slave that needs no nnfmu, the description fix (each for FMI 2 and FMI 3), then what is particular
+to FMI 2 (pythonfmu). The FMU semantics both backends share are the contract suite's (test_contract.py); FMI 3's own
+tests are in test_pythonfmu3.py."""
 
 from __future__ import annotations
 
 import json
-import math
 import subprocess
 import sys
-import time
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
@@ -19,19 +18,18 @@ import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
-from onnx import TensorProto, helper
 
 from nnfmu.component import Component, Port
-from nnfmu.cosim.slave import FmuSlave
 from nnfmu.fmu.model_description import FmuIdentity, ModelDescriptionView, tensor_dependencies
+from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.fmu.pythonfmu import PythonFmuBuildError, build_pythonfmu
+from nnfmu.fmu.pythonfmu import PythonFmuBuildError
 from nnfmu.fmu.pythonfmu.runtimes import runtime
 from nnfmu.fmu.pythonfmu.fmi2_slave import NnfmuSlave
 from nnfmu.fmu.pythonfmu.model_description_fix import DescriptionFix, fix_model_description
 from nnfmu.fmu.variables import fmu_variables
 from native_fmu_helpers import hostile_graph
-from pythonfmu_helpers import (DISCARD, ERROR, T, VMAX, WARNING, Instance, Reference, build, delay_damper_graph,
+from pythonfmu_helpers import (DISCARD, ERROR, T, Instance, Reference, build, delay_damper_graph,
                               native_description, unzip)
 
 
@@ -56,93 +54,6 @@ def description_fix(onnx_path: Path, component: Component | None = None) -> Desc
 
 
 # ----- both FMI versions -------------------------------------------------------------------------------------------
-@pytest.mark.parametrize("h_over_t", [1.0, 2.5])
-def test_matches_onnxruntime_over_10000_steps_across_a_serialised_state_rollback(damper, h_over_t):
-    onnx_path, fmu = damper
-    h = h_over_t * T
-    rng = np.random.default_rng(1)
-    velocity = rng.uniform(-0.9 * VMAX, 0.9 * VMAX, 10_001)
-    detour = rng.uniform(-0.9 * VMAX, 0.9 * VMAX, 100)
-    inst, ref = Instance(fmu, "a", velocity=velocity[0]), Reference(onnx_path, velocity=velocity[0])
-    assert inst.force() == pytest.approx(ref.y, rel=1e-12, abs=1e-12)
-    got, want = [], []
-    for k in range(1, len(velocity)):
-        t = (k - 1) * h
-        if k == 5000:  # save (through serialisation), wander off, roll back
-            saved = inst.serialised_state()
-            detoured = [inst.step(t + j * h, h, v) for j, v in enumerate(detour)]
-            inst.set_state(saved)
-            inst.free_state(saved)
-            assert np.ptp(detoured) > 0
-            if inst.fmi_version == 3:
-                assert inst.get_real(["time"])[0] == pytest.approx(t, rel=1e-15)
-        got.append(inst.step(t, h, velocity[k]))
-        want.append(ref.step(t, h, velocity[k]))
-    inst.close()
-    np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
-    assert np.std(want) > 1.0  # the comparison is not between two constants
-    assert ref.k == round(10_000 * h_over_t)
-
-
-def test_a_serialised_state_continues_in_another_instance(damper):
-    _, fmu = damper
-    velocity = np.random.default_rng(8).uniform(-0.9 * VMAX, 0.9 * VMAX, 60)
-    a, b = Instance(fmu, "a", cutoff=80.0, gain=0.5), Instance(fmu, "b")
-    for k, v in enumerate(velocity[:30]):
-        a.step(k * T, T, v)
-    moved = a.serialised_state()
-    b.set_state(moved)
-    b.free_state(moved)
-    assert list(b.get_real(["filter_cutoff", "output_gain"])) == [80.0, 0.5]
-    for k, v in enumerate(velocity[30:], start=30):
-        assert b.step(k * T, T, v) == a.step(k * T, T, v)  # bit-identical continuation
-    assert a.force() != 0.0
-    a.close()
-    b.close()
-
-
-@pytest.mark.parametrize("h_over_t", [2.5, 0.4])
-def test_communication_step_other_than_the_sample_period_with_filter_and_gain(damper, h_over_t):
-    onnx_path, fmu = damper
-    h, n = h_over_t * T, 2000
-    velocity = np.random.default_rng(2).uniform(-0.9 * VMAX, 0.9 * VMAX, n)
-    inst = Instance(fmu, "b", cutoff=50.0, gain=1.5, velocity=velocity[0])
-    ref = Reference(onnx_path, cutoff=50.0, gain=1.5, velocity=velocity[0])
-    got = [inst.step(j * h, h, v) for j, v in enumerate(velocity)]
-    want = [ref.step(j * h, h, v) for j, v in enumerate(velocity)]
-    if inst.fmi_version == 3:
-        assert inst.fmu.doStep(n * h, h) == (False, False, False, pytest.approx((n + 1) * h, rel=1e-15))
-    inst.close()
-    np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
-    assert ref.k == int(round(n * h_over_t))  # every sample up to the end was evaluated
-
-
-def test_samples_count_from_the_start_time_and_a_gap_in_time_is_refused(damper):
-    onnx_path, fmu = damper
-    start, h = 0.25, 2.5 * T
-    velocity = np.random.default_rng(6).uniform(-0.9 * VMAX, 0.9 * VMAX, 300)
-    inst, ref = Instance(fmu, "late", velocity=velocity[0], start=start), Reference(onnx_path, velocity=velocity[0])
-    got = [inst.step(start + j * h, h, v) for j, v in enumerate(velocity)]
-    np.testing.assert_allclose(got, [ref.step(j * h, h, v) for j, v in enumerate(velocity)], rtol=1e-12, atol=1e-12)
-    if inst.fmi_version == 3:
-        assert inst.get_real(["time"])[0] == pytest.approx(start + 300 * h, rel=1e-15)
-    with pytest.raises(FMICallException) as gap:
-        inst.do_step(start + 400 * h, h)
-    assert gap.value.status == DISCARD
-    assert any("last communication point" in m for m in inst.logged(ERROR))
-    inst.close()
-
-
-def test_instances_of_one_fmu_are_independent_and_reset_clears_state(damper):
-    onnx_path, fmu = damper
-    a, b = Instance(fmu, "a"), Instance(fmu, "b")
-    first = [a.step(k * T, T, 0.5) for k in range(5)]
-    assert b.step(0.0, T, -0.5) == pytest.approx(Reference(onnx_path).step(0.0, T, -0.5), rel=1e-12, abs=1e-12)
-    a.fmu.reset()
-    a.initialise(cutoff=0.0, gain=1.0, velocity=0.0)
-    assert [a.step(k * T, T, 0.5) for k in range(5)] == first
-    a.close()
-    b.close()
 
 
 def test_two_different_fmus_with_the_same_name_in_one_process(damper, tmp_path):
@@ -159,35 +70,6 @@ def test_two_different_fmus_with_the_same_name_in_one_process(damper, tmp_path):
         assert instances[0].force() != instances[1].force()
     for inst in instances:
         inst.close()
-
-
-def test_extrapolating_flag_and_one_warning_per_excursion(damper):
-    _, fmu = damper
-    inst = Instance(fmu, "env")
-    flags = []
-    for k, v in enumerate([0.5, 1.5, 2.0, 1.2, 0.3, -3.0, 0.0]):
-        inst.step(k * T, T, v)
-        flags.append(inst.get_boolean(["extrapolating"])[0])
-    inst.close()
-    assert flags == [False, True, True, True, False, True, False]
-    warnings = [(c, m) for s, c, m in inst.messages if s == WARNING]
-    assert len(warnings) == 2 and all(c == "logStatusWarning" for c, _ in warnings)
-    assert "velocity" in warnings[0][1] and "1.5" in warnings[0][1] and "-3.0" in warnings[1][1]
-
-
-@pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
-def test_non_finite_input_is_refused_with_an_error_status_and_a_logged_message(damper, bad):
-    onnx_path, fmu = damper
-    inst, ref = Instance(fmu, "nan"), Reference(onnx_path)
-    assert inst.step(0.0, T, 0.2) == pytest.approx(ref.step(0.0, T, 0.2), rel=1e-12, abs=1e-12)
-    inst.set_real(["velocity"], [bad])
-    with pytest.raises(FMICallException) as refused:
-        inst.do_step(T, T)
-    assert refused.value.status == DISCARD
-    assert any("velocity" in m and repr(bad) in m for m in inst.logged(ERROR))
-    assert inst.get_real(["velocity"])[0] == 0.2  # the refused value never reached the graph
-    assert inst.step(T, T, 0.1) == pytest.approx(ref.step(T, T, 0.1), rel=1e-12, abs=1e-12)
-    inst.close()
 
 
 @pytest.mark.parametrize(("field", "forged", "named"), [
@@ -233,68 +115,6 @@ def test_a_forged_or_garbage_state_is_refused_naming_the_field_and_the_instance_
     inst.close()
 
 
-class Uninitialised(Instance):
-    """An instance left in the state instantiation leaves it: never initialised."""
-
-    def initialise(self, cutoff: float, gain: float, velocity: float, start: float = 0.0) -> None:
-        pass
-
-
-def test_a_step_before_initialisation_is_refused(damper):
-    _, fmu = damper
-    inst = Uninitialised(fmu, "early")
-    with pytest.raises(FMICallException) as refused:
-        inst.do_step(0.0, T)
-    assert refused.value.status == DISCARD
-    assert any("not initialised" in m for m in inst.logged(ERROR)), inst.messages
-    inst.close()
-
-
-@pytest.mark.parametrize("h", [1e308, float("inf"), 1e3])
-def test_a_step_of_too_many_samples_is_refused_at_once_naming_the_limit(damper, h):
-    onnx_path, fmu = damper
-    inst, ref = Instance(fmu, "long"), Reference(onnx_path)
-    started = time.perf_counter()
-    with pytest.raises(FMICallException) as refused:
-        inst.do_step(0.0, h)
-    assert time.perf_counter() - started < 1.0
-    assert refused.value.status == DISCARD
-    assert any("more than the 100000 one step may evaluate" in m for m in inst.logged(ERROR)), inst.messages
-    assert inst.step(0.0, T, 0.2) == pytest.approx(ref.step(0.0, T, 0.2), rel=1e-12, abs=1e-12)  # nothing changed
-    inst.close()
-
-
-@pytest.mark.parametrize("fmi_version", [2, 3])
-def test_graph_without_component_gets_a_generic_description_evaluated_each_step(tmp_path, monkeypatch, fmi_version):
-    node = helper.make_node("Tanh", ["x"], ["y"])
-    graph = helper.make_graph([node], "plain", [helper.make_tensor_value_info("x", TensorProto.DOUBLE, [2])],
-                              [helper.make_tensor_value_info("y", TensorProto.DOUBLE, [2])])
-    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)], ir_version=9)
-    onnx.save(model, str(tmp_path / "plain.onnx"))
-    monkeypatch.chdir(tmp_path)
-    fmu = build_pythonfmu(tmp_path / "plain.onnx", BuildOptions(backend="pythonfmu", fmi_version=fmi_version))
-    assert fmu == Path("exported/plain.fmu")
-    assert validate_fmu(str(fmu)) == []
-    md = read_model_description(str(fmu))
-    assert md.coSimulation.modelIdentifier == "plain" and md.defaultExperiment.stepSize is None
-    ports = [("x[0]", 0), ("x[1]", 1), ("y[0]", 2), ("y[1]", 3)]
-    assert [(v.name, v.valueReference) for v in md.modelVariables][:5] == (
-        ports + [("extrapolating", 4)] if fmi_version == 2 else [("time", 7)] + ports)
-    assert [(v.name, v.valueReference) for v in md.modelVariables if v.name == "filter_cutoff"] == [
-        ("filter_cutoff", 5)]
-    with FmuSlave(fmu, "p") as inst:
-        inst.enter_initialization(0.0)
-        inst.set_real(["filter_cutoff"], [5.0])  # [Hz]; without a sample period the filter runs at the step size
-        inst.exit_initialization()
-        t, y = 0.0, np.tanh([0.0, 0.0])
-        for h, x in [(0.01, [0.3, -0.1]), (0.5, [-2.0, 0.4]), (0.001, [1.0, 1.0]), (0.02, [0.7, -3.0])]:
-            inst.set_real(["x[0]", "x[1]"], x)
-            inst.do_step(t, h)
-            t += h
-            y = y + (1.0 - math.exp(-2.0 * math.pi * 5.0 * h)) * (np.tanh(x) - y)
-            np.testing.assert_allclose(inst.get_real(["y[0]", "y[1]"]), y, rtol=1e-14, atol=1e-15)
-
-
 @pytest.mark.parametrize("fmi_version", [2, 3])
 def test_hostile_names_validate_and_give_the_native_variables(tmp_path, fmi_version):
     onnx_path, fmu = build(tmp_path, hostile_graph(), "hostile", fmi_version)
@@ -325,7 +145,7 @@ def test_the_fmu_runs_in_a_python_without_nnfmu(damper):
 def test_the_same_graph_builds_the_same_fmu_bytes(damper, tmp_path):
     onnx_path, fmu = damper
     version = int(read_model_description(str(fmu)).fmiVersion[0])
-    again = build_pythonfmu(onnx_path, BuildOptions(out=tmp_path / "again.fmu", backend="pythonfmu",
+    again = build_fmu(onnx_path, BuildOptions(out=tmp_path / "again.fmu", backend="pythonfmu",
                                                     fmi_version=version))
     assert again.read_bytes() == fmu.read_bytes()
 
@@ -390,16 +210,10 @@ def test_a_component_that_does_not_fit_its_graph_is_refused_at_build_time(tmp_pa
 
 def test_name_option_renames_the_component_and_gives_a_c_model_identifier(damper2, tmp_path):
     onnx_path, _ = damper2
-    fmu = build_pythonfmu(onnx_path, BuildOptions(out=tmp_path / "fl.fmu", backend="pythonfmu", name="front-left 1"))
+    fmu = build_fmu(onnx_path, BuildOptions(out=tmp_path / "fl.fmu", backend="pythonfmu", name="front-left 1"))
     md = read_model_description(str(fmu))
     assert (md.modelName, md.coSimulation.modelIdentifier) == ("front-left 1", "front_left_1")
     assert zipfile.ZipFile(fmu).getinfo("binaries/linux64/front_left_1.so").file_size > 0
     assert validate_fmu(str(fmu)) == []
 
 
-def test_bad_files_are_refused_clearly(tmp_path):
-    junk = tmp_path / "junk.onnx"
-    junk.write_bytes(b"not an onnx model")
-    with pytest.raises(PythonFmuBuildError, match="junk.onnx"):
-        build_pythonfmu(junk, BuildOptions(out=tmp_path / "y.fmu", backend="pythonfmu"))
-    assert not (tmp_path / "y.fmu").exists()

@@ -1,9 +1,9 @@
 """The pythonfmu backend's FMI 3.0 FMUs (pythonfmu3): what is particular to FMI 3, checked against the model description
-the native backend renders for the same graph. The behaviour both FMI versions share is tested in test_pythonfmu.py."""
+the native backend renders for the same graph. What the backend does for both FMI versions is tested in
+test_pythonfmu.py, the FMU semantics of every backend in test_contract.py."""
 
 from __future__ import annotations
 
-import math
 import sys
 import zipfile
 from pathlib import Path
@@ -15,8 +15,9 @@ from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
 from nnfmu.component import Component, Port
+from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.fmu.pythonfmu import PythonFmuBuildError, build_pythonfmu
+from nnfmu.fmu.pythonfmu import PythonFmuBuildError
 from nnfmu.fmu.pythonfmu.fmi3_slave import NnfmuSlave3
 from nnfmu.fmu.pythonfmu.model_description_fix import DescriptionFix, fix_model_description
 from nnfmu.fmu.pythonfmu.runtimes import runtime
@@ -98,21 +99,9 @@ def test_fixed_parameters_and_outputs_cannot_be_set_after_initialisation(damper)
     inst.close()
 
 
-def test_with_logging_off_errors_are_reported_and_warnings_are_not(damper):
-    quiet = Instance(damper[1], "quiet", logging_on=False)
-    flags = []
-    for k, v in enumerate([0.5, 1.5, 2.0, 1.2, 0.3, -3.0, 0.0]):
-        quiet.step(k * T, T, v)
-        flags.append(quiet.get_boolean(["extrapolating"])[0])
-    quiet.set_real(["velocity"], [math.nan])
-    quiet.close()
-    assert flags == [False, True, True, True, False, True, False]
-    assert [s for s, _, _ in quiet.messages] == [ERROR]
-
-
 def test_a_missing_pythonfmu3_is_reported_with_the_package_to_install(damper, tmp_path, monkeypatch):
     onnx_path, _ = damper
     monkeypatch.setitem(sys.modules, "pythonfmu3", None)  # `import pythonfmu3` now raises ImportError
     with pytest.raises(PythonFmuBuildError, match=r"pythonfmu3==0\.3\.4"):
-        build_pythonfmu(onnx_path, BuildOptions(out=tmp_path / "x.fmu", backend="pythonfmu", fmi_version=3))
+        build_fmu(onnx_path, BuildOptions(out=tmp_path / "x.fmu", backend="pythonfmu", fmi_version=3))
     assert not (tmp_path / "x.fmu").exists()

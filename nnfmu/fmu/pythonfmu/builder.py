@@ -1,4 +1,4 @@
-"""Package an ONNX step graph as a pythonfmu FMU (FMI 2.0, pythonfmu) or pythonfmu3 FMU (FMI 3.0) co-simulation.
+"""The pythonfmu backend of the FMU factory: the step graph as a pythonfmu (FMI 2.0) or pythonfmu3 (FMI 3.0) FMU.
 
 The FMU holds `resources/model.onnx` (with the component description in its metadata), `resources/variables.json`
 (nnfmu's variable table), the fixed slave module of its FMI version (`fmi2_slave.py` or `fmi3_slave.py`) copied as
@@ -13,62 +13,46 @@ from __future__ import annotations
 import hashlib
 import json
 import shutil
-import tempfile
 import uuid
 import xml.etree.ElementTree as ET
 from dataclasses import asdict
 from pathlib import Path
 
 import onnx
-from google.protobuf.message import DecodeError
 from onnxruntime.capi.onnxruntime_pybind11_state import Fail, InvalidArgument, InvalidGraph
 from onnxruntime.capi.onnxruntime_pybind11_state import NotImplemented as OrtNotImplemented
 
-from nnfmu.fmu.model_description import GENERATION_TOOL, FmuIdentity, ModelDescriptionView, tensor_dependencies
-from nnfmu.fmu.names import c_identifier
-from nnfmu.fmu.options import BuildOptions
-from nnfmu.fmu.package import package_fmu
+from nnfmu.fmu.factory import BuildPlan
+from nnfmu.fmu.model_description import GENERATION_TOOL, ModelDescriptionView
 from nnfmu.fmu.pythonfmu import sampled_component
 from nnfmu.fmu.pythonfmu.errors import PythonFmuBuildError
 from nnfmu.fmu.pythonfmu.model_description_fix import DescriptionFix, fix_model_description
 from nnfmu.fmu.pythonfmu.runtimes import Runtime, runtime
-from nnfmu.fmu.reference_results import write_reference_results
-from nnfmu.fmu.variables import FmuVariables, fmu_variables
+from nnfmu.fmu.variables import FmuVariables
 
 RUNTIME_NOTE = ("pythonfmu backend: runs in the importing tool's Python 3 process, "
                 "which needs numpy and onnxruntime installed")
 ORT_ERRORS = (Fail, InvalidArgument, InvalidGraph, OrtNotImplemented)
-def build_pythonfmu(onnx_path: Path, options: BuildOptions) -> Path:
-    """Build `options.out` (default `exported/<identifier>.fmu`) from the step graph `onnx_path`; return its path."""
-    model = _load(Path(onnx_path))
-    run = runtime(options.fmi_version)
-    component = options.component_of(model, Path(onnx_path))
+
+
+def write_pythonfmu(plan: BuildPlan, tree: Path) -> None:
+    """The pythonfmu backend: the graph with its component attached, the variable table, the fixed slave and the
+    runtime under `resources/`, the runtime's binaries and modelDescription.xml, written into the FMU folder `tree`.
+    Raises PythonFmuBuildError (an FmuBuildError)."""
+    run = runtime(plan.fmi_version)
+    component = plan.component
     if component.interpolates_inputs:
         raise PythonFmuBuildError(
-            f"{onnx_path}: {component.name!r} interpolates its inputs between samples (a vehicle), which the pythonfmu "
-            "runtimes cannot offer (no input derivatives, no evaluation of the latest sample when inputs are set "
-            "after a step); build it with the native backend")
+            f"{plan.source}: {component.name!r} interpolates its inputs between samples (a vehicle), which the "
+            "pythonfmu runtimes cannot offer (no input derivatives, no evaluation of the latest sample when inputs "
+            "are set after a step); build it with the native backend")
+    model = onnx.ModelProto()
+    model.CopyFrom(plan.model)
     component.attach_to(model)  # the slave reads its ports from here, also for graphs from other tools
-    identifier = c_identifier(component.name)
-    variables = fmu_variables(component)
-    out = Path(options.out) if options.out is not None else Path("exported") / f"{identifier}.fmu"
-
-    with tempfile.TemporaryDirectory(prefix="nnfmu_pythonfmu_") as tmp:
-        tree = Path(tmp)
-        module = _write_resources(tree / "resources", model, variables, run, options.fmi_version)
-        identity = FmuIdentity(component.name, identifier, _guid(module), options.fmi_version)
-        view = ModelDescriptionView(identity, component, variables, tensor_dependencies(model))
-        (tree / "modelDescription.xml").write_bytes(_model_description(tree / "resources", view, run))
-        _copy_binaries(tree / "binaries", identifier, run)
-        write_reference_results(tree, model, component, variables)
-        return package_fmu(tree, out)
-
-
-def _load(onnx_path: Path) -> onnx.ModelProto:
-    try:
-        return onnx.load(str(onnx_path))
-    except (OSError, DecodeError) as err:
-        raise PythonFmuBuildError(f"{onnx_path}: cannot read the ONNX model: {err}") from err
+    module = _write_resources(tree / "resources", model, plan.variables, run, plan.fmi_version)
+    view = plan.view(_guid(module))
+    (tree / "modelDescription.xml").write_bytes(_model_description(tree / "resources", view, run))
+    _copy_binaries(tree / "binaries", plan.identifier, run)
 
 
 def _guid(module: str) -> str:

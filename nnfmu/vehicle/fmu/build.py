@@ -1,27 +1,25 @@
 """`nnfmu vehicle build`: a quarter car or full vehicle as a native FMI co-simulation FMU, via the component factory.
 
-The vehicle's exact discrete step becomes an ONNX step graph (`step_graph`) with a `Component` attached: input
-ports are the vehicle's inputs (actuator displacements and velocities, forces of external components), output ports
-its outputs, the state starts at the static equilibrium for zero actuator input (or the settings' initial state), and
-the output filter is off (an
-exact model must not be low-passed). The component interpolates its inputs (`interval_starts`), and
-`nnfmu.fmu.build_fmu` turns it into a native FMU like any trained component, so the FMU semantics are those of
-docs/fmu.md: samples at t_start + k T; the inputs are linear between samples, from the values set at one sample's
-time to those set at the next; a sample in a step takes the inputs set before the step (plus their FMI 2 derivatives
-times the time into the step); inputs set at the latest sample's time make the FMU evaluate that sample again, so
-the outputs there (accelerations, tyre forces) follow the component forces set there.
+The vehicle's exact discrete step becomes an ONNX step graph (`step_graph`) with a `Component` attached: input ports are
+the vehicle's inputs (actuator displacements and velocities, forces of external components), output ports its outputs,
+the state starts at the static equilibrium for zero actuator input (or the settings' initial state), and the output
+filter is off (an exact model must not be low-passed). The component interpolates its inputs (`interval_starts`), and
+`nnfmu.fmu.build.build_fmu_from_model` turns the graph, in memory, into a native FMU like any trained component, so the
+FMU semantics are those of docs/fmu.md: samples at t_start + k T; the inputs are linear between samples, from the values
+set at one sample's time to those set at the next; a sample in a step takes the inputs set before the step (plus their
+FMI 2 derivatives times the time into the step); inputs set at the latest sample's time make the FMU evaluate that
+sample again, so the outputs there (accelerations, tyre forces) follow the component forces set there.
 """
 
 from __future__ import annotations
 
-import tempfile
 from pathlib import Path
 
 import onnx
 
 import nnfmu
 from nnfmu.component import Component, Port, StatePort
-from nnfmu.fmu.build import build_fmu
+from nnfmu.fmu.build import build_fmu_from_model
 from nnfmu.fmu.options import BuildOptions
 
 from ..models import DEFAULT_FILE, LinearVehicle, QuarterCarParameters, VehicleModelError, VehicleParameters
@@ -110,10 +108,6 @@ def build_vehicle_fmu(model: str, out: Path, settings: VehicleBuildSettings | No
     """Build the FMU of `model` ('quarter-car' or 'full-vehicle') at `out`; return its path. Raises FmuBuildError
     (build), VehicleBuildError (settings) or ParameterError (parameter file); no partial `.fmu` is left."""
     settings = settings or VehicleBuildSettings()
-    graph = vehicle_step_graph(model, settings)
-    with tempfile.TemporaryDirectory(prefix="nnfmu-vehicle-") as folder:
-        onnx_path = Path(folder) / f"{graph.graph.name}.onnx"
-        onnx_path.write_bytes(graph.SerializeToString())  # a private temporary folder: nothing to half-write
-        options = BuildOptions(out=Path(out), backend=settings.backend, fmi_version=settings.fmi_version,
-                               platforms=settings.platforms)
-        return build_fmu(onnx_path, options)
+    options = BuildOptions(out=Path(out), backend=settings.backend, fmi_version=settings.fmi_version,
+                           platforms=settings.platforms)
+    return build_fmu_from_model(vehicle_step_graph(model, settings), options)

@@ -1,0 +1,101 @@
+"""The FMU factory's front half, shared by every backend: an in-memory graph, its component and the build options
+become one `BuildPlan` (identifier, output path, variables, dependencies), and `assemble` runs a backend on a
+temporary folder, adds the reference results and zips the `.fmu` atomically.
+
+A backend is a function `(plan, tree) -> None` that writes only what differs between backends into the FMU folder
+`tree`: modelDescription.xml with its own instantiation token (the view comes from the plan), and its sources and
+compiled binaries (native) or its resources and runtime (pythonfmu). Every failure is an FmuBuildError naming the
+source (the ONNX file, or the in-memory graph); no `.fmu` is written then.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import onnx
+
+from nnfmu.component import Component
+from nnfmu.fmu.errors import FmuBuildError
+from nnfmu.fmu.model_description import FmuIdentity, ModelDescriptionView, tensor_dependencies
+from nnfmu.fmu.names import c_identifier
+from nnfmu.fmu.options import BuildOptions
+from nnfmu.fmu.package import package_fmu
+from nnfmu.fmu.reference_results import write_reference_results
+from nnfmu.fmu.variables import FmuVariables, fmu_variables
+
+
+@dataclass(frozen=True)
+class BuildPlan:
+    """What every backend builds from: the graph (a private copy), its component, the options, where the graph came
+    from (`source` names it in errors, `source_name` is the short form in generated comments), the model identifier,
+    the `.fmu` path and the FMU variables with their graph dependencies."""
+
+    model: onnx.ModelProto
+    component: Component
+    options: BuildOptions
+    source: str
+    source_name: str
+    identifier: str
+    target: Path
+    variables: FmuVariables
+    dependencies: dict[str, set[str]]
+
+    @property
+    def fmi_version(self) -> int:
+        return self.options.fmi_version
+
+    def view(self, token: str, source_files: Sequence[str] = ()) -> ModelDescriptionView:
+        """What the modelDescription templates read, with the backend's instantiation token and C sources."""
+        identity = FmuIdentity(self.component.name, self.identifier, token, self.fmi_version)
+        return ModelDescriptionView(identity, self.component, self.variables, self.dependencies, list(source_files))
+
+
+Backend = Callable[[BuildPlan, Path], None]
+
+
+def default_output(identifier: str) -> Path:
+    """Where `nnfmu build` writes an FMU when `--out` is not given."""
+    return Path("exported") / f"{identifier}.fmu"
+
+
+def load_onnx(onnx_path: Path) -> onnx.ModelProto:
+    """Read an ONNX file, naming it in the error when it is missing or cannot be read."""
+    if not Path(onnx_path).is_file():
+        raise FmuBuildError(f"{onnx_path}: no such ONNX file")
+    try:
+        return onnx.load(str(onnx_path))
+    except Exception as err:  # onnx raises DecodeError, OSError or its own errors
+        raise FmuBuildError(f"{onnx_path}: cannot read the ONNX model: {err}") from err
+
+
+def in_memory_source(model: onnx.ModelProto) -> str:
+    """How errors and generated comments name a graph that was never a file."""
+    return f"ONNX graph {model.graph.name!r} (in memory)"
+
+
+def plan_build(model: onnx.ModelProto, options: BuildOptions, component: Component | None = None,
+               source: str | None = None, source_name: str | None = None) -> BuildPlan:
+    """Derive everything the backends share, once: the component (given, or read from the graph's metadata, with the
+    options' name and filter start value), identifier, output path, variables and dependencies. The graph is copied,
+    so a backend may attach metadata to its copy without touching the caller's."""
+    source = source or in_memory_source(model)
+    private = onnx.ModelProto()
+    private.CopyFrom(model)
+    described = options.describe(component) if component is not None else options.component_of(private, source)
+    identifier = c_identifier(described.name)
+    target = Path(options.out) if options.out is not None else default_output(identifier)
+    return BuildPlan(private, described, options, source, source_name or source, identifier, target,
+                     fmu_variables(described), tensor_dependencies(private))
+
+
+def assemble(plan: BuildPlan, backend: Backend) -> Path:
+    """Run `backend` on a temporary FMU folder, add the reference results and zip it to `plan.target`."""
+    with tempfile.TemporaryDirectory(prefix="nnfmu-build-") as tmp:
+        tree = Path(tmp) / "fmu"
+        tree.mkdir()
+        backend(plan, tree)
+        write_reference_results(tree, plan.model, plan.component, plan.variables)
+        return package_fmu(tree, plan.target)
