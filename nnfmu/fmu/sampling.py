@@ -20,6 +20,16 @@ class SamplingAnnotationError(FmuBuildError):
     """The sampling annotation of a model description is there but unreadable; names the file and the value."""
 
 
+def annotate_sample_period(root: ET.Element, period: float, fmi_version: int) -> None:
+    """Add the sampling annotation to a model description's root element (the pythonfmu backend's writer; the
+    native backend's templates write the same element)."""
+    if fmi_version == 2:
+        tool = ET.SubElement(ET.SubElement(root, "VendorAnnotations"), "Tool", name=ANNOTATION_TOOL)
+    else:
+        tool = ET.SubElement(ET.SubElement(root, "Annotations"), "Annotation", type=ANNOTATION_TOOL)
+    ET.SubElement(tool, "Sampling", period=repr(float(period)), unit="s")
+
+
 def read_sample_period(model_description: Path) -> float | None:
     """The sample period [s] annotated in the model description file, or None (no annotation: a stateless graph or
     another tool's FMU). A malformed annotation raises SamplingAnnotationError naming the file."""

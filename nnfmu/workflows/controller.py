@@ -12,7 +12,6 @@ displacement), else the controller's output `X`. The vehicle's actuator inputs s
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
 
 import onnx
@@ -20,7 +19,7 @@ import onnx
 from nnfmu.control import Command, SkyhookSettings, fixed_command_graph, known_command, skyhook_graph
 from nnfmu.cosim.ssp import Connection, Connector, Element, SspError, SystemStructure, write_ssd
 from nnfmu.errors import SettingsError
-from nnfmu.fmu.build import build_fmu
+from nnfmu.fmu.build import build_fmu_from_model
 from nnfmu.fmu.options import BuildOptions, FmiVersion
 
 __all__ = ["CONTROLLERS", "Command", "SkyhookSettings", "build_controller_fmu", "build_fixed_command_fmu",
@@ -32,12 +31,8 @@ DAMPER_PORT = "damper"  # the quarter car's damper port prefix: damper_force in,
 
 
 def build_graph_fmu(graph: onnx.ModelProto, out: str | os.PathLike[str], fmi_version: FmiVersion = 2) -> Path:
-    """Build the native FMU of an in-memory step graph at `out` (through a private temporary ONNX file, named
-    apart from the graph so no graph name can steer where it lands); the FMU takes the component's name."""
-    with tempfile.TemporaryDirectory(prefix="nnfmu-controller-") as folder:
-        onnx_path = Path(folder) / "step_graph.onnx"
-        onnx_path.write_bytes(graph.SerializeToString())  # a private temporary folder: nothing to half-write
-        return build_fmu(onnx_path, BuildOptions(out=Path(out), fmi_version=fmi_version))
+    """Build the native FMU of an in-memory step graph at `out`; the FMU takes the component's name."""
+    return build_fmu_from_model(graph, BuildOptions(out=Path(out), fmi_version=fmi_version))
 
 
 def build_skyhook_fmu(settings: SkyhookSettings, out: str | os.PathLike[str], fmi_version: FmiVersion = 2) -> Path:

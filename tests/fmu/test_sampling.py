@@ -20,15 +20,16 @@ def _description(fmu: Path, folder: Path) -> Path:
     return folder / "modelDescription.xml"
 
 
+@pytest.mark.parametrize("backend", ["native", "pythonfmu"])
 @pytest.mark.parametrize("fmi_version", [2, 3])
-def test_the_fmu_carries_its_sample_period(tmp_path: Path, fmi_version: int) -> None:
+def test_the_fmu_carries_its_sample_period(tmp_path: Path, fmi_version: int, backend: str) -> None:
     import onnx
 
     for period in (1e-3, None):
         onnx_path = tmp_path / f"damper_{period}.onnx"
         onnx.save(linear_damper_graph(1500.0, sample_period=period), onnx_path)
         fmu = build_fmu(onnx_path, BuildOptions(out=tmp_path / f"damper_{period}_{fmi_version}.fmu",
-                                                fmi_version=fmi_version))
+                                                fmi_version=fmi_version, backend=backend))
         assert read_sample_period(_description(fmu, tmp_path / f"x_{period}_{fmi_version}")) == period
 
 
