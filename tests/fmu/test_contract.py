@@ -337,12 +337,6 @@ def test_build_option_sets_the_filter_start_value(combo, built, master, referenc
         BuildOptions(filter_cutoff=-1.0)
 
 
-@pytest.mark.parametrize("combo", [
-    pytest.param(c, id=i, marks=pytest.mark.xfail(
-        c[0] == "pythonfmu", strict=True,
-        reason="pythonfmu: reading an output in Initialization Mode returns 0, not sample 0 computed from the inputs "
-               "set so far (its slave evaluates sample 0 only when initialisation ends)"))
-    for c, i in zip(COMBOS, COMBO_IDS)])
 def test_outputs_read_in_initialization_mode_preview_sample_0(combo, built, master, reference):
     backend, fmi = combo
     inputs = random_inputs(400, seed=31)
@@ -369,6 +363,25 @@ def test_outputs_read_in_initialization_mode_preview_sample_0(combo, built, mast
 
 # ----- envelope, refusals, logging -----------------------------------------------------------------------------------
 VELOCITY_EXCURSIONS = [0.0, 0.5, 1.5, 2.0, 1.8, 0.2, 0.1, -3.0, 0.0]  # two excursions: samples 2-4 and 7
+
+
+def test_the_initialization_mode_preview_follows_parameters_and_flags_the_envelope_without_a_warning(combo, built,
+                                                                                                   master, reference):
+    backend, fmi = combo
+    m = master(built("delay", backend, fmi))
+    m.enter_initialization(0.0)
+    m.set_real(["output_gain"], [2.0])
+    m.set_real(m.inputs, [1.5, 0.01])  # velocity outside its training range
+    outside = reference.simulate(np.array([[1.5, 0.01]]), T, gain=2.0)[0]
+    np.testing.assert_allclose(m.outputs_now(), outside, rtol=RTOL, atol=ATOL)
+    assert m.extrapolating()
+    m.set_real(m.inputs, [0.5, 0.01])
+    inside = reference.simulate(np.array([[0.5, 0.01]]), T, gain=2.0)[0]
+    assert not m.extrapolating()
+    np.testing.assert_allclose(m.outputs_now(), inside, rtol=RTOL, atol=ATOL)
+    m.fmu.exitInitializationMode()
+    np.testing.assert_allclose(m.outputs_now(), inside, rtol=RTOL, atol=ATOL)
+    assert not m.extrapolating() and m.logged(WARNING) == []  # the previewed excursion left no trace
 
 
 def test_extrapolating_flag_and_one_warning_per_excursion(combo, built, master, reference):

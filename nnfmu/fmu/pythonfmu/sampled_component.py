@@ -54,6 +54,13 @@ def _session(model: Path) -> ort.InferenceSession:
     return ort.InferenceSession(str(model), options, providers=["CPUExecutionProvider"])
 
 
+def _envelope(port: dict[str, Any]) -> tuple[float, float]:
+    """The training range [min, max] of an input port (unbounded where the component description gives none)."""
+    lo = -math.inf if port.get("min") is None else port["min"]
+    hi = math.inf if port.get("max") is None else port["max"]
+    return lo, hi
+
+
 def _static_shape(node_arg: Any) -> tuple[int, ...]:
     """Shape of a graph tensor with symbolic or unknown dimensions (a batch) taken as 1."""
     return tuple(d if isinstance(d, int) and d > 0 else 1 for d in node_arg.shape)
@@ -104,6 +111,7 @@ class SampledComponent:
         self._t_start: float | None = None  # set by `start`, else by the first step
         self._time = 0.0
         self._sample = -1  # index of the latest evaluated sample; -1 before initialisation ends
+        self._preview: tuple[list[float], bool] | None = None  # sample 0 from the current values, until one changes
 
     def _check_tensors(self) -> None:
         """Every port and state must name a floating-point graph tensor and an element inside it."""
@@ -126,7 +134,8 @@ class SampledComponent:
 
     # ----- variables -------------------------------------------------------------------------------------------------
     def read(self, vr: int, var_type: str, function: str) -> float | bool:
-        """The value of variable `vr` of table type `var_type` ("Real" or "Boolean"); a mismatch is reported."""
+        """The value of variable `vr` of table type `var_type` ("Real" or "Boolean"); a mismatch is reported. Before
+        initialisation ends, outputs read the preview of sample 0."""
         var = self._by_vr.get(vr)
         if var is None or var["type"] != var_type:
             self._report(f"{function}: value reference {vr} is not a {var_type} variable", "error")
@@ -138,7 +147,8 @@ class SampledComponent:
             return self._parameters[var["name"]]
         if causality == "independent":
             return self._time
-        return self._outputs[var["port_index"]] if var_type == "Real" else self._extrapolating
+        outputs, extrapolating = self._sample_0_preview() if self._sample < 0 else (self._outputs, self._extrapolating)
+        return outputs[var["port_index"]] if var_type == "Real" else extrapolating
 
     def write(self, vr: int, value: Any, var_type: str, function: str) -> None:
         """Set an input or parameter. A NaN/Inf (or negative cut-off) is refused: the old value is kept, the message
@@ -160,6 +170,7 @@ class SampledComponent:
                          f"is set", "error")
             return
         self._refused.pop(name, None)
+        self._preview = None
         if var["causality"] == "input":
             self._inputs[var["port_index"]] = value
         else:
@@ -213,17 +224,32 @@ class SampledComponent:
         return True
 
     # ----- one sample ------------------------------------------------------------------------------------------------
-    def _evaluate(self, period: float, t_sample: float) -> None:
-        """Run the graph for the next sample, advance its state, filter the outputs and check the envelope."""
+    def _run_graph(self) -> tuple[dict[str, list[float]], list[float]]:
+        """The graph's next state and raw outputs from the current inputs and state; nothing is changed."""
         feeds = {name: t.zeros() for name, t in self._tensors.items()}
         for port, value in zip(self._in_ports, self._inputs):
             feeds[port["tensor"]].reshape(-1)[port["index"]] = value
         for state in self._states:
             feeds[state["input"]].reshape(-1)[:] = self._graph_state[state["input"]]
         results = dict(zip(self._output_names, self._session.run(self._output_names, feeds)))
-        for state in self._states:
-            self._graph_state[state["input"]] = [float(v) for v in np.ravel(results[state["output"]])]
-        self._raw = [float(np.ravel(results[p["tensor"]])[p["index"]]) for p in self._out_ports]
+        graph_state = {s["input"]: [float(v) for v in np.ravel(results[s["output"]])] for s in self._states}
+        raw = [float(np.ravel(results[p["tensor"]])[p["index"]]) for p in self._out_ports]
+        return graph_state, raw
+
+    def _sample_0_preview(self) -> tuple[list[float], bool]:
+        """Outputs and envelope flag of sample 0 as ending initialisation now would evaluate them (docs/fmu.md: read
+        in Initialization Mode), without advancing state or logging; kept until an input, parameter or state is set."""
+        if self._preview is None:
+            _, raw = self._run_graph()
+            gain = self._parameters["output_gain"]
+            outside = any(not lo <= value <= hi
+                          for (lo, hi), value in zip(map(_envelope, self._in_ports), self._inputs))
+            self._preview = ([gain * u for u in raw], outside)
+        return self._preview
+
+    def _evaluate(self, period: float, t_sample: float) -> None:
+        """Run the graph for the next sample, advance its state, filter the outputs and check the envelope."""
+        self._graph_state, self._raw = self._run_graph()
         self._sample += 1
         self._filter(period)
         self._check_envelope(t_sample)
@@ -241,8 +267,7 @@ class SampledComponent:
     def _check_envelope(self, t_sample: float) -> None:
         """Flag inputs outside the training envelope; report one warning when an input leaves it."""
         for i, (port, value) in enumerate(zip(self._in_ports, self._inputs)):
-            lo = -math.inf if port.get("min") is None else port["min"]
-            hi = math.inf if port.get("max") is None else port["max"]
+            lo, hi = _envelope(port)
             outside = not lo <= value <= hi
             if outside and not self._outside[i]:
                 unit = port.get("unit", "")
@@ -285,6 +310,7 @@ class SampledComponent:
         self._t_start = None if state["t_start"] is None else float(state["t_start"])
         self._time = float(state["time"])
         self._sample = int(state["sample"])
+        self._preview = None
 
     def _check_state(self, state: Any) -> None:
         """ValueError naming the first field of a deserialised state that does not fit this FMU."""
