@@ -3,8 +3,8 @@
 This file is shipped unchanged in every FMI 2 pythonfmu FMU, copied under a module name unique to that FMU, with
 `sampled_component.py` beside it as `<module>_core.py` (builder.py): Python caches modules by name, so two FMUs in
 one process never share either. It runs in the importing tool's Python (numpy, onnxruntime) and must not import
-nnfmu. pythonfmu 0.7.0 turns any Python exception into fmi2Fatal, so refused calls are logged with status error and
-`do_step` returns False (fmi2Discard) while an input holds a refused value.
+nnfmu. pythonfmu 0.7.0 turns any Python exception into fmi2Fatal and ignores what a setter returns, so refused calls
+are logged with status error and `do_step` returns False (fmi2Discard) while an input holds a refused value.
 """
 
 from __future__ import annotations

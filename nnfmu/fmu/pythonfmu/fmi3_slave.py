@@ -1,10 +1,10 @@
 """nnfmu's one generic FMI 3.0 slave (pythonfmu3): translates FMI 3 calls to the shared `SampledComponent`.
 
 Shipped like the FMI 2 slave (builder.py): unchanged, under a module name unique to its FMU, with
-`sampled_component.py` beside it as `<module>_core.py`. pythonfmu3 0.3.4 turns any Python exception into fmi3Fatal
-and does not pass the start time of fmi3EnterInitializationMode to the slave, so samples count from the first
-doStep's communication point (which FMI 3 requires to be the start time). Refused calls are logged with status error
-and `do_step` returns fmi3Discard while an input holds a refused value.
+`sampled_component.py` beside it as `<module>_core.py`. pythonfmu3 0.3.4 turns any Python exception into fmi3Fatal,
+ignores what a setter returns and does not pass the start time of fmi3EnterInitializationMode to the slave, so
+samples count from the first doStep's communication point (which FMI 3 requires to be the start time). Refused calls
+are logged with status error and `do_step` returns fmi3Discard while an input holds a refused value.
 """
 
 from __future__ import annotations
