@@ -96,6 +96,7 @@ def rig(
     margin: float = typer.Option(1.2, help="With --drive-from: the drive's excursions over the simulated ones on each side of the working point."),
     band: Optional[str] = typer.Option(None, help="With --drive-from: the rig controller's pass band LOW:HIGH [Hz] (default: bushing rig 0.5:40, damper dyno 0.5:100)."),
     default_sensors: bool = typer.Option(False, "--default-sensors", help="Bushing rig with --drive-from: record with the rig's default transducers instead of ranges sized for the test (the damper dyno always records with its own)."),
+    damper_type: str = typer.Option("passive", "--type", help="Damper dyno: passive (default), mr (magnetorheological, records the coil's voltage [V]) or cdc (continuously controlled valve, records the valve current [A])."),
 ) -> None:
     """Simulate a lab rig and write realistic "measured" data plus a separate truth file."""
     from nnfmu.data.rigs import RigOptions, write_rig
@@ -103,7 +104,7 @@ def rig(
     chosen = None if effects is None else () if effects.strip() == "none" else tuple(_split([effects]))
     vehicle = drive_from is not None or excitation == "vehicle"
     options = RigOptions(sample_rate=sample_rate, duration=duration, seed=seed, noise=noise, effects=chosen,
-                         excitation=excitation or ("vehicle" if vehicle else "lab"))
+                         excitation=excitation or ("vehicle" if vehicle else "lab"), damper_type=damper_type)
     try:
         target = check_output_file(out, [drive_from] if drive_from is not None else [])
         if vehicle:
