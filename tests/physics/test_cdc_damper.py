@@ -57,7 +57,8 @@ def test_gas_seal_and_inertia_add_their_terms():
     x, v, a, i = rng.normal(0, 0.01, 50), rng.normal(0, 0.3, 50), rng.normal(0, 20, 50), rng.uniform(0.3, 1.8, 50)
     base, _ = CDCDamperTruth(p, ()).simulate(1e-3, x, v, a, i)
     full, _ = CDCDamperTruth(p, ("gas_force", "seal_friction", "inertia")).simulate(1e-3, x, v, a, i)
-    expected = -(p.gas_preload - p.gas_rate * x) + p.seal_friction * np.tanh(v / p.friction_velocity) + p.moving_mass * a
+    gas = -(p.gas_preload - p.gas_rate * x)
+    expected = gas + p.seal_friction * np.tanh(v / p.friction_velocity) + p.moving_mass * a
     np.testing.assert_allclose(full - base, expected, atol=1e-9)
 
 
