@@ -11,10 +11,10 @@ from pathlib import Path
 from nnfmu.data import Measurement, load_measurement
 from nnfmu.data.inertia import compensate_inertia
 from nnfmu.export import ExportResult, export_onnx
+from nnfmu.models.features import FeatureSpec
 from nnfmu.models.metrics import SplitMetrics
 from nnfmu.models.presets import COMMAND, Preset, bind_command, custom_spec, get_preset, recurrent
 from nnfmu.models.selection import SelectionResult, SelectionSettings, select_inputs
-from nnfmu.models.features import FeatureSpec
 from nnfmu.models.train import Architecture, Progress, SizeTrial, TrainResult, TrainSettings, train_model
 from nnfmu.models.trained import TrainedModel
 
