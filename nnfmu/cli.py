@@ -98,6 +98,7 @@ def rig(
     margin: float = typer.Option(1.2, help="With --drive-from: the drive's excursions over the simulated ones on each side of the working point."),
     band: Optional[str] = typer.Option(None, help="With --drive-from: the rig controller's pass band LOW:HIGH [Hz] (default: bushing rig 0.5:40, damper dyno 0.5:100)."),
     default_sensors: bool = typer.Option(False, "--default-sensors", help="Bushing rig with --drive-from: record with the rig's default transducers instead of ranges sized for the test (the damper dyno always records with its own)."),
+    damper_type: str = typer.Option("passive", "--type", help="Damper dyno: passive (default), mr (magnetorheological, records the coil's voltage [V]) or cdc (continuously controlled valve, records the valve current [A])."),
 ) -> None:
     """Simulate a lab rig and write realistic "measured" data plus a separate truth file."""
     from nnfmu.workflows.rig import RigOptions, write_rig_record
@@ -106,7 +107,7 @@ def rig(
     vehicle = drive_from is not None or excitation == "vehicle"
     try:
         options = RigOptions(sample_rate=sample_rate, duration=duration, seed=seed, noise=noise, effects=chosen,
-                             excitation=excitation or ("vehicle" if vehicle else "lab"))
+                             excitation=excitation or ("vehicle" if vehicle else "lab"), damper_type=damper_type)
         target = check_output_file(out, [drive_from] if drive_from is not None else [])
         data_path, truth_path = write_rig_record(kind, target, options, drive_from, _split(element), margin, band,
                                                  not default_sensors)
@@ -139,7 +140,7 @@ def _int_list(items: Optional[list[str]], option: str) -> tuple[int, ...]:
 @app.command()
 def train(
     data: Path = typer.Argument(..., help="Rig data (CSV with `name [unit]` headers, MDF4, or an MTS 793 export)."),
-    preset: str = typer.Option(..., help="damper-spline, damper-hysteresis, bushing-axial-force, bushing-radial-force, bushing-axial-torque or bushing-conical-torque."),
+    preset: str = typer.Option(..., help="damper-spline, damper-hysteresis, damper-semiactive, bushing-axial-force, bushing-radial-force, bushing-axial-torque or bushing-conical-torque."),
     out: str = typer.Option(..., "--out", "-o", help="ONNX step graph to write."),
     output: Optional[str] = typer.Option(None, help="Output channel (default: the preset's, e.g. force)."),
     inputs: Optional[list[str]] = typer.Option(None, help="Input channels replacing the preset's (comma-separated or repeated)."),

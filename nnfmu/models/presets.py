@@ -13,15 +13,21 @@ the feature-space form of the friction's Jenkins elements): at the few mrad a fo
 friction is half the torque and follows the motion since the last reversal. Damper hysteresis: velocity, its
 backward differences over 2 and 8 samples (valve lag, acceleration) instead of the thesis's single delay, and the
 seal friction's smoothed sign. Damper spline: velocity, the seal friction's smoothed sign and the valve's blow-off
-knee as tanh(v/0.1 m/s).
+knee as tanh(v/0.1 m/s). Semi-active damper (MR coil voltage or CDC valve current): the hysteresis preset's velocity
+features, the displacement (accumulator) and the command with its own dynamics: the command now and 10 samples ago,
+and two first-order low-passes of it (the coil's field build-up, the valve spool's lag) whose time constants are
+chosen by validation error from SEMIACTIVE_COMMAND_TAUS; the thesis variant is the plain time-delay net on the
+command (delays 0, 3, 10, 30 samples) measured by hand on a public MR record.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, replace
 
+from nnfmu.data.errors import DataError
 from nnfmu.errors import SettingsError
-from nnfmu.models.features import Derived, Difference, FeatureSpec, Highpass, SmoothSign, Stop, Tap
+from nnfmu.models.features import Derived, Difference, FeatureSpec, Highpass, Lowpass, SmoothSign, Stop, Tap
 from nnfmu.models.train import Architecture, TrainSettings
 
 # Hidden sizes tried by default after the thesis's size (chosen by validation error).
@@ -46,6 +52,15 @@ CONICAL_FRICTION_RATE = 0.05
 # where the friction is half the torque and depends on the motion since the last reversal (Masing), not on the rate's
 # sign; on the lab record's ±50 mrad they saturate into friction-sign features.
 CONICAL_STOP_RADII = (0.5e-3, 1.5e-3, 4.5e-3)
+# A semi-active preset's placeholder input channel, bound to the record's command channel by `bind_command`: the coil
+# voltage of an MR damper or the valve current of a CDC damper, as `nnfmu rig damper --type mr|cdc` records them.
+COMMAND = "command"
+COMMAND_CHANNELS = ("voltage", "current")
+# Low-pass time-constant pairs [s] of the command (tau, 4 tau) tried by validation error: MR coils build their field
+# and CDC spools settle within ~5-20 ms (Spencer 1997: 1/eta = 5 ms; supplier data sheets), so the grid spans 2.5-40 ms.
+SEMIACTIVE_COMMAND_TAUS = ((0.0025, 0.01), (0.005, 0.02), (0.01, 0.04))
+SEMIACTIVE_COMMAND_DELAYS = (0, 10)  # samples: the command now and 10 ms ago at 1 kHz
+SEMIACTIVE_THESIS_DELAYS = (0, 3, 10, 30)  # samples: the issue's hand-made time-delay net on a public MR record
 
 
 @dataclass(frozen=True)
@@ -60,10 +75,16 @@ class Preset:
     spec: FeatureSpec
     architecture: Architecture
     settings: TrainSettings = TrainSettings()
+    variants: tuple[FeatureSpec, ...] = ()
 
     @property
     def output(self) -> str:
         return self.spec.output
+
+    @property
+    def candidates(self) -> tuple[FeatureSpec, ...]:
+        """The default specs to choose among by validation error: `spec` first, then the `variants`."""
+        return (self.spec, *self.variants)
 
 
 def auto_from(thesis_hidden: int) -> tuple[int, ...]:
@@ -94,6 +115,67 @@ def _preset(
         spec=FeatureSpec(taps=_taps(channels, (0,)), output=output, derived=derived),
         architecture=Architecture("mlp", auto_from(hidden)),
     )
+
+
+def _semiactive_spec(taus: tuple[float, ...]) -> FeatureSpec:
+    """The semi-active damper's default inputs with the command low-passed at `taus` [s]."""
+    return FeatureSpec(
+        taps=(Tap("velocity"), Tap("displacement"), Tap(COMMAND, SEMIACTIVE_COMMAND_DELAYS)),
+        output="force",
+        derived=(
+            *(Lowpass(COMMAND, tau=t) for t in taus),
+            *(Difference("velocity", delay=d) for d in HYSTERESIS_DIFFERENCES),
+            SmoothSign("velocity", scale=SEAL_FRICTION_VELOCITY),
+            SmoothSign("velocity", scale=VALVE_KNEE_VELOCITY),
+        ),
+    )
+
+
+def _semiactive() -> Preset:
+    """The semi-active damper: its default specs differ in the command's low-pass time constants only."""
+    middle = len(SEMIACTIVE_COMMAND_TAUS) // 2
+    specs = [_semiactive_spec(taus) for taus in SEMIACTIVE_COMMAND_TAUS]
+    return Preset(
+        name="damper-semiactive",
+        description="semi-active (MR or CDC) damper force from velocity, displacement and the command (coil voltage "
+                    "or valve current) with its low-passed states",
+        thesis_spec=FeatureSpec(
+            taps=(Tap("velocity"), Tap("displacement"), Tap(COMMAND, SEMIACTIVE_THESIS_DELAYS)), output="force"
+        ),
+        thesis=Architecture("mlp", (5,)),
+        spec=specs[middle],
+        architecture=Architecture("mlp", auto_from(5)),
+        variants=tuple(specs[:middle] + specs[middle + 1 :]),
+    )
+
+
+def rename_channel(spec: FeatureSpec, old: str, new: str) -> FeatureSpec:
+    """`spec` with every tap and derived feature of channel `old` reading channel `new` instead."""
+    return FeatureSpec(
+        taps=tuple(Tap(new if t.channel == old else t.channel, t.delays) for t in spec.taps),
+        output=spec.output,
+        derived=tuple(replace(d, channel=new) if d.channel == old else d for d in spec.derived),
+    )
+
+
+def bind_command(spec: FeatureSpec, available: Iterable[str], source: str) -> FeatureSpec:
+    """`spec` with its COMMAND placeholder bound to the record's command channel (one of COMMAND_CHANNELS, or a
+    channel named `command` itself); a spec without the placeholder is returned as it is.
+
+    Raises DataError naming `source` when the record has none of them, or more than one.
+    """
+    available = list(available)
+    if COMMAND not in spec.channels or COMMAND in available:
+        return spec
+    found = [c for c in COMMAND_CHANNELS if c in available]
+    if len(found) != 1:
+        problem = "has both" if found else "has none of"
+        raise DataError(
+            f"{source}: a semi-active damper model needs one command channel, voltage [V] (MR coil) or current [A] "
+            f"(CDC valve); the record {problem} them (channels: {', '.join(available)}). Name the command with "
+            f"--map, e.g. --map \"Coil Voltage=voltage\""
+        )
+    return rename_channel(spec, COMMAND, found[0])
 
 
 PRESETS: dict[str, Preset] = {
@@ -133,6 +215,7 @@ PRESETS: dict[str, Preset] = {
             (*memory_bank("conical_rotation"), SmoothSign("conical_angular_velocity", scale=CONICAL_FRICTION_RATE),
              *(Stop("conical_rotation", radius=r) for r in CONICAL_STOP_RADII)),
         ),
+        _semiactive(),
     )
 }
 

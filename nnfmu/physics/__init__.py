@@ -1,8 +1,10 @@
 """The components' truth physics, shared by the rig simulators (`data/rigs`) and the vehicle's monolithic reference."""
 
 from .bushing import IWAN_ELEMENTS, IWAN_SPAN, BushingChannelParams, BushingChannelTruth, BushingParams
+from .cdc_damper import CDC_CURRENT_RANGE, CDCDamperParams, CDCDamperTruth
 from .damper import DamperParams, DamperTruth, ValveSide
-from .effects import BUSHING_EFFECTS, DAMPER_EFFECTS, DEFAULT_EFFECTS, EFFECTS
+from .effects import BUSHING_EFFECTS, CDC_DAMPER_EFFECTS, DAMPER_EFFECTS, DEFAULT_EFFECTS, EFFECTS, MR_DAMPER_EFFECTS
+from .mr_damper import MR_VOLTAGE_RANGE, MRDamperParams, MRDamperTruth
 from .parameters import describe, param
 
 __all__ = [
@@ -10,6 +12,10 @@ __all__ = [
     "BushingChannelParams",
     "BushingChannelTruth",
     "BushingParams",
+    "CDC_CURRENT_RANGE",
+    "CDC_DAMPER_EFFECTS",
+    "CDCDamperParams",
+    "CDCDamperTruth",
     "DAMPER_EFFECTS",
     "DEFAULT_EFFECTS",
     "DamperParams",
@@ -17,6 +23,10 @@ __all__ = [
     "EFFECTS",
     "IWAN_ELEMENTS",
     "IWAN_SPAN",
+    "MR_DAMPER_EFFECTS",
+    "MR_VOLTAGE_RANGE",
+    "MRDamperParams",
+    "MRDamperTruth",
     "ValveSide",
     "describe",
     "param",

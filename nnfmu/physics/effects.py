@@ -4,11 +4,19 @@ from __future__ import annotations
 
 DAMPER_EFFECTS = ("hysteresis", "gas_force", "seal_friction", "temperature", "inertia")
 BUSHING_EFFECTS = ("viscoelastic", "friction")
-EFFECTS: dict[str, tuple[str, ...]] = {"damper": DAMPER_EFFECTS, "bushing": BUSHING_EFFECTS}
+MR_DAMPER_EFFECTS = ("command_lag", "gas_force", "inertia")
+CDC_DAMPER_EFFECTS = ("valve_lag", "gas_force", "seal_friction", "inertia")
+EFFECTS: dict[str, tuple[str, ...]] = {
+    "damper": DAMPER_EFFECTS, "bushing": BUSHING_EFFECTS, "mr_damper": MR_DAMPER_EFFECTS,
+    "cdc_damper": CDC_DAMPER_EFFECTS,
+}
 
 # The damper default holds what a velocity-history network can represent; gas force and temperature fade are the
-# undeclared effects a later stage must discover.
+# undeclared effects a later stage must discover. The semi-active dampers' networks see the displacement, so their
+# accumulator's gas force is on by default.
 DEFAULT_EFFECTS: dict[str, tuple[str, ...]] = {
     "damper": ("hysteresis", "seal_friction", "inertia"),
     "bushing": ("viscoelastic", "friction"),
+    "mr_damper": MR_DAMPER_EFFECTS,
+    "cdc_damper": CDC_DAMPER_EFFECTS,
 }

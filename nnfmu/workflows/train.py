@@ -5,16 +5,17 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from nnfmu.data import Measurement, load_measurement
 from nnfmu.data.inertia import compensate_inertia
 from nnfmu.export import ExportResult, export_onnx
+from nnfmu.models.features import FeatureSpec
 from nnfmu.models.metrics import SplitMetrics
-from nnfmu.models.presets import Preset, custom_spec, get_preset, recurrent
+from nnfmu.models.presets import COMMAND, Preset, bind_command, custom_spec, get_preset, recurrent
 from nnfmu.models.selection import SelectionResult, SelectionSettings, select_inputs
-from nnfmu.models.train import Architecture, Progress, SizeTrial, TrainSettings, train_model
+from nnfmu.models.train import Architecture, Progress, SizeTrial, TrainResult, TrainSettings, train_model
 from nnfmu.models.trained import TrainedModel
 
 
@@ -51,7 +52,8 @@ class TrainRequest:
 @dataclass
 class TrainOutcome:
     """Result of one `train` run: the written model, its metrics per split, export check, input ranking, timing,
-    and the notes the loader left on the data (time base, channel names, derived rates)."""
+    and the notes the loader left on the data (time base, channel names, derived rates); `feature_choice` the
+    validation MSE (scaled) of each of the preset's candidate feature sets where it offers several (else empty)."""
 
     path: Path
     model: TrainedModel
@@ -62,6 +64,7 @@ class TrainOutcome:
     warnings: list[str]
     seconds: float
     data_notes: list[str]
+    feature_choice: list[tuple[FeatureSpec, float]] = field(default_factory=list)
 
 
 def resolve(request: TrainRequest) -> tuple[Preset, Architecture, TrainSettings]:
@@ -91,6 +94,7 @@ def _stage(progress: Progress | None, start: float, end: float) -> Progress | No
 
 def _load(data: str | os.PathLike[str], required: list[str], output: str, request: TrainRequest) -> Measurement:
     """The rig file with the request's channel map, its output compensated for the dyno's moving mass if asked."""
+    required = [c for c in required if c != COMMAND]  # bound to the record's command channel once it is read
     measurement = load_measurement(data, required=required, channel_map=dict(request.channel_map))
     return compensate_inertia(measurement, request.moving_mass, output) if request.moving_mass else measurement
 
@@ -116,9 +120,15 @@ def train_from_file(
         progress = _stage(progress, 0.5, 1.0)
     else:
         measurement = _load(data, [*spec.channels, spec.output], spec.output, request)
+    spec = bind_command(spec, measurement.channels, str(data))
     mass = request.moving_mass
     compensated = f" ({spec.output} compensated for {mass:g} kg of moving mass)" if mass else ""
-    result = train_model(measurement, spec, architecture, settings, progress)
+    candidates = [spec]
+    if preset.variants and architecture.kind == "mlp" and not (request.thesis or request.inputs or request.delays
+                                                               or request.select_inputs):
+        candidates += [bind_command(custom_spec(v, request.output), measurement.channels, str(data))
+                       for v in preset.variants]
+    spec, result, feature_choice = _fit_candidates(measurement, candidates, architecture, settings, progress)
     block = max(result.splits.test, key=lambda part: part.stop - part.start)
     test = measurement.slice(block.start, block.stop)
     export = export_onnx(
@@ -139,4 +149,24 @@ def train_from_file(
         warnings=result.warnings,
         seconds=time.perf_counter() - started,
         data_notes=list(measurement.notes.values()),
+        feature_choice=feature_choice,
     )
+
+
+def _fit_candidates(
+    measurement: Measurement, candidates: list[FeatureSpec], architecture: Architecture, settings: TrainSettings,
+    progress: Progress | None,
+) -> tuple[FeatureSpec, TrainResult, list[tuple[FeatureSpec, float]]]:
+    """Train on every candidate feature set; keep the one whose chosen network has the lowest validation MSE (the
+    first on a tie). Returns it, its result and each candidate's validation MSE (empty for a single candidate)."""
+    best: tuple[float, FeatureSpec, TrainResult] | None = None
+    scores: list[tuple[FeatureSpec, float]] = []
+    for i, candidate in enumerate(candidates):
+        stage = _stage(progress, i / len(candidates), (i + 1) / len(candidates))
+        result = train_model(measurement, candidate, architecture, settings, stage)
+        mse = min(t.validation_mse for t in result.trials)
+        scores.append((candidate, mse))
+        if best is None or mse < best[0]:
+            best = (mse, candidate, result)
+    assert best is not None
+    return best[1], best[2], scores if len(candidates) > 1 else []

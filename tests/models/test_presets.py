@@ -78,7 +78,7 @@ def test_default_bushing_memory_is_not_collinear_with_the_position():
 def test_every_preset_is_listed_and_unknown_names_are_refused():
     assert set(PRESETS) == {
         "damper-spline", "damper-hysteresis", "bushing-axial-force", "bushing-radial-force",
-        "bushing-axial-torque", "bushing-conical-torque",
+        "bushing-axial-torque", "bushing-conical-torque", "damper-semiactive",
     }
     with pytest.raises(ValueError, match="damper-spline"):
         get_preset("damper")

@@ -15,8 +15,10 @@ from ...physics import (
     DamperTruth,
     ValveSide,
 )
-from .options import EXCITATIONS, KINDS, RigOptions
+from .command import CommandSchedule
+from .options import DAMPER_TYPES, EXCITATIONS, KINDS, RigOptions
 from .run import RigRun, simulate_rig, write_rig
+from .semiactive_rig import COMMAND_CHANNELS
 from .truth import truth_path
 from .vehicle_drive import RIG_BANDS, DriveDesign, VehicleDrive, design_damper_drive, design_vehicle_drive
 from .vehicle_dyno import simulate_vehicle_damper_dyno, write_vehicle_damper_dyno
@@ -29,6 +31,9 @@ __all__ = [
     "BushingChannelTruth",
     "BushingParams",
     "BushingRig",
+    "COMMAND_CHANNELS",
+    "CommandSchedule",
+    "DAMPER_TYPES",
     "DAMPER_EFFECTS",
     "DEFAULT_EFFECTS",
     "DamperDyno",

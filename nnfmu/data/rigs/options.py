@@ -9,6 +9,7 @@ from ...errors import SettingsError
 from ...physics.effects import DEFAULT_EFFECTS, EFFECTS
 
 KINDS = ("damper", "bushing")
+DAMPER_TYPES = ("passive", "mr", "cdc")  # passive valve, magnetorheological (coil voltage), CDC (valve current)
 EXCITATIONS = ("lab", "random", "sine", "vehicle")
 VEHICLE_EXCITATION = "vehicle"  # a drive derived from a vehicle result (`vehicle_rig`), never self-made
 
@@ -27,6 +28,8 @@ class RigOptions:
     velocities, then band-limited random; bushing: target-spectrum random beyond the vehicle range), "random" (only
     band-limited random, for held-out test data), "sine" (only the sine series) or "vehicle" (a drive derived from a
     vehicle simulation's deflections, see `vehicle_rig`; damper: the sine series, then the derived random).
+    `damper_type` (damper only): "passive", "mr" (magnetorheological, commanded by coil voltage) or "cdc"
+    (continuously controlled valve, commanded by valve current); the semi-active types add a lab-like command signal.
     """
 
     sample_rate: float = 1000.0
@@ -35,6 +38,7 @@ class RigOptions:
     noise: float = 1.0
     effects: tuple[str, ...] | None = None
     excitation: str = "lab"
+    damper_type: str = "passive"
 
 
 def check_kind(kind: str) -> str:
@@ -44,17 +48,32 @@ def check_kind(kind: str) -> str:
     return kind
 
 
-def resolve_effects(kind: str, effects: tuple[str, ...] | None) -> tuple[str, ...]:
-    """The effects switched on for `kind`, in canonical order; an unknown name: SettingsError naming the valid ones."""
-    valid = EFFECTS[check_kind(kind)]
+def effect_set(kind: str, damper_type: str = "passive") -> str:
+    """The key of `kind`'s effects in `EFFECTS`: the kind, or the semi-active damper's own ("mr_damper", ...)."""
+    check_kind(kind)
+    if damper_type not in DAMPER_TYPES:
+        raise SettingsError(f"unknown damper type {damper_type!r}; valid types: {', '.join(DAMPER_TYPES)}")
+    if damper_type == "passive":
+        return kind
+    if kind != "damper":
+        raise SettingsError(f"damper type {damper_type!r} is for the damper dyno, not the {kind} rig")
+    return f"{damper_type}_damper"
+
+
+def resolve_effects(kind: str, effects: tuple[str, ...] | None, damper_type: str = "passive") -> tuple[str, ...]:
+    """The effects switched on for `kind` (and damper type), in canonical order; an unknown name: SettingsError naming
+    the valid ones."""
+    key = effect_set(kind, damper_type)
+    valid = EFFECTS[key]
     if effects is None:
-        return DEFAULT_EFFECTS[kind]
+        return DEFAULT_EFFECTS[key]
     if isinstance(effects, str):
         raise SettingsError(f"effects must be a tuple of names, not the string {effects!r}")
     unknown = [name for name in effects if name not in valid]
     if unknown:
+        what = kind if damper_type == "passive" else f"{damper_type} {kind}"
         raise SettingsError(
-            f"unknown {kind} effect(s) {', '.join(map(repr, unknown))}; valid {kind} effects: {', '.join(valid)}"
+            f"unknown {what} effect(s) {', '.join(map(repr, unknown))}; valid {what} effects: {', '.join(valid)}"
         )
     return tuple(name for name in valid if name in effects)
 
@@ -67,9 +86,12 @@ def resolve_duration(kind: str, options: RigOptions) -> float:
 def check_options(kind: str, options: RigOptions) -> None:
     """Raise SettingsError naming the bad option value, else return None."""
     check_kind(kind)
-    resolve_effects(kind, options.effects)
+    resolve_effects(kind, options.effects, options.damper_type)
     if options.excitation not in EXCITATIONS:
         raise SettingsError(f"unknown excitation {options.excitation!r}; valid excitations: {', '.join(EXCITATIONS)}")
+    if options.damper_type != "passive" and options.excitation == VEHICLE_EXCITATION:
+        raise SettingsError(f"the {options.damper_type} damper dyno has no vehicle-derived drive; use the lab, random "
+                            "or sine excitation")
     if not (math.isfinite(options.sample_rate) and options.sample_rate >= MIN_SAMPLE_RATE):
         raise SettingsError(
             f"sample_rate must be at least {MIN_SAMPLE_RATE:g} Hz (the drives reach 40 Hz), got {options.sample_rate!r}"

@@ -19,9 +19,17 @@ from .bushing_rig import BushingRig, describe_params, run_bushing_rig
 from ...physics.damper import DamperParams
 from .damper_rig import UNITS as DAMPER_UNITS
 from .damper_rig import DamperDyno, run_damper_dyno
+from .semiactive_rig import PARAMS as SEMIACTIVE_PARAMS
+from .semiactive_rig import UNITS as SEMIACTIVE_UNITS
+from .semiactive_rig import run_semiactive_dyno
 from .options import VEHICLE_EXCITATION, RigOptions, check_options, resolve_duration, resolve_effects
+from ...physics.cdc_damper import CDCDamperParams
+from ...physics.mr_damper import MRDamperParams
 from ...physics.parameters import describe
 from .truth import build_truth, truth_path, truth_text
+
+
+RigParams = DamperParams | BushingParams | MRDamperParams | CDCDamperParams
 
 
 @dataclass
@@ -32,8 +40,9 @@ class RigRun:
     truth: dict[str, Any]
 
 
-def simulate_rig(kind: str, options: RigOptions, params: DamperParams | BushingParams | None = None) -> RigRun:
-    """Simulate `kind` ("damper" or "bushing") under `options`; `params` (default: realistic defaults) are the truth.
+def simulate_rig(kind: str, options: RigOptions, params: RigParams | None = None) -> RigRun:
+    """Simulate `kind` ("damper" or "bushing", the damper of `options.damper_type`) under `options`; `params`
+    (default: realistic defaults of the kind and type) are the truth.
 
     Raises SettingsError naming an unknown kind, effect, excitation or an unusable option value.
     """
@@ -41,11 +50,18 @@ def simulate_rig(kind: str, options: RigOptions, params: DamperParams | BushingP
     if options.excitation == VEHICLE_EXCITATION:
         raise SettingsError(f"a vehicle-derived {kind} drive needs the vehicle's result: use simulate_vehicle_rig "
                             f"(nnfmu rig {kind} --drive-from RESULT --element NAME)")
-    effects = resolve_effects(kind, options.effects)
+    effects = resolve_effects(kind, options.effects, options.damper_type)
     duration = resolve_duration(kind, options)
     n = int(round(duration * options.sample_rate))
     run_args = (options.sample_rate, n, options.excitation, options.noise, options.seed)
-    if kind == "damper":
+    if kind == "damper" and options.damper_type != "passive":
+        expected = SEMIACTIVE_PARAMS[options.damper_type]
+        params = params or expected()
+        _check_params(params, expected)
+        dyno = DamperDyno()
+        time, channels, excitation, sensors = run_semiactive_dyno(options.damper_type, params, effects, dyno, *run_args)
+        units, described = SEMIACTIVE_UNITS, describe(params)
+    elif kind == "damper":
         params = params or DamperParams()
         _check_params(params, DamperParams)
         dyno = DamperDyno()
@@ -57,7 +73,8 @@ def simulate_rig(kind: str, options: RigOptions, params: DamperParams | BushingP
         rig = BushingRig()
         time, channels, excitation = run_bushing_rig(params, effects, rig, *run_args)
         units, described, sensors = BUSHING_UNITS, describe_params(params), rig.sensors
-    source = f"nnfmu rig {kind} (seed {options.seed})"
+    what = kind if options.damper_type == "passive" else f"{kind} --type {options.damper_type}"
+    source = f"nnfmu rig {what} (seed {options.seed})"
     measurement = Measurement(time=time, channels=channels, units={k: units[k] for k in channels}, source=source)
     recorded = {name: sensors[name].describe() for name in channels}
     truth = build_truth(kind, effects, described, excitation, recorded, options, duration, measurement.units)

@@ -25,15 +25,19 @@ def build_truth(
     sensors: dict[str, Any], options: RigOptions, duration: float, channels: dict[str, str],
 ) -> dict[str, Any]:
     """The truth dictionary: kind, effects on, every parameter with units, excitation, sensors, options, seed,
-    channel units and nnfmu version."""
+    channel units and nnfmu version. A semi-active damper's type is named beside the kind (a passive run's truth
+    is as it was before damper types existed)."""
+    settings = dict(dataclasses.asdict(options), effects=list(effects), duration=duration)
+    damper_type = settings.pop("damper_type")
     return {
         "notice": NOTICE,
         "kind": kind,
+        **({} if damper_type == "passive" else {"damper_type": damper_type}),
         "effects": list(effects),
         "parameters": parameters,
         "excitation": excitation,
         "sensors": sensors,
-        "options": dict(dataclasses.asdict(options), effects=list(effects), duration=duration),
+        "options": settings,
         "seed": options.seed,
         "channels": channels,
         "nnfmu_version": __version__,
