@@ -27,7 +27,7 @@ import torch
 from nnfmu.data import load_measurement
 from nnfmu.data.rigs import COMMAND_CHANNELS, RigOptions, simulate_rig, write_rig
 from nnfmu.models.metrics import nrmse
-from nnfmu.models.workflow import TrainRequest, train_from_file
+from nnfmu.workflows.train import TrainRequest, train_from_file
 
 MODELS = {
     "semiactive": TrainRequest("damper-semiactive"),

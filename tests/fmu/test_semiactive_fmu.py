@@ -15,7 +15,7 @@ from nnfmu.data import load_measurement
 from nnfmu.data.rigs import RigOptions, write_rig
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.models.workflow import TrainRequest, train_from_file
+from nnfmu.workflows.train import TrainRequest, train_from_file
 
 STEPS = 1500
 

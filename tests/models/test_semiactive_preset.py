@@ -9,7 +9,7 @@ from nnfmu.data.errors import DataError
 from nnfmu.data.rigs import RigOptions, write_rig
 from nnfmu.models.features import Lowpass, Tap
 from nnfmu.models.presets import COMMAND, SEMIACTIVE_COMMAND_TAUS, bind_command, get_preset
-from nnfmu.models.workflow import TrainRequest, train_from_file
+from nnfmu.workflows.train import TrainRequest, train_from_file
 
 TINY = dict(hidden=(3,), restarts=1, max_epochs=3)
 
