@@ -1,18 +1,14 @@
-"""Settings of `nnfmu loop` and the exception it raises for unusable input, checked once here."""
+"""Settings of `nnfmu loop`, checked once here."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
 
-from nnfmu.errors import NnfmuError
+from nnfmu.diagnosis import DiagnosisSettings
 from nnfmu.models.retrain import RetrainSettings
 
-from .settings import DiagnosisSettings
-
-
-class LoopError(NnfmuError, ValueError):
-    """The loop cannot run on this data or model; the message names the file, channel or value at fault."""
+from .errors import LoopError
 
 
 @dataclass(frozen=True)
@@ -22,7 +18,8 @@ class LoopSettings:
     Record blocks: the record is cut into `segments` equal segments, each split in time order into a fit part
     (`fit_fraction`; its last `validation_fraction` of the segment for early stopping), a diagnosis part and a test
     part (`test_fraction`, the rest of the segment). The diagnosis and the reported error use only their parts.
-    `max_effects`: effects added at most. `diagnosis`: the residual diagnosis. Retraining: `max_epochs` and
+    `max_effects`: effects added at most. `diagnosis`: the residual diagnosis and the effects' parameters (both
+    halves of an effect, its regressors and its extension, read them there). Retraining: `max_epochs` and
     `patience` of Levenberg-Marquardt, `lm_max_samples` (it fits on at most this many evenly strided training
     rows, and checks on as many validation rows), `lm_mu` (its initial damping: a warm start sits near the old
     minimum, so the first steps start damped, gradient-descent-like, instead of a full Gauss-Newton jump that early
@@ -35,12 +32,7 @@ class LoopSettings:
     (see `trials._candidates`). `min_explained`: an effect is added only when it explains at least this fraction
     of the residual variance (beyond the effects ranked above it; alone, for a simpler rival): with tens of
     thousands of samples a network's own approximation error makes tiny effects statistically significant, and the
-    loop adds what matters, not what is merely detectable. Extensions:
-    `friction_scale` (fraction of the rms velocity: the smoothed sign's velocity scale), `memory_taus` [s] (low-pass
-    states of velocity for hysteresis), `frequency_taus` [s] (low-pass states of displacement), `thermal_tau` [s]
-    (thermal time constant of the running mean square of velocity that stands in for an unmeasured temperature),
-    `amplitude_tau` [s] (averaging time of the running mean square of displacement). `backend`/`fmi_version`: the
-    FMUs built.
+    loop adds what matters, not what is merely detectable. `backend`/`fmi_version`: the FMUs built.
     """
 
     max_effects: int = 3
@@ -76,11 +68,6 @@ class LoopSettings:
     # inertia.
     parsimony: float = 0.35
     min_explained: float = 0.05
-    friction_scale: float = 0.02
-    memory_taus: tuple[float, ...] = (0.002, 0.02)
-    frequency_taus: tuple[float, ...] = (0.01, 0.1, 1.0)
-    thermal_tau: float = 300.0
-    amplitude_tau: float = 1.0
     backend: str = "native"
     fmi_version: int = 2
 
@@ -105,14 +92,6 @@ class LoopSettings:
         if not (0 <= self.parsimony < 1 and 0 <= self.min_explained < 1):
             raise LoopError(f"parsimony and min_explained must lie in [0, 1), got {self.parsimony!r} and "
                             f"{self.min_explained!r}")
-        positive = {
-            "friction_scale": (self.friction_scale,), "memory_taus": self.memory_taus,
-            "frequency_taus": self.frequency_taus, "thermal_tau": (self.thermal_tau,),
-            "amplitude_tau": (self.amplitude_tau,),
-        }
-        for name, values in positive.items():
-            if not values or not all(math.isfinite(v) and v > 0 for v in values):
-                raise LoopError(f"{name} must be positive, got {getattr(self, name)!r}")
 
     def retrain_settings(self) -> RetrainSettings:
         """How the loop retrains a model on an extended spec (ValueError for bad values)."""

@@ -1,15 +1,40 @@
 """Networks from rig data: feature specs, presets, training (Levenberg–Marquardt, Adam, L-BFGS), metrics, input
-selection, and the `train` workflow (`nnfmu.models.workflow`, imported on use: it pulls in the exporter)."""
+selection, and the `train` workflow (`nnfmu.models.workflow`: it pulls in the exporter).
+
+Every name here is imported on first use, so that `nnfmu.models.features` (numpy only) can be imported without
+torch: the torch-free diagnosis library (`nnfmu.diagnosis`) builds feature specs from it.
+"""
 
 from __future__ import annotations
 
-from typing import Any
+from importlib import import_module
+from typing import TYPE_CHECKING, Any
 
-from nnfmu.models.metrics import SplitMetrics
-from nnfmu.models.presets import PRESETS, Preset, get_preset
-from nnfmu.models.selection import SelectionResult, SelectionSettings, select_inputs
-from nnfmu.models.splits import SplitFractions
-from nnfmu.models.train import Architecture, TrainResult, TrainSettings, train_model
+if TYPE_CHECKING:
+    from nnfmu.models.metrics import SplitMetrics
+    from nnfmu.models.presets import PRESETS, Preset, get_preset
+    from nnfmu.models.selection import SelectionResult, SelectionSettings, select_inputs
+    from nnfmu.models.splits import SplitFractions
+    from nnfmu.models.train import Architecture, TrainResult, TrainSettings, train_model
+    from nnfmu.models.workflow import TrainOutcome, TrainRequest, train_from_file
+
+_HOMES = {
+    "SplitMetrics": "metrics",
+    "PRESETS": "presets",
+    "Preset": "presets",
+    "get_preset": "presets",
+    "SelectionResult": "selection",
+    "SelectionSettings": "selection",
+    "select_inputs": "selection",
+    "SplitFractions": "splits",
+    "Architecture": "train",
+    "TrainResult": "train",
+    "TrainSettings": "train",
+    "train_model": "train",
+    "TrainOutcome": "workflow",
+    "TrainRequest": "workflow",
+    "train_from_file": "workflow",
+}
 
 __all__ = [
     "PRESETS",
@@ -31,8 +56,7 @@ __all__ = [
 
 
 def __getattr__(name: str) -> Any:
-    if name in ("TrainOutcome", "TrainRequest", "train_from_file"):
-        from nnfmu.models import workflow
-
-        return getattr(workflow, name)
+    """The public name `name` from the module that defines it, imported now."""
+    if name in _HOMES:
+        return getattr(import_module(f"nnfmu.models.{_HOMES[name]}"), name)
     raise AttributeError(f"module 'nnfmu.models' has no attribute {name!r}")
