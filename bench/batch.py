@@ -10,7 +10,8 @@ The rate of a small VM drifts by +-20 % within a minute, so the serial run, the 
 ceiling without any engine, two plain processes each running half the cases take turns for `--rounds` rounds: the
 efficiency is the median of the rounds' ratios.
 
-Every case is the quarter car with a linear damper FMU on a generated class C road (`nnfmu.campaign.quarter_car`).
+Every case is the quarter car with a linear damper FMU on a generated class C road
+(`nnfmu.workflows.campaign.quarter_car`).
 Cluster start-up and the workers' first imports are timed apart: each engine first runs a few warm-up cases. Beside
 the wall-clock rates, the CPU time of every process involved (client, scheduler, nannies, workers) per case: on a
 machine shared with other jobs the wall-clock efficiency measures the sharing, while the CPU time shows what the
@@ -29,11 +30,11 @@ import tempfile
 import time
 from pathlib import Path
 
-from nnfmu.campaign.cases import expand_cases
-from nnfmu.campaign.engine import dask_client, run_dask, run_serial
-from nnfmu.campaign.execute import run_cases
-from nnfmu.campaign.quarter_car import build_quarter_car_system
-from nnfmu.campaign.spec import read_campaign
+from nnfmu.workflows.campaign.cases import expand_cases
+from nnfmu.workflows.campaign.engine import dask_client, run_dask, run_serial
+from nnfmu.workflows.campaign.execute import run_cases
+from nnfmu.workflows.campaign.quarter_car import build_quarter_car_system
+from nnfmu.workflows.campaign.spec import read_campaign
 from nnfmu.cosim.slave import FmuSlave
 
 WARM_UP = 4  # cases each engine runs before it is timed

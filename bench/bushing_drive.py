@@ -26,10 +26,10 @@ from pathlib import Path
 
 from nnfmu.data import load_measurement, save_measurement
 from nnfmu.data.rigs import DriveDesign, RigOptions, write_rig, write_vehicle_rig
-from nnfmu.models.workflow import TrainRequest, train_from_file
-from nnfmu.roadtest import BUSHING_MODELS, RoadTestSettings, monolithic_reference
-from nnfmu.roadtest.bushing_drive import replay_bushing_networks
-from nnfmu.roadtest.systems import bushing_elements, vehicle_components
+from nnfmu.workflows.train import TrainRequest, train_from_file
+from nnfmu.workflows.roadtest import BUSHING_MODELS, RoadTestSettings, monolithic_reference
+from nnfmu.workflows.roadtest.bushing_drive import replay_bushing_networks
+from nnfmu.workflows.roadtest.systems import bushing_elements, vehicle_components
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 
 SYSTEM = "full-vehicle"

@@ -1,10 +1,10 @@
 """Speed of the fmpy co-simulation master: 50 s of road excitation at a 1 ms communication step (one JSON line).
 
 Usage: python bench/cosim.py [MODELS_DIR] [DURATION_S] [REPEATS]
-Systems as the road test builds them (`nnfmu.roadtest.systems`): the quarter car with a damper network (2 FMUs) and
-the full vehicle with four damper networks and its four front LCA bushing networks on stabilised ports (9 FMUs), the
-vehicle FMU sampled at the communication step, the master's default coupling (its compiled inner loop where a C
-compiler is found), network FMUs at their default parameters (output filter off). MODELS_DIR holds
+Systems as the road test builds them (`nnfmu.workflows.roadtest.systems`): the quarter car with a damper network (2
+FMUs) and the full vehicle with four damper networks and its four front LCA bushing networks on stabilised ports (9
+FMUs), the vehicle FMU sampled at the communication step, the master's default coupling (its compiled inner loop where a
+C compiler is found), network FMUs at their default parameters (output filter off). MODELS_DIR holds
 <preset>.onnx of the two damper and four bushing presets; without it, the presets are trained in a temporary folder on
 short rig records with short training (the networks' size and graph are the presets', their accuracy is not quoted).
 Preparation (training, FMU builds) is not timed. Timed: the whole `cosimulate` call (instantiation, initialisation,
@@ -30,7 +30,7 @@ import numpy as np
 from nnfmu.cosim.master import CosimError, CosimSettings, cosimulate
 from nnfmu.cosim.ssp import open_system, read_ssd
 from nnfmu.data import Measurement
-from nnfmu.roadtest.systems import bushing_elements, build_component_fmus, build_vehicle, write_system
+from nnfmu.workflows.roadtest.systems import bushing_elements, build_component_fmus, build_vehicle, write_system
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
 from nnfmu.vehicle.models.components import REFERENCE

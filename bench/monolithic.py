@@ -20,8 +20,8 @@ import time
 import numpy as np
 
 from nnfmu.data import Measurement
-from nnfmu.roadtest.reference import monolithic_reference
-from nnfmu.roadtest.systems import SYSTEMS, vehicle_components
+from nnfmu.workflows.roadtest.reference import monolithic_reference
+from nnfmu.workflows.roadtest.systems import SYSTEMS, vehicle_components
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 
 STEP = 1e-4  # s, the road test's reference step

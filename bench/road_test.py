@@ -13,8 +13,8 @@ FMUs at their defaults. Progress goes to stderr; the last stdout line is one JSO
 the bushing and damper networks were trained on,
 `realtime_factor_full_vehicle` (simulated seconds per wall second of the full vehicle with the hysteresis damper
 networks), the error `budget` (per system, channel and damper model: nrmse_total, nrmse_network, nrmse_coupling,
-damage_ratio; see nnfmu/roadtest/budget.py), the thesis comparison, and the largest use of each network input's
-training envelope.
+damage_ratio; see nnfmu/workflows/roadtest/budget.py), the thesis comparison, and the largest use of each network
+input's training envelope.
 """
 
 from __future__ import annotations
@@ -26,9 +26,9 @@ import time
 from pathlib import Path
 
 from nnfmu.data.rigs import RigOptions, write_rig
-from nnfmu.demo import MOVING_MASS_BY_RIG, PRESETS_BY_RIG
-from nnfmu.models.workflow import TrainRequest, train_from_file
-from nnfmu.roadtest import (
+from nnfmu.workflows.demo import MOVING_MASS_BY_RIG, PRESETS_BY_RIG
+from nnfmu.workflows.train import TrainRequest, train_from_file
+from nnfmu.workflows.roadtest import (
     BushingDriveSettings, RoadTestSettings, SystemRun, run_road_test, train_vehicle_bushings, train_vehicle_dampers,
 )
 

@@ -31,7 +31,7 @@ from nnfmu.diagnosis import EFFECTS, DiagnosisSettings
 from nnfmu.loop.settings import LoopSettings
 from nnfmu.loop import LoopReport, run_loop
 from nnfmu.models import train_model
-from nnfmu.models.workflow import TrainRequest, resolve
+from nnfmu.workflows.train import TrainRequest, resolve
 
 PRESET = "damper-hysteresis"
 

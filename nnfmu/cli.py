@@ -64,7 +64,7 @@ def _platforms(items: Optional[list[str]]) -> Optional[tuple[str, ...]]:
 def _warnings_as_lines() -> Iterator[None]:
     """Print each distinct build warning (a platform left out) raised inside the block as one `warning: ...` line on
     stderr; other warnings pass on as Python shows them."""
-    from nnfmu.fmu.errors import PlatformSkippedWarning
+    from nnfmu.workflows.fmu_build import PlatformSkippedWarning
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PlatformSkippedWarning)
@@ -98,53 +98,24 @@ def rig(
     default_sensors: bool = typer.Option(False, "--default-sensors", help="Bushing rig with --drive-from: record with the rig's default transducers instead of ranges sized for the test (the damper dyno always records with its own)."),
 ) -> None:
     """Simulate a lab rig and write realistic "measured" data plus a separate truth file."""
-    from nnfmu.data.rigs import RigOptions, write_rig
+    from nnfmu.workflows.rig import RigOptions, write_rig_record
 
     chosen = None if effects is None else () if effects.strip() == "none" else tuple(_split([effects]))
     vehicle = drive_from is not None or excitation == "vehicle"
-    options = RigOptions(sample_rate=sample_rate, duration=duration, seed=seed, noise=noise, effects=chosen,
-                         excitation=excitation or ("vehicle" if vehicle else "lab"))
     try:
+        options = RigOptions(sample_rate=sample_rate, duration=duration, seed=seed, noise=noise, effects=chosen,
+                             excitation=excitation or ("vehicle" if vehicle else "lab"))
         target = check_output_file(out, [drive_from] if drive_from is not None else [])
-        if vehicle:
-            data_path, truth_path = _vehicle_rig(kind, drive_from, _split(element), target, options, margin, band,
+        data_path, truth_path = write_rig_record(kind, target, options, drive_from, _split(element), margin, band,
                                                  not default_sensors)
-        else:
-            data_path, truth_path = write_rig(kind, target, options)
     except NnfmuError as error:
         _fail(error)
     typer.echo(f"data: {data_path}\ntruth (for evaluation only, never for training): {truth_path}")
 
 
-def _vehicle_rig(kind: str, source: Optional[Path], elements: list[str], out: Path, options, margin: float,
-                 band: Optional[str], fit_sensors: bool) -> tuple[Path, Path]:
-    """`nnfmu rig KIND --drive-from`: check the combination of options, then write the vehicle-derived record."""
-    from nnfmu.data.rigs import RIG_BANDS, DriveDesign, write_vehicle_damper_dyno, write_vehicle_rig
-
-    if kind not in RIG_BANDS:
-        raise SettingsError(f"unknown rig kind {kind!r}; valid kinds: {', '.join(RIG_BANDS)}")
-    if source is None:
-        raise SettingsError("excitation 'vehicle' needs --drive-from RESULT (a vehicle result file)")
-    if options.excitation != "vehicle":
-        raise SettingsError(f"--drive-from sets the excitation to 'vehicle'; it cannot be {options.excitation!r} too")
-    if not elements:
-        raise SettingsError(f"--drive-from needs --element NAME (e.g. {'damper_fl' if kind == 'damper' else 'bushing_fl_front'})")
-    if kind == "damper" and not fit_sensors:
-        raise SettingsError("--default-sensors is for the bushing rig; the damper dyno always records with its own "
-                            "transducers")
-    try:
-        low, high = (float(v) for v in band.split(":")) if band is not None else RIG_BANDS[kind]
-    except ValueError:
-        raise SettingsError(f"--band must be LOW:HIGH in Hz, e.g. 0.5:40; got {band!r}") from None
-    design = DriveDesign(margin=margin, band=(low, high), fit_sensors=fit_sensors)
-    if kind == "damper":
-        return write_vehicle_damper_dyno(source, elements, out, options, design)
-    return write_vehicle_rig(source, elements, out, options, design)
-
-
 def _channel_map(items: Optional[list[str]]) -> dict[str, str]:
     """`--map "FILE CHANNEL=name"` options as a channel map."""
-    from nnfmu.data import parse_channel_map
+    from nnfmu.workflows.data_check import parse_channel_map
 
     try:
         return parse_channel_map(items or [])
@@ -189,7 +160,7 @@ def train(
     from rich.table import Table
     from rich.text import Text
 
-    from nnfmu.models.workflow import TrainRequest, train_from_file
+    from nnfmu.workflows.train import TrainRequest, train_from_file
 
     request = TrainRequest(preset=preset, output=output, inputs=tuple(_split(inputs)),
                            delays=_int_list(delays, "--delays"), hidden=_int_list(hidden, "--hidden"),
@@ -244,7 +215,7 @@ def demo(
     from rich.console import Console
     from rich.table import Table
 
-    from nnfmu.demo import DemoSettings, run_demo
+    from nnfmu.workflows.demo import DemoSettings, run_demo
 
     console = Console(markup=False)  # diagnosis test names carry brackets: test[velocity]
     try:
@@ -288,8 +259,7 @@ def build(
     platforms: Optional[list[str]] = typer.Option(None, help=PLATFORMS_HELP),
 ) -> None:
     """Build a standalone FMI co-simulation FMU from an ONNX model."""
-    from nnfmu.fmu.build import build_fmu
-    from nnfmu.fmu.options import BuildOptions
+    from nnfmu.workflows.fmu_build import BuildOptions, build_fmu
 
     try:
         target = None if out is None else check_output_file(out, [model])
@@ -304,7 +274,7 @@ def build(
 
 def _echo_reference_results(fmu: Path) -> None:
     """Say whether the FMU carries reference results and how to check them."""
-    from nnfmu.fmu.reference_results import has_reference_results
+    from nnfmu.workflows.fmu_build import has_reference_results
 
     if has_reference_results(fmu):
         typer.echo(f"reference results: yes (FMI-LS-REF); verify with: nnfmu check {fmu}")
@@ -318,7 +288,7 @@ def check(
     tolerance: Optional[float] = typer.Option(None, help="Allowed max error of each output as a fraction of its peak (default: the experiment's)."),
 ) -> None:
     """Replay the reference results an FMU carries with fmpy and report pass/fail per output (exit 1 on failure)."""
-    from nnfmu.fmu.check import check_fmu, report_lines
+    from nnfmu.workflows.fmu_build import check_fmu, report_lines
 
     try:
         report = check_fmu(fmu, tolerance)
@@ -347,7 +317,7 @@ def vehicle_build(
 
     quarter-car takes a quarter-car file or a full-vehicle file (one corner derived); full-vehicle a full-vehicle file.
     """
-    from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
+    from nnfmu.workflows.fmu_build import VehicleBuildSettings, build_vehicle_fmu
 
     try:
         settings = VehicleBuildSettings(params_path=params, components={n: "reference" for n in _split(reference)}
@@ -380,26 +350,16 @@ def cosim(
     """Co-simulate a vehicle FMU with component FMUs on a drive file."""
     from rich.progress import Progress
 
-    from nnfmu.cosim.master import CosimSettings, run_cosim
-    from nnfmu.cosim.results import save_result
-    from nnfmu.vehicle.drive import read_drive
+    from nnfmu.workflows.cosim import CosimSettings, run_cosim
 
     try:
         target = check_output_file(out, [system, drive])
         settings = CosimSettings(step=step, stop_time=stop, scheme=scheme, order=order, refresh=refresh,
                                  extrapolation="linear" if extrapolate else "none", iterations=iterations)
-        if master == "libcosim":
-            from nnfmu.cosim.libcosim_runner import run_libcosim
-
-            result = run_libcosim(system, read_drive(drive), settings)
-            save_result(result, target)
-        elif master == "fmpy":
-            with Progress(transient=True) as bar:
-                task = bar.add_task("co-simulation", total=None)
-                result = run_cosim(system, drive, settings, target,
-                                   progress=lambda done, total: bar.update(task, completed=done, total=total))
-        else:
-            raise SettingsError(f"unknown master {master!r}; use fmpy or libcosim")
+        with Progress(transient=True) as bar:
+            task = bar.add_task("co-simulation", total=None)
+            result = run_cosim(system, drive, settings, target, master=master,
+                               progress=lambda done, total: bar.update(task, completed=done, total=total))
     except NnfmuError as error:
         _fail(error)
     typer.echo(f"{result.steps} steps of {step:g} s; result: {out}")
@@ -417,8 +377,8 @@ def batch(
     reuse_instances: bool = typer.Option(True, help="Keep FMU instances between cases and reset them (fmi2Reset/fmi3Reset) instead of opening them again; --no-reuse-instances for FMUs whose reset is unreliable."),
 ) -> None:
     """Run a road-test campaign (events x variants) on Dask into one Parquet table of pseudo-damage per channel."""
-    from nnfmu.campaign import run_campaign
-    from nnfmu.campaign.progress import CaseProgress
+    from nnfmu.workflows.campaign import run_campaign
+    from nnfmu.workflows.campaign.progress import CaseProgress
 
     if workers is not None and workers < 0:
         raise typer.BadParameter(f"--workers {workers}: give 0 (here, serially) or more")
@@ -465,11 +425,11 @@ def data_check(
     channel_map: Optional[list[str]] = typer.Option(None, "--map", help=MAP_HELP),
 ) -> None:
     """Load a measurement, convert it to SI units and report its channels, or say exactly what is wrong."""
-    from nnfmu.data import load_measurement
+    from nnfmu.workflows.data_check import check_data_file
 
     mapping = _channel_map(channel_map)
     try:
-        m = load_measurement(path, required=_split(require), channel_map=mapping)
+        m = check_data_file(path, _split(require), mapping)
     except NnfmuError as error:
         _fail(error)
     typer.echo(f"{path}: {len(m)} samples, sample period {m.sample_period:.6g} s")
@@ -510,7 +470,7 @@ def drive_generate(
     rpc_data_type: str = typer.Option("int16", help="RPC III sample type: int16 or float32."),
 ) -> None:
     """Write four actuator displacement channels from an ISO 8608 road at a given speed, with optional events."""
-    from nnfmu.vehicle.drive import DriveSettings, KerbStrike, Pothole, generate_drive, write_drive
+    from nnfmu.workflows.drive import DriveSettings, KerbStrike, Pothole, write_generated_drive
 
     events = [Pothole(**_event_fields(p, "--pothole", ("time", "depth", "length", "side"))) for p in pothole or []]
     events += [KerbStrike(**_event_fields(k, "--kerb", ("time", "height", "ramp_length", "length", "side")))
@@ -520,7 +480,7 @@ def drive_generate(
                              highpass=highpass or None, lowpass=lowpass or None, seed=seed, events=tuple(events))
     try:
         target = check_output_file(out, [])
-        path = write_drive(generate_drive(settings), target, rpc_data_type=rpc_data_type)
+        path = write_generated_drive(settings, target, rpc_data_type=rpc_data_type)
     except NnfmuError as error:
         _fail(error)
     typer.echo(f"drive file: {path}")
@@ -533,11 +493,10 @@ def drive_convert(
     rpc_data_type: str = typer.Option("int16", help="RPC III sample type: int16 or float32."),
 ) -> None:
     """Convert a drive file between CSV, MDF4 and RPC III, keeping channel names and units."""
-    from nnfmu.vehicle.drive import read_drive, write_drive
+    from nnfmu.workflows.drive import convert_drive
 
     try:
-        path = write_drive(read_drive(source), check_output_file(target, [source], "TARGET"),
-                           rpc_data_type=rpc_data_type)
+        path = convert_drive(source, check_output_file(target, [source], "TARGET"), rpc_data_type=rpc_data_type)
     except NnfmuError as error:
         _fail(error)
     typer.echo(f"drive file: {path}")
@@ -580,7 +539,7 @@ def validate(
     window: Optional[str] = typer.Option(None, "--window", help="Fixed time-history window START,END [s], e.g. 30,35."),
 ) -> None:
     """Compare a result with a reference: NRMSE, R², peaks, mean shift, RMS, PSD and rainflow pseudo-damage."""
-    from nnfmu.validate import ValidationSettings, validate_files
+    from nnfmu.workflows.validation import ValidationSettings, validate_files
 
     try:
         settings = ValidationSettings(basquin_slope=slope, slopes=_slopes(slope_for or []), fmax=fmax,

@@ -18,15 +18,15 @@ runner = CliRunner()
 
 # (command line with {tmp} for the test's folder, the function the command calls: module, name)
 COMMANDS = {
-    "rig": (["rig", "damper", "--out", "{tmp}/d.csv"], ("nnfmu.data.rigs", "write_rig")),
+    "rig": (["rig", "damper", "--out", "{tmp}/d.csv"], ("nnfmu.workflows.rig", "write_rig_record")),
     "train": (["train", "{tmp}/d.csv", "--preset", "damper-spline", "--out", "{tmp}/m.onnx"],
-              ("nnfmu.models.workflow", "train_from_file")),
+              ("nnfmu.workflows.train", "train_from_file")),
     "cosim": (["cosim", "{tmp}/system", "--drive", "{tmp}/drive.csv", "--out", "{tmp}/r.csv"],
-              ("nnfmu.cosim.master", "run_cosim")),
+              ("nnfmu.workflows.cosim", "run_cosim")),
     "validate": (["validate", "{tmp}/a.csv", "{tmp}/b.csv", "--out", "{tmp}/report"],
-                 ("nnfmu.validate", "validate_files")),
-    "data check": (["data", "check", "{tmp}/d.csv"], ("nnfmu.data", "load_measurement")),
-    "build": (["build", "{tmp}/m.onnx", "--out", "{tmp}/m.fmu"], ("nnfmu.fmu.build", "build_fmu")),
+                 ("nnfmu.workflows.validation", "validate_files")),
+    "data check": (["data", "check", "{tmp}/d.csv"], ("nnfmu.workflows.data_check", "check_data_file")),
+    "build": (["build", "{tmp}/m.onnx", "--out", "{tmp}/m.fmu"], ("nnfmu.workflows.fmu_build", "build_fmu")),
 }
 
 

@@ -40,7 +40,8 @@ CLASSES = _nnfmu_exception_classes()
 
 def test_the_walk_finds_the_package_errors() -> None:
     """A guard on the walk itself: errors of the lowest and highest stages are among those it finds."""
-    for name in ("nnfmu.errors.SettingsError", "nnfmu.data.errors.DataError", "nnfmu.campaign.errors.CampaignError",
+    for name in ("nnfmu.errors.SettingsError", "nnfmu.data.errors.DataError",
+                 "nnfmu.workflows.campaign.errors.CampaignError",
                  "nnfmu.fmu.native.codegen.errors.UnsupportedGraphError", "nnfmu.cosim.master._Diverged"):
         assert name in CLASSES, sorted(CLASSES)
     assert len(CLASSES) >= 25

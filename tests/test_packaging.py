@@ -17,7 +17,7 @@ def test_wheel_ships_templates_and_package_data(tmp_path: Path) -> None:
         if template.is_file():
             assert f"nnfmu/templates/{template.relative_to(ROOT / 'templates').as_posix()}" in names
     assert "nnfmu/validate/report.html.j2" in names
-    assert "nnfmu/campaign/summary.html.j2" in names
+    assert "nnfmu/workflows/campaign/summary.html.j2" in names
     assert "nnfmu/loop/loop_report.html.j2" in names
     assert {"nnfmu/diagnosis/__init__.py", "nnfmu/diagnosis/effects/__init__.py",
             "nnfmu/diagnosis/effects/friction.py"} <= names  # subpackages found by find_packages

@@ -10,8 +10,9 @@ is stood in for by a generated class D road written as CSV, to show a drive-file
 
 from pathlib import Path
 
-from nnfmu.campaign.quarter_car import build_quarter_car_system
-from nnfmu.vehicle.drive import DriveSettings, generate_drive, write_drive
+from nnfmu.workflows.campaign.quarter_car import build_quarter_car_system
+from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.data.drive_files import write_drive
 from nnfmu.vehicle.models import VehicleParameters
 
 HERE = Path(__file__).parent

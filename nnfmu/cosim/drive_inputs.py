@@ -1,10 +1,9 @@
-"""Feed a vehicle's actuator inputs from a drive file: by channel name, rates derived, values at any master time.
+"""Feed the driven element's inputs from a drive file: by channel name, rates derived, values at any master time.
 
-A vehicle input `actuator_fl_displacement` reads the drive channel of the same name, and only that: a quarter car
-names its inputs after the corner it stands on, so it reads its own corner's channels with no special case. A rate
-the drive lacks (`..._velocity`) is differentiated from its displacement with the data package's Savitzky-Golay
-filter (`derive_rates`). Between drive samples the values are interpolated linearly, so the master's communication
-step need not equal the drive's sample period.
+Each bound input reads the drive channel its `DriveBinding` names (a vehicle's `actuator_fl_displacement` the
+channel of the same name). A rate the drive lacks (`..._velocity`) is differentiated from its displacement with the
+data package's Savitzky-Golay filter (`derive_rates`). Between drive samples the values are interpolated linearly,
+so the master's communication step need not equal the drive's sample period.
 """
 
 from __future__ import annotations
@@ -21,18 +20,18 @@ TIME_TOLERANCE = 1e-9  # relative to the drive's sample period: how far outside 
 
 
 class DriveInputError(NnfmuError, ValueError):
-    """The drive cannot feed the vehicle: a missing channel or a time outside the drive; names file and channel."""
+    """The drive cannot feed the system: a missing channel, a time outside the drive or a bad binding; names what."""
 
 
 class DriveInputs:
-    """Values of the vehicle inputs `names` from `drive` at master times; `at(t)` returns them in that order."""
+    """Values of the drive channels `names` from `drive` at master times; `at(t)` returns them in that order."""
 
     def __init__(self, drive: Measurement, names: Sequence[str]) -> None:
         source = derive_rates(drive) if any(n not in drive for n in names) else drive
         missing = [n for n in names if n not in source]
         if missing:
             raise DriveInputError(
-                f"{drive.source}: no channel for the vehicle input(s) {', '.join(map(repr, missing))} "
+                f"{drive.source}: no channel for the bound input(s) {', '.join(map(repr, missing))} "
                 f"(the drive has: {', '.join(drive.names)})"
             )
         self.names = list(names)

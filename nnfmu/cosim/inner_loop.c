@@ -21,7 +21,7 @@ typedef int (*nn_set_slopes)(void *instance, const uint32_t *references, size_t 
 typedef int (*nn_do_step)(void *instance, double t, double h, int no_prior_state);
 
 /* One element: its coupled inputs are gathered from `sources` (positions in the values row) into the first
- * n_coupled entries of `inputs`; the vehicle's drive inputs follow them. Its outputs land at values + span_start. */
+ * n_coupled entries of `inputs`; the driven element's drive inputs follow them. Its outputs land at values + span_start. */
 typedef struct {
     void *instance;
     nn_transfer set_real;
@@ -39,7 +39,7 @@ typedef struct {
     const uint32_t *output_references;
     int64_t n_outputs;
     int64_t span_start;
-    int64_t vehicle;
+    int64_t is_driven;
     int64_t feedthrough;
 } nn_element;
 
@@ -92,7 +92,7 @@ static int set_inputs(const nn_plan *plan, int64_t index, const double *source, 
     if (e->feedthrough) {
         if (plan->n_refreshed == 0) {
             for (i = 0; i < n; i++) e->inputs[i] = plan->now[e->sources[i]];
-            if (e->vehicle) memcpy(e->inputs + n, drive, (size_t)e->n_driven * sizeof(double));
+            if (e->is_driven) memcpy(e->inputs + n, drive, (size_t)e->n_driven * sizeof(double));
             if (failed(failure, step, index, NN_CALL_SET, e->set_real(e->instance, e->input_references, n_inputs,
                                                                      e->inputs)))
                 return 1;
@@ -105,7 +105,7 @@ static int set_inputs(const nn_plan *plan, int64_t index, const double *source, 
         }
         return 0;
     }
-    if (e->vehicle) {
+    if (e->is_driven) {
         for (i = 0; i < n; i++) e->inputs[i] = 0.5 * (plan->now[e->sources[i]] + source[e->sources[i]]);
         for (i = 0; i < e->n_driven; i++) e->inputs[n + i] = 0.5 * (drive[i] + end[i]);
     } else {
@@ -123,7 +123,7 @@ static int refresh(const nn_plan *plan, const double *end, int64_t step, nn_fail
         nn_element *e = &plan->elements[index];
         size_t n_inputs = (size_t)(e->n_coupled + e->n_driven);
         for (i = 0; i < e->n_coupled; i++) e->inputs[i] = plan->values[e->sources[i]];
-        if (e->vehicle) memcpy(e->inputs + e->n_coupled, end, (size_t)e->n_driven * sizeof(double));
+        if (e->is_driven) memcpy(e->inputs + e->n_coupled, end, (size_t)e->n_driven * sizeof(double));
         if (failed(failure, step, index, NN_CALL_REFRESH_SET,
                    e->set_real(e->instance, e->input_references, n_inputs, e->inputs)))
             return 1;

@@ -35,7 +35,7 @@ class _CElement(Structure):
                                                "input_references", "inputs")] + [
         ("n_coupled", c_int64), ("n_driven", c_int64), ("sources", c_void_p), ("slope_references", c_void_p),
         ("slope_orders", c_void_p), ("slopes", c_void_p), ("output_references", c_void_p), ("n_outputs", c_int64),
-        ("span_start", c_int64), ("vehicle", c_int64), ("feedthrough", c_int64)]
+        ("span_start", c_int64), ("is_driven", c_int64), ("feedthrough", c_int64)]
 
 
 class _CPlan(Structure):
@@ -141,7 +141,7 @@ class CompiledLoop:
                 slot.slopes = _pointer(slopes.values)
             slot.output_references = cast(element.outputs._references, c_void_p).value
             slot.n_outputs, slot.span_start = len(element.outputs.names), element.span.start
-            slot.vehicle, slot.feedthrough = int(element.vehicle), int(element.feedthrough)
+            slot.is_driven, slot.feedthrough = int(element.driven_element), int(element.feedthrough)
         starts = np.cumsum([0] + [len(group) for group in groups], dtype=np.int64)
         refreshed = np.array([index[id(e)] for e in system.refreshed], dtype=np.int64)
         self.values, n = system.values, len(system.values)

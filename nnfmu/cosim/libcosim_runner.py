@@ -18,7 +18,8 @@ import numpy as np
 
 from ..data import Measurement
 from .drive_inputs import DriveInputs
-from .master import CosimError, CosimSettings, find_vehicle, result_table, step_count, whole_steps
+from .binding import DriveBinding, bind_free_inputs
+from .master import CosimError, CosimSettings, result_table, step_count, whole_steps
 from .results import CosimResult
 from .ssp import SystemStructure, open_system
 
@@ -42,9 +43,10 @@ def _check_settings(settings: CosimSettings) -> None:
         raise CosimError(f"libcosim's SSP executions start at t = 0, not {settings.start_time!r} s")
 
 
-def run_libcosim(ssd_path: str | os.PathLike[str], drive: Measurement, settings: CosimSettings) -> CosimResult:
-    """Co-simulate the system of `ssd_path` (.ssd, its folder or .ssp) in libcosim; channels named as fmpy names
-    them."""
+def run_libcosim(ssd_path: str | os.PathLike[str], drive: Measurement, settings: CosimSettings,
+                 binding: DriveBinding | None = None) -> CosimResult:
+    """Co-simulate the system of `ssd_path` (.ssd, its folder or .ssp) in libcosim, the drive fed as `binding` says
+    (None: `bind_free_inputs`); channels named as fmpy names them."""
     from libcosimpy.CosimEnums import CosimVariableCausality, CosimVariableType
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
@@ -56,8 +58,8 @@ def run_libcosim(ssd_path: str | os.PathLike[str], drive: Measurement, settings:
     with open_system(path) as system:
         h_ns = _nanoseconds(settings.step, "communication step")
         stop = settings.stop_time if settings.stop_time is not None else system.stop_time
-        vehicle = find_vehicle(system)
-        driven = {(c.end_element, c.end_connector) for c in system.connections}
+        binding = binding if binding is not None else bind_free_inputs(system)
+        driven = binding.element
         log_output_level(CosimLogLevel.ERROR)
         # the system file open_system read and checked: for an .ssp the extracted copy, never the archive itself,
         # which libcosim would extract again without open_system's checks
@@ -67,14 +69,19 @@ def run_libcosim(ssd_path: str | os.PathLike[str], drive: Measurement, settings:
         index = {e.name: execution.slave_index_from_instance_name(e.name) for e in system.elements}
         refs = {name: {v.name.decode(): (v.reference, v.causality) for v in execution.slave_variables(i)}
                 for name, i in index.items()}
-        drive_names = [n for n, (_, causality) in refs[vehicle].items()
-                       if causality == CosimVariableCausality.INPUT.value and (vehicle, n) not in driven]
-        inputs = DriveInputs(drive, drive_names)
+        connected = {(c.end_element, c.end_connector) for c in system.connections}
+        wrong = [n for n in binding.inputs if refs[driven].get(n, (0, None))[1] != CosimVariableCausality.INPUT.value
+                 or (driven, n) in connected]
+        if wrong:
+            raise CosimError(f"{path}: element {driven!r}: bound input(s) {', '.join(wrong)} are not free inputs of "
+                             "its FMU (no such input, or connected)")
+        drive_names = list(binding.inputs)
+        inputs = DriveInputs(drive, binding.channels)
         h = settings.step
         n_steps = step_count(0.0, stop, h) if stop is not None else whole_steps(0.0, inputs.end, h)
-        channels = _channels(system, vehicle)
+        channels = _channels(system, driven)
         rows = result_table(n_steps, len(channels))  # refuses a result too large before libcosim buffers it too
-        drive_refs = [refs[vehicle][n][0] for n in drive_names]
+        drive_refs = [refs[driven][n][0] for n in drive_names]
         manipulator = CosimManipulator.create_override()
         last = CosimObserver.create_last_value()
         series = CosimObserver.create_time_series(buffer_size=n_steps + 1)  # keeps step 0
@@ -84,10 +91,10 @@ def run_libcosim(ssd_path: str | os.PathLike[str], drive: Measurement, settings:
         for element, output, _, _ in channels:
             series.start_time_series(index[element], refs[element][output][0], CosimVariableType.REAL)
         for ref, value in zip(drive_refs, inputs.at(0.0)):
-            execution.real_initial_value(index[vehicle], ref, float(value))
+            execution.real_initial_value(index[driven], ref, float(value))
         for n in range(n_steps):
             if drive_refs:
-                manipulator.slave_real_values(index[vehicle], drive_refs,
+                manipulator.slave_real_values(index[driven], drive_refs,
                                               [float(x) for x in inputs.at(n * h)])
             if not execution.step(1):
                 raise CosimError(f"{path}: libcosim failed at step {n} (t = {n * h_ns} ns)")
@@ -107,7 +114,7 @@ def run_libcosim(ssd_path: str | os.PathLike[str], drive: Measurement, settings:
     return CosimResult(measurement, n_steps, n_steps, 0, master="libcosim")
 
 
-def _channels(system: SystemStructure, vehicle: str) -> list[tuple[str, str, str, str]]:
+def _channels(system: SystemStructure, driven: str) -> list[tuple[str, str, str, str]]:
     """(element, output, channel, unit) of every Real output, in the fmpy master's order and naming."""
     from fmpy import read_model_description
 
@@ -115,7 +122,7 @@ def _channels(system: SystemStructure, vehicle: str) -> list[tuple[str, str, str
     for element in system.elements:
         for v in read_model_description(str(system.fmu_path(element))).modelVariables:
             if v.causality == "output" and v.type in ("Real", "Float64"):
-                channel = v.name if element.name == vehicle else f"{element.name}_{v.name}"
+                channel = v.name if element.name == driven else f"{element.name}_{v.name}"
                 unit = v.unit or (v.declaredType.unit if v.declaredType else "") or "1"
                 result.append((element.name, v.name, channel, unit))
     return result

@@ -1,7 +1,7 @@
 """A linear viscous damper F = c·v as an nnfmu step graph: the baseline component for coupling studies.
 
 With a linear component the co-simulation error against the monolithic solution is the coupling error alone, which
-is how the master's schemes are measured (`bench/cosim_coupling.py`, tests/cosim, tests/roadtest).
+is how the master's schemes are measured (`bench/cosim_coupling.py`, tests/cosim, tests/workflows/roadtest).
 """
 
 from __future__ import annotations

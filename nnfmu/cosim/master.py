@@ -1,4 +1,5 @@
-"""Fixed-step co-simulation master on fmpy: one vehicle FMU, component FMUs, drive-file inputs, SSP wiring.
+"""Fixed-step co-simulation master on fmpy for an SSP system: FMUs wired by its connections, and one driven element
+whose free inputs read a drive file (a `DriveBinding`: in a road test the vehicle, whose actuators the drive moves).
 
 Time is counted in whole steps: t_n = t0 + n h, so 10 s at 1 ms is exactly 10 000 steps and the last sample is
 labelled 10.0 s. Outputs read after the step from t_n belong to t_{n+1} and are labelled so.
@@ -13,20 +14,21 @@ Two kinds of FMU, told apart by their model description:
 One step from t_n, for a coupling signal y (an output wired to an input) with value y_n at t_n:
 1. The elements step one after another in `order` (Gauss-Seidel) or all on the same values (Jacobi). A sampled
    element gets, for each input, the freshest value: the t_{n+1} output of an element stepped before it in this
-   pass, else y_n (plain) or its estimate for t_{n+1}, 2 y_n - y_{n-1} ('linear' extrapolation); a sampled vehicle
-   (no feedthrough) holds its inputs over the step, so it gets the mean of y_n and that estimate instead. An element
-   with feedthrough already holds its t_n inputs (set in the previous step's refresh) and, where it can interpolate
-   and the scheme is not plain, gets their slopes over the step: (estimate - y_n) / h, the drive's exactly.
+   pass, else y_n (plain) or its estimate for t_{n+1}, 2 y_n - y_{n-1} ('linear' extrapolation); a sampled
+   driven element (no feedthrough) holds its inputs over the step, so it gets the mean of y_n and that estimate
+   instead. An element with feedthrough already holds its t_n inputs (set in the previous step's refresh) and, where
+   it can interpolate and the scheme is not plain, gets their slopes over the step: (estimate - y_n) / h, the
+   drive's exactly.
 2. Refresh (`refresh`, the default): every element with feedthrough gets its inputs at t_{n+1} (all fresh now: the
-   components' outputs, the drive at t_{n+1}) and its outputs are read again, so a vehicle's accelerations see the
-   damper force of t_{n+1}, and its state follows the force ramping from t_n to t_{n+1} (trapezoidal rule).
+   components' outputs, the drive at t_{n+1}) and its outputs are read again, so a vehicle's accelerations see
+   the damper force of t_{n+1}, and its state follows the force ramping from t_n to t_{n+1} (trapezoidal rule).
 Iterative coupling (`iterations` > 0): every FMU state is saved at t_n; the step is repeated from the saved states
 with the t_{n+1} values of the last pass as the estimate until they change by less than `tolerance` (relative to the
 signal's peak so far) or `iterations` repeats are spent.
 
-The default (vehicle first, linear extrapolation, refresh) makes one pass per step: the vehicle steps on the damper
-force extrapolated linearly, the components sample at t_{n+1} on its motion, and the refresh gives the vehicle their
-forces at t_{n+1}: second order in h for motions, forces and accelerations (bench/cosim_coupling.py).
+The default (the driven element first, linear extrapolation, refresh) makes one pass per step: the vehicle steps on
+the damper force extrapolated linearly, the components sample at t_{n+1} on its motion, and the refresh gives the
+vehicle their forces at t_{n+1}: second order in h for motions, forces and accelerations (bench/cosim_coupling.py).
 
 Cost: per element and pass, one FMI call sets all its inputs, one steps it and one reads all its Real outputs into
 the result row (`direct`, buffers and value references prepared once); the refresh adds one set and one get per
@@ -39,7 +41,6 @@ results, the full vehicle about 3x faster (bench/cosim.py).
 from __future__ import annotations
 
 import math
-import os
 import time as clock
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -47,8 +48,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..data import Measurement
+from ..component import same_period
 from ..errors import NnfmuError
 from .direct import FmiStatusError, RealBlock, SlopeBlock, Stepper
+from .binding import DriveBinding, bind_free_inputs
 from .drive_inputs import DriveInputs
 from .inner_loop import CompiledLoop, LoopFailure
 from .instances import InstancePool
@@ -83,8 +86,8 @@ class CosimSettings:
     `extrapolation` of coupling signals over a step, 'none' or 'linear'; `refresh`: give elements with feedthrough
     their inputs at t_{n+1} after the step and read their outputs again; `iterations`: most repeats of a step for
     strong coupling (0: none), until the t_{n+1} values change by less than `tolerance` of their peak. The defaults
-    are the accurate one-pass scheme of the module docstring. The vehicle's actuator inputs read the drive's channels
-    of the same names (a quarter car's name its corner). `inner_loop`: 'auto' steps one-pass schemes of FMI 2 FMUs
+    are the accurate one-pass scheme of the module docstring. `order` 'vehicle-first' steps the driven element
+    (the binding's, see `binding.py`) first. `inner_loop`: 'auto' steps one-pass schemes of FMI 2 FMUs
     in compiled C where a host compiler is found (`inner_loop.py`; same numbers), else in Python; 'python' always
     in Python; 'c' requires the C loop.
     """
@@ -157,29 +160,15 @@ class _Link:
     input: str
 
 
-def find_vehicle(system: SystemStructure) -> str:
-    """The element whose FMU has unconnected actuator_* inputs (fed from the drive); exactly one must exist."""
-    from fmpy import read_model_description
-
-    driven = {(c.end_element, c.end_connector) for c in system.connections}
-    candidates = [e.name for e in system.elements
-                  if any(v.causality == "input" and v.name.startswith("actuator_") and (e.name, v.name) not in driven
-                         for v in read_model_description(str(system.fmu_path(e))).modelVariables)]
-    if len(candidates) != 1:
-        raise CosimError(f"system {system.name!r}: expected exactly one vehicle element (one with unconnected "
-                         f"actuator_* inputs), found {candidates or 'none'}")
-    return candidates[0]
-
-
 @dataclass(eq=False, slots=True)
 class _Element:
     """One element's transfers in a step, prepared once: its coupling inputs gathered from the values row at
-    `sources` into `coupled`, the drive's values into `driven` (the vehicle only), one set of all its inputs, one
+    `sources` into `coupled`, the drive's values into `driven` (the driven element only), one set of all its inputs, one
     doStep, one get of all its Real outputs into `span` of the values row. An element with `feedthrough` is set its
     inputs at t_{n+1} after the step (refresh); `slopes` (FMI 2, inputs interpolated) takes their slopes over it."""
 
     name: str
-    vehicle: bool
+    driven_element: bool
     feedthrough: bool
     sources: np.ndarray
     coupled: np.ndarray
@@ -200,10 +189,11 @@ class _System:
     """
 
     def __init__(self, system: SystemStructure, drive: Measurement, settings: CosimSettings,
-                 pool: InstancePool | None = None) -> None:
+                 pool: InstancePool | None = None, binding: DriveBinding | None = None) -> None:
         self.settings = settings
         self.pool = pool
-        self.vehicle = find_vehicle(system)
+        binding = binding if binding is not None else bind_free_inputs(system)
+        self.driven = binding.element
         self.links = [_Link(c.start_element, c.start_connector, c.end_element, c.end_connector)
                       for c in system.connections]
         self.parameters = {e.name: dict(e.parameters) for e in system.elements}
@@ -213,29 +203,56 @@ class _System:
                 path = system.fmu_path(element)
                 self.slaves[element.name] = (pool.take(path, element.name) if pool is not None
                                              else FmuSlave(path, instance_name=element.name))
-            driven = {(link.target, link.input) for link in self.links}
-            vehicle = self.slaves[self.vehicle]
-            self.drive_names = [n for n in vehicle.names("input") if (self.vehicle, n) not in driven]
-            self.drive = DriveInputs(drive, self.drive_names)
+            connected = {(link.target, link.input) for link in self.links}
+            self._check_binding(system.name, binding, connected)
+            self.drive_names = list(binding.inputs)
+            self.drive = DriveInputs(drive, binding.channels)
+            bound = {(binding.element, n) for n in binding.inputs}
             for name, slave in self.slaves.items():
-                free = [n for n in slave.names("input") if (name, n) not in driven and name != self.vehicle]
+                free = [n for n in slave.names("input") if (name, n) not in connected | bound]
                 if free:
                     raise CosimError(f"system {system.name!r}: element {name!r}: input(s) {', '.join(free)} are "
                                      "connected to nothing")
+            self._check_periods(system.name, settings.step)
             self.outputs = {name: [n for n in slave.names("output") if slave.variables[n].type in ("Real", "Float64")]
                             for name, slave in self.slaves.items()}
             self.elements = self._wire(system.name)
         except BaseException:
             self.close(healthy=False)
             raise
-        components = [e.name for e in system.elements if e.name != self.vehicle]
-        order = components + [self.vehicle] if settings.order == "components-first" else [self.vehicle] + components
+        components = [e.name for e in system.elements if e.name != self.driven]
+        order = components + [self.driven] if settings.order == "components-first" else [self.driven] + components
         ordered = [self.elements[name] for name in order]
         self.groups = [[element] for element in ordered] if settings.scheme == "gauss-seidel" else [ordered]
         self.refreshed = [e for e in ordered if e.feedthrough and e.inputs is not None] if settings.refresh else []
         self.now = self.values.copy()
         self.before = self.values.copy()
         self.peak = np.zeros(len(self.links))
+
+    def _check_periods(self, system_name: str, h: float) -> None:
+        """Refuse a step an element cannot honour: one with feedthrough makes its outputs follow inputs set at a
+        sample time, so the communication points must be sample times (h a whole multiple of its period T). An
+        element without feedthrough honours any h (it evaluates every sample a step reaches)."""
+        for name, slave in self.slaves.items():
+            period = slave.sample_period
+            if period is None or not slave.feedthrough:
+                continue
+            samples = round(h / period)
+            if samples < 1 or not same_period(samples * period, h):
+                raise CosimError(f"system {system_name!r}: element {name!r} samples every {period:.9g} s and its "
+                                 f"outputs follow inputs set at its sample times (feedthrough), so the communication "
+                                 f"step must be a whole multiple of {period:.9g} s; it is {h:.9g} s")
+
+    def _check_binding(self, system_name: str, binding: DriveBinding, connected: set[tuple[str, str]]) -> None:
+        """The bound element exists and every bound input is one of its inputs that no connection reaches."""
+        if binding.element not in self.slaves:
+            raise CosimError(f"system {system_name!r}: the drive binding names element {binding.element!r}, which the "
+                             f"system does not have ({', '.join(self.slaves)})")
+        inputs = set(self.slaves[binding.element].names("input"))
+        wrong = [n for n in binding.inputs if n not in inputs or (binding.element, n) in connected]
+        if wrong:
+            raise CosimError(f"system {system_name!r}: element {binding.element!r}: bound input(s) "
+                             f"{', '.join(wrong)} are not free inputs of its FMU (no such input, or connected)")
 
     def _wire(self, system_name: str) -> dict[str, _Element]:
         """The values row, every output's place in it, and each element's prepared transfers."""
@@ -253,12 +270,12 @@ class _System:
         elements = {}
         for name, slave in self.slaves.items():
             incoming = [link for link in self.links if link.target == name]
-            is_vehicle = name == self.vehicle
-            names = [link.input for link in incoming] + (self.drive_names if is_vehicle else [])
+            is_driven = name == self.driven
+            names = [link.input for link in incoming] + (self.drive_names if is_driven else [])
             inputs = RealBlock(slave, names) if names else None
             buffer = inputs.values if inputs is not None else np.zeros(0)
             elements[name] = _Element(
-                name=name, vehicle=is_vehicle, feedthrough=slave.feedthrough,
+                name=name, driven_element=is_driven, feedthrough=slave.feedthrough,
                 sources=np.array([position[(link.source, link.output)] for link in incoming], dtype=np.intp),
                 coupled=buffer[:len(incoming)], driven=buffer[len(incoming):], inputs=inputs,
                 slopes=SlopeBlock(slave, names) if names and slave.feedthrough and slave.takes_input_slopes else None,
@@ -283,7 +300,7 @@ class _System:
             if self.parameters[name]:
                 slave.set_real(list(self.parameters[name]), list(self.parameters[name].values()))
         if self.drive_names:
-            self.slaves[self.vehicle].set_real(self.drive_names, drive)
+            self.slaves[self.driven].set_real(self.drive_names, drive)
         for _ in range(len(self.slaves)):
             for link in self.links:
                 self.slaves[link.target].set_real([link.input], self.slaves[link.source].get_real([link.output]))
@@ -302,7 +319,7 @@ class _System:
         return self.now.copy()
 
     def _set_inputs(self, element: _Element, source: np.ndarray, drive: np.ndarray, end: np.ndarray, h: float) -> None:
-        """Before an element's step: a sampled element's inputs from `source` (a sampled vehicle: the mean of t_n
+        """Before an element's step: a sampled element's inputs from `source` (a sampled driven element: the mean of t_n
         and `source`, and the drive's mean, unless the scheme is plain); an element with feedthrough has its inputs at
         t_n (set by the refresh, else here) and gets their slopes toward `source` and toward the drive's value `end`
         at t_{n+1}."""
@@ -311,7 +328,7 @@ class _System:
         if element.feedthrough:
             if not self.refreshed:  # its inputs at t_n are not set yet
                 self.now.take(element.sources, out=element.coupled)
-                if element.vehicle:
+                if element.driven_element:
                     element.driven[:] = drive
                 element.inputs.set()
             if element.slopes is not None and not self.settings.plain:
@@ -323,12 +340,12 @@ class _System:
                 except FmiStatusError as error:
                     raise self._diverged(element, source, h) or error from error
             return
-        if element.vehicle and not self.settings.plain:
+        if element.driven_element and not self.settings.plain:
             element.coupled[:] = 0.5 * (self.now[element.sources] + source[element.sources])
             element.driven[:] = 0.5 * (drive + end)
         else:
             source.take(element.sources, out=element.coupled)
-            if element.vehicle:
+            if element.driven_element:
                 element.driven[:] = drive
         element.inputs.set()
 
@@ -354,7 +371,7 @@ class _System:
         """Inputs at the current communication point for every element with feedthrough, then its outputs again."""
         for element in self.refreshed:
             self.values.take(element.sources, out=element.coupled)
-            if element.vehicle:
+            if element.driven_element:
                 element.driven[:] = drive
             element.inputs.set()
             element.outputs.get()
@@ -413,11 +430,12 @@ class _System:
         return passes, converged
 
     def channels(self) -> list[tuple[str, str]]:
-        """(channel name, unit) of every output: vehicle outputs by name, component outputs as element_output."""
+        """(channel name, unit) of every output: the driven element's outputs by name, the others'
+        as element_output."""
         result = []
         for name, outputs in self.outputs.items():
             for output in outputs:
-                channel = output if name == self.vehicle else f"{name}_{output}"
+                channel = output if name == self.driven else f"{name}_{output}"
                 result.append((channel, self.slaves[name].unit(output) or "1"))
         names = [c for c, _ in result]
         clashes = sorted({c for c in names if names.count(c) > 1})
@@ -452,13 +470,17 @@ def _loop_error(parts: _System, loop: CompiledLoop, failure: LoopFailure, t: flo
 
 
 def cosimulate(system: SystemStructure, drive: Measurement, settings: CosimSettings,
-               progress: Progress | None = None, pool: InstancePool | None = None) -> CosimResult:
+               progress: Progress | None = None, pool: InstancePool | None = None,
+               binding: DriveBinding | None = None) -> CosimResult:
     """Run `system` driven by `drive` on fmpy; every FMU output at t_n = t0 + n h, n = 0..N.
+
+    `binding` says which element's free inputs read which drive channels (None: `bind_free_inputs`, the one element
+    with free inputs reads the channels of their names).
 
     A failing FMU call (an FMU refusing a non-finite input when the loop diverges) raises CosimError naming the
     element, the time and what the FMU logged. With a `pool`, the FMU instances come from it and go back to it."""
     stop = settings.stop_time if settings.stop_time is not None else system.stop_time
-    parts = _System(system, drive, settings, pool)
+    parts = _System(system, drive, settings, pool, binding)
     healthy = False
     try:
         h, t0 = settings.step, settings.start_time
@@ -512,18 +534,3 @@ def cosimulate(system: SystemStructure, drive: Measurement, settings: CosimSetti
         notes={"wall_time_s": f"{elapsed:.3f}", "inner_loop": "C" if loop is not None else "Python"},
     )
     return CosimResult(measurement, n_steps, passes, unconverged, master="fmpy")
-
-
-def run_cosim(ssd_path: str | os.PathLike[str], drive_path: str | os.PathLike[str], settings: CosimSettings,
-              out_path: str | os.PathLike[str] | None = None, progress: Progress | None = None) -> CosimResult:
-    """`nnfmu cosim`: read the system (.ssd, folder or .ssp) and the drive file, co-simulate, write the result."""
-    from ..vehicle.drive import read_drive
-    from .results import save_result
-    from .ssp import open_system
-
-    drive = read_drive(drive_path)
-    with open_system(ssd_path) as system:
-        result = cosimulate(system, drive, settings, progress)
-    if out_path is not None:
-        save_result(result, out_path)
-    return result

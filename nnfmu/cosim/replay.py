@@ -48,8 +48,7 @@ def replay_fmu(
             raise ReplayError(f"{measurement.source}: no channel {', '.join(map(repr, missing))} for the inputs of "
                               f"{fmu_path} (the measurement has: {', '.join(measurement.names)})")
         dt = measurement.sample_period
-        experiment = slave.description.defaultExperiment
-        period = float(experiment.stepSize) if experiment is not None and experiment.stepSize else None
+        period = slave.sample_period
         if period is not None and not same_period(period, dt):
             raise ReplayError(f"{measurement.source}: sample period {dt:.9g} s differs from the period {period:.9g} s "
                               f"{fmu_path} was trained at; resample the data first")

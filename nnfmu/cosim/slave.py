@@ -51,6 +51,7 @@ class FmuSlave:
     def __init__(self, path: str | Path, instance_name: str = "instance", logging_on: bool = False) -> None:
         from fmpy import extract, read_model_description
 
+        from nnfmu.fmu.sampling import read_sample_period
         from nnfmu.safe_zip import check_zip
 
         self.path = Path(path)
@@ -63,6 +64,7 @@ class FmuSlave:
         self._key = 0
         self._unzip_dir = tempfile.mkdtemp(prefix="nnfmu-fmu-")
         directory = extract(str(self.path), unzipdir=self._unzip_dir)
+        self.sample_period = read_sample_period(Path(directory) / "modelDescription.xml")
         kwargs = dict(guid=self.description.guid, unzipDirectory=directory, instanceName=instance_name,
                       modelIdentifier=self.description.coSimulation.modelIdentifier)
         if self.fmi_version == 2:

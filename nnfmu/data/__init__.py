@@ -3,6 +3,7 @@
 from .channel_map import parse_channel_map
 from .checks import check_measurement
 from .derive import derive_rates
+from .drive_files import read_drive, write_drive
 from .errors import DataError
 from .load import load_measurement
 from .measurement import Measurement
@@ -10,6 +11,8 @@ from .save import save_measurement
 from .units import to_si
 
 __all__ = [
+    "read_drive",
+    "write_drive",
     "DataError",
     "Measurement",
     "check_measurement",

@@ -22,6 +22,7 @@ import onnx
 import nnfmu
 from nnfmu.component import Component
 from nnfmu.fmu.names import xml_text
+from nnfmu.fmu.sampling import ANNOTATION_TOOL
 from nnfmu.fmu.variables import FmuVariable, FmuVariables
 from nnfmu.resources import templates_dir
 
@@ -148,6 +149,10 @@ class ModelDescriptionView:
     @property
     def sample_period(self) -> float | None:
         return self.component.sample_period
+
+    @property
+    def annotation_tool(self) -> str:
+        return ANNOTATION_TOOL
 
     @cached_property
     def variables(self) -> list[FmuVariable]:

@@ -1,5 +1,5 @@
 """Networks from rig data: feature specs, presets, training (Levenberg–Marquardt, Adam, L-BFGS), metrics, input
-selection, and the `train` workflow (`nnfmu.models.workflow`: it pulls in the exporter).
+selection. The `nnfmu train` use case (load, train, export) is `nnfmu.workflows.train`.
 
 Every name here is imported on first use, so that `nnfmu.models.features` (numpy only) can be imported without
 torch: the torch-free diagnosis library (`nnfmu.diagnosis`) builds feature specs from it.
@@ -16,7 +16,6 @@ if TYPE_CHECKING:
     from nnfmu.models.selection import SelectionResult, SelectionSettings, select_inputs
     from nnfmu.models.splits import SplitFractions
     from nnfmu.models.train import Architecture, TrainResult, TrainSettings, train_model
-    from nnfmu.models.workflow import TrainOutcome, TrainRequest, train_from_file
 
 _HOMES = {
     "SplitMetrics": "metrics",
@@ -31,9 +30,6 @@ _HOMES = {
     "TrainResult": "train",
     "TrainSettings": "train",
     "train_model": "train",
-    "TrainOutcome": "workflow",
-    "TrainRequest": "workflow",
-    "train_from_file": "workflow",
 }
 
 __all__ = [
@@ -44,13 +40,10 @@ __all__ = [
     "SelectionSettings",
     "SplitFractions",
     "SplitMetrics",
-    "TrainOutcome",
-    "TrainRequest",
     "TrainResult",
     "TrainSettings",
     "get_preset",
     "select_inputs",
-    "train_from_file",
     "train_model",
 ]
 

@@ -11,7 +11,7 @@ import onnx
 import pytest
 from cosim_system_helpers import drive
 
-from nnfmu.campaign.quarter_car import NO_FILTER, build_quarter_car_system
+from nnfmu.workflows.campaign.quarter_car import NO_FILTER, build_quarter_car_system
 from nnfmu.cosim.instances import InstancePool
 from nnfmu.cosim.drive_inputs import DriveInputError
 from nnfmu.cosim.master import CosimSettings, cosimulate

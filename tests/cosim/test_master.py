@@ -17,12 +17,11 @@ from cosim_system_helpers import (BASIC, NO_FILTER, damper_graph, drive, peak_er
                                   reference)
 
 from nnfmu.cosim.drive_inputs import DriveInputError
-from nnfmu.cosim.master import CosimError, CosimSettings, cosimulate, run_cosim, step_count
+from nnfmu.cosim.master import CosimError, CosimSettings, cosimulate, step_count
 from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd
-from nnfmu.data import Measurement, load_measurement
+from nnfmu.data import Measurement
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.vehicle.drive import write_drive
 
 DURATION = 2.0  # [s]
 DRIVE = drive(DURATION, 0.5e-3)
@@ -103,17 +102,6 @@ def test_vehicle_inputs_read_their_own_channels_and_derive_the_velocity(systems:
                                            {"actuator_fl_displacement": "m"}), settings)
     v = exact["damper_velocity"]
     assert np.max(np.abs(derived["damper_velocity"] - v)) < 1e-3 * np.max(np.abs(v))  # Savitzky-Golay rate
-
-
-def test_run_cosim_writes_csv_and_mdf_with_units(systems: dict[float, Path], tmp_path: Path) -> None:
-    drive_file = write_drive(DRIVE, tmp_path / "drive.csv")
-    for suffix in (".csv", ".mf4"):
-        out = tmp_path / f"result{suffix}"
-        result = run_cosim(systems[1e-3], drive_file, CosimSettings(step=1e-3, stop_time=0.5), out)
-        back = load_measurement(out)
-        assert back.units["damper_velocity"] == "m/s" and back.units["damper_force"] == "N"
-        np.testing.assert_array_equal(back["body_displacement"], result.measurement["body_displacement"])
-        assert back.time[-1] == pytest.approx(0.5, abs=1e-12)
 
 
 def test_bad_settings_are_refused() -> None:

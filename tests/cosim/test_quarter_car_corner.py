@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from nnfmu.cosim.drive_inputs import DriveInputError
-from nnfmu.cosim.master import CosimSettings, cosimulate
+from nnfmu.cosim.master import CosimError, CosimSettings, cosimulate
 from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd
 from nnfmu.data import Measurement
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu, vehicle_model
@@ -70,3 +70,16 @@ def test_a_quarter_car_reads_its_own_corners_channels(front_right: tuple[Path, V
     assert np.max(np.abs(got - expected["fr"])) < 1e-9 * scale
     assert np.max(np.abs(got - expected["fl"])) > 0.5 * scale  # the fl post would move the body quite differently
     assert np.max(np.abs(swapped["body_displacement"] - expected["fl"])) < 1e-9 * np.max(np.abs(expected["fl"]))
+
+
+def test_a_step_the_vehicle_cannot_honour_is_refused(front_right: tuple[Path, VehicleBuildSettings]) -> None:
+    """The vehicle samples every 1 ms and its outputs follow inputs set at its sample times (feedthrough): 2 ms steps
+    are whole multiples and run; 2.5 ms or 0.5 ms steps would put communication points between samples: refused."""
+    ssd, _ = front_right
+    t = np.arange(2001) * H
+    drive = _drive(t, {"fr": _post(t, 0.004, 7.0)})
+    with open_system(ssd) as system:
+        assert cosimulate(system, drive, CosimSettings(step=2 * H)).measurement.time[-1] == pytest.approx(2.0)
+        for step in (2.5 * H, 0.5 * H):
+            with pytest.raises(CosimError, match=r"'vehicle' samples every 0.001 s .* whole multiple of 0.001 s"):
+                cosimulate(system, drive, CosimSettings(step=step))

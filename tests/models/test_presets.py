@@ -8,7 +8,7 @@ import pytest
 from nnfmu.data.rigs import RigOptions, simulate_rig
 from nnfmu.models.features import FeatureSpec, Highpass, Lowpass, Tap
 from nnfmu.models.presets import MEMORY_TAUS, PRESETS, custom_spec, get_preset
-from nnfmu.models.workflow import TrainRequest, resolve
+from nnfmu.workflows.train import TrainRequest, resolve
 
 
 @pytest.mark.parametrize(

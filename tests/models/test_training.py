@@ -201,7 +201,7 @@ def test_missing_channel_is_named():
 
 def test_workflow_writes_a_verified_onnx_with_channel_ports(tmp_path):
     from nnfmu.data import save_measurement
-    from nnfmu.models.workflow import TrainRequest, train_from_file
+    from nnfmu.workflows.train import TrainRequest, train_from_file
 
     data = save_measurement(lagged_damper(2000), tmp_path / "dyno.csv")
     progress: list[float] = []
@@ -218,7 +218,7 @@ def test_workflow_writes_a_verified_onnx_with_channel_ports(tmp_path):
 
 def test_workflow_with_input_selection_exports_the_chosen_channels(tmp_path):
     from nnfmu.data import save_measurement
-    from nnfmu.models.workflow import TrainRequest, train_from_file
+    from nnfmu.workflows.train import TrainRequest, train_from_file
 
     data = save_measurement(lagged_damper(2000), tmp_path / "dyno.csv")
     outcome = train_from_file(
@@ -234,7 +234,7 @@ def test_workflow_with_input_selection_exports_the_chosen_channels(tmp_path):
 def test_workflow_compensates_the_dyno_moving_mass_before_training(tmp_path):
     """moving_mass: the network is fitted to force - m·a; the data note and the model's description say so."""
     from nnfmu.data import save_measurement
-    from nnfmu.models.workflow import TrainRequest, train_from_file
+    from nnfmu.workflows.train import TrainRequest, train_from_file
 
     measured = lagged_damper(2000)
     data = save_measurement(measured, tmp_path / "dyno.csv")

@@ -10,8 +10,8 @@ import pytest
 
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import DamperParams, DamperTruth
-from nnfmu.roadtest.reference import monolithic_reference, settled_state
-from nnfmu.roadtest.systems import vehicle_components
+from nnfmu.workflows.roadtest.reference import monolithic_reference, settled_state
+from nnfmu.workflows.roadtest.systems import vehicle_components
 from nnfmu.vehicle.fmu import initial_state
 from nnfmu.vehicle.models import (
     DamperTruthLaw,

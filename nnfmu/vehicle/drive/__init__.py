@@ -1,9 +1,9 @@
-"""Drive files for a virtual four-post road test simulator: ISO 8608 road synthesis, events, CSV/MDF4/RPC III."""
+"""Drive signals for a virtual four-post road test simulator: ISO 8608 road synthesis and events (the file
+formats are `nnfmu.data.drive_files`)."""
 
 from .errors import DriveError
 from .events import KerbStrike, Pothole
 from .generator import CHANNELS, generate_drive
-from .io import read_drive, write_drive
 from .road import CLASS_LEVELS, displacement_psd, track_coherence
 from .settings import DriveSettings
 
@@ -16,7 +16,5 @@ __all__ = [
     "Pothole",
     "displacement_psd",
     "generate_drive",
-    "read_drive",
     "track_coherence",
-    "write_drive",
 ]

@@ -11,7 +11,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).parent))  # the test modules import campaign_helpers beside this file
 from campaign_helpers import DAMPERS  # noqa: E402
 
-from nnfmu.campaign.quarter_car import build_quarter_car_system  # noqa: E402
+from nnfmu.workflows.campaign.quarter_car import build_quarter_car_system  # noqa: E402
 
 
 @pytest.fixture(scope="session")

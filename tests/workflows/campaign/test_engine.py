@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from nnfmu.campaign.engine import GROUPS_PER_THREAD, MAX_GROUP, group_cases
+from nnfmu.workflows.campaign.engine import GROUPS_PER_THREAD, MAX_GROUP, group_cases
 
 
 @pytest.mark.parametrize(("cases", "threads", "size"), [(16, 2, 2), (60, 2, 8), (10_000, 8, MAX_GROUP), (3, 4, 1)])

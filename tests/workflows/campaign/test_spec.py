@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 from campaign_helpers import campaign_text, write_campaign
 
-from nnfmu.campaign import CampaignError, read_campaign
-from nnfmu.campaign.cases import expand_cases
+from nnfmu.workflows.campaign import CampaignError, read_campaign
+from nnfmu.workflows.campaign.cases import expand_cases
 
 
 def _keys(path: Path) -> dict[tuple[str, str], str]:

@@ -17,13 +17,13 @@ from nnfmu.cosim.ssp import open_system
 from nnfmu.data.rigs import RigOptions, write_rig
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.models.workflow import TrainRequest, train_from_file
-from nnfmu.roadtest import (
+from nnfmu.workflows.train import TrainRequest, train_from_file
+from nnfmu.workflows.roadtest import (
     BUSHING_MODELS, DAMPER_MODELS, RoadTestError, RoadTestResult, RoadTestSettings, SystemRun, actuator_inputs,
     build_vehicle, run_road_test, write_system,
 )
-from nnfmu.roadtest.runs import COMPARED
-from nnfmu.roadtest.systems import bushing_elements, damper_elements
+from nnfmu.workflows.roadtest.runs import COMPARED
+from nnfmu.workflows.roadtest.systems import bushing_elements, damper_elements
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.vehicle.fmu import VehicleBuildSettings, vehicle_model
 from nnfmu.vehicle.models import LinearLaw, MonolithicSettings, simulate_monolithic

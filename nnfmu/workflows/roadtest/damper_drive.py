@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from nnfmu.data.rigs import RIG_BANDS, DriveDesign, RigOptions, write_vehicle_damper_dyno
-from nnfmu.models.workflow import TrainRequest
+from nnfmu.workflows.train import TrainRequest
 
 from .record_training import train_on_record
 from .systems import DAMPER_MODELS, damper_elements

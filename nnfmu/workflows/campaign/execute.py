@@ -31,7 +31,9 @@ from nnfmu.errors import NnfmuError
 from nnfmu.validate.compare import ValidationSettings
 from nnfmu.validate.damage import pseudo_damage
 from nnfmu.validate.metrics import rms
-from nnfmu.vehicle.drive import generate_drive, read_drive
+from nnfmu.vehicle.drive import generate_drive
+from nnfmu.data.drive_files import read_drive
+from nnfmu.workflows.vehicle_binding import vehicle_binding
 
 from .cases import Case
 from .hashing import json_sha256
@@ -176,7 +178,7 @@ def run_case(case: Case, blobs: Mapping[str, bytes], reuse_instances: bool = Tru
     try:
         drive = load_drive(case.event, blobs)
         system = build_system(case, blobs)
-        result = cosimulate(system, drive, CosimSettings(**case.coupling),
+        result = cosimulate(system, drive, CosimSettings(**case.coupling), binding=vehicle_binding(system),
                             pool=instance_pool() if reuse_instances else None)
         rows = score(result.measurement, case)
     except Exception as error:  # the case's own failure: recorded, the campaign goes on

@@ -22,9 +22,10 @@ from nnfmu.data import Measurement, save_measurement
 from nnfmu.data.rigs import DriveDesign, RigOptions, write_vehicle_rig
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.models.workflow import TrainRequest
+from nnfmu.workflows.train import TrainRequest
 from nnfmu.validate import ChannelComparison, ValidationSettings, compare
-from nnfmu.vehicle.drive import DriveSettings, generate_drive, write_drive
+from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.data.drive_files import write_drive
 
 from .envelope import Excursion, excursion
 from .record_training import train_on_record

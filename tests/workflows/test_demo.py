@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nnfmu.demo import PRESETS_BY_RIG, UNDECLARED_EFFECTS, DemoSettings, run_demo
+from nnfmu.workflows.demo import PRESETS_BY_RIG, UNDECLARED_EFFECTS, DemoSettings, run_demo
 from nnfmu.fmu.check import check_fmu
 
 

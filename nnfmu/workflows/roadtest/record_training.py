@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from nnfmu.models.workflow import TrainRequest, train_from_file
+from nnfmu.workflows.train import TrainRequest, train_from_file
 
 
 def train_on_record(rig: Path, presets: Sequence[str], request: Callable[[str], TrainRequest], folder: Path,

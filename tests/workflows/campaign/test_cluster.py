@@ -17,7 +17,7 @@ import pyarrow.parquet as pq
 import pytest
 from campaign_helpers import campaign_text, metrics_of, read_rows, write_campaign
 
-from nnfmu.campaign import run_campaign
+from nnfmu.workflows.campaign import run_campaign
 
 distributed = pytest.importorskip("distributed")
 SCHEDULER = [sys.executable, "-m", "distributed.cli.dask_scheduler"]  # what `dask scheduler` runs

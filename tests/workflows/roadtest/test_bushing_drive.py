@@ -11,13 +11,14 @@ import pytest
 
 from nnfmu.component import Component
 from nnfmu.data import load_measurement
-from nnfmu.models.workflow import TrainRequest
-from nnfmu.roadtest import (
+from nnfmu.workflows.train import TrainRequest
+from nnfmu.workflows.roadtest import (
     BUSHING_MODELS, BushingDriveSettings, RoadTestError, RoadTestSettings, VehicleBushingModels,
     train_vehicle_bushings,
 )
-from nnfmu.roadtest.systems import bushing_elements
-from nnfmu.vehicle.drive import DriveSettings, generate_drive, read_drive
+from nnfmu.workflows.roadtest.systems import bushing_elements
+from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.data.drive_files import read_drive
 
 
 @pytest.fixture(scope="module")

@@ -3,16 +3,15 @@
 Rig simulators make lab and held-out test records of a damper and a bushing; every thesis preset is trained on the
 lab record and exported as an ONNX step graph; each graph is built into a native FMU; the FMU is replayed on the
 held-out record with fmpy and validated against the measurement (NRMSE, R², peaks, PSD, rainflow pseudo-damage).
-Then the road test (`nnfmu.roadtest`): the damper and bushing networks as FMUs in the quarter car and the full
+Then the road test (`nnfmu.workflows.roadtest`): the damper and bushing networks as FMUs in the quarter car and the full
 vehicle on a generated ISO 8608 class C drive, against the monolithic reference with the rigs' truth physics, with
 the bushing networks trained on a rig record whose drive is derived from the vehicle's own bushing deflections on
-another drive (`nnfmu.roadtest.bushing_drive`, as the thesis designed its rig data), the damper networks likewise on
-a dyno record whose random part follows the car's damper strokes (`nnfmu.roadtest.damper_drive`), and with the
-thesis comparison
-(spline vs hysteresis network vs reference) in a report per system. Last, the loop (`nnfmu.loop`): a damper whose
-rig record carries two effects the model was not told about (the gas spring of a monotube and the oil's warming), a
-hysteresis network trained on the record's fit blocks, and `run_loop` tracing the residual to the missing effects,
-adding them and reporting the held-out error before and after.
+another drive (`nnfmu.workflows.roadtest.bushing_drive`, as the thesis designed its rig data), the damper networks
+likewise on a dyno record whose random part follows the car's damper strokes (`nnfmu.workflows.roadtest.damper_drive`),
+and with the thesis comparison (spline vs hysteresis network vs reference) in a report per system. Last, the loop
+(`nnfmu.loop`): a damper whose rig record carries two effects the model was not told about (the gas spring of a monotube
+and the oil's warming), a hysteresis network trained on the record's fit blocks, and `run_loop` tracing the residual to
+the missing effects, adding them and reporting the held-out error before and after.
 """
 
 from __future__ import annotations
@@ -36,9 +35,9 @@ from nnfmu.loop.blocks import training_part
 from nnfmu.loop.settings import LoopSettings
 from nnfmu.loop import LoopReport, run_loop
 from nnfmu.models import TrainSettings, get_preset, train_model
-from nnfmu.models.workflow import TrainRequest, train_from_file
+from nnfmu.workflows.train import TrainRequest, train_from_file
 from nnfmu.out_paths import check_output_dir, mark_output_dir
-from nnfmu.roadtest import (
+from nnfmu.workflows.roadtest import (
     BushingDriveSettings, RoadTestSettings, SystemRun, VehicleBushingModels, VehicleDamperModels, run_road_test,
     train_vehicle_bushings, train_vehicle_dampers,
 )

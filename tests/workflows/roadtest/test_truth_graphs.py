@@ -17,7 +17,7 @@ from nnfmu.data.rigs import BUSHING_CHANNELS, BushingChannelTruth, BushingParams
 from nnfmu.export.run import run_step_graph
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.roadtest.truth_graphs import TruthGraphError, bushing_truth_graph, damper_truth_graph
+from nnfmu.workflows.roadtest.truth_graphs import TruthGraphError, bushing_truth_graph, damper_truth_graph
 
 T = 1e-3
 N = 2000

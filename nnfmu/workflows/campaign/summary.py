@@ -133,7 +133,7 @@ def write_summary(out: Path, table: pa.Table, reference: str, context: dict[str,
     d = digest(table, reference)
     plot_programme(d, out / RATIO_PLOT)
     plot_worst(d, out / WORST_PLOT)
-    environment = jinja2.Environment(loader=jinja2.PackageLoader("nnfmu.campaign", "."),
+    environment = jinja2.Environment(loader=jinja2.PackageLoader("nnfmu.workflows.campaign", "."),
                                      autoescape=True, undefined=jinja2.StrictUndefined)
     html = environment.get_template(TEMPLATE).render(d=d, ratio_plot=RATIO_PLOT, worst_plot=WORST_PLOT, **context)
     path = out / SUMMARY

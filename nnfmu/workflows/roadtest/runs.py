@@ -29,7 +29,9 @@ from nnfmu.cosim.replay import replay_fmu
 from nnfmu.cosim.ssp import open_system
 from nnfmu.data import Measurement, save_measurement
 from nnfmu.validate import ChannelComparison, ValidationSettings, compare, write_report
-from nnfmu.vehicle.drive import DriveSettings, generate_drive, write_drive
+from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.data.drive_files import write_drive
+from nnfmu.workflows.vehicle_binding import vehicle_binding
 
 from .budget import BudgetRow, budget_rows
 from .envelope import Excursion, excursion
@@ -151,7 +153,7 @@ def _cosim(ssd: Path, drive: Measurement, run: SystemRun) -> tuple[Measurement, 
     started = time.perf_counter()
     with open_system(ssd) as system:
         settings = CosimSettings(step=run.step, iterations=run.iterations, tolerance=1e-6)
-        result = cosimulate(system, drive, settings)
+        result = cosimulate(system, drive, settings, binding=vehicle_binding(system))
     return result.measurement, time.perf_counter() - started
 
 

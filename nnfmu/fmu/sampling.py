@@ -1,0 +1,40 @@
+"""The sample period an nnfmu FMU carries as a fact: an annotation of its model description, written by the factory
+and read back by masters that must know it (the step-size hint of the default experiment is only a suggestion).
+
+FMI 2: `<VendorAnnotations><Tool name="org.nnfmu"><Sampling period="T" unit="s"/></Tool></VendorAnnotations>`;
+FMI 3: `<Annotations><Annotation type="org.nnfmu"><Sampling period="T" unit="s"/></Annotation></Annotations>`.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+from nnfmu.fmu.errors import FmuBuildError
+
+ANNOTATION_TOOL = "org.nnfmu"
+
+
+class SamplingAnnotationError(FmuBuildError):
+    """The sampling annotation of a model description is there but unreadable; names the file and the value."""
+
+
+def read_sample_period(model_description: Path) -> float | None:
+    """The sample period [s] annotated in the model description file, or None (no annotation: a stateless graph or
+    another tool's FMU). A malformed annotation raises SamplingAnnotationError naming the file."""
+    root = ET.parse(model_description).getroot()
+    paths = (f"./VendorAnnotations/Tool[@name='{ANNOTATION_TOOL}']/Sampling",
+             f"./Annotations/Annotation[@type='{ANNOTATION_TOOL}']/Sampling")
+    node = next((found for path in paths if (found := root.find(path)) is not None), None)
+    if node is None:
+        return None
+    text = node.get("period", "")
+    try:
+        period = float(text)
+    except ValueError:
+        period = math.nan
+    if not (math.isfinite(period) and period > 0) or node.get("unit", "s") != "s":
+        raise SamplingAnnotationError(f"{model_description}: sampling annotation period={text!r} "
+                                      f"unit={node.get('unit')!r} is not a positive time in s")
+    return period

@@ -1,0 +1,39 @@
+"""`nnfmu cosim`: read an SSP system and a drive file, bind the drive to the vehicle, co-simulate, write the result."""
+
+from __future__ import annotations
+
+import os
+
+from nnfmu.cosim.master import CosimSettings, Progress, cosimulate
+from nnfmu.cosim.results import CosimResult, save_result
+from nnfmu.cosim.ssp import open_system
+from nnfmu.data.drive_files import read_drive
+from nnfmu.errors import SettingsError
+
+from .vehicle_binding import vehicle_binding
+
+__all__ = ["CosimSettings", "run_cosim"]
+
+MASTERS = ("fmpy", "libcosim")
+
+
+def run_cosim(ssd_path: str | os.PathLike[str], drive_path: str | os.PathLike[str], settings: CosimSettings,
+              out_path: str | os.PathLike[str] | None = None, progress: Progress | None = None,
+              master: str = "fmpy") -> CosimResult:
+    """Co-simulate the system (.ssd, folder or .ssp) on the drive file with `master` (fmpy, this package's master, or
+    libcosim, the cross-check); write the result to `out_path` when given."""
+    if master not in MASTERS:
+        raise SettingsError(f"unknown master {master!r}; use {' or '.join(MASTERS)}")
+    drive = read_drive(drive_path)
+    if master == "libcosim":
+        from nnfmu.cosim.libcosim_runner import run_libcosim
+
+        with open_system(ssd_path) as system:
+            binding = vehicle_binding(system)
+        result = run_libcosim(ssd_path, drive, settings, binding)
+    else:
+        with open_system(ssd_path) as system:
+            result = cosimulate(system, drive, settings, progress, binding=vehicle_binding(system))
+    if out_path is not None:
+        save_result(result, out_path)
+    return result

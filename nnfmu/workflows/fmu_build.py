@@ -1,0 +1,21 @@
+"""`nnfmu build`, `nnfmu check` and `nnfmu vehicle build`: component and vehicle FMUs, and their self-check."""
+
+from __future__ import annotations
+
+from nnfmu.fmu.build import build_fmu
+from nnfmu.fmu.check import check_fmu, report_lines
+from nnfmu.fmu.errors import PlatformSkippedWarning
+from nnfmu.fmu.options import BuildOptions
+from nnfmu.fmu.reference_results import has_reference_results
+from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
+
+__all__ = [
+    "BuildOptions",
+    "PlatformSkippedWarning",
+    "VehicleBuildSettings",
+    "build_fmu",
+    "build_vehicle_fmu",
+    "check_fmu",
+    "has_reference_results",
+    "report_lines",
+]

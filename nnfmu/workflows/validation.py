@@ -1,0 +1,7 @@
+"""`nnfmu validate`: compare a result file with a reference file into metrics, plots and an HTML report."""
+
+from __future__ import annotations
+
+from nnfmu.validate import ValidationSettings, validate_files
+
+__all__ = ["ValidationSettings", "validate_files"]

@@ -1,0 +1,41 @@
+"""The sample period travels inside the FMU as a fact (a model-description annotation), for FMI 2 and 3 alike, and
+a stateless graph carries none."""
+
+from __future__ import annotations
+
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from nnfmu.cosim.linear_damper import linear_damper_graph
+from nnfmu.fmu.build import build_fmu
+from nnfmu.fmu.options import BuildOptions
+from nnfmu.fmu.sampling import SamplingAnnotationError, read_sample_period
+
+
+def _description(fmu: Path, folder: Path) -> Path:
+    with zipfile.ZipFile(fmu) as archive:
+        archive.extract("modelDescription.xml", folder)
+    return folder / "modelDescription.xml"
+
+
+@pytest.mark.parametrize("fmi_version", [2, 3])
+def test_the_fmu_carries_its_sample_period(tmp_path: Path, fmi_version: int) -> None:
+    import onnx
+
+    for period in (1e-3, None):
+        onnx_path = tmp_path / f"damper_{period}.onnx"
+        onnx.save(linear_damper_graph(1500.0, sample_period=period), onnx_path)
+        fmu = build_fmu(onnx_path, BuildOptions(out=tmp_path / f"damper_{period}_{fmi_version}.fmu",
+                                                fmi_version=fmi_version))
+        assert read_sample_period(_description(fmu, tmp_path / f"x_{period}_{fmi_version}")) == period
+
+
+def test_a_malformed_annotation_is_refused_naming_the_file(tmp_path: Path) -> None:
+    path = tmp_path / "modelDescription.xml"
+    for period, unit in (("0", "s"), ("fast", "s"), ("1e-3", "ms")):
+        path.write_text(f'<fmiModelDescription><VendorAnnotations><Tool name="org.nnfmu"><Sampling period="{period}" '
+                        f'unit="{unit}"/></Tool></VendorAnnotations></fmiModelDescription>')
+        with pytest.raises(SamplingAnnotationError, match=f"Description.xml: sampling annotation period='{period}"):
+            read_sample_period(path)
