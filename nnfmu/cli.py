@@ -435,7 +435,7 @@ def loop(
     max_effects: int = typer.Option(3, help="Most effects to add."),
 ) -> None:
     """Replay the model's FMU on measured data, trace the residual to missing physical effects, add them, report."""
-    from nnfmu.loop.loop_settings import LoopSettings
+    from nnfmu.loop.settings import LoopSettings
     from nnfmu.loop.run import run_loop
 
     try:

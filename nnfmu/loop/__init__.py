@@ -1,23 +1,20 @@
-"""Closing the loop: diagnose a model's residual with classical residual tests and a library of physical effects
-ranked by the variance each explains out of sample."""
+"""Closing the loop, the driver: replay a model's FMU on measured data, diagnose the residual (`nnfmu.diagnosis`),
+extend the feature spec with the top effect's extension, retrain the rivals, rebuild and replay; then the report."""
 
-from .diagnose import diagnose
-from .effects import EFFECTS, EffectFamily, Regressors, select_families
-from .errors import DiagnosisError
-from .evidence import Diagnosis, EffectEvidence
-from .residual_tests import ResidualTest, residual_tests
-from .settings import DiagnosisSettings
+from .blocks import RecordBlocks, part_measurement, plan_blocks, training_part
+from .errors import LoopError
+from .results import Iteration, LoopReport
+from .run import run_loop
+from .settings import LoopSettings
 
 __all__ = [
-    "EFFECTS",
-    "Diagnosis",
-    "DiagnosisError",
-    "DiagnosisSettings",
-    "EffectEvidence",
-    "EffectFamily",
-    "Regressors",
-    "ResidualTest",
-    "diagnose",
-    "residual_tests",
-    "select_families",
+    "Iteration",
+    "LoopError",
+    "LoopReport",
+    "LoopSettings",
+    "RecordBlocks",
+    "part_measurement",
+    "plan_blocks",
+    "run_loop",
+    "training_part",
 ]

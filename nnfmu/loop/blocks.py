@@ -11,7 +11,8 @@ import numpy as np
 
 from nnfmu.data import Measurement
 
-from .loop_settings import LoopError, LoopSettings
+from .errors import LoopError
+from .settings import LoopSettings
 
 PARTS = ("train", "validation", "diagnosis", "test")
 

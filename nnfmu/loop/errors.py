@@ -1,9 +1,10 @@
-"""The exception raised when a residual cannot be diagnosed, so callers can tell bad input from programming errors."""
+"""The loop driver's exception: unusable data or model for `nnfmu loop` (a bad residual is the diagnosis's
+`DiagnosisError`, raised by `nnfmu.diagnosis` and passed through)."""
 
 from __future__ import annotations
 
-from ..errors import NnfmuError
+from nnfmu.errors import NnfmuError
 
 
-class DiagnosisError(NnfmuError, ValueError):
-    """Unusable input to the diagnosis; the message names the source, channel or value and what was expected."""
+class LoopError(NnfmuError, ValueError):
+    """The loop cannot run on this data or model; the message names the file, channel or value at fault."""

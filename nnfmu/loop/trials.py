@@ -11,13 +11,13 @@ from dataclasses import replace
 import numpy as np
 
 from nnfmu.data import Measurement
+from nnfmu.diagnosis import EFFECTS, Diagnosis, EffectEvidence, Extension, NoExtension
+from nnfmu.diagnosis.ranking import GainTest
+from nnfmu.models.features import FeatureSpec
 from nnfmu.models.retrain import Retrained, retrain
 from nnfmu.models.trained import TrainedModel
 
-from .evidence import Diagnosis, EffectEvidence
-from .extend import Extension, NoExtension, extend_spec
-from .loop_settings import LoopSettings
-from .ranking import GainTest
+from .settings import LoopSettings
 
 SIGNIFICANT = "significant in the diagnosis"
 # Rival explanations of one residual (a compliance lag, inertia and viscoelastic states all look like the force's
@@ -30,6 +30,12 @@ SIGNIFICANT = "significant in the diagnosis"
 TRIAL_TIE = 0.10
 
 Candidate = tuple[Extension, EffectEvidence, str]  # an extension to retrain with, its evidence, and why it is tried
+
+
+def extension(effect: str, spec: FeatureSpec, m: Measurement, fit: np.ndarray,
+              settings: LoopSettings) -> Extension | NoExtension:
+    """The registry's extension of `spec` for `effect`, its parameters from the diagnosis settings."""
+    return EFFECTS[effect].extension(spec, m, fit, settings.diagnosis)
 
 
 def nrmse(predicted: np.ndarray, measured: np.ndarray, rows: np.ndarray) -> float:
@@ -70,7 +76,7 @@ def trial_group(d: Diagnosis, model: TrainedModel, m: Measurement, fit: np.ndarr
     significant one gives way to a simpler family that holds it (`_simpler_cover`). Notes say why significant
     effects could not be added. The group is empty when nothing can be added."""
     def extend(effect: str) -> Extension | NoExtension:
-        return extend_spec(effect, model.spec, m, fit, settings)
+        return extension(effect, model.spec, m, fit, settings)
 
     group: list[Candidate] = []
     top: str | None = None  # the first significant effect, once met
@@ -177,7 +183,7 @@ def _together(first: Candidate, second: Candidate, evidence: EffectEvidence, why
               fit: np.ndarray, settings: LoopSettings) -> Candidate | None:
     """`first`'s extension with `second`'s effect added on top, as one candidate for when both are present; None
     when `first`'s spec already holds what `second` adds."""
-    ext = extend_spec(second[0].effect, first[0].spec, m, fit, settings)
+    ext = extension(second[0].effect, first[0].spec, m, fit, settings)
     if isinstance(ext, NoExtension):
         return None
     both = Extension(f"{first[0].effect}+{second[0].effect}", ext.spec, (*first[0].added, *ext.added),

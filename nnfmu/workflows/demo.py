@@ -32,8 +32,8 @@ from nnfmu.export import export_onnx
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.loop.blocks import training_part
-from nnfmu.loop.loop_settings import LoopSettings
-from nnfmu.loop.run import LoopReport, run_loop
+from nnfmu.loop.settings import LoopSettings
+from nnfmu.loop import LoopReport, run_loop
 from nnfmu.models import TrainSettings, get_preset, train_model
 from nnfmu.workflows.train import TrainRequest, train_from_file
 from nnfmu.out_paths import check_output_dir, mark_output_dir

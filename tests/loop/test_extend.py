@@ -1,6 +1,6 @@
 """The loop's building blocks: the running-mean-square feature against its step graph and an analytic response,
-each effect's feature-spec extension, reading a model back from its ONNX file, the warm start that starts exactly
-where the old model stands, and the record's fit/diagnosis/test blocks."""
+the warm start that starts exactly where the old model stands, and the record's fit/diagnosis/test blocks. (Each
+effect's feature-spec extension: tests/diagnosis/test_extensions.py.)"""
 
 from __future__ import annotations
 
@@ -14,13 +14,12 @@ import torch
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import RigOptions, simulate_rig
 from nnfmu.export.graph import GraphBuilder
-from nnfmu.loop.blocks import plan_blocks
-from nnfmu.loop.extend import Extension, NoExtension, extend_spec
-from nnfmu.loop.loop_settings import LoopError, LoopSettings
+from nnfmu.diagnosis import EFFECTS, DiagnosisSettings
+from nnfmu.loop import LoopError, LoopSettings, plan_blocks
 from nnfmu.models import retrain as warm_start_module
 from nnfmu.models.retrain import RetrainSettings, _warm_network, fresh_start, retrain, warm_start
 from nnfmu.models import Architecture, TrainSettings, train_model
-from nnfmu.models.features import FeatureSpec, LowpassSquare, SmoothSign, Tap, derived_from_dict
+from nnfmu.models.features import FeatureSpec, LowpassSquare, Tap, derived_from_dict
 from nnfmu.models.networks import MLP
 from nnfmu.models.stopping import FitHistory
 
@@ -70,61 +69,11 @@ def test_lowpass_square_round_trips_and_refuses_a_bad_tau():
         LowpassSquare("velocity", tau=-1.0)
 
 
-@pytest.mark.parametrize(
-    ("effect", "added"),
-    [
-        ("gas_force", ["displacement[k]"]),
-        ("inertia", ["velocity[k-1]"]),
-        ("hysteresis", ["lowpass(velocity, tau=0.002)", "lowpass(velocity, tau=0.02)"]),
-        ("temperature", ["temperature[k]"]),
-        ("frequency_dependence", [f"lowpass(displacement, tau={t!r})" for t in (0.01, 0.1, 1.0)]),
-        ("amplitude_dependence", ["lowpass_square(displacement, tau=1.0)"]),
-    ],
-)
-def test_each_effect_extends_the_spec_with_its_features(effect, added):
-    m = rig()
-    ext = extend_spec(effect, SPEC, m, np.arange(len(m)), LoopSettings())
-    assert isinstance(ext, Extension)
-    assert list(ext.added) == added
-    assert [n for n in ext.spec.feature_names if n not in added] == SPEC.feature_names  # old features kept
-
-
-def test_seal_friction_scale_follows_the_fit_rows_rms_velocity():
-    m = rig()
-    rows = np.arange(1000)
-    ext = extend_spec("seal_friction", SPEC, m, rows, LoopSettings(friction_scale=0.05))
-    (feature,) = ext.spec.derived
-    assert isinstance(feature, SmoothSign)
-    assert feature.scale == pytest.approx(0.05 * np.sqrt(np.mean(m["velocity"][rows] ** 2)))
-
-
-def test_temperature_without_its_channel_becomes_a_running_mean_square_of_velocity():
-    m = rig()
-    channels = {k: v for k, v in m.channels.items() if k != "temperature"}
-    bare = Measurement(m.time, channels, {k: m.units[k] for k in channels}, m.source)
-    ext = extend_spec("temperature", SPEC, bare, np.arange(len(m)), LoopSettings(thermal_tau=200.0))
-    assert ext.added == ("lowpass_square(velocity, tau=200.0)",)
-
-
-def test_effects_that_cannot_be_added_say_why():
-    m = rig()
-    rows = np.arange(len(m))
-    offset = extend_spec("sensor_offset", SPEC, m, rows, LoopSettings())
-    assert isinstance(offset, NoExtension) and "measurement, not to the component" in offset.reason
-    channels = {"velocity": m["velocity"], "force": m["force"]}
-    bare = Measurement(m.time, channels, {k: m.units[k] for k in channels}, m.source)
-    gas = extend_spec("gas_force", SPEC, bare, rows, LoopSettings())
-    assert isinstance(gas, NoExtension) and gas.missing_channels == ("displacement",)
-    spec = FeatureSpec((Tap("velocity", (0, 1)),), "force")
-    again = extend_spec("inertia", spec, bare, rows, LoopSettings())
-    assert isinstance(again, NoExtension) and "already has" in again.reason
-
-
 def test_warm_started_network_starts_exactly_at_the_old_model():
     """Old columns carry the old scaled features, the new column anything: the output is the old model's."""
     model = small_model()
     m = rig()
-    ext = extend_spec("gas_force", SPEC, m, np.arange(len(m)), LoopSettings())
+    ext = EFFECTS["gas_force"].extension(SPEC, m, np.arange(len(m)), DiagnosisSettings())
     network = _warm_network(model, ext.spec, extra=3, seed=0)
     scaled = model.feature_scaler.scale(SPEC.features({"velocity": m["velocity"]}, T))
     full = np.full((len(m), ext.spec.n_features), 123.0)
@@ -139,7 +88,7 @@ def test_warm_start_keeps_old_scalers_and_lowers_the_validation_error():
     model = small_model()
     m = rig()
     blocks = plan_blocks(len(m), LoopSettings(diagnosis=LoopSettings().diagnosis), m.source)
-    ext = extend_spec("temperature", SPEC, m, blocks.rows("train"), LoopSettings())
+    ext = EFFECTS["temperature"].extension(SPEC, m, blocks.rows("train"), DiagnosisSettings())
     result = warm_start(model, ext.spec, m, blocks.rows("train"), blocks.rows("validation"),
                         LoopSettings(max_epochs=30, extra_hidden=(0, 2), lm_max_samples=3000).retrain_settings(),
                         "temperature")
@@ -158,7 +107,7 @@ def test_fresh_start_trains_a_seeded_network_of_the_given_size_on_the_extended_i
     m = rig()
     blocks = plan_blocks(len(m), LoopSettings(), m.source)
     train, validation = blocks.rows("train"), blocks.rows("validation")
-    ext = extend_spec("temperature", SPEC, m, train, LoopSettings())
+    ext = EFFECTS["temperature"].extension(SPEC, m, train, DiagnosisSettings())
     settings = LoopSettings(max_epochs=30, lm_max_samples=3000).retrain_settings()
     result = fresh_start(model, ext.spec, m, train, validation, settings, "temperature", hidden=5)
     new = result.model
@@ -189,7 +138,7 @@ def test_warm_start_tries_more_hidden_units_only_while_they_help(monkeypatch):
     monkeypatch.setattr(warm_start_module, "fit_lm", fake_fit)
     m = rig()
     blocks = plan_blocks(len(m), LoopSettings(), m.source)
-    ext = extend_spec("temperature", SPEC, m, blocks.rows("train"), LoopSettings())
+    ext = EFFECTS["temperature"].extension(SPEC, m, blocks.rows("train"), DiagnosisSettings())
     result = warm_start(small_model(), ext.spec, m, blocks.rows("train"), blocks.rows("validation"),
                         LoopSettings(extra_hidden=(0, 2, 4, 8)).retrain_settings(), "temperature")
     assert tried == [3, 5, 7] and result.extra_hidden == 2 and result.validation_mse == {0: 0.5, 2: 0.3, 4: 0.4}
@@ -212,7 +161,7 @@ def test_retrain_starts_warm_or_fresh_and_refuses_anything_else():
     m = rig()
     blocks = plan_blocks(len(m), LoopSettings(), m.source)
     train, validation = blocks.rows("train"), blocks.rows("validation")
-    ext = extend_spec("temperature", SPEC, m, train, LoopSettings())
+    ext = EFFECTS["temperature"].extension(SPEC, m, train, DiagnosisSettings())
     settings = RetrainSettings(max_epochs=5, lm_max_samples=2000)
     warm = retrain(small_model(), ext.spec, m, train, validation, settings, "temperature")
     fresh = retrain(small_model(), ext.spec, m, train, validation, settings, "temperature", start="fresh", hidden=4)

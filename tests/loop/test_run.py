@@ -21,14 +21,12 @@ from nnfmu.component import Component
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import RigOptions, simulate_rig
 from nnfmu.export import export_onnx, run_step_graph
-from nnfmu.loop.blocks import training_part
-from nnfmu.loop.loop_settings import LoopError, LoopSettings
-from nnfmu.loop.extend import Extension, extend_spec
-from nnfmu.loop.ranking import GainTest
-from nnfmu.loop.run import LoopReport, run_loop
+from nnfmu.diagnosis import Extension
+from nnfmu.diagnosis.ranking import GainTest
+from nnfmu.loop import LoopError, LoopReport, LoopSettings, run_loop, training_part
 from nnfmu.loop import trials as trials_module
 from nnfmu.loop.trials import (SIGNIFICANT, TRIAL_TIE, _best_trial, _partner_rivals, _simpler_cover, _together,
-                               retrain_rivals)
+                               extension, retrain_rivals)
 from nnfmu.models.retrain import Retrained
 from nnfmu.models import Architecture, TrainSettings, get_preset, train_model
 from nnfmu.models.features import Difference, FeatureSpec, SmoothSign
@@ -262,7 +260,7 @@ def test_a_significant_effect_gives_way_to_a_simpler_family_that_holds_it():
         return SimpleNamespace(name=name, testable=True, regressors=("r",) * regressors)
 
     d = SimpleNamespace(ranking=[family("frequency_dependence", 3), family("sensor_offset", 1), family("gas_force", 2)])
-    richer = (extend_spec("frequency_dependence", HISTORY, m, rows, SETTINGS), d.ranking[0], SIGNIFICANT)
+    richer = (extension("frequency_dependence", HISTORY, m, rows, SETTINGS), d.ranking[0], SIGNIFICANT)
     asked = []
 
     def beyond(held_by: str):
@@ -274,7 +272,7 @@ def test_a_significant_effect_gives_way_to_a_simpler_family_that_holds_it():
         return test
 
     def extend(effect: str):
-        return extend_spec(effect, HISTORY, m, rows, SETTINGS)
+        return extension(effect, HISTORY, m, rows, SETTINGS)
 
     settings = LoopSettings(min_explained=0.05)
     (ext, evidence, reason), why = _simpler_cover(richer, d, beyond("gas_force"), extend, ("temperature",), set(),
@@ -302,7 +300,7 @@ def test_a_partner_is_offered_with_the_simpler_rivals_that_explain_near_as_much_
         return GainTest(beyond_top[effect], 1e-9, 5.0, 100.0, 3)
 
     def extend(effect: str):
-        return extend_spec(effect, HISTORY, m, rows, SETTINGS)
+        return extension(effect, HISTORY, m, rows, SETTINGS)
 
     partner = (extend("frequency_dependence"), d.ranking[0], SIGNIFICANT)
     settings = LoopSettings(parsimony=0.35, min_explained=0.05)
@@ -317,8 +315,8 @@ def test_a_partner_is_offered_with_the_simpler_rivals_that_explain_near_as_much_
 def test_two_present_effects_are_offered_together_with_both_features():
     m = record(FULL, duration=2.0)
     rows = np.arange(len(m))
-    gas = extend_spec("gas_force", NO_SIGN, m, rows, SETTINGS)
-    seal = extend_spec("seal_friction", NO_SIGN, m, rows, SETTINGS)
+    gas = extension("gas_force", NO_SIGN, m, rows, SETTINGS)
+    seal = extension("seal_friction", NO_SIGN, m, rows, SETTINGS)
     evidence = SimpleNamespace(name="seal_friction")
     both, kept, reason = _together((gas, SimpleNamespace(name="gas_force"), ""), (seal, evidence, SIGNIFICANT),
                                    evidence, "gas_force beat seal_friction", m, rows, SETTINGS)

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import jinja2
 import numpy as np
@@ -20,8 +19,7 @@ from nnfmu.models.features import FeatureSpec
 from nnfmu.validate import welch_psd
 from nnfmu.validate.plots import axis_label, new_axes, psd_unit
 
-if TYPE_CHECKING:
-    from .run import LoopReport
+from .results import LoopReport
 
 TEMPLATE = "loop_report.html.j2"
 LOOP_WINDOW = 2.0  # s of the first test block drawn in the force-velocity and force-displacement loops
@@ -43,7 +41,7 @@ def feature_unit(spec: FeatureSpec, name: str, units: dict[str, str]) -> str:
     return units.get(channel, "")
 
 
-def plot_residual_vs_features(report: "LoopReport", m: Measurement, rows: np.ndarray, residual: np.ndarray,
+def plot_residual_vs_features(report: LoopReport, m: Measurement, rows: np.ndarray, residual: np.ndarray,
                               spec: FeatureSpec, names: tuple[str, ...], path: Path, effect: str) -> Path:
     """Residual before the effect was added against each feature the effect added (diagnosis part)."""
     values = spec.features({c: m[c] for c in spec.channels}, m.sample_period)
@@ -62,7 +60,7 @@ def plot_residual_vs_features(report: "LoopReport", m: Measurement, rows: np.nda
     return path
 
 
-def plot_loops(report: "LoopReport", m: Measurement, rows: np.ndarray, before: np.ndarray, after: np.ndarray,
+def plot_loops(report: LoopReport, m: Measurement, rows: np.ndarray, before: np.ndarray, after: np.ndarray,
                x_channel: str, path: Path) -> Path:
     """Output over `x_channel` (velocity or displacement): measured, first model, final model, first test window."""
     window = rows[: int(round(LOOP_WINDOW / m.sample_period))]
@@ -79,7 +77,7 @@ def plot_loops(report: "LoopReport", m: Measurement, rows: np.ndarray, before: n
     return path
 
 
-def plot_residual_psd(report: "LoopReport", m: Measurement, test_ranges: tuple[tuple[int, int], ...],
+def plot_residual_psd(report: LoopReport, m: Measurement, test_ranges: tuple[tuple[int, int], ...],
                       before: np.ndarray, after: np.ndarray, path: Path) -> Path:
     """Welch PSD of the residual before and after, averaged over the test blocks."""
     unit = m.units.get(report.output, "")
@@ -104,7 +102,7 @@ def _number(value: object) -> str:
     return "–" if value is None else str(value)
 
 
-def write_loop_report(folder: Path, report: "LoopReport", m: Measurement, rows: dict[str, np.ndarray],
+def write_loop_report(folder: Path, report: LoopReport, m: Measurement, rows: dict[str, np.ndarray],
                       first: np.ndarray, final: np.ndarray, steps: list[tuple[np.ndarray, FeatureSpec]]) -> None:
     """Plots, report.json and report.html into `folder` (the run's staging folder, renamed into place later).
 

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..data import DataError, Measurement, check_measurement
-from .effects import select_families
+from .effects import select_effects
 from .errors import DiagnosisError
 from .evidence import Diagnosis, EffectEvidence, effect_evidence
 from .ranking import GainTest, cross_fit_errors, extend_base, fold_mask, gain_test, rank_effects, recalibration
@@ -109,7 +109,7 @@ def diagnose(
     """
     inputs = tuple(model_inputs)
     signals, residual, base = _residual_setup(measurement, predicted, output, inputs, settings)
-    families = select_families(settings.effects)
+    families = select_effects(settings.effects)
     if np.std(residual) <= 1e-12 * np.sqrt(np.mean(signals.measured**2)):
         raise DiagnosisError(
             f"{measurement.source}: the residual of {output!r} is constant ({np.mean(residual):g}): the prediction "
@@ -156,8 +156,8 @@ class FamilyGains:
 
     def _matrix(self, effect: str) -> np.ndarray:
         if effect not in self._matrices:
-            (family,) = select_families((effect,))
-            self._matrices[effect] = family.compute(self._signals, self._settings).matrix
+            (family,) = select_effects((effect,))
+            self._matrices[effect] = family.regressors(self._signals, self._settings).matrix
         return self._matrices[effect]
 
     def explained(self, effect: str, given: Sequence[str] = ()) -> GainTest:

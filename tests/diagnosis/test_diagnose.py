@@ -14,9 +14,8 @@ from scipy.signal import lfilter
 from nnfmu.data import Measurement
 from nnfmu.data.importers import load_brfd
 from nnfmu.data.rigs import RigOptions, simulate_rig
-from nnfmu.loop import DiagnosisError, DiagnosisSettings, diagnose
-from nnfmu.loop.diagnose import FamilyGains
-from nnfmu.loop.residual_tests import residual_tests, whiteness_test
+from nnfmu.diagnosis import DiagnosisError, DiagnosisSettings, FamilyGains, diagnose
+from nnfmu.diagnosis.residual_tests import residual_tests, whiteness_test
 
 MODEL_EFFECTS = ("hysteresis", "seal_friction", "inertia")  # the rig's default: what the "model" has
 DURATION = 20.0  # s at 1 kHz

@@ -31,7 +31,7 @@ import numpy as np
 from scipy import stats
 
 from .correlation import newey_west_variance
-from .effects import EffectFamily, Regressors
+from .effects import Effect, Regressors
 from .settings import DiagnosisSettings
 from .signals import EffectSignals
 
@@ -54,7 +54,7 @@ class GainTest:
 class RankedFamily:
     """One family's place in the ranking; tests are None when it could not be computed (channels missing)."""
 
-    family: EffectFamily
+    family: Effect
     regressors: Regressors | None
     missing: tuple[str, ...]
     alone: GainTest | None
@@ -131,14 +131,14 @@ def family_threshold(alpha: float, testable: int) -> float:
 
 
 def rank_effects(
-    signals: EffectSignals, families: list[EffectFamily], base: np.ndarray, settings: DiagnosisSettings
+    signals: EffectSignals, families: list[Effect], base: np.ndarray, settings: DiagnosisSettings
 ) -> list[RankedFamily]:
     """Rank `families` on the residual measured - predicted beyond the `base` columns (see `recalibration` and the
     module docstring); selected ones first, then the others by what they explain alone, then the untestable."""
     residual = signals.measured - signals.predicted
     fold = fold_mask(len(residual), settings.blocks)
     testable = {f.name: f for f in families if not f.missing(signals)}
-    regressors = {name: f.compute(signals, settings) for name, f in testable.items()}
+    regressors = {name: f.regressors(signals, settings) for name, f in testable.items()}
     alone = {name: gain_test(residual, base, r.matrix, fold) for name, r in regressors.items()}
     threshold = family_threshold(settings.alpha, len(testable))
     selected: list[str] = []

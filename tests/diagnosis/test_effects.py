@@ -8,9 +8,9 @@ import pytest
 from scipy import stats
 
 from nnfmu.data import Measurement
-from nnfmu.loop import EFFECTS, DiagnosisError, DiagnosisSettings, diagnose, select_families
-from nnfmu.loop.ranking import fold_mask, gain_test
-from nnfmu.loop.signals import build_signals
+from nnfmu.diagnosis import EFFECTS, DiagnosisError, DiagnosisSettings, diagnose, select_effects
+from nnfmu.diagnosis.ranking import fold_mask, gain_test
+from nnfmu.diagnosis.signals import build_signals
 
 RATE = 1000.0
 AMPLITUDE = 0.02  # m
@@ -35,7 +35,7 @@ def sine_measurement(channels: tuple[str, ...] = ("displacement", "velocity"), s
 
 def regressors(name: str, m: Measurement, inputs=("velocity",)):
     signals = build_signals(m, m["force"], "force", inputs)
-    return EFFECTS[name].compute(signals, DiagnosisSettings())
+    return EFFECTS[name].regressors(signals, DiagnosisSettings())
 
 
 def test_the_library_has_the_stable_names():
@@ -43,8 +43,8 @@ def test_the_library_has_the_stable_names():
         "seal_friction", "gas_force", "hysteresis", "backlash", "inertia", "temperature", "frequency_dependence",
         "amplitude_dependence", "sensor_offset",
     ]
-    for family in EFFECTS.values():
-        assert family.description and isinstance(family.requires, tuple)
+    for effect in EFFECTS.values():
+        assert effect.description and isinstance(effect.requires, tuple)
 
 
 @pytest.mark.parametrize("name", list(EFFECTS))
@@ -128,7 +128,7 @@ def test_a_residual_without_variation_is_refused():
 
 def test_unknown_effect_names_are_refused():
     with pytest.raises(DiagnosisError, match="unknown effect.*'viscosity'.*seal_friction"):
-        select_families(("seal_friction", "viscosity"))
+        select_effects(("seal_friction", "viscosity"))
 
 
 def test_out_of_sample_gain_ignores_a_regressor_unrelated_to_the_residual():

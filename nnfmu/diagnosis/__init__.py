@@ -1,0 +1,27 @@
+"""Residual diagnosis, torch-free: classical residual tests and a library of physical effects ranked by the variance
+each explains out of sample, each effect with the model extension that would take it in (`effects`). Imports numpy,
+scipy, `nnfmu.data` and `nnfmu.models.features` only (no torch, fmpy, compiler), so any stage can diagnose."""
+
+from .diagnose import FamilyGains, diagnose
+from .effects import EFFECTS, Effect, Extension, NoExtension, Regressors, select_effects
+from .errors import DiagnosisError
+from .evidence import Diagnosis, EffectEvidence
+from .residual_tests import ResidualTest, residual_tests
+from .settings import DiagnosisSettings
+
+__all__ = [
+    "EFFECTS",
+    "Diagnosis",
+    "DiagnosisError",
+    "DiagnosisSettings",
+    "Effect",
+    "EffectEvidence",
+    "Extension",
+    "FamilyGains",
+    "NoExtension",
+    "Regressors",
+    "ResidualTest",
+    "diagnose",
+    "residual_tests",
+    "select_effects",
+]

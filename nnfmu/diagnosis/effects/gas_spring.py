@@ -1,0 +1,36 @@
+"""The gas spring of a damper: a preload and a force rising with displacement."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nnfmu.data import Measurement
+from nnfmu.models.features import FeatureSpec
+
+from ..settings import DiagnosisSettings
+from ..signals import EffectSignals
+from .base import Effect, Extension, NoExtension, Regressors, channel, extended, need, with_delays
+from .shared import derived_note
+
+
+class GasForce(Effect):
+    """A constant and the displacement; the extension taps the displacement (the network's bias holds the
+    preload)."""
+
+    name = "gas_force"
+    description = "gas spring: preload and displacement dependence"
+    requires = ("displacement",)
+
+    def regressors(self, signals: EffectSignals, settings: DiagnosisSettings) -> Regressors:
+        x = signals["displacement"]
+        matrix = np.column_stack([np.ones_like(x), x])
+        note = ("preload (constant) and spring rate (displacement); the constant alone cannot be told from a sensor "
+                "offset")
+        return Regressors(("1 (preload)", "displacement [m]"), matrix, (), note + derived_note(signals, "displacement"))
+
+    def extension(self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray,
+                  settings: DiagnosisSettings) -> Extension | NoExtension:
+        """The displacement at delay 0 (preload and gas rate)."""
+        displacement = channel(spec, "displacement")
+        return need(self.name, displacement, measurement) or extended(
+            self.name, spec, with_delays(spec, displacement, (0,)), f"{displacement} at delay 0")

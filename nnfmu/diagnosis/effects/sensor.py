@@ -1,0 +1,35 @@
+"""A load-cell offset or slow drift: the measurement's error, not the component's."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from nnfmu.data import Measurement
+from nnfmu.models.features import FeatureSpec
+
+from ..settings import DiagnosisSettings
+from ..signals import EffectSignals
+from .base import Effect, Extension, NoExtension, Regressors
+
+
+class SensorOffset(Effect):
+    """A constant and a linear drift over the record. No extension, by design: the measurement, not the
+    component, is at fault (the network's bias already holds a constant offset)."""
+
+    name = "sensor_offset"
+    description = "load-cell offset or slow drift"
+    requires = ()
+
+    def regressors(self, signals: EffectSignals, settings: DiagnosisSettings) -> Regressors:
+        t = signals.time - signals.time[0]
+        span = t[-1] if t[-1] > 0 else 1.0
+        matrix = np.column_stack([np.ones_like(t), t / span])
+        names = ("1 (offset)", "time / record length (drift)")
+        return Regressors(names, matrix, (), "constant offset and linear drift")
+
+    def extension(self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray,
+                  settings: DiagnosisSettings) -> Extension | NoExtension:
+        """Always NoExtension: the fix is to correct the measurement."""
+        return NoExtension(self.name, "a load-cell offset or slow drift belongs to the measurement, not to the "
+                                      "component; correct the measurement (the network's bias already holds a "
+                                      "constant offset)")
