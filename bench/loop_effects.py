@@ -36,9 +36,9 @@ from nnfmu.component import Component
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import DamperDyno, DamperTruth, RigOptions, simulate_rig
 from nnfmu.export import export_onnx, run_step_graph
-from nnfmu.loop.blocks import part_measurement, plan_blocks
-from nnfmu.loop.settings import LoopSettings
-from nnfmu.loop.run import run_loop
+from nnfmu.workflows.loop.blocks import part_measurement, plan_blocks
+from nnfmu.workflows.loop.settings import LoopSettings
+from nnfmu.workflows.loop.run import run_loop
 from nnfmu.models import TrainSettings, get_preset, train_model
 from nnfmu.models.features import Difference, FeatureSpec, SmoothSign
 

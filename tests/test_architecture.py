@@ -23,7 +23,6 @@ FLOORS: tuple[tuple[str, ...], ...] = (
     ("cosim",),
     ("validate",),
     ("diagnosis",),
-    ("loop",),
     ("workflows",),
     ("cli",),
 )

@@ -18,7 +18,7 @@ def test_wheel_ships_templates_and_package_data(tmp_path: Path) -> None:
             assert f"nnfmu/templates/{template.relative_to(ROOT / 'templates').as_posix()}" in names
     assert "nnfmu/validate/report.html.j2" in names
     assert "nnfmu/workflows/campaign/summary.html.j2" in names
-    assert "nnfmu/loop/loop_report.html.j2" in names
+    assert "nnfmu/workflows/loop/loop_report.html.j2" in names
     assert {"nnfmu/diagnosis/__init__.py", "nnfmu/diagnosis/effects/__init__.py",
             "nnfmu/diagnosis/effects/friction.py"} <= names  # subpackages found by find_packages
     assert not any(n.startswith(("tests/", "bench/", "exported/")) for n in names)

@@ -9,9 +9,9 @@ the bushing networks trained on a rig record whose drive is derived from the veh
 another drive (`nnfmu.workflows.roadtest.bushing_drive`, as the thesis designed its rig data), the damper networks
 likewise on a dyno record whose random part follows the car's damper strokes (`nnfmu.workflows.roadtest.damper_drive`),
 and with the thesis comparison (spline vs hysteresis network vs reference) in a report per system. Last, the loop
-(`nnfmu.loop`): a damper whose rig record carries two effects the model was not told about (the gas spring of a monotube
-and the oil's warming), a hysteresis network trained on the record's fit blocks, and `run_loop` tracing the residual to
-the missing effects, adding them and reporting the held-out error before and after.
+(`nnfmu.workflows.loop`): a damper whose rig record carries two effects the model was not told about (the gas spring of
+a monotube and the oil's warming), a hysteresis network trained on the record's fit blocks, and `run_loop` tracing the
+residual to the missing effects, adding them and reporting the held-out error before and after.
 """
 
 from __future__ import annotations
@@ -31,9 +31,9 @@ from nnfmu.data.rigs import DEFAULT_EFFECTS, DamperParams, RigOptions, write_rig
 from nnfmu.export import export_onnx
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.loop.blocks import training_part
-from nnfmu.loop.settings import LoopSettings
-from nnfmu.loop import LoopReport, run_loop
+from nnfmu.workflows.loop.blocks import training_part
+from nnfmu.workflows.loop.settings import LoopSettings
+from nnfmu.workflows.loop import LoopReport, run_loop
 from nnfmu.models import TrainSettings, get_preset, train_model
 from nnfmu.workflows.train import TrainRequest, train_from_file
 from nnfmu.out_paths import check_output_dir, mark_output_dir

@@ -1,6 +1,6 @@
 """The backlash effect's two halves: its regressors (stop operators of displacement at gaps sized by the travel
 between reversals) against the Stop feature of the step graph, and its extension. (On the measured BRFD damper:
-tests/loop/test_brfd_loop.py.)"""
+tests/workflows/loop/test_brfd_loop.py.)"""
 
 from __future__ import annotations
 

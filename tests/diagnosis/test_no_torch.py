@@ -30,7 +30,8 @@ assert d.ranking[0].name == "seal_friction", d.summary
 ext = EFFECTS["seal_friction"].extension(FeatureSpec((Tap("velocity"),), "force"), m, np.arange(len(t)),
                                          DiagnosisSettings())
 assert isinstance(ext, Extension)
-for stage in ("torch", "fmpy", "nnfmu.fmu", "nnfmu.cosim", "nnfmu.export", "nnfmu.loop", "nnfmu.models.train"):
+for stage in ("torch", "fmpy", "nnfmu.fmu", "nnfmu.cosim", "nnfmu.export", "nnfmu.workflows.loop",
+              "nnfmu.models.train"):
     assert stage not in sys.modules, stage
 """
 

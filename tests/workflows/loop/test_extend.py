@@ -15,7 +15,7 @@ from nnfmu.data import Measurement
 from nnfmu.data.rigs import RigOptions, simulate_rig
 from nnfmu.export.graph import GraphBuilder
 from nnfmu.diagnosis import EFFECTS, DiagnosisSettings
-from nnfmu.loop import LoopError, LoopSettings, plan_blocks
+from nnfmu.workflows.loop import LoopError, LoopSettings, plan_blocks
 from nnfmu.models import retrain as warm_start_module
 from nnfmu.models.retrain import RetrainSettings, _warm_network, fresh_start, retrain, warm_start
 from nnfmu.models import Architecture, TrainSettings, train_model

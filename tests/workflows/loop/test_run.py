@@ -23,10 +23,10 @@ from nnfmu.data.rigs import RigOptions, simulate_rig
 from nnfmu.export import export_onnx, run_step_graph
 from nnfmu.diagnosis import Extension
 from nnfmu.diagnosis.ranking import GainTest
-from nnfmu.loop import LoopError, LoopReport, LoopSettings, run_loop, training_part
-from nnfmu.loop import trials as trials_module
-from nnfmu.loop.trials import (SIGNIFICANT, TRIAL_TIE, _best_trial, _partner_rivals, _simpler_cover, _together,
-                               extension, retrain_rivals)
+from nnfmu.workflows.loop import LoopError, LoopReport, LoopSettings, run_loop, training_part
+from nnfmu.workflows.loop import trials as trials_module
+from nnfmu.workflows.loop.trials import (SIGNIFICANT, TRIAL_TIE, _best_trial, _partner_rivals, _simpler_cover,
+                                         _together, extension, retrain_rivals)
 from nnfmu.models.retrain import Retrained
 from nnfmu.models import Architecture, TrainSettings, get_preset, train_model
 from nnfmu.models.features import Difference, FeatureSpec, SmoothSign

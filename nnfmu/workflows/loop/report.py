@@ -128,7 +128,7 @@ def write_loop_report(folder: Path, report: LoopReport, m: Measurement, rows: di
     document = {**report.to_dict(), "nnfmu_version": nnfmu.__version__, "plots": plots}
     write_text_atomic(folder / "report.json", json.dumps(document, indent=1, allow_nan=False))
     environment = jinja2.Environment(
-        loader=jinja2.PackageLoader("nnfmu.loop", "."), autoescape=True, undefined=jinja2.StrictUndefined
+        loader=jinja2.PackageLoader("nnfmu.workflows.loop", "."), autoescape=True, undefined=jinja2.StrictUndefined
     )
     environment.filters["number"] = _number
     html = environment.get_template(TEMPLATE).render(report=document)

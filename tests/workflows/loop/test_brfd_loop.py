@@ -12,11 +12,11 @@ import numpy as np
 from nnfmu.data.importers import load_brfd_series
 from nnfmu.export import export_onnx
 from nnfmu.diagnosis import EFFECTS, DiagnosisSettings
-from nnfmu.loop import LoopSettings, part_measurement, plan_blocks, run_loop
+from nnfmu.workflows.loop import LoopSettings, part_measurement, plan_blocks, run_loop
 from nnfmu.models import Architecture, TrainSettings, train_model
 from nnfmu.models.features import FeatureSpec, SmoothSign, Tap
 
-SLICE = Path(__file__).parents[1] / "data" / "brfd"
+SLICE = Path(__file__).parents[2] / "data" / "brfd"
 RUNS = [SLICE / f"1Hz36lbtension{a}amplitude.json.gz" for a in ("0.5", "1", "1.5")]
 # The damper has no gas spring: the diagnosis ranks the other families (as examples/brfd_loop.py --effects does).
 EFFECTS_RANKED = tuple(name for name in EFFECTS if name != "gas_force")
