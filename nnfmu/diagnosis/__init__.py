@@ -3,7 +3,8 @@ each explains out of sample, each effect with the model extension that would tak
 scipy, `nnfmu.data` and `nnfmu.models.features` only (no torch, fmpy, compiler), so any stage can diagnose."""
 
 from .diagnose import FamilyGains, diagnose
-from .effects import EFFECTS, Effect, Extension, NoExtension, Regressors, select_effects
+from .effects import (EFFECTS, ChannelInput, Effect, Extension, NoExtension, Regressors, channel_effects, effects_for,
+                      find_effect, select_effects)
 from .errors import DiagnosisError
 from .evidence import Diagnosis, EffectEvidence
 from .residual_tests import ResidualTest, residual_tests
@@ -11,6 +12,7 @@ from .settings import DiagnosisSettings
 
 __all__ = [
     "EFFECTS",
+    "ChannelInput",
     "Diagnosis",
     "DiagnosisError",
     "DiagnosisSettings",
@@ -21,7 +23,10 @@ __all__ = [
     "NoExtension",
     "Regressors",
     "ResidualTest",
+    "channel_effects",
     "diagnose",
+    "effects_for",
+    "find_effect",
     "residual_tests",
     "select_effects",
 ]

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..data import DataError, Measurement, check_measurement
-from .effects import select_effects
+from .effects import effects_for, find_effect
 from .errors import DiagnosisError
 from .evidence import Diagnosis, EffectEvidence, effect_evidence
 from .ranking import GainTest, cross_fit_errors, extend_base, fold_mask, gain_test, rank_effects, recalibration
@@ -109,7 +109,7 @@ def diagnose(
     """
     inputs = tuple(model_inputs)
     signals, residual, base = _residual_setup(measurement, predicted, output, inputs, settings)
-    families = select_effects(settings.effects)
+    families = effects_for(measurement, inputs, output, settings.effects)
     if np.std(residual) <= 1e-12 * np.sqrt(np.mean(signals.measured**2)):
         raise DiagnosisError(
             f"{measurement.source}: the residual of {output!r} is constant ({np.mean(residual):g}): the prediction "
@@ -156,8 +156,7 @@ class FamilyGains:
 
     def _matrix(self, effect: str) -> np.ndarray:
         if effect not in self._matrices:
-            (family,) = select_effects((effect,))
-            self._matrices[effect] = family.regressors(self._signals, self._settings).matrix
+            self._matrices[effect] = find_effect(effect).regressors(self._signals, self._settings).matrix
         return self._matrices[effect]
 
     def explained(self, effect: str, given: Sequence[str] = ()) -> GainTest:

@@ -33,7 +33,9 @@ class DiagnosisSettings:
     (frequency_dependence): low-pass time constants of the viscoelastic states; both halves use each.
     `amplitude_tau` [s] (amplitude_dependence): averaging time of the running amplitude. `thermal_tau` [s]
     (temperature, extension only): thermal time constant of the running mean square of velocity that stands in for
-    an unmeasured temperature.
+    an unmeasured temperature. `channel_taus` [s] (every `input:<channel>` candidate, a measured channel the model
+    does not use): time constants of the channel's low-passes; both halves use each (a command acts through the lag
+    of a coil or valve, ~1-30 ms).
     """
 
     alpha: float = 0.05
@@ -47,6 +49,7 @@ class DiagnosisSettings:
     frequency_taus: tuple[float, ...] = (0.01, 0.1, 1.0)
     amplitude_tau: float = 1.0
     thermal_tau: float = 300.0
+    channel_taus: tuple[float, ...] = (0.005, 0.02, 0.1)
 
     def __post_init__(self) -> None:
         if not (0 < self.alpha < 1):
@@ -60,7 +63,7 @@ class DiagnosisSettings:
                 f"min_samples {self.min_samples} is too small: at least 20*max_lag ({20 * self.max_lag}) and "
                 f"16*blocks ({16 * self.blocks}) are needed for the tests to mean anything"
             )
-        for name in ("friction_scales", "memory_times", "reversal_fractions", "frequency_taus"):
+        for name in ("friction_scales", "memory_times", "reversal_fractions", "frequency_taus", "channel_taus"):
             values = getattr(self, name)
             if not values or not all(math.isfinite(v) and v > 0 for v in values):
                 raise DiagnosisError(f"{name} must be a non-empty tuple of positive numbers, got {values!r}")

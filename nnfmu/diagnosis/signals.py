@@ -18,7 +18,8 @@ class EffectSignals:
 
     `channels`: the measured and derived channels of the output's direction, shape (n,) each, SI units;
     `derived`: which of them were derived (and how, from `Measurement.notes`); `measured`: the output channel;
-    `predicted`: the model's output; `time` [s]; `unknown_to_model`: base names present but not model inputs.
+    `predicted`: the model's output; `time` [s]; `unknown_to_model`: base names present but not model inputs;
+    `raw`: every measured channel by its full name (what an `input:<channel>` candidate reads).
     """
 
     time: np.ndarray
@@ -28,6 +29,7 @@ class EffectSignals:
     predicted: np.ndarray
     output: str
     unknown_to_model: tuple[str, ...]
+    raw: dict[str, np.ndarray]
 
     @property
     def sample_period(self) -> float:
@@ -74,4 +76,5 @@ def build_signals(
         predicted=np.asarray(predicted, dtype=float),
         output=output,
         unknown_to_model=unknown,
+        raw={name: np.asarray(values, dtype=float) for name, values in m.channels.items()},
     )

@@ -1,7 +1,8 @@
 """The effect registry as a whole: every effect provides both halves (regressors for the diagnosis and a model
 extension, or an explicit, documented NoExtension), every effect parameter has exactly one owner among the effects,
 and the features each extension adds are computed identically by numpy and by the ONNX nodes of the step graph
-(the feature nodes alone, column by column, and the whole exported graph of a small network)."""
+(the feature nodes alone, column by column, and the whole exported graph of a small network). A measured channel
+the model does not use (`input:<channel>`, made per record) is checked the same way."""
 
 from __future__ import annotations
 
@@ -15,7 +16,8 @@ import pytest
 
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import RigOptions, simulate_rig
-from nnfmu.diagnosis import EFFECTS, DiagnosisError, DiagnosisSettings, Effect, Extension, NoExtension, select_effects
+from nnfmu.diagnosis import (EFFECTS, ChannelInput, DiagnosisError, DiagnosisSettings, Effect, Extension, NoExtension,
+                             find_effect, select_effects)
 from nnfmu.diagnosis.effects.friction import added_scale
 from nnfmu.diagnosis.effects.hysteresis import added_taus
 from nnfmu.diagnosis.settings import TEST_FIELDS
@@ -31,11 +33,13 @@ NO_EXTENSION = {"sensor_offset": "belongs to the measurement, not to the compone
 SPEC = FeatureSpec((Tap("velocity", (0, 2)),), "force", (Lowpass("velocity", tau=0.05),))
 FEATURE_SAMPLES = 400  # samples run through the feature nodes one at a time
 # (effect, how the record is changed first): temperature once measured and once not (a running mean square of
-# velocity stands in), inertia once from a measured acceleration and once from velocity taps.
+# velocity stands in), inertia once from a measured acceleration and once from velocity taps; the channel candidate
+# on a record with a coil voltage the model does not use.
+CHANNEL = "input:voltage"
 CASES = [
     ("seal_friction", "rig"), ("gas_force", "rig"), ("hysteresis", "rig"), ("backlash", "rig"),
     ("inertia", "rig"), ("inertia", "with_acceleration"), ("temperature", "rig"), ("temperature", "no_temperature"),
-    ("frequency_dependence", "rig"), ("amplitude_dependence", "rig"),
+    ("frequency_dependence", "rig"), ("amplitude_dependence", "rig"), (CHANNEL, "with_voltage"),
 ]
 
 
@@ -49,13 +53,16 @@ def record(variant: str) -> Measurement:
         del channels["temperature"]
     elif variant == "with_acceleration":
         channels["acceleration"] = np.gradient(m["velocity"], m.sample_period)
-    units = {**m.units, "acceleration": "m/s^2"}
+    elif variant == "with_voltage":  # a coil voltage held in random steps of 0.1 s, 0-5 V
+        steps = np.random.default_rng(4).uniform(0.0, 5.0, len(m) // 100 + 1)
+        channels["voltage"] = np.repeat(steps, 100)[: len(m)]
+    units = {**m.units, "acceleration": "m/s^2", "voltage": "V"}
     return Measurement(m.time, channels, {k: units[k] for k in channels}, f"{m.source} ({variant})")
 
 
 def extension_of(effect: str, variant: str) -> Extension:
     m = record(variant)
-    ext = EFFECTS[effect].extension(SPEC, m, np.arange(len(m) // 2), DiagnosisSettings())
+    ext = find_effect(effect).extension(SPEC, m, np.arange(len(m) // 2), DiagnosisSettings())
     assert isinstance(ext, Extension), ext
     return ext
 
@@ -86,13 +93,16 @@ def test_the_registry_is_keyed_by_each_effects_own_name_and_every_effect_has_bot
         assert type(effect).regressors is not Effect.regressors
         assert type(effect).extension is not Effect.extension
         assert type(effect).extension.__doc__, f"{name}'s extension must say what it adds or why it adds nothing"
-    extending = {name for name, _ in CASES}
+    extending = {name for name, _ in CASES} - {CHANNEL}
     assert extending | set(NO_EXTENSION) == set(EFFECTS) and not extending & set(NO_EXTENSION)
+    channel = find_effect(CHANNEL)
+    assert isinstance(channel, ChannelInput) and channel.name == CHANNEL and channel.channel == "voltage"
+    assert CHANNEL not in EFFECTS  # made per record, not registered
 
 
 def test_every_effect_parameter_has_one_owner_and_every_owner_reads_a_real_setting():
     names = {f.name for f in fields(DiagnosisSettings)}
-    claimed = [p for effect in EFFECTS.values() for p in effect.parameters]
+    claimed = [p for effect in (*EFFECTS.values(), find_effect(CHANNEL)) for p in effect.parameters]
     assert set(claimed) <= names
     assert set(claimed) == names - set(TEST_FIELDS)  # no setting of an effect without an effect reading it
     # reversal_fractions is the one parameter two effects share: the travel after a reversal, for the build-up
@@ -114,6 +124,16 @@ def test_the_extension_picks_its_values_from_the_tuples_the_diagnosis_tries():
     ext = EFFECTS["frequency_dependence"].extension(SPEC, m, np.arange(len(m)), one_tau)
     assert regressors.names == ("displacement - lowpass(displacement, 0.05 s)",)
     assert ext.added == ("lowpass(displacement, tau=0.05)",)  # one setting moves both halves
+    with_voltage = record("with_voltage")
+    signals = build_signals(with_voltage, with_voltage["force"] + 1.0, "force", ("velocity",))
+    one_tau = DiagnosisSettings(channel_taus=(0.05,))
+    regressors = find_effect(CHANNEL).regressors(signals, one_tau)
+    ext = find_effect(CHANNEL).extension(SPEC, with_voltage, np.arange(len(with_voltage)), one_tau)
+    assert regressors.names == ("voltage - its mean", "lowpass(voltage, 0.05 s) - its mean",
+                                "(voltage - its mean) * predicted force",
+                                "(lowpass(voltage, 0.05 s) - its mean) * predicted force")
+    assert np.allclose(regressors.matrix.mean(axis=0)[:2], 0.0)  # centred on the record mean
+    assert ext.added == ("voltage[k]", "lowpass(voltage, tau=0.05)")  # the channel at delay 0 and its low-pass
 
 
 @pytest.mark.parametrize("name", sorted(NO_EXTENSION))

@@ -1,12 +1,19 @@
 """The effect library: ONE registry of the physical effects a model may lack, each with both halves of the loop
 (regressors for the diagnosis, a feature-spec extension for the retraining; see `base.Effect`), under a stable
-name. Grouped by physical family, one module each."""
+name. Grouped by physical family, one module each. Beside them, per record, every measured channel the model does
+not use is a candidate of its own, `input:<channel>` (`channels`); `effects_for` merges both for one diagnosis and
+`find_effect` looks either kind up by name."""
 
 from __future__ import annotations
+
+from collections.abc import Sequence
+
+from nnfmu.data import Measurement
 
 from ..errors import DiagnosisError
 from .backlash import Backlash
 from .base import Effect, Extension, NoExtension, Regressors
+from .channels import PREFIX, ChannelInput, channel_effects
 from .friction import SealFriction
 from .gas_spring import GasForce
 from .hysteresis import Hysteresis
@@ -42,4 +49,28 @@ def select_effects(names: tuple[str, ...] | None) -> list[Effect]:
     return [EFFECTS[name] for name in names]
 
 
-__all__ = ["EFFECTS", "Effect", "Extension", "NoExtension", "Regressors", "select_effects"]
+def effects_for(measurement: Measurement, model_inputs: Sequence[str], output: str,
+                names: tuple[str, ...] | None) -> list[Effect]:
+    """The effects one diagnosis ranks: the library's and the record's `input:` candidates (`channel_effects`);
+    None: all of them, library first; else those named, in the order asked (DiagnosisError for an unknown name)."""
+    candidates = {e.name: e for e in channel_effects(measurement, tuple(model_inputs), output)}
+    if names is None:
+        return [*EFFECTS.values(), *candidates.values()]
+    known = {**EFFECTS, **candidates}
+    unknown = [name for name in names if name not in known]
+    if unknown:
+        raise DiagnosisError(f"unknown effect(s) {', '.join(map(repr, unknown))}; the library has {', '.join(EFFECTS)}"
+                             f" and {measurement.source} the channel candidates {', '.join(candidates) or '(none)'}")
+    return [known[name] for name in names]
+
+
+def find_effect(name: str) -> Effect:
+    """The effect named `name`: the library's, or the channel candidate `input:<channel>` (DiagnosisError else)."""
+    if name.startswith(PREFIX) and len(name) > len(PREFIX):
+        return ChannelInput(name[len(PREFIX):])
+    (effect,) = select_effects((name,))
+    return effect
+
+
+__all__ = ["EFFECTS", "ChannelInput", "Effect", "Extension", "NoExtension", "Regressors", "channel_effects",
+           "effects_for", "find_effect", "select_effects"]

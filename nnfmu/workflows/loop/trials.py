@@ -11,7 +11,7 @@ from dataclasses import replace
 import numpy as np
 
 from nnfmu.data import Measurement
-from nnfmu.diagnosis import EFFECTS, Diagnosis, EffectEvidence, Extension, NoExtension
+from nnfmu.diagnosis import Diagnosis, EffectEvidence, Extension, NoExtension, find_effect
 from nnfmu.diagnosis.ranking import GainTest
 from nnfmu.models.features import FeatureSpec
 from nnfmu.models.retrain import Retrained, retrain
@@ -34,8 +34,9 @@ Candidate = tuple[Extension, EffectEvidence, str]  # an extension to retrain wit
 
 def extension(effect: str, spec: FeatureSpec, m: Measurement, fit: np.ndarray,
               settings: LoopSettings) -> Extension | NoExtension:
-    """The registry's extension of `spec` for `effect`, its parameters from the diagnosis settings."""
-    return EFFECTS[effect].extension(spec, m, fit, settings.diagnosis)
+    """The extension of `spec` for `effect` (the library's or an `input:<channel>` candidate), its parameters from
+    the diagnosis settings."""
+    return find_effect(effect).extension(spec, m, fit, settings.diagnosis)
 
 
 def nrmse(predicted: np.ndarray, measured: np.ndarray, rows: np.ndarray) -> float:
