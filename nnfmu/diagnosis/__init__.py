@@ -1,5 +1,6 @@
 """Residual diagnosis, torch-free: classical residual tests and a library of physical effects ranked by the variance
-each explains out of sample, each effect with the model extension that would take it in (`effects`). Imports numpy,
+each explains out of sample, beside every measured channel the model does not use (`input:<channel>`), each effect
+with the model extension that would take it in (`effects`). Imports numpy,
 scipy, `nnfmu.data` and `nnfmu.models.features` only (no torch, fmpy, compiler), so any stage can diagnose."""
 
 from .diagnose import FamilyGains, diagnose

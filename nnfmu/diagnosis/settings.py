@@ -20,7 +20,7 @@ class DiagnosisSettings:
     Bonferroni). `max_lag`: largest lag [samples] of the correlation tests. `blocks`: the record is cut into this
     many contiguous blocks; half of them fit, the other half evaluate, then the other way round (2-fold
     cross-fitting), so every explained variance is out of sample. `min_samples`: shorter records are refused.
-    `effects`: names from the effect library to rank (None: all).
+    `effects`: names from the effect library or `input:<channel>` candidates to rank (None: all of both).
 
     Effect parameters, each named once and read by both halves of its effect (the diagnosis's regressors and the
     model extension). Where the diagnosis tries several values and the extension adds fewer, the extension picks
