@@ -33,7 +33,7 @@ from nnfmu.data import Measurement
 from nnfmu.workflows.roadtest.systems import bushing_elements, build_component_fmus, build_vehicle, write_system
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
-from nnfmu.vehicle.models.components import REFERENCE
+from nnfmu.vehicle.dynamics.components import REFERENCE
 from road_test import models_in  # bench/ is on the path when a bench script runs
 
 STEP = 1e-3  # [s] communication step

@@ -20,7 +20,7 @@ import time
 import numpy as np
 
 from nnfmu.data import Measurement
-from nnfmu.workflows.roadtest.reference import monolithic_reference
+from nnfmu.workflows.roadtest.truth_reference import monolithic_reference
 from nnfmu.workflows.roadtest.systems import SYSTEMS, vehicle_components
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 

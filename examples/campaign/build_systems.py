@@ -13,7 +13,7 @@ from pathlib import Path
 from nnfmu.workflows.campaign.quarter_car import build_quarter_car_system
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.data.drive_files import write_drive
-from nnfmu.vehicle.models import VehicleParameters
+from nnfmu.vehicle.dynamics import VehicleParameters
 
 HERE = Path(__file__).parent
 BUILD = HERE / "build"

@@ -17,7 +17,7 @@ from ...physics import (
 )
 from .command import CommandSchedule
 from .options import DAMPER_TYPES, EXCITATIONS, KINDS, RigOptions
-from .run import RigRun, simulate_rig, write_rig
+from .simulate import RigRun, simulate_rig, write_rig
 from .semiactive_rig import COMMAND_CHANNELS
 from .truth import truth_path
 from .vehicle_drive import RIG_BANDS, DriveDesign, VehicleDrive, design_damper_drive, design_vehicle_drive

@@ -24,7 +24,7 @@ from .damper_rig import UNITS, DamperDyno, run_damper_dyno
 from .excitation import Motion
 from .options import VEHICLE_EXCITATION, RigOptions, check_options, resolve_duration, resolve_effects
 from ...physics.parameters import describe
-from .run import RigRun, write_run
+from .simulate import RigRun, write_run
 from .truth import build_truth
 from .vehicle_drive import DriveDesign, VehicleDrive, design_damper_drive
 

@@ -22,7 +22,7 @@ from ..measurement import Measurement
 from ...physics.bushing import BushingParams
 from .bushing_rig import RUN_NOTES, UNITS, BushingRig, describe_params, true_signals
 from .options import VEHICLE_EXCITATION, RigOptions, check_options, resolve_duration, resolve_effects
-from .run import RigRun, write_run
+from .simulate import RigRun, write_run
 from .sensors import Sensor, record
 from .truth import build_truth
 from .vehicle_drive import DriveDesign, design_vehicle_drive

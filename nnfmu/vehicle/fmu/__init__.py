@@ -1,6 +1,6 @@
 """Vehicle models as FMI co-simulation FMUs, built from their exact discrete step by the component FMU factory."""
 
-from .build import build_vehicle_fmu, initial_state, vehicle_component, vehicle_model, vehicle_step_graph
+from .vehicle_fmu import build_vehicle_fmu, initial_state, vehicle_component, vehicle_model, vehicle_step_graph
 from .errors import VehicleBuildError
 from .settings import DEFAULT_SAMPLE_PERIOD, MAX_SUBSTEP, MODELS, VehicleBuildSettings
 from .step_graph import discrete_step_graph, spline_terms

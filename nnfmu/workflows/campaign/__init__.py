@@ -2,7 +2,7 @@
 Parquet table, with a record of the inputs and an HTML summary (`nnfmu batch`)."""
 
 from .errors import CampaignError
-from .run import CampaignRun, run_campaign
+from .batch import CampaignRun, run_campaign
 from .spec import Campaign, read_campaign
 
 __all__ = ["Campaign", "CampaignError", "CampaignRun", "read_campaign", "run_campaign"]

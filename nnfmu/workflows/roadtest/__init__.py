@@ -3,7 +3,7 @@
 from .bushing_drive import BushingDriveSettings, VehicleBushingModels, train_vehicle_bushings
 from .damper_drive import VehicleDamperModels, train_vehicle_dampers
 from .envelope import Excursion, excursion
-from .reference import Reference, actuator_inputs, monolithic_reference
+from .truth_reference import Reference, actuator_inputs, monolithic_reference
 from .runs import RoadTestResult, RoadTestSettings, SystemResult, SystemRun, run_road_test
 from .systems import (
     BUSHING_MODELS, DAMPER_MODELS, SYSTEMS, ComponentFmus, RoadTestError, build_component_fmus, build_vehicle,

@@ -29,7 +29,7 @@ from nnfmu.data.drive_files import write_drive
 
 from .envelope import Excursion, excursion
 from .record_training import train_on_record
-from .reference import monolithic_reference
+from .truth_reference import monolithic_reference
 from .runs import RoadTestSettings, _open_loop, _ports
 from .systems import BUSHING_MODELS, RoadTestError, bushing_elements, bushing_onnx, vehicle_components
 

@@ -35,7 +35,7 @@ from nnfmu.workflows.vehicle_binding import vehicle_binding
 
 from .budget import BudgetRow, budget_rows
 from .envelope import Excursion, excursion
-from .reference import Reference, monolithic_reference
+from .truth_reference import Reference, monolithic_reference
 from .report import write_system_report
 from .systems import (
     DAMPER_MODELS, RoadTestError, ComponentFmus, bushing_elements, build_component_fmus, build_truth_fmus,

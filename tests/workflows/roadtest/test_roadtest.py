@@ -26,7 +26,7 @@ from nnfmu.workflows.roadtest.runs import COMPARED
 from nnfmu.workflows.roadtest.systems import bushing_elements, damper_elements
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.vehicle.fmu import VehicleBuildSettings, vehicle_model
-from nnfmu.vehicle.models import LinearLaw, MonolithicSettings, simulate_monolithic
+from nnfmu.vehicle.dynamics import LinearLaw, MonolithicSettings, simulate_monolithic
 
 DAMPING = 2500.0  # [N.s/m] of the linear damper
 PERIOD = 1e-3  # [s] the rigs' sample period

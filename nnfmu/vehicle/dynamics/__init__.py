@@ -9,7 +9,7 @@ from .parameters import DEFAULT_FILE, VehicleParameters
 from .ports import VehiclePort
 from .quarter_car import build_quarter_car
 from .quarter_car_parameters import QuarterCarParameters
-from .reference import LinearSpring, SplineDamper
+from .builtin_elements import LinearSpring, SplineDamper
 
 __all__ = [
     "BushingTruthLaw",

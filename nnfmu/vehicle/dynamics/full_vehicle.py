@@ -25,7 +25,7 @@ from .geometry import SIDES, BushingFrame, mirror_point, mirror_rotation, unit
 from .linear import LinearVehicle
 from .parameters import AxleParameters, BushingParameters, DamperParameters, VehicleParameters, corner_sprung_mass
 from .ports import CORNERS, VehiclePort, actuator_ports, bushing_inputs, bushing_outputs, damper_input, damper_outputs
-from .reference import LinearSpring, SplineDamper
+from .builtin_elements import LinearSpring, SplineDamper
 
 FRONT_CORNERS = ("fl", "fr")
 REAR_CORNERS = ("rl", "rr")

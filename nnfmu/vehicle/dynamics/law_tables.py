@@ -14,7 +14,7 @@ import numpy as np
 
 from ...physics import BushingChannelTruth, DamperTruth, ValveSide
 from .laws import BushingTruthLaw, ComponentLaw, DamperTruthLaw, LinearLaw
-from .reference import SplineDamper
+from .builtin_elements import SplineDamper
 
 LINEAR, DAMPER, BUSHING = 0, 1, 2  # law kinds, column KIND of the layout
 KIND, VALUES, STATES, FLAG0, FLAG1, FLAG2, FLAG3 = range(7)  # layout columns

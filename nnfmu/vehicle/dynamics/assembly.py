@@ -18,7 +18,7 @@ import numpy as np
 from .errors import VehicleModelError
 from .linear import LinearVehicle
 from .ports import VehiclePort
-from .reference import LinearSpring, SplineDamper
+from .builtin_elements import LinearSpring, SplineDamper
 
 
 def skew(p: np.ndarray) -> np.ndarray:

@@ -22,11 +22,11 @@ from nnfmu.component import Component, Port, StatePort
 from nnfmu.fmu.build import build_fmu_from_model
 from nnfmu.fmu.options import BuildOptions
 
-from ..models import DEFAULT_FILE, LinearVehicle, QuarterCarParameters, VehicleModelError, VehicleParameters
-from ..models.full_vehicle import build_full_vehicle
-from ..models.linear import DiscreteVehicle
-from ..models.ports import CORNERS
-from ..models.quarter_car import build_quarter_car
+from ..dynamics import DEFAULT_FILE, LinearVehicle, QuarterCarParameters, VehicleModelError, VehicleParameters
+from ..dynamics.full_vehicle import build_full_vehicle
+from ..dynamics.linear import DiscreteVehicle
+from ..dynamics.ports import CORNERS
+from ..dynamics.quarter_car import build_quarter_car
 from .errors import VehicleBuildError
 from .settings import MAX_SUBSTEP, MODELS, VehicleBuildSettings
 from .step_graph import FIRST_IN, FIRST_OUT, INPUTS, INPUTS_START, OUTPUTS, STATE_IN, STATE_OUT, discrete_step_graph

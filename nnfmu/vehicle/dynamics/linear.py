@@ -36,7 +36,7 @@ from scipy.linalg import expm
 
 from .errors import VehicleModelError
 from .ports import VehiclePort
-from .reference import SplineDamper
+from .builtin_elements import SplineDamper
 
 HOLDS = ("zoh", "foh")
 

@@ -18,7 +18,7 @@ from .components import REFERENCE, STABILISED, resolve_components
 from .linear import LinearVehicle
 from .ports import VehiclePort, actuator_ports, damper_input, damper_outputs
 from .quarter_car_parameters import QuarterCarParameters
-from .reference import LinearSpring, SplineDamper
+from .builtin_elements import LinearSpring, SplineDamper
 
 COMPONENTS = ["damper"]
 
