@@ -22,10 +22,9 @@ import numpy as np
 import onnx
 
 from nnfmu.component import SAMPLE_PERIOD_RANGE
+from nnfmu.control.command import SENSOR_PORTS, Command, controller_component, known_command
 from nnfmu.errors import SettingsError
 from nnfmu.export.graph import GraphBuilder
-
-from .command import SENSOR_PORTS, Command, controller_component, known_command
 
 BODY_VELOCITY, DAMPER_VELOCITY = SENSOR_PORTS
 

@@ -2,12 +2,12 @@
 each explains out of sample, each effect with the model extension that would take it in (`effects`). Imports numpy,
 scipy, `nnfmu.data` and `nnfmu.models.features` only (no torch, fmpy, compiler), so any stage can diagnose."""
 
-from .diagnose import FamilyGains, diagnose
-from .effects import EFFECTS, Effect, Extension, NoExtension, Regressors, select_effects
-from .errors import DiagnosisError
-from .evidence import Diagnosis, EffectEvidence
-from .residual_tests import ResidualTest, residual_tests
-from .settings import DiagnosisSettings
+from nnfmu.diagnosis.diagnose import FamilyGains, diagnose
+from nnfmu.diagnosis.effects import EFFECTS, Effect, Extension, NoExtension, Regressors, select_effects
+from nnfmu.diagnosis.errors import DiagnosisError
+from nnfmu.diagnosis.evidence import Diagnosis, EffectEvidence
+from nnfmu.diagnosis.residual_tests import ResidualTest, residual_tests
+from nnfmu.diagnosis.settings import DiagnosisSettings
 
 __all__ = [
     "EFFECTS",

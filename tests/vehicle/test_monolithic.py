@@ -10,9 +10,6 @@ import pytest
 
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import DamperParams, DamperTruth
-from nnfmu.workflows.roadtest.truth_reference import monolithic_reference, settled_state
-from nnfmu.workflows.roadtest.systems import vehicle_components
-from nnfmu.vehicle.fmu import initial_state
 from nnfmu.vehicle.dynamics import (
     DamperTruthLaw,
     LinearLaw,
@@ -23,12 +20,15 @@ from nnfmu.vehicle.dynamics import (
     VehicleParameters,
     build_full_vehicle,
     build_quarter_car,
+    monolithic,
     rest_state,
     simulate_monolithic,
     truth_laws,
 )
-from nnfmu.vehicle.dynamics import monolithic
 from nnfmu.vehicle.dynamics.ports import CORNERS
+from nnfmu.vehicle.fmu import initial_state
+from nnfmu.workflows.roadtest.systems import vehicle_components
+from nnfmu.workflows.roadtest.truth_reference import monolithic_reference, settled_state
 
 PERIOD = 1e-3  # s, input and output sample period
 

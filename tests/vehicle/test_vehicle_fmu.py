@@ -14,14 +14,6 @@ from nnfmu.component import Component, Port
 from nnfmu.cosim.slave import FmuSlave
 from nnfmu.export.step_runner import run_step_graph
 from nnfmu.fmu.errors import FmuBuildError
-from nnfmu.vehicle.fmu import (
-    VehicleBuildError,
-    VehicleBuildSettings,
-    build_vehicle_fmu,
-    spline_terms,
-    vehicle_model,
-    vehicle_step_graph,
-)
 from nnfmu.vehicle.dynamics import (
     LinearVehicle,
     SimulationSettings,
@@ -32,6 +24,14 @@ from nnfmu.vehicle.dynamics import (
 )
 from nnfmu.vehicle.dynamics.full_vehicle import COMPONENTS as FULL_VEHICLE_COMPONENTS
 from nnfmu.vehicle.dynamics.ports import component_channels
+from nnfmu.vehicle.fmu import (
+    VehicleBuildError,
+    VehicleBuildSettings,
+    build_vehicle_fmu,
+    spline_terms,
+    vehicle_model,
+    vehicle_step_graph,
+)
 
 T = 1e-4  # the default internal sample period [s]
 ALL_REFERENCE = {name: "reference" for name in FULL_VEHICLE_COMPONENTS}

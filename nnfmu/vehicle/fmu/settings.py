@@ -7,10 +7,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from nnfmu.fmu.options import BACKENDS, FMI_VERSIONS, Backend, FmiVersion
-
-from ..dynamics.components import CHOICES
-from ..dynamics.ports import CORNERS
-from .errors import VehicleBuildError
+from nnfmu.vehicle.dynamics.components import CHOICES
+from nnfmu.vehicle.dynamics.ports import CORNERS
+from nnfmu.vehicle.fmu.errors import VehicleBuildError
 
 MODELS = ("quarter-car", "full-vehicle")
 # Internal sample period [s]: the linear part is exact at any period, the spline dampers are stepped explicitly and

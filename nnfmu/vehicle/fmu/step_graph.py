@@ -27,10 +27,9 @@ import onnx
 from onnx import TensorProto, helper
 
 from nnfmu.export.graph import IR_VERSION, OPSET, GraphBuilder
-
-from ..dynamics.linear import DiscreteVehicle, LinearVehicle
-from ..dynamics.builtin_elements import SplineDamper
-from .errors import VehicleBuildError
+from nnfmu.vehicle.dynamics.builtin_elements import SplineDamper
+from nnfmu.vehicle.dynamics.linear import DiscreteVehicle, LinearVehicle
+from nnfmu.vehicle.fmu.errors import VehicleBuildError
 
 STATE_IN, STATE_OUT, INPUTS, OUTPUTS = "x", "x_next", "u", "y"
 INPUTS_START = "u_start"  # the inputs at the previous sample: the start of the interval

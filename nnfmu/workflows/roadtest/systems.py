@@ -26,14 +26,13 @@ from nnfmu.errors import NnfmuError
 from nnfmu.export.merge import merge_step_graphs
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
 from nnfmu.vehicle.dynamics import truth_laws
 from nnfmu.vehicle.dynamics.components import STABILISED
 from nnfmu.vehicle.dynamics.full_vehicle import FRONT_CORNERS
 from nnfmu.vehicle.dynamics.ports import CORNERS
-
-from .truth_reference import settled_state
-from .truth_graphs import bushing_truth_graph, damper_truth_graph
+from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
+from nnfmu.workflows.roadtest.truth_graphs import bushing_truth_graph, damper_truth_graph
+from nnfmu.workflows.roadtest.truth_reference import settled_state
 
 SYSTEMS = ("quarter-car", "full-vehicle")
 DAMPER_MODELS = ("damper-spline", "damper-hysteresis")
