@@ -30,12 +30,12 @@ import tempfile
 import time
 from pathlib import Path
 
+from nnfmu.cosim.slave import FmuSlave
 from nnfmu.workflows.campaign.cases import expand_cases
 from nnfmu.workflows.campaign.engine import dask_client, run_dask, run_serial
 from nnfmu.workflows.campaign.execute import run_cases
 from nnfmu.workflows.campaign.quarter_car import build_quarter_car_system
 from nnfmu.workflows.campaign.spec import read_campaign
-from nnfmu.cosim.slave import FmuSlave
 
 WARM_UP = 4  # cases each engine runs before it is timed
 

@@ -26,11 +26,11 @@ from pathlib import Path
 
 from nnfmu.data import load_measurement, save_measurement
 from nnfmu.data.rigs import DriveDesign, RigOptions, write_rig, write_vehicle_rig
-from nnfmu.workflows.train import TrainRequest, train_from_file
+from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.workflows.roadtest import BUSHING_MODELS, RoadTestSettings, monolithic_reference
 from nnfmu.workflows.roadtest.bushing_drive import replay_bushing_networks
 from nnfmu.workflows.roadtest.systems import bushing_elements, vehicle_components
-from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.workflows.train import TrainRequest, train_from_file
 
 SYSTEM = "full-vehicle"
 CHECKED = "bushing_fl_front"  # the road test's open-loop check replays this bushing's motion

@@ -26,15 +26,15 @@ import time
 from pathlib import Path
 
 import numpy as np
+from road_test import models_in  # bench/ is on the path when a bench script runs
 
 from nnfmu.cosim.master import CosimError, CosimSettings, cosimulate
 from nnfmu.cosim.ssp import open_system, read_ssd
 from nnfmu.data import Measurement
-from nnfmu.workflows.roadtest.systems import bushing_elements, build_component_fmus, build_vehicle, write_system
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.vehicle.dynamics.components import REFERENCE
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
-from nnfmu.vehicle.models.components import REFERENCE
-from road_test import models_in  # bench/ is on the path when a bench script runs
+from nnfmu.workflows.roadtest.systems import build_component_fmus, build_vehicle, bushing_elements, write_system
 
 STEP = 1e-3  # [s] communication step
 DAMPER = "damper-hysteresis"

@@ -29,9 +29,14 @@ from nnfmu.data.derive import derive_rates
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.vehicle.dynamics import (
+    LinearLaw,
+    MonolithicSettings,
+    QuarterCarParameters,
+    build_quarter_car,
+    simulate_monolithic,
+)
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu, initial_state
-from nnfmu.vehicle.models import (LinearLaw, MonolithicSettings, QuarterCarParameters, build_quarter_car,
-                                  simulate_monolithic)
 
 STEPS = (0.5e-3, 1e-3, 2e-3)
 SCHEMES = {

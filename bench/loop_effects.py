@@ -36,11 +36,11 @@ from nnfmu.component import Component
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import DamperDyno, DamperTruth, RigOptions, simulate_rig
 from nnfmu.export import export_onnx, run_step_graph
-from nnfmu.workflows.loop.blocks import part_measurement, plan_blocks
-from nnfmu.workflows.loop.settings import LoopSettings
-from nnfmu.workflows.loop.run import run_loop
 from nnfmu.models import TrainSettings, get_preset, train_model
 from nnfmu.models.features import Difference, FeatureSpec, SmoothSign
+from nnfmu.workflows.loop.blocks import part_measurement, plan_blocks
+from nnfmu.workflows.loop.run import run_loop
+from nnfmu.workflows.loop.settings import LoopSettings
 
 # The rig's sensors at half their default noise: a 5 N rms load cell (0.05 % of its 10 kN range) and a 1 mm/s rms
 # velocity transducer (0.05 % of 2 m/s), the quiet end of a damper dyno's 0.05-0.1 % of range.

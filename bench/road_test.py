@@ -27,10 +27,15 @@ from pathlib import Path
 
 from nnfmu.data.rigs import RigOptions, write_rig
 from nnfmu.workflows.demo import MOVING_MASS_BY_RIG, PRESETS_BY_RIG
-from nnfmu.workflows.train import TrainRequest, train_from_file
 from nnfmu.workflows.roadtest import (
-    BushingDriveSettings, RoadTestSettings, SystemRun, run_road_test, train_vehicle_bushings, train_vehicle_dampers,
+    BushingDriveSettings,
+    RoadTestSettings,
+    SystemRun,
+    run_road_test,
+    train_vehicle_bushings,
+    train_vehicle_dampers,
 )
+from nnfmu.workflows.train import TrainRequest, train_from_file
 
 
 def models_in(folder: Path, durations: dict[str, float] | None = None, **training: int) -> dict[str, Path]:

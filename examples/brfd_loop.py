@@ -25,12 +25,12 @@ import numpy as np
 
 from nnfmu.atomic import write_text_atomic
 from nnfmu.data.importers import BRFD_LICENCE, load_brfd_series
-from nnfmu.export import export_onnx
-from nnfmu.workflows.loop.blocks import part_measurement, plan_blocks
 from nnfmu.diagnosis import EFFECTS, DiagnosisSettings
-from nnfmu.workflows.loop.settings import LoopSettings
-from nnfmu.workflows.loop import LoopReport, run_loop
+from nnfmu.export import export_onnx
 from nnfmu.models import train_model
+from nnfmu.workflows.loop import LoopReport, run_loop
+from nnfmu.workflows.loop.blocks import part_measurement, plan_blocks
+from nnfmu.workflows.loop.settings import LoopSettings
 from nnfmu.workflows.train import TrainRequest, resolve
 
 PRESET = "damper-hysteresis"

@@ -435,8 +435,8 @@ def loop(
     max_effects: int = typer.Option(3, help="Most effects to add."),
 ) -> None:
     """Replay the model's FMU on measured data, trace the residual to missing physical effects, add them, report."""
-    from nnfmu.workflows.loop.settings import LoopSettings
     from nnfmu.workflows.loop.run import run_loop
+    from nnfmu.workflows.loop.settings import LoopSettings
 
     try:
         with _warnings_as_lines():

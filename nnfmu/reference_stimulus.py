@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import onnx
 
-from .component import replace_metadata
+from nnfmu.component import replace_metadata
 
 METADATA_KEY = "nnfmu.reference_stimulus"
 FORMAT_VERSION = 1

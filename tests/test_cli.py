@@ -104,7 +104,7 @@ def test_vehicle_build_takes_a_quarter_car_file_and_refuses_what_does_not_fit(tm
     it, is refused naming the file, and no FMU is left."""
     from fmpy import read_model_description
 
-    from nnfmu.vehicle.models.parameters import DEFAULTS_DIR
+    from nnfmu.vehicle.dynamics.parameters import DEFAULTS_DIR
 
     quarter = DEFAULTS_DIR / "midsize_sedan_quarter_car_fl.toml"
     out = tmp_path / "qc.fmu"

@@ -10,10 +10,10 @@ is stood in for by a generated class D road written as CSV, to show a drive-file
 
 from pathlib import Path
 
-from nnfmu.workflows.campaign.quarter_car import build_quarter_car_system
-from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.data.drive_files import write_drive
-from nnfmu.vehicle.models import VehicleParameters
+from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.vehicle.dynamics import VehicleParameters
+from nnfmu.workflows.campaign.quarter_car import build_quarter_car_system
 
 HERE = Path(__file__).parent
 BUILD = HERE / "build"

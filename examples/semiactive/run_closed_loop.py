@@ -34,7 +34,12 @@ from nnfmu.data.drive_files import write_drive
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.vehicle.fmu import build_vehicle_fmu
 from nnfmu.workflows.controller import (
-    SkyhookSettings, build_fixed_command_fmu, build_graph_fmu, build_skyhook_fmu, known_command, write_closed_loop,
+    SkyhookSettings,
+    build_fixed_command_fmu,
+    build_graph_fmu,
+    build_skyhook_fmu,
+    known_command,
+    write_closed_loop,
 )
 from nnfmu.workflows.cosim import run_cosim
 

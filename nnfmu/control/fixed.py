@@ -12,10 +12,9 @@ import numpy as np
 import onnx
 
 from nnfmu.component import SAMPLE_PERIOD_RANGE
+from nnfmu.control.command import SENSOR_PORTS, Command, controller_component
 from nnfmu.errors import SettingsError
 from nnfmu.export.graph import GraphBuilder
-
-from .command import SENSOR_PORTS, Command, controller_component
 
 DEFAULT_SAMPLE_PERIOD = 1e-3  # [s]: the skyhook controller's
 

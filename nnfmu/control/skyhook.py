@@ -1,6 +1,6 @@
 """A continuous skyhook controller for a semi-active damper, as an nnfmu step graph (sampled, stateless).
 
-Sign convention (the vehicle's ports, nnfmu/vehicle/models/ports.py and quarter_car.py): `body_velocity` [m/s] is
+Sign convention (the vehicle's ports, nnfmu/vehicle/dynamics/ports.py and quarter_car.py): `body_velocity` [m/s] is
 the sprung mass's absolute vertical velocity, up positive; `damper_velocity` [m/s] the stroke rate, rebound
 (extension) positive, r·(v_body − v_wheel) with r the damper motion ratio; the damper force is rebound (tension)
 positive, resisting extension, so a force F pulls the body down by r·F. Skyhook asks for the body force −c_sky·v_b
@@ -22,10 +22,9 @@ import numpy as np
 import onnx
 
 from nnfmu.component import SAMPLE_PERIOD_RANGE
+from nnfmu.control.command import SENSOR_PORTS, Command, controller_component, known_command
 from nnfmu.errors import SettingsError
 from nnfmu.export.graph import GraphBuilder
-
-from .command import SENSOR_PORTS, Command, controller_component, known_command
 
 BODY_VELOCITY, DAMPER_VELOCITY = SENSOR_PORTS
 

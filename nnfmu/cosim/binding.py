@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .drive_inputs import DriveInputError
-from .ssp import SystemStructure
+from nnfmu.cosim.drive_inputs import DriveInputError
+from nnfmu.cosim.ssp import SystemStructure
 
 
 @dataclass(frozen=True)

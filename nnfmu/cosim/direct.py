@@ -13,8 +13,8 @@ from ctypes import CFUNCTYPE, POINTER, byref, c_bool, c_double, c_int, c_size_t,
 
 import numpy as np
 
-from ..errors import NnfmuError
-from .slave import FmuSlave
+from nnfmu.cosim.slave import FmuSlave
+from nnfmu.errors import NnfmuError
 
 WARNING = 1  # fmi2Warning = fmi3Warning: a status above it means the call failed
 STATUS_NAMES = ("OK", "Warning", "Discard", "Error", "Fatal", "Pending")

@@ -12,9 +12,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..data import Measurement
-from ..data.derive import derive_rates
-from ..errors import NnfmuError
+from nnfmu.data import Measurement
+from nnfmu.data.derive import derive_rates
+from nnfmu.errors import NnfmuError
 
 TIME_TOLERANCE = 1e-9  # relative to the drive's sample period: how far outside the drive a time may lie
 

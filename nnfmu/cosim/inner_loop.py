@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from .master import _Element, _System
+    from nnfmu.cosim.master import _Element, _System
 
 SOURCE = Path(__file__).with_name("inner_loop.c")
 CALL_NAMES = ("set inputs", "set input slopes", "step", "get outputs", "refresh: set inputs", "refresh: get outputs")
@@ -74,8 +74,8 @@ def library() -> CDLL | None:
     """The compiled loop (compiled on first use, then from the cache); None when no host C compiler can build it."""
     global _LIBRARY
     if _LIBRARY is None:
-        from ..fmu.errors import CompilerError
-        from ..fmu.native.compiler import compile_shared_library, host_target
+        from nnfmu.fmu.errors import CompilerError
+        from nnfmu.fmu.native.compiler import compile_shared_library, host_target
 
         try:
             target = host_target()

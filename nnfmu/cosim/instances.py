@@ -14,7 +14,7 @@ from __future__ import annotations
 from collections import OrderedDict
 from pathlib import Path
 
-from .slave import FmuSlave
+from nnfmu.cosim.slave import FmuSlave
 
 DEFAULT_CAPACITY = 64  # idle instances kept: 9 FMUs of a full vehicle x several variants
 _Key = tuple[str, int, int, str]

@@ -16,12 +16,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..data import Measurement
-from .drive_inputs import DriveInputs
-from .binding import DriveBinding, bind_free_inputs
-from .master import CosimError, CosimSettings, result_table, step_count, whole_steps
-from .results import CosimResult
-from .ssp import SystemStructure, open_system
+from nnfmu.cosim.binding import DriveBinding, bind_free_inputs
+from nnfmu.cosim.drive_inputs import DriveInputs
+from nnfmu.cosim.master import CosimError, CosimSettings, result_table, step_count, whole_steps
+from nnfmu.cosim.results import CosimResult
+from nnfmu.cosim.ssp import SystemStructure, open_system
+from nnfmu.data import Measurement
 
 NANOSECONDS = 1_000_000_000
 NANOSECOND_TOLERANCE = 1e-3  # [ns]: how far from a whole number of nanoseconds a time may lie (float rounding)

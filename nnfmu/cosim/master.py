@@ -47,17 +47,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..data import Measurement
-from ..component import same_period
-from ..errors import NnfmuError
-from .direct import FmiStatusError, RealBlock, SlopeBlock, Stepper
-from .binding import DriveBinding, bind_free_inputs
-from .drive_inputs import DriveInputs
-from .inner_loop import CompiledLoop, LoopFailure
-from .instances import InstancePool
-from .results import CosimResult
-from .slave import FmuSlave
-from .ssp import SystemStructure
+from nnfmu.component import same_period
+from nnfmu.cosim.binding import DriveBinding, bind_free_inputs
+from nnfmu.cosim.direct import FmiStatusError, RealBlock, SlopeBlock, Stepper
+from nnfmu.cosim.drive_inputs import DriveInputs
+from nnfmu.cosim.inner_loop import CompiledLoop, LoopFailure
+from nnfmu.cosim.instances import InstancePool
+from nnfmu.cosim.results import CosimResult
+from nnfmu.cosim.slave import FmuSlave
+from nnfmu.cosim.ssp import SystemStructure
+from nnfmu.data import Measurement
+from nnfmu.errors import NnfmuError
 
 SCHEMES = ("gauss-seidel", "jacobi")
 ORDERS = ("components-first", "vehicle-first")

@@ -18,7 +18,6 @@ from nnfmu.data.measurement import Measurement
 from nnfmu.errors import NnfmuError
 
 
-
 class ReplayError(NnfmuError, ValueError):
     """The measurement cannot drive the FMU (missing input channel, other sample rate, ...)."""
 

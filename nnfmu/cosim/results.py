@@ -6,7 +6,7 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..data import Measurement, save_measurement
+from nnfmu.data import Measurement, save_measurement
 
 
 @dataclass

@@ -14,9 +14,9 @@ import math
 import numpy as np
 import onnx
 
-from ..component import Component, Port, StatePort
-from ..errors import SettingsError
-from ..export.graph import GraphBuilder
+from nnfmu.component import Component, Port, StatePort
+from nnfmu.errors import SettingsError
+from nnfmu.export.graph import GraphBuilder
 
 STATE, STATE_NEXT = "state", "state_next"
 

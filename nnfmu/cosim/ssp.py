@@ -20,9 +20,9 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..atomic import atomic_path
-from ..errors import NnfmuError
-from ..safe_zip import ArchiveError, check_zip, confined_source, extract_zip
+from nnfmu.atomic import atomic_path
+from nnfmu.errors import NnfmuError
+from nnfmu.safe_zip import ArchiveError, check_zip, confined_source, extract_zip
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"

@@ -1,14 +1,14 @@
 """Rig data: load CSV/MDF/MTS 793 measurements into SI units, check them, derive missing rates, save them."""
 
-from .channel_map import parse_channel_map
-from .checks import check_measurement
-from .derive import derive_rates
-from .drive_files import read_drive, write_drive
-from .errors import DataError
-from .load import load_measurement
-from .measurement import Measurement
-from .save import save_measurement
-from .units import to_si
+from nnfmu.data.channel_map import parse_channel_map
+from nnfmu.data.checks import check_measurement
+from nnfmu.data.derive import derive_rates
+from nnfmu.data.drive_files import read_drive, write_drive
+from nnfmu.data.errors import DataError
+from nnfmu.data.load import load_measurement
+from nnfmu.data.measurement import Measurement
+from nnfmu.data.save import save_measurement
+from nnfmu.data.units import to_si
 
 __all__ = [
     "read_drive",

@@ -11,9 +11,9 @@ from __future__ import annotations
 import re
 from collections.abc import Iterable, Mapping, Sequence
 
-from ..errors import SettingsError
-from .errors import DataError
-from .raw import RawTable
+from nnfmu.data.errors import DataError
+from nnfmu.data.raw import RawTable
+from nnfmu.errors import SettingsError
 
 _SAME = re.compile(r"[\s_]+")
 _TARGET = re.compile(r"^[a-z][a-z0-9_]*$")

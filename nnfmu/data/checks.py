@@ -6,10 +6,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .errors import DataError
-from .measurement import Measurement
-from .timebase import Resolution, check_uniform
-from .units import SI_UNITS, channel_quantity, kept_unit
+from nnfmu.data.errors import DataError
+from nnfmu.data.measurement import Measurement
+from nnfmu.data.timebase import Resolution, check_uniform
+from nnfmu.data.units import SI_UNITS, channel_quantity, kept_unit
 
 MIN_TEMPERATURE = 150.0  # K; rig temperatures lie far above (-123 degC), a value below is degC or degF labelled K
 

@@ -16,11 +16,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .channel_map import first_duplicate
-from .errors import DataError
-from .measurement import Measurement
-from .raw import RawTable
-from .timebase import printed_resolution
+from nnfmu.data.channel_map import first_duplicate
+from nnfmu.data.errors import DataError
+from nnfmu.data.measurement import Measurement
+from nnfmu.data.raw import RawTable
+from nnfmu.data.timebase import printed_resolution
 
 MAX_HEADER_CHARS = 65536  # a header of 1000 channels with 64-character names fits
 

@@ -18,9 +18,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import savgol_filter
 
-from .errors import DataError
-from .measurement import Measurement
-from .units import base_name, si_unit_of
+from nnfmu.data.errors import DataError
+from nnfmu.data.measurement import Measurement
+from nnfmu.data.units import base_name, si_unit_of
 
 WINDOW_S = 0.005
 POLYORDER = 4

@@ -20,13 +20,13 @@ from typing import Literal
 import numpy as np
 from rpc3 import rpc3 as rpc3_file
 
-from ..atomic import atomic_path
-from .checks import check_measurement
-from .errors import DataError
-from .load import load_measurement
-from .measurement import Measurement
-from .save import save_measurement
-from .units import to_si
+from nnfmu.atomic import atomic_path
+from nnfmu.data.checks import check_measurement
+from nnfmu.data.errors import DataError
+from nnfmu.data.load import load_measurement
+from nnfmu.data.measurement import Measurement
+from nnfmu.data.save import save_measurement
+from nnfmu.data.units import to_si
 
 MEASUREMENT_SUFFIXES = (".csv", ".mf4", ".mdf")
 RPC_SUFFIXES = (".rsp", ".drv", ".tim", ".rpc")

@@ -13,9 +13,9 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from .derive import derivative
-from .errors import DataError
-from .measurement import Measurement
+from nnfmu.data.derive import derivative
+from nnfmu.data.errors import DataError
+from nnfmu.data.measurement import Measurement
 
 
 def compensate_inertia(m: Measurement, mass: float, force: str = "force") -> Measurement:

@@ -7,17 +7,17 @@ import os
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
-from .channel_map import rename_channels
-from .checks import check_measurement
-from .csv_io import read_csv
-from .derive import derive_rates
-from .errors import DataError
-from .mdf_io import read_mdf
-from .measurement import Measurement
-from .mts_io import is_mts_export, read_mts
-from .raw import RawTable
-from .timebase import Resolution, uniform_time
-from .units import SI_UNITS, to_si
+from nnfmu.data.channel_map import rename_channels
+from nnfmu.data.checks import check_measurement
+from nnfmu.data.csv_io import read_csv
+from nnfmu.data.derive import derive_rates
+from nnfmu.data.errors import DataError
+from nnfmu.data.mdf_io import read_mdf
+from nnfmu.data.measurement import Measurement
+from nnfmu.data.mts_io import is_mts_export, read_mts
+from nnfmu.data.raw import RawTable
+from nnfmu.data.timebase import Resolution, uniform_time
+from nnfmu.data.units import SI_UNITS, to_si
 
 READERS: dict[str, Callable[[Path], RawTable]] = {".csv": read_csv, ".mf4": read_mdf, ".mdf": read_mdf}
 MTS_SUFFIXES = (".dat", ".txt")  # read only as MTS 793 exports; a `.csv` starting `MTS793|` is one too

@@ -29,11 +29,11 @@ from pathlib import Path
 import numpy as np
 from asammdf import MDF, Signal
 
-from .channel_map import first_duplicate
-from .errors import DataError
-from .measurement import Measurement
-from .raw import RawTable
-from .timebase import Resolution, float32_resolution
+from nnfmu.data.channel_map import first_duplicate
+from nnfmu.data.errors import DataError
+from nnfmu.data.measurement import Measurement
+from nnfmu.data.raw import RawTable
+from nnfmu.data.timebase import Resolution, float32_resolution
 
 TIME_MATCH = 1e-9  # largest time-stamp difference between groups, relative to the period, that counts as the same
 MDF_VERSION = "4.10"

@@ -20,9 +20,9 @@ import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-from .channel_map import first_duplicate, resolve_channel_map
-from .errors import DataError
-from .units import QUANTITIES, unit_quantities
+from nnfmu.data.channel_map import first_duplicate, resolve_channel_map
+from nnfmu.data.errors import DataError
+from nnfmu.data.units import QUANTITIES, unit_quantities
 
 SIGNALS: dict[str, str] = {
     "displacement": "displacement",

@@ -24,11 +24,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .csv_io import MAX_HEADER_CHARS
-from .errors import DataError
-from .mts_channels import plan_channels
-from .raw import RawTable
-from .timebase import Resolution, printed_resolution, stamp_tolerance
+from nnfmu.data.csv_io import MAX_HEADER_CHARS
+from nnfmu.data.errors import DataError
+from nnfmu.data.mts_channels import plan_channels
+from nnfmu.data.raw import RawTable
+from nnfmu.data.timebase import Resolution, printed_resolution, stamp_tolerance
 
 SIGNATURE = "MTS793|"
 MTS_UNITS: dict[str, str] = {"Sec": "s", "sec": "s", "Secs": "s", "secs": "s"}

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .timebase import Resolution
+from nnfmu.data.timebase import Resolution
 
 
 @dataclass

@@ -6,12 +6,12 @@ import os
 from collections.abc import Callable
 from pathlib import Path
 
-from ..atomic import atomic_path
-from .checks import check_measurement
-from .csv_io import write_csv
-from .errors import DataError
-from .mdf_io import write_mdf
-from .measurement import Measurement
+from nnfmu.atomic import atomic_path
+from nnfmu.data.checks import check_measurement
+from nnfmu.data.csv_io import write_csv
+from nnfmu.data.errors import DataError
+from nnfmu.data.mdf_io import write_mdf
+from nnfmu.data.measurement import Measurement
 
 WRITERS: dict[str, Callable[[Measurement, Path], None]] = {".csv": write_csv, ".mf4": write_mdf}
 

@@ -26,8 +26,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .errors import DataError
-from .measurement import Measurement
+from nnfmu.data.errors import DataError
+from nnfmu.data.measurement import Measurement
 
 TIME_JITTER = 1e-3  # sampling jitter accepted at every stamp, relative to the period
 FLOAT_NOISE = 64.0  # float64 rounding accepted at every stamp, in units of epsilon times the largest |stamp|

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import DataError
+from nnfmu.data.errors import DataError
 
 G_STANDARD = 9.80665  # m/s^2 per g, by definition
 INCH = 0.0254  # m, by definition

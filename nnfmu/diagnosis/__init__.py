@@ -3,13 +3,23 @@ each explains out of sample, beside every measured channel the model does not us
 with the model extension that would take it in (`effects`). Imports numpy,
 scipy, `nnfmu.data` and `nnfmu.models.features` only (no torch, fmpy, compiler), so any stage can diagnose."""
 
-from .diagnose import FamilyGains, diagnose
-from .effects import (EFFECTS, ChannelInput, Effect, Extension, NoExtension, Regressors, channel_effects, effects_for,
-                      find_effect, select_effects)
-from .errors import DiagnosisError
-from .evidence import Diagnosis, EffectEvidence
-from .residual_tests import ResidualTest, residual_tests
-from .settings import DiagnosisSettings
+from nnfmu.diagnosis.diagnose import FamilyGains, diagnose
+from nnfmu.diagnosis.effects import (
+    EFFECTS,
+    ChannelInput,
+    Effect,
+    Extension,
+    NoExtension,
+    Regressors,
+    channel_effects,
+    effects_for,
+    find_effect,
+    select_effects,
+)
+from nnfmu.diagnosis.errors import DiagnosisError
+from nnfmu.diagnosis.evidence import Diagnosis, EffectEvidence
+from nnfmu.diagnosis.residual_tests import ResidualTest, residual_tests
+from nnfmu.diagnosis.settings import DiagnosisSettings
 
 __all__ = [
     "EFFECTS",

@@ -7,14 +7,22 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..data import DataError, Measurement, check_measurement
-from .effects import effects_for, find_effect
-from .errors import DiagnosisError
-from .evidence import Diagnosis, EffectEvidence, effect_evidence
-from .ranking import GainTest, cross_fit_errors, extend_base, fold_mask, gain_test, rank_effects, recalibration
-from .residual_tests import ResidualTest, residual_tests
-from .settings import DiagnosisSettings
-from .signals import EffectSignals, build_signals
+from nnfmu.data import DataError, Measurement, check_measurement
+from nnfmu.diagnosis.effects import effects_for, find_effect
+from nnfmu.diagnosis.errors import DiagnosisError
+from nnfmu.diagnosis.evidence import Diagnosis, EffectEvidence, effect_evidence
+from nnfmu.diagnosis.ranking import (
+    GainTest,
+    cross_fit_errors,
+    extend_base,
+    fold_mask,
+    gain_test,
+    rank_effects,
+    recalibration,
+)
+from nnfmu.diagnosis.residual_tests import ResidualTest, residual_tests
+from nnfmu.diagnosis.settings import DiagnosisSettings
+from nnfmu.diagnosis.signals import EffectSignals, build_signals
 
 
 def _check_input(

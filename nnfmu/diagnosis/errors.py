@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..errors import NnfmuError
+from nnfmu.errors import NnfmuError
 
 
 class DiagnosisError(NnfmuError, ValueError):

@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .ranking import GainTest, RankedFamily, family_threshold
-from .residual_tests import ResidualTest
+from nnfmu.diagnosis.ranking import GainTest, RankedFamily, family_threshold
+from nnfmu.diagnosis.residual_tests import ResidualTest
 
 
 def _finite(x: float | None) -> float | None:

@@ -30,10 +30,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from .correlation import newey_west_variance
-from .effects import Effect, Regressors
-from .settings import DiagnosisSettings
-from .signals import EffectSignals
+from nnfmu.diagnosis.correlation import newey_west_variance
+from nnfmu.diagnosis.effects import Effect, Regressors
+from nnfmu.diagnosis.settings import DiagnosisSettings
+from nnfmu.diagnosis.signals import EffectSignals
 
 RIDGE = 1e-4  # ridge weight relative to n on unit-rms columns: shrinks only directions with rms below 1 % of a column
 FOLD_SEED = 20051  # fixes which blocks fit and which evaluate

@@ -18,8 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from .correlation import autocorrelation, bartlett_variance, cross_correlation, ljung_box
-from .settings import DiagnosisSettings
+from nnfmu.diagnosis.correlation import autocorrelation, bartlett_variance, cross_correlation, ljung_box
+from nnfmu.diagnosis.settings import DiagnosisSettings
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .errors import DiagnosisError
+from nnfmu.diagnosis.errors import DiagnosisError
 
 # DiagnosisSettings fields that tune how the residual is tested; every other field is an effect parameter, read by
 # the effect(s) that name it in `Effect.parameters` (tests/diagnosis/test_registry.py checks each has an owner).

@@ -7,9 +7,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..data import DataError, Measurement, derive_rates
-from ..data.units import base_name
-from .errors import DiagnosisError
+from nnfmu.data import DataError, Measurement, derive_rates
+from nnfmu.data.units import base_name
+from nnfmu.diagnosis.errors import DiagnosisError
 
 
 @dataclass(frozen=True)

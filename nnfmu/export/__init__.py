@@ -10,7 +10,7 @@ from __future__ import annotations
 from typing import Any
 
 from nnfmu.export.errors import ExportError
-from nnfmu.export.run import run_step_graph
+from nnfmu.export.step_runner import run_step_graph
 
 __all__ = ["ExportError", "ExportResult", "export_onnx", "read_step_graph", "run_step_graph"]
 

@@ -13,7 +13,7 @@ import torch
 from nnfmu.export.errors import ExportError
 from nnfmu.export.graph import GraphBuilder
 from nnfmu.export.initializers import HIDDEN_LAYER, OUTPUT_LAYER, layer_initializers
-from nnfmu.models.networks import GRUNet, MLP
+from nnfmu.models.networks import MLP, GRUNet
 
 
 def _weights(layer: torch.nn.Linear) -> tuple[np.ndarray, np.ndarray]:

@@ -13,13 +13,19 @@ import torch
 from onnx import numpy_helper
 
 from nnfmu.component import Component
+from nnfmu.export.errors import ExportError
+from nnfmu.export.initializers import (
+    FEATURE_GAIN,
+    FEATURE_MIN,
+    MLP_INITIALIZERS,
+    SCALER_INITIALIZERS,
+    TARGET_GAIN,
+    TARGET_MIN,
+)
 from nnfmu.models.features import FeatureSpec
 from nnfmu.models.networks import MLP
 from nnfmu.models.scaling import MinMaxScaler
 from nnfmu.models.trained import TrainedModel
-
-from .errors import ExportError
-from .initializers import FEATURE_GAIN, FEATURE_MIN, MLP_INITIALIZERS, SCALER_INITIALIZERS, TARGET_GAIN, TARGET_MIN
 
 
 def _scaler(low: np.ndarray, gain: np.ndarray) -> MinMaxScaler:

@@ -14,7 +14,7 @@ from nnfmu.export.graph import GraphBuilder
 from nnfmu.export.initializers import FEATURE_GAIN, FEATURE_MIN, TARGET_GAIN, TARGET_MIN
 from nnfmu.export.networks import gru_nodes, mlp_nodes
 from nnfmu.models.features import StateSlot
-from nnfmu.models.networks import GRUNet, MLP
+from nnfmu.models.networks import MLP, GRUNet
 from nnfmu.models.trained import TrainedModel
 
 STATE = "state"

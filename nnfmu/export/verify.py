@@ -6,7 +6,7 @@ import numpy as np
 import onnx
 
 from nnfmu.export.errors import ExportError
-from nnfmu.export.run import run_step_graph
+from nnfmu.export.step_runner import run_step_graph
 from nnfmu.models.trained import TrainedModel
 
 # float64 graph and float64 torch: differences are rounding only (~1e-15); 1e-6 is the acceptance bound.

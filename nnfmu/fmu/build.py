@@ -22,7 +22,7 @@ def backend_of(options: BuildOptions) -> Backend:
         from nnfmu.fmu.pythonfmu import write_pythonfmu
 
         return write_pythonfmu
-    from nnfmu.fmu.native.build import write_native
+    from nnfmu.fmu.native.backend import write_native
 
     return write_native
 

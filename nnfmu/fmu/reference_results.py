@@ -25,7 +25,7 @@ import numpy as np
 import onnx
 
 from nnfmu.component import Component
-from nnfmu.export.run import run_step_graph
+from nnfmu.export.step_runner import run_step_graph
 from nnfmu.fmu.errors import FmuBuildError
 from nnfmu.fmu.variables import FmuVariables
 from nnfmu.reference_stimulus import ReferenceStimulus

@@ -18,14 +18,13 @@ import torch
 
 from nnfmu.data import Measurement
 from nnfmu.errors import SettingsError
-
-from .features import FeatureSpec
-from .lm import LMSettings, fit_lm
-from .metrics import max_abs_weight, split_metrics
-from .networks import MLP
-from .scaling import MinMaxScaler
-from .stopping import FitHistory
-from .trained import TrainedModel, trained_model
+from nnfmu.models.features import FeatureSpec
+from nnfmu.models.lm import LMSettings, fit_lm
+from nnfmu.models.metrics import max_abs_weight, split_metrics
+from nnfmu.models.networks import MLP
+from nnfmu.models.scaling import MinMaxScaler
+from nnfmu.models.stopping import FitHistory
+from nnfmu.models.trained import TrainedModel, trained_model
 
 # Training settings of the first fit that no longer describe the retrained network.
 FIRST_FIT_KEYS = ("best_epoch", "epochs_run", "stop_reason", "validation_mse_by_hidden", "samples", "hidden_candidates")

@@ -17,7 +17,7 @@ from nnfmu.errors import SettingsError
 from nnfmu.models.features import FeatureSpec
 from nnfmu.models.lm import LMSettings, fit_lm
 from nnfmu.models.metrics import SplitMetrics, max_abs_weight, split_metrics, weight_warning
-from nnfmu.models.networks import GRUNet, MLP
+from nnfmu.models.networks import MLP, GRUNet
 from nnfmu.models.scaling import MinMaxScaler
 from nnfmu.models.splits import SplitFractions, Splits, contiguous_splits
 from nnfmu.models.stopping import FitHistory, TrainingLog

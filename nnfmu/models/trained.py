@@ -12,7 +12,7 @@ import torch
 
 from nnfmu.data import Measurement
 from nnfmu.models.features import FeatureSpec
-from nnfmu.models.networks import GRUNet, MLP
+from nnfmu.models.networks import MLP, GRUNet
 from nnfmu.models.scaling import MinMaxScaler
 
 

@@ -1,11 +1,18 @@
 """The components' truth physics, shared by the rig simulators (`data/rigs`) and the vehicle's monolithic reference."""
 
-from .bushing import IWAN_ELEMENTS, IWAN_SPAN, BushingChannelParams, BushingChannelTruth, BushingParams
-from .cdc_damper import CDC_CURRENT_RANGE, CDCDamperParams, CDCDamperTruth
-from .damper import DamperParams, DamperTruth, ValveSide
-from .effects import BUSHING_EFFECTS, CDC_DAMPER_EFFECTS, DAMPER_EFFECTS, DEFAULT_EFFECTS, EFFECTS, MR_DAMPER_EFFECTS
-from .mr_damper import MR_VOLTAGE_RANGE, MRDamperParams, MRDamperTruth
-from .parameters import describe, param
+from nnfmu.physics.bushing import IWAN_ELEMENTS, IWAN_SPAN, BushingChannelParams, BushingChannelTruth, BushingParams
+from nnfmu.physics.cdc_damper import CDC_CURRENT_RANGE, CDCDamperParams, CDCDamperTruth
+from nnfmu.physics.damper import DamperParams, DamperTruth, ValveSide
+from nnfmu.physics.effects import (
+    BUSHING_EFFECTS,
+    CDC_DAMPER_EFFECTS,
+    DAMPER_EFFECTS,
+    DEFAULT_EFFECTS,
+    EFFECTS,
+    MR_DAMPER_EFFECTS,
+)
+from nnfmu.physics.mr_damper import MR_VOLTAGE_RANGE, MRDamperParams, MRDamperTruth
+from nnfmu.physics.parameters import describe, param
 
 __all__ = [
     "BUSHING_EFFECTS",

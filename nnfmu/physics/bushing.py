@@ -19,8 +19,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.signal import lfilter
 
-from ..errors import SettingsError
-from .effects import BUSHING_EFFECTS, DEFAULT_EFFECTS
+from nnfmu.errors import SettingsError
+from nnfmu.physics.effects import BUSHING_EFFECTS, DEFAULT_EFFECTS
 
 IWAN_ELEMENTS = 12  # Jenkins elements approximating Berg's friction curve
 IWAN_SPAN = (0.05, 30.0)  # slip displacements of the first and last element, in units of x2; the last slips at F_max

@@ -20,10 +20,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.signal import lfilter
 
-from ..errors import SettingsError
-from .damper import ValveSide
-from .effects import CDC_DAMPER_EFFECTS, DEFAULT_EFFECTS
-from .parameters import param
+from nnfmu.errors import SettingsError
+from nnfmu.physics.damper import ValveSide
+from nnfmu.physics.effects import CDC_DAMPER_EFFECTS, DEFAULT_EFFECTS
+from nnfmu.physics.parameters import param
 
 # Currents [A] the command may span: the valve's working range (below it the valve is at its soft end).
 CDC_CURRENT_RANGE = (0.3, 1.8)

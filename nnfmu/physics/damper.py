@@ -14,9 +14,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import SettingsError
-from .effects import DAMPER_EFFECTS, DEFAULT_EFFECTS
-from .parameters import param
+from nnfmu.errors import SettingsError
+from nnfmu.physics.effects import DAMPER_EFFECTS, DEFAULT_EFFECTS
+from nnfmu.physics.parameters import param
 
 
 @dataclass(frozen=True)

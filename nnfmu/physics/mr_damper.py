@@ -32,9 +32,9 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..errors import SettingsError
-from .effects import DEFAULT_EFFECTS, MR_DAMPER_EFFECTS
-from .parameters import param
+from nnfmu.errors import SettingsError
+from nnfmu.physics.effects import DEFAULT_EFFECTS, MR_DAMPER_EFFECTS
+from nnfmu.physics.parameters import param
 
 # Voltages [V] the command may span: a lab amplifier's 0-5 V drive of the coil.
 MR_VOLTAGE_RANGE = (0.0, 5.0)

@@ -14,7 +14,6 @@ from nnfmu.validate.spectra import Spectrum, welch_psd
 from nnfmu.validate.summary import ChannelMetrics, channel_metrics
 
 
-
 class ValidationError(DataError):
     """A result and reference cannot be compared: a missing channel, a unit mismatch, no common time span."""
 

@@ -9,8 +9,7 @@ from nnfmu.cosim.results import CosimResult, save_result
 from nnfmu.cosim.ssp import open_system
 from nnfmu.data.drive_files import read_drive
 from nnfmu.errors import SettingsError
-
-from .vehicle_binding import vehicle_binding
+from nnfmu.workflows.vehicle_binding import vehicle_binding
 
 __all__ = ["CosimSettings", "run_cosim"]
 

@@ -25,23 +25,29 @@ from pathlib import Path
 from nnfmu.atomic import write_text_atomic
 from nnfmu.cosim.replay import replay_fmu
 from nnfmu.data import load_measurement
-from nnfmu.data.measurement import Measurement
 from nnfmu.data.inertia import compensate_inertia
+from nnfmu.data.measurement import Measurement
 from nnfmu.data.rigs import DEFAULT_EFFECTS, DamperParams, RigOptions, write_rig
 from nnfmu.export import export_onnx
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
+from nnfmu.models import TrainSettings, get_preset, train_model
+from nnfmu.out_paths import check_output_dir, mark_output_dir
+from nnfmu.validate import ValidationSettings, compare, write_report
+from nnfmu.workflows.loop import LoopReport, run_loop
 from nnfmu.workflows.loop.blocks import training_part
 from nnfmu.workflows.loop.settings import LoopSettings
-from nnfmu.workflows.loop import LoopReport, run_loop
-from nnfmu.models import TrainSettings, get_preset, train_model
-from nnfmu.workflows.train import TrainRequest, train_from_file
-from nnfmu.out_paths import check_output_dir, mark_output_dir
 from nnfmu.workflows.roadtest import (
-    BushingDriveSettings, RoadTestSettings, SystemRun, VehicleBushingModels, VehicleDamperModels, run_road_test,
-    train_vehicle_bushings, train_vehicle_dampers,
+    BushingDriveSettings,
+    RoadTestSettings,
+    SystemRun,
+    VehicleBushingModels,
+    VehicleDamperModels,
+    run_road_test,
+    train_vehicle_bushings,
+    train_vehicle_dampers,
 )
-from nnfmu.validate import ValidationSettings, compare, write_report
+from nnfmu.workflows.train import TrainRequest, train_from_file
 
 # The loop stage's damper has these; its starting model has neither displacement nor temperature input.
 UNDECLARED_EFFECTS = ("gas_force", "temperature")

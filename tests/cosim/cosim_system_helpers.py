@@ -23,7 +23,7 @@ from nnfmu.cosim.ssp import connect_by_name, write_ssd
 from nnfmu.data import Measurement
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.vehicle.models import QuarterCarParameters, build_quarter_car
+from nnfmu.vehicle.dynamics import QuarterCarParameters, build_quarter_car
 
 OPSET = 17
 IR_VERSION = 8

@@ -22,8 +22,8 @@ from nnfmu.cosim.master import CosimSettings, cosimulate
 from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
+from nnfmu.vehicle.dynamics import QuarterCarParameters, SimulationSettings, build_quarter_car, simulate
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu, initial_state, vehicle_model
-from nnfmu.vehicle.models import QuarterCarParameters, SimulationSettings, build_quarter_car, simulate
 
 DURATION = 1.0  # [s]
 STEPS = (2e-3, 1e-3, 0.5e-3)

@@ -51,7 +51,7 @@ def test_libcosim_runner_refuses_other_schemes(systems: dict[float, Path]) -> No
 
 def test_libcosim_equals_fmpy_with_the_vehicle_packages_quarter_car(tmp_path: Path) -> None:
     """The vehicle package's quarter-car FMU samples every 0.1 ms, so each 2 ms step evaluates 20 samples."""
-    vehicle_build = pytest.importorskip("nnfmu.vehicle.fmu.build")
+    vehicle_build = pytest.importorskip("nnfmu.vehicle.fmu.vehicle_fmu")
     vehicle_fmu = vehicle_build.build_vehicle_fmu("quarter-car", tmp_path / "quarter_car.fmu")
     damper_fmu = build(damper_graph(), tmp_path, "damper")
     system = connect_by_name("quarter car", ("vehicle", vehicle_fmu), {"damper": damper_fmu}, tmp_path,

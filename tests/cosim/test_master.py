@@ -13,8 +13,16 @@ from pathlib import Path
 import numpy as np
 import onnx
 import pytest
-from cosim_system_helpers import (BASIC, NO_FILTER, damper_graph, drive, peak_error, plant_step_graph, quarter_cars,
-                                  reference)
+from cosim_system_helpers import (
+    BASIC,
+    NO_FILTER,
+    damper_graph,
+    drive,
+    peak_error,
+    plant_step_graph,
+    quarter_cars,
+    reference,
+)
 
 from nnfmu.cosim.drive_inputs import DriveInputError
 from nnfmu.cosim.master import CosimError, CosimSettings, cosimulate, step_count

@@ -12,9 +12,9 @@ from nnfmu.cosim.drive_inputs import DriveInputError
 from nnfmu.cosim.master import CosimError, CosimSettings, cosimulate
 from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd
 from nnfmu.data import Measurement
+from nnfmu.vehicle.dynamics import SimulationSettings, simulate
+from nnfmu.vehicle.dynamics.parameters import DEFAULTS_DIR
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu, vehicle_model
-from nnfmu.vehicle.models import SimulationSettings, simulate
-from nnfmu.vehicle.models.parameters import DEFAULTS_DIR
 
 H = 1e-3  # [s] communication step and the vehicle's sample period
 EXAMPLE = DEFAULTS_DIR / "midsize_sedan_quarter_car_fl.toml"

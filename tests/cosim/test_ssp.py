@@ -13,7 +13,15 @@ import pytest
 
 from nnfmu import safe_zip
 from nnfmu.cosim.ssp import (
-    SSD, Connection, Connector, Element, SspError, SystemStructure, check_against_fmus, open_system, read_ssd,
+    SSD,
+    Connection,
+    Connector,
+    Element,
+    SspError,
+    SystemStructure,
+    check_against_fmus,
+    open_system,
+    read_ssd,
     write_ssd,
 )
 

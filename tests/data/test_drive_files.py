@@ -5,8 +5,8 @@ import pytest
 from rpc3 import rpc3 as rpc3_file
 
 from nnfmu.data import DataError, Measurement
-from nnfmu.vehicle.drive import CHANNELS, DriveSettings, Pothole, generate_drive
 from nnfmu.data.drive_files import read_drive, write_drive
+from nnfmu.vehicle.drive import CHANNELS, DriveSettings, Pothole, generate_drive
 
 INT16_FULL_SCALE = 32752  # counts of max|x| in rpc3-file's SHORT_INTEGER scaling
 FLOAT32_EPS = 2.0**-24  # relative rounding of a float32

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from nnfmu.data.rigs.excitation import SineLevel, sine_level
 from nnfmu.data.rigs import DamperParams, DamperTruth, RigOptions, ValveSide, simulate_rig, write_rig
+from nnfmu.data.rigs.excitation import SineLevel, sine_level
 
 DT = 0.25e-3
 

@@ -14,7 +14,13 @@ from typer.testing import CliRunner
 from nnfmu.cli import app
 from nnfmu.data import DataError, Measurement, load_measurement, save_measurement
 from nnfmu.data.rigs import (
-    BUSHING_CHANNELS, BushingRig, DriveDesign, RigOptions, SpectrumShape, design_vehicle_drive, simulate_vehicle_rig,
+    BUSHING_CHANNELS,
+    BushingRig,
+    DriveDesign,
+    RigOptions,
+    SpectrumShape,
+    design_vehicle_drive,
+    simulate_vehicle_rig,
 )
 from nnfmu.data.rigs.excitation import random_motion
 from nnfmu.data.rigs.sensors import Sensor

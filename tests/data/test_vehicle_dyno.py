@@ -15,7 +15,13 @@ from typer.testing import CliRunner
 from nnfmu.cli import app
 from nnfmu.data import DataError, Measurement, load_measurement, save_measurement
 from nnfmu.data.rigs import (
-    RIG_BANDS, DamperDyno, DriveDesign, RigOptions, SpectrumShape, design_damper_drive, simulate_rig,
+    RIG_BANDS,
+    DamperDyno,
+    DriveDesign,
+    RigOptions,
+    SpectrumShape,
+    design_damper_drive,
+    simulate_rig,
     simulate_vehicle_damper_dyno,
 )
 from nnfmu.data.rigs.excitation import random_motion

@@ -12,8 +12,16 @@ import pytest
 
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import RigOptions, simulate_rig
-from nnfmu.diagnosis import (EFFECTS, ChannelInput, DiagnosisError, DiagnosisSettings, channel_effects, diagnose,
-                             effects_for, find_effect)
+from nnfmu.diagnosis import (
+    EFFECTS,
+    ChannelInput,
+    DiagnosisError,
+    DiagnosisSettings,
+    channel_effects,
+    diagnose,
+    effects_for,
+    find_effect,
+)
 from nnfmu.models import Architecture, TrainSettings, get_preset, train_model
 
 SPEC = get_preset("damper-hysteresis").spec  # velocity, its differences, the friction sign: no command

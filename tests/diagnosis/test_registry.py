@@ -16,8 +16,17 @@ import pytest
 
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import RigOptions, simulate_rig
-from nnfmu.diagnosis import (EFFECTS, ChannelInput, DiagnosisError, DiagnosisSettings, Effect, Extension, NoExtension,
-                             find_effect, select_effects)
+from nnfmu.diagnosis import (
+    EFFECTS,
+    ChannelInput,
+    DiagnosisError,
+    DiagnosisSettings,
+    Effect,
+    Extension,
+    NoExtension,
+    find_effect,
+    select_effects,
+)
 from nnfmu.diagnosis.effects.friction import added_scale
 from nnfmu.diagnosis.effects.hysteresis import added_taus
 from nnfmu.diagnosis.settings import TEST_FIELDS

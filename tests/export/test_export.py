@@ -12,7 +12,7 @@ from nnfmu.component import Component
 from nnfmu.export import ExportError, export_onnx, run_step_graph
 from nnfmu.export.graph import ALLOWED_OPS, OPSET
 from nnfmu.models.features import FeatureSpec, Lowpass, SmoothSign, Tap
-from nnfmu.models.networks import GRUNet, MLP
+from nnfmu.models.networks import MLP, GRUNet
 from nnfmu.models.scaling import MinMaxScaler
 from nnfmu.models.trained import TrainedModel
 

@@ -16,10 +16,9 @@ from onnx import TensorProto, helper, numpy_helper
 
 from nnfmu.component import Component, Port, StatePort
 from nnfmu.cosim.slave import FmuSlave
-from nnfmu.fmu.model_description import (FmuIdentity, ModelDescriptionView, render_model_description,
-                                         tensor_dependencies)
-from nnfmu.fmu.options import BuildOptions
 from nnfmu.fmu.build import build_fmu
+from nnfmu.fmu.model_description import FmuIdentity, ModelDescriptionView, render_model_description, tensor_dependencies
+from nnfmu.fmu.options import BuildOptions
 from nnfmu.fmu.variables import fmu_variables
 
 T = 1e-3  # sample period of the test graphs [s]

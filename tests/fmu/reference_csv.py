@@ -16,7 +16,6 @@ from pathlib import Path
 
 import numpy as np
 import onnx
-
 from native_fmu_helpers import SAMPLE_PERIOD, Reference, delay_step_graph, generic_graph
 
 FOLDER = Path(__file__).parent / "reference"

@@ -13,7 +13,7 @@ from onnx import TensorProto, helper
 from nnfmu.component import MAX_PORTS
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.errors import FmuBuildError
-from nnfmu.fmu.native import build as native_build
+from nnfmu.fmu.native import backend as native_build
 from nnfmu.fmu.options import BuildOptions
 
 OPSET = 17

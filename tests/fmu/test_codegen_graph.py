@@ -14,6 +14,7 @@ import onnx
 import pytest
 from onnx import TensorProto, helper
 from onnx.reference import ReferenceEvaluator
+
 from nnfmu.fmu.native.codegen import UnsupportedGraphError, generate_c
 
 # The model builders and the compile-and-compare helpers live in the per-operator test module; load it by path so

@@ -13,16 +13,16 @@ from pathlib import Path
 import numpy as np
 import onnx
 import pytest
+from contract_helpers import DISCARD, ERROR, OK, WARNING, Master
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
-from onnx import TensorProto, helper
-
-from contract_helpers import DISCARD, ERROR, OK, WARNING, Master
 from native_fmu_helpers import SAMPLE_PERIOD, Reference, delay_step_graph, generic_graph, hostile_graph
+from onnx import TensorProto, helper
+from reference_csv import FOLDER, RECIPES, expected_outputs, port_names, read
+
 from nnfmu.fmu.build import build_fmu, build_fmu_from_model
 from nnfmu.fmu.errors import FmuBuildError
 from nnfmu.fmu.options import BuildOptions
-from reference_csv import FOLDER, RECIPES, expected_outputs, port_names, read
 
 T = SAMPLE_PERIOD
 RTOL = ATOL = 1e-12  # float64 graphs: the FMU and onnxruntime differ by rounding only

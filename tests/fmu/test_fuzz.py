@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 from fmpy import read_model_description
 
-from nnfmu.fmu.native.build import fmi_headers_dir
+from nnfmu.fmu.native.backend import fmi_headers_dir
 
 SANITIZE = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
 SECONDS_PER_RUN = 8.0

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from native_fmu_helpers import SAMPLE_PERIOD, Reference, delay_step_graph
 
 libcosim_execution = pytest.importorskip("libcosimpy.CosimExecution")

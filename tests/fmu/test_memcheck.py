@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 from fmpy import read_model_description
 
-from nnfmu.fmu.native.build import fmi_headers_dir
+from nnfmu.fmu.native.backend import fmi_headers_dir
 
 BINARY_FOLDER = {2: "linux64", 3: "x86_64-linux"}
 

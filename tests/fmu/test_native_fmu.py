@@ -11,9 +11,9 @@ import onnx
 import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import fmi2LastSuccessfulTime
+from native_fmu_helpers import SAMPLE_PERIOD
 from onnx import helper
 
-from native_fmu_helpers import SAMPLE_PERIOD
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.errors import FmuBuildError
 from nnfmu.fmu.options import BuildOptions

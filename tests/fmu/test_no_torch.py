@@ -5,7 +5,6 @@ import sys
 from pathlib import Path
 
 import onnx
-
 from native_fmu_helpers import delay_step_graph
 
 # An import hook makes `import torch` fail; then the FMU is built through the CLI and replayed: any torch import on

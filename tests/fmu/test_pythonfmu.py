@@ -18,19 +18,28 @@ import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
+from native_fmu_helpers import hostile_graph
+from pythonfmu_helpers import (
+    DISCARD,
+    ERROR,
+    Instance,
+    Reference,
+    T,
+    build,
+    delay_damper_graph,
+    native_description,
+    unzip,
+)
 
 from nnfmu.component import Component, Port
-from nnfmu.fmu.model_description import FmuIdentity, ModelDescriptionView, tensor_dependencies
 from nnfmu.fmu.build import build_fmu
+from nnfmu.fmu.model_description import FmuIdentity, ModelDescriptionView, tensor_dependencies
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.fmu.pythonfmu import PythonFmuBuildError
-from nnfmu.fmu.pythonfmu.runtimes import runtime
 from nnfmu.fmu.pythonfmu.fmi2_slave import NnfmuSlave
 from nnfmu.fmu.pythonfmu.model_description_fix import DescriptionFix, fix_model_description
+from nnfmu.fmu.pythonfmu.runtimes import runtime
 from nnfmu.fmu.variables import fmu_variables
-from native_fmu_helpers import hostile_graph
-from pythonfmu_helpers import (DISCARD, ERROR, T, Instance, Reference, build, delay_damper_graph,
-                              native_description, unzip)
 
 
 @pytest.fixture(params=[2, 3], ids=["fmi2", "fmi3"])

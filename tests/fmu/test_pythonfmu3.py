@@ -13,6 +13,7 @@ import onnx
 import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
+from pythonfmu_helpers import ERROR, Instance, Reference, T, native_description, unzip, view_of
 
 from nnfmu.component import Component, Port
 from nnfmu.fmu.build import build_fmu
@@ -21,7 +22,6 @@ from nnfmu.fmu.pythonfmu import PythonFmuBuildError
 from nnfmu.fmu.pythonfmu.fmi3_slave import NnfmuSlave3
 from nnfmu.fmu.pythonfmu.model_description_fix import DescriptionFix, fix_model_description
 from nnfmu.fmu.pythonfmu.runtimes import runtime
-from pythonfmu_helpers import ERROR, T, Instance, Reference, native_description, unzip, view_of
 
 VR_FORCE, VR_EXTRAPOLATING, VR_GAIN, VR_TIME = 1, 2, 4, 5
 

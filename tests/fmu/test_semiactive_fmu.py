@@ -9,8 +9,8 @@ import numpy as np
 import onnx
 import pytest
 from fmpy import read_model_description
-
 from native_fmu_helpers import Reference
+
 from nnfmu.data import load_measurement
 from nnfmu.data.rigs import RigOptions, write_rig
 from nnfmu.fmu.build import build_fmu

@@ -9,8 +9,8 @@ import onnx
 import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
-
 from native_fmu_helpers import SAMPLE_PERIOD, delay_step_graph, hostile_graph
+
 from nnfmu.component import Component, Port
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions

@@ -21,7 +21,7 @@ from fmpy import read_model_description
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.errors import CompilerError, PlatformSkippedWarning
 from nnfmu.fmu.native import compiler
-from nnfmu.fmu.native.build import fmi_headers_dir
+from nnfmu.fmu.native.backend import fmi_headers_dir
 from nnfmu.fmu.options import BuildOptions
 
 MINGW = shutil.which(compiler.WIN64_COMPILER)

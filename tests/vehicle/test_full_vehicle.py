@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy.signal import cont2discrete
 
-from nnfmu.vehicle.models import (
+from nnfmu.vehicle.dynamics import (
     LinearVehicle,
     MonolithicSettings,
     SimulationSettings,
@@ -21,8 +21,8 @@ from nnfmu.vehicle.models import (
     simulate_monolithic,
     truth_laws,
 )
-from nnfmu.vehicle.models.full_vehicle import COMPONENTS
-from nnfmu.vehicle.models.ports import component_channels
+from nnfmu.vehicle.dynamics.full_vehicle import COMPONENTS
+from nnfmu.vehicle.dynamics.ports import component_channels
 
 CORNERS = ("fl", "fr", "rl", "rr")
 SI_UNITS = {"m", "m/s", "m/s^2", "N", "N.m", "rad", "rad/s", "rad/s^2"}

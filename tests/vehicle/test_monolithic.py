@@ -10,10 +10,7 @@ import pytest
 
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import DamperParams, DamperTruth
-from nnfmu.workflows.roadtest.reference import monolithic_reference, settled_state
-from nnfmu.workflows.roadtest.systems import vehicle_components
-from nnfmu.vehicle.fmu import initial_state
-from nnfmu.vehicle.models import (
+from nnfmu.vehicle.dynamics import (
     DamperTruthLaw,
     LinearLaw,
     LinearVehicle,
@@ -23,12 +20,15 @@ from nnfmu.vehicle.models import (
     VehicleParameters,
     build_full_vehicle,
     build_quarter_car,
+    monolithic,
     rest_state,
     simulate_monolithic,
     truth_laws,
 )
-from nnfmu.vehicle.models import monolithic
-from nnfmu.vehicle.models.ports import CORNERS
+from nnfmu.vehicle.dynamics.ports import CORNERS
+from nnfmu.vehicle.fmu import initial_state
+from nnfmu.workflows.roadtest.systems import vehicle_components
+from nnfmu.workflows.roadtest.truth_reference import monolithic_reference, settled_state
 
 PERIOD = 1e-3  # s, input and output sample period
 

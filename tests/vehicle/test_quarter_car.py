@@ -11,7 +11,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.signal import cont2discrete
 
-from nnfmu.vehicle.models import (
+from nnfmu.vehicle.dynamics import (
     LinearLaw,
     MonolithicSettings,
     ParameterError,

@@ -12,15 +12,15 @@ import numpy as np
 import pytest
 
 from nnfmu.component import Component
-from nnfmu.vehicle.fmu import VehicleBuildError, VehicleBuildSettings, vehicle_model, vehicle_step_graph
-from nnfmu.vehicle.models import (
+from nnfmu.vehicle.dynamics import (
     ParameterError,
     QuarterCarParameters,
     VehicleModelError,
     VehicleParameters,
     build_quarter_car,
 )
-from nnfmu.vehicle.models.parameters import DEFAULTS_DIR
+from nnfmu.vehicle.dynamics.parameters import DEFAULTS_DIR
+from nnfmu.vehicle.fmu import VehicleBuildError, VehicleBuildSettings, vehicle_model, vehicle_step_graph
 
 EXAMPLE = DEFAULTS_DIR / "midsize_sedan_quarter_car_fl.toml"
 MATRICES = ("A", "B", "C", "D", "e", "gravity", "preload", "Bn", "Cn", "Dn", "Dyn", "stabiliser")

@@ -12,8 +12,18 @@ from fmpy.validation import validate_fmu
 
 from nnfmu.component import Component, Port
 from nnfmu.cosim.slave import FmuSlave
-from nnfmu.export.run import run_step_graph
+from nnfmu.export.step_runner import run_step_graph
 from nnfmu.fmu.errors import FmuBuildError
+from nnfmu.vehicle.dynamics import (
+    LinearVehicle,
+    SimulationSettings,
+    SplineDamper,
+    VehicleModelError,
+    VehicleParameters,
+    simulate,
+)
+from nnfmu.vehicle.dynamics.full_vehicle import COMPONENTS as FULL_VEHICLE_COMPONENTS
+from nnfmu.vehicle.dynamics.ports import component_channels
 from nnfmu.vehicle.fmu import (
     VehicleBuildError,
     VehicleBuildSettings,
@@ -22,16 +32,6 @@ from nnfmu.vehicle.fmu import (
     vehicle_model,
     vehicle_step_graph,
 )
-from nnfmu.vehicle.models import (
-    LinearVehicle,
-    SimulationSettings,
-    SplineDamper,
-    VehicleModelError,
-    VehicleParameters,
-    simulate,
-)
-from nnfmu.vehicle.models.full_vehicle import COMPONENTS as FULL_VEHICLE_COMPONENTS
-from nnfmu.vehicle.models.ports import component_channels
 
 T = 1e-4  # the default internal sample period [s]
 ALL_REFERENCE = {name: "reference" for name in FULL_VEHICLE_COMPONENTS}

@@ -17,7 +17,11 @@ from nnfmu.data.drive_files import write_drive
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.vehicle.fmu import build_vehicle_fmu
 from nnfmu.workflows.controller import (
-    build_fixed_command_fmu, build_graph_fmu, build_skyhook_fmu, closed_loop_system, write_closed_loop,
+    build_fixed_command_fmu,
+    build_graph_fmu,
+    build_skyhook_fmu,
+    closed_loop_system,
+    write_closed_loop,
 )
 from nnfmu.workflows.cosim import run_cosim
 from nnfmu.workflows.vehicle_binding import vehicle_binding

@@ -16,8 +16,8 @@ from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd  # noqa: E40
 from nnfmu.data import load_measurement  # noqa: E402
 from nnfmu.data.drive_files import write_drive  # noqa: E402
 from nnfmu.errors import SettingsError  # noqa: E402
+from nnfmu.vehicle.dynamics.parameters import DEFAULTS_DIR  # noqa: E402
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu  # noqa: E402
-from nnfmu.vehicle.models.parameters import DEFAULTS_DIR  # noqa: E402
 from nnfmu.workflows.cosim import run_cosim  # noqa: E402
 from nnfmu.workflows.vehicle_binding import vehicle_binding  # noqa: E402
 

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from nnfmu.workflows.demo import PRESETS_BY_RIG, UNDECLARED_EFFECTS, DemoSettings, run_demo
 from nnfmu.fmu.check import check_fmu
+from nnfmu.workflows.demo import PRESETS_BY_RIG, UNDECLARED_EFFECTS, DemoSettings, run_demo
 
 
 def test_quick_demo_runs_every_stage(tmp_path: Path) -> None:

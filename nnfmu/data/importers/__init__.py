@@ -1,5 +1,5 @@
 """Importers for public measured data sets whose files are not nnfmu's CSV/MDF layout."""
 
-from .brfd import BRFD_LICENCE, load_brfd, load_brfd_series
+from nnfmu.data.importers.brfd import BRFD_LICENCE, load_brfd, load_brfd_series
 
 __all__ = ["BRFD_LICENCE", "load_brfd", "load_brfd_series"]

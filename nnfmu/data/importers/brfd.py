@@ -17,10 +17,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..checks import check_measurement
-from ..errors import DataError
-from ..measurement import Measurement
-from ..units import to_si
+from nnfmu.data.checks import check_measurement
+from nnfmu.data.errors import DataError
+from nnfmu.data.measurement import Measurement
+from nnfmu.data.units import to_si
 
 BRFD_LICENCE = (
     "CC BY-SA 4.0. Cite: Coble, Huggins, Cao, Ricles, Downey, \"Dataset-Friction-Damper-with-Backlash\", 2022 "

@@ -1,10 +1,24 @@
 """Rig simulators that make realistic "measured" data from known physics, with the truth written beside it."""
 
-from .bushing_rig import CHANNELS as BUSHING_CHANNELS
-from .bushing_rig import BushingRig
-from .damper_rig import DamperDyno
-from .excitation import Motion, SineLevel, SpectrumShape
-from ...physics import (
+from nnfmu.data.rigs.bushing_rig import CHANNELS as BUSHING_CHANNELS
+from nnfmu.data.rigs.bushing_rig import BushingRig
+from nnfmu.data.rigs.command import CommandSchedule
+from nnfmu.data.rigs.damper_rig import DamperDyno
+from nnfmu.data.rigs.excitation import Motion, SineLevel, SpectrumShape
+from nnfmu.data.rigs.options import DAMPER_TYPES, EXCITATIONS, KINDS, RigOptions
+from nnfmu.data.rigs.semiactive_rig import COMMAND_CHANNELS
+from nnfmu.data.rigs.simulate import RigRun, simulate_rig, write_rig
+from nnfmu.data.rigs.truth import truth_path
+from nnfmu.data.rigs.vehicle_drive import (
+    RIG_BANDS,
+    DriveDesign,
+    VehicleDrive,
+    design_damper_drive,
+    design_vehicle_drive,
+)
+from nnfmu.data.rigs.vehicle_dyno import simulate_vehicle_damper_dyno, write_vehicle_damper_dyno
+from nnfmu.data.rigs.vehicle_rig import simulate_vehicle_rig, write_vehicle_rig
+from nnfmu.physics import (
     BUSHING_EFFECTS,
     DAMPER_EFFECTS,
     DEFAULT_EFFECTS,
@@ -15,14 +29,6 @@ from ...physics import (
     DamperTruth,
     ValveSide,
 )
-from .command import CommandSchedule
-from .options import DAMPER_TYPES, EXCITATIONS, KINDS, RigOptions
-from .run import RigRun, simulate_rig, write_rig
-from .semiactive_rig import COMMAND_CHANNELS
-from .truth import truth_path
-from .vehicle_drive import RIG_BANDS, DriveDesign, VehicleDrive, design_damper_drive, design_vehicle_drive
-from .vehicle_dyno import simulate_vehicle_damper_dyno, write_vehicle_damper_dyno
-from .vehicle_rig import simulate_vehicle_rig, write_vehicle_rig
 
 __all__ = [
     "BUSHING_CHANNELS",

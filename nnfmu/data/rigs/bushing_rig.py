@@ -6,9 +6,9 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from ...physics.bushing import IWAN_ELEMENTS, IWAN_SPAN, BushingChannelTruth, BushingParams
-from .excitation import Motion, SineLevel, SpectrumShape, random_motion, sine_series, sine_series_cycles
-from .sensors import Sensor, record
+from nnfmu.data.rigs.excitation import Motion, SineLevel, SpectrumShape, random_motion, sine_series, sine_series_cycles
+from nnfmu.data.rigs.sensors import Sensor, record
+from nnfmu.physics.bushing import IWAN_ELEMENTS, IWAN_SPAN, BushingChannelTruth, BushingParams
 
 
 @dataclass(frozen=True)

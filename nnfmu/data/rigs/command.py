@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import butter, sosfilt
 
-from ...errors import SettingsError
+from nnfmu.errors import SettingsError
 
 SEGMENT_KINDS = ("step", "ramp", "random")
 

@@ -8,10 +8,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...errors import SettingsError
-from ...physics.damper import DamperParams, DamperTruth
-from .excitation import Motion, SineLevel, SpectrumShape, random_motion, sine_series, sine_series_cycles
-from .sensors import Sensor, record
+from nnfmu.data.rigs.excitation import Motion, SineLevel, SpectrumShape, random_motion, sine_series, sine_series_cycles
+from nnfmu.data.rigs.sensors import Sensor, record
+from nnfmu.errors import SettingsError
+from nnfmu.physics.damper import DamperParams, DamperTruth
 
 UNITS = {"displacement": "m", "velocity": "m/s", "force": "N", "temperature": "K"}
 

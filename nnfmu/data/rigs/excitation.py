@@ -12,7 +12,7 @@ from typing import Protocol
 
 import numpy as np
 
-from ...errors import SettingsError
+from nnfmu.errors import SettingsError
 
 RAMP_CYCLES = 0.5  # raised-cosine amplitude ramp at each end of a sine level, in cycles
 MIN_SINE_CYCLES = 3  # cycles per sine level; with the ramps at least two full-amplitude cycles remain

@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ...errors import SettingsError
-from ...physics.effects import DEFAULT_EFFECTS, EFFECTS
+from nnfmu.errors import SettingsError
+from nnfmu.physics.effects import DEFAULT_EFFECTS, EFFECTS
 
 KINDS = ("damper", "bushing")
 DAMPER_TYPES = ("passive", "mr", "cdc")  # passive valve, magnetorheological (coil voltage), CDC (valve current)

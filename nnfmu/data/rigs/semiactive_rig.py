@@ -7,12 +7,12 @@ import math
 
 import numpy as np
 
-from ...physics.cdc_damper import CDC_CURRENT_RANGE, CDCDamperParams, CDCDamperTruth
-from ...physics.mr_damper import MR_VOLTAGE_RANGE, MRDamperParams, MRDamperTruth
-from .command import CommandSchedule
-from .damper_rig import UNITS as PASSIVE_UNITS
-from .damper_rig import DamperDyno
-from .sensors import Sensor, record
+from nnfmu.data.rigs.command import CommandSchedule
+from nnfmu.data.rigs.damper_rig import UNITS as PASSIVE_UNITS
+from nnfmu.data.rigs.damper_rig import DamperDyno
+from nnfmu.data.rigs.sensors import Sensor, record
+from nnfmu.physics.cdc_damper import CDC_CURRENT_RANGE, CDCDamperParams, CDCDamperTruth
+from nnfmu.physics.mr_damper import MR_VOLTAGE_RANGE, MRDamperParams, MRDamperTruth
 
 # The command channel each semi-active type records, with its unit, range and transducer.
 COMMAND_CHANNELS = {"mr": "voltage", "cdc": "current"}

@@ -8,8 +8,8 @@ import json
 from pathlib import Path
 from typing import Any
 
-from ... import __version__
-from .options import RigOptions
+from nnfmu import __version__
+from nnfmu.data.rigs.options import RigOptions
 
 TRUTH_SUFFIX = ".truth.json"
 NOTICE = "Ground truth of a simulated rig run. Training and diagnosis must not read this file."

@@ -31,11 +31,11 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 from scipy.signal import welch
 
-from ...errors import SettingsError
-from ..errors import DataError
-from ..measurement import Measurement
-from .bushing_rig import CHANNELS
-from .excitation import Motion, preload, random_motion
+from nnfmu.data.errors import DataError
+from nnfmu.data.measurement import Measurement
+from nnfmu.data.rigs.bushing_rig import CHANNELS
+from nnfmu.data.rigs.excitation import Motion, preload, random_motion
+from nnfmu.errors import SettingsError
 
 # The rig controller's pass band [Hz] by rig: the bushing rig's lab drive reaches 40 Hz; a servo-hydraulic damper
 # dyno follows small strokes to about 100 Hz, and the car moves its dampers there (wheel hop ~12 Hz, the road's

@@ -17,16 +17,16 @@ from pathlib import Path
 
 import numpy as np
 
-from ..load import load_measurement
-from ..measurement import Measurement
-from ...physics.damper import DamperParams
-from .damper_rig import UNITS, DamperDyno, run_damper_dyno
-from .excitation import Motion
-from .options import VEHICLE_EXCITATION, RigOptions, check_options, resolve_duration, resolve_effects
-from ...physics.parameters import describe
-from .run import RigRun, write_run
-from .truth import build_truth
-from .vehicle_drive import DriveDesign, VehicleDrive, design_damper_drive
+from nnfmu.data.load import load_measurement
+from nnfmu.data.measurement import Measurement
+from nnfmu.data.rigs.damper_rig import UNITS, DamperDyno, run_damper_dyno
+from nnfmu.data.rigs.excitation import Motion
+from nnfmu.data.rigs.options import VEHICLE_EXCITATION, RigOptions, check_options, resolve_duration, resolve_effects
+from nnfmu.data.rigs.simulate import RigRun, write_run
+from nnfmu.data.rigs.truth import build_truth
+from nnfmu.data.rigs.vehicle_drive import DriveDesign, VehicleDrive, design_damper_drive
+from nnfmu.physics.damper import DamperParams
+from nnfmu.physics.parameters import describe
 
 
 def simulate_vehicle_damper_dyno(source: Measurement, elements: Sequence[str], options: RigOptions = RigOptions(),

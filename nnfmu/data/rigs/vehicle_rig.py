@@ -17,15 +17,15 @@ from pathlib import Path
 
 import numpy as np
 
-from ..load import load_measurement
-from ..measurement import Measurement
-from ...physics.bushing import BushingParams
-from .bushing_rig import RUN_NOTES, UNITS, BushingRig, describe_params, true_signals
-from .options import VEHICLE_EXCITATION, RigOptions, check_options, resolve_duration, resolve_effects
-from .run import RigRun, write_run
-from .sensors import Sensor, record
-from .truth import build_truth
-from .vehicle_drive import DriveDesign, design_vehicle_drive
+from nnfmu.data.load import load_measurement
+from nnfmu.data.measurement import Measurement
+from nnfmu.data.rigs.bushing_rig import RUN_NOTES, UNITS, BushingRig, describe_params, true_signals
+from nnfmu.data.rigs.options import VEHICLE_EXCITATION, RigOptions, check_options, resolve_duration, resolve_effects
+from nnfmu.data.rigs.sensors import Sensor, record
+from nnfmu.data.rigs.simulate import RigRun, write_run
+from nnfmu.data.rigs.truth import build_truth
+from nnfmu.data.rigs.vehicle_drive import DriveDesign, design_vehicle_drive
+from nnfmu.physics.bushing import BushingParams
 
 
 def transducers_for(true: dict[str, np.ndarray], design: DriveDesign,

@@ -9,18 +9,17 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from nnfmu.data import Measurement
-
-from ..errors import DiagnosisError
-from .backlash import Backlash
-from .base import Effect, Extension, NoExtension, Regressors
-from .channels import PREFIX, ChannelInput, channel_effects
-from .friction import SealFriction
-from .gas_spring import GasForce
-from .hysteresis import Hysteresis
-from .inertia import Inertia
-from .sensor import SensorOffset
-from .temperature import Temperature
-from .viscoelastic import AmplitudeDependence, FrequencyDependence
+from nnfmu.diagnosis.effects.backlash import Backlash
+from nnfmu.diagnosis.effects.base import Effect, Extension, NoExtension, Regressors
+from nnfmu.diagnosis.effects.channels import PREFIX, ChannelInput, channel_effects
+from nnfmu.diagnosis.effects.friction import SealFriction
+from nnfmu.diagnosis.effects.gas_spring import GasForce
+from nnfmu.diagnosis.effects.hysteresis import Hysteresis
+from nnfmu.diagnosis.effects.inertia import Inertia
+from nnfmu.diagnosis.effects.sensor import SensorOffset
+from nnfmu.diagnosis.effects.temperature import Temperature
+from nnfmu.diagnosis.effects.viscoelastic import AmplitudeDependence, FrequencyDependence
+from nnfmu.diagnosis.errors import DiagnosisError
 
 
 def _registry(*effects: Effect) -> dict[str, Effect]:

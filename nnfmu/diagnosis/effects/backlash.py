@@ -5,12 +5,20 @@ from __future__ import annotations
 import numpy as np
 
 from nnfmu.data import Measurement
+from nnfmu.diagnosis.effects.base import (
+    Effect,
+    Extension,
+    NoExtension,
+    Regressors,
+    channel,
+    extended,
+    need,
+    with_derived,
+)
+from nnfmu.diagnosis.effects.shared import backlash_radii, derived_note, stop_operator
+from nnfmu.diagnosis.settings import DiagnosisSettings
+from nnfmu.diagnosis.signals import EffectSignals
 from nnfmu.models.features import FeatureSpec, Stop
-
-from ..settings import DiagnosisSettings
-from ..signals import EffectSignals
-from .base import Effect, Extension, NoExtension, Regressors, channel, extended, need, with_derived
-from .shared import backlash_radii, derived_note, stop_operator
 
 
 class Backlash(Effect):

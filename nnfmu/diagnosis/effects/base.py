@@ -18,10 +18,9 @@ from typing import ClassVar
 import numpy as np
 
 from nnfmu.data import Measurement
+from nnfmu.diagnosis.settings import DiagnosisSettings
+from nnfmu.diagnosis.signals import EffectSignals, direction_prefix
 from nnfmu.models.features import Derived, FeatureSpec, Tap
-
-from ..settings import DiagnosisSettings
-from ..signals import EffectSignals, direction_prefix
 
 
 @dataclass(frozen=True)

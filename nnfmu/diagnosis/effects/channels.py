@@ -15,12 +15,20 @@ import numpy as np
 
 from nnfmu.data import Measurement
 from nnfmu.data.units import base_name
+from nnfmu.diagnosis.effects.base import (
+    Effect,
+    Extension,
+    NoExtension,
+    Regressors,
+    extended,
+    need,
+    with_delays,
+    with_derived,
+)
+from nnfmu.diagnosis.effects.shared import CENTRED, low_pass
+from nnfmu.diagnosis.settings import DiagnosisSettings
+from nnfmu.diagnosis.signals import EffectSignals
 from nnfmu.models.features import FeatureSpec, Lowpass
-
-from ..settings import DiagnosisSettings
-from ..signals import EffectSignals
-from .base import Effect, Extension, NoExtension, Regressors, extended, need, with_delays, with_derived
-from .shared import CENTRED, low_pass
 
 PREFIX = "input:"
 # Base quantities some physical family covers: the motion, loads and temperature (see the module docstring).

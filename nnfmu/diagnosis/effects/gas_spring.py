@@ -5,12 +5,20 @@ from __future__ import annotations
 import numpy as np
 
 from nnfmu.data import Measurement
+from nnfmu.diagnosis.effects.base import (
+    Effect,
+    Extension,
+    NoExtension,
+    Regressors,
+    channel,
+    extended,
+    need,
+    with_delays,
+)
+from nnfmu.diagnosis.effects.shared import derived_note
+from nnfmu.diagnosis.settings import DiagnosisSettings
+from nnfmu.diagnosis.signals import EffectSignals
 from nnfmu.models.features import FeatureSpec
-
-from ..settings import DiagnosisSettings
-from ..signals import EffectSignals
-from .base import Effect, Extension, NoExtension, Regressors, channel, extended, need, with_delays
-from .shared import derived_note
 
 
 class GasForce(Effect):

@@ -5,11 +5,10 @@ from __future__ import annotations
 import numpy as np
 
 from nnfmu.data import Measurement
+from nnfmu.diagnosis.effects.base import Effect, Extension, NoExtension, Regressors
+from nnfmu.diagnosis.settings import DiagnosisSettings
+from nnfmu.diagnosis.signals import EffectSignals
 from nnfmu.models.features import FeatureSpec
-
-from ..settings import DiagnosisSettings
-from ..signals import EffectSignals
-from .base import Effect, Extension, NoExtension, Regressors
 
 
 class SensorOffset(Effect):

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.signal import lfilter
 
-from ..signals import EffectSignals
+from nnfmu.diagnosis.signals import EffectSignals
 
 CENTRED = (
     "; centred on its record mean, so that only its variation counts as evidence (a constant level times the "

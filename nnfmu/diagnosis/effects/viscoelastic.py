@@ -6,12 +6,20 @@ from __future__ import annotations
 import numpy as np
 
 from nnfmu.data import Measurement
+from nnfmu.diagnosis.effects.base import (
+    Effect,
+    Extension,
+    NoExtension,
+    Regressors,
+    channel,
+    extended,
+    need,
+    with_derived,
+)
+from nnfmu.diagnosis.effects.shared import CENTRED, derived_note, low_pass
+from nnfmu.diagnosis.settings import DiagnosisSettings
+from nnfmu.diagnosis.signals import EffectSignals
 from nnfmu.models.features import FeatureSpec, Lowpass, LowpassSquare
-
-from ..settings import DiagnosisSettings
-from ..signals import EffectSignals
-from .base import Effect, Extension, NoExtension, Regressors, channel, extended, need, with_derived
-from .shared import CENTRED, derived_note, low_pass
 
 
 class FrequencyDependence(Effect):

@@ -12,8 +12,16 @@ from __future__ import annotations
 from importlib import import_module
 from typing import Any
 
-from pythonfmu3 import Boolean, Fmi3Causality, Fmi3Initial, Fmi3Slave, Fmi3Status, Fmi3StepResult, Fmi3Variability
-from pythonfmu3 import Float64
+from pythonfmu3 import (
+    Boolean,
+    Float64,
+    Fmi3Causality,
+    Fmi3Initial,
+    Fmi3Slave,
+    Fmi3Status,
+    Fmi3StepResult,
+    Fmi3Variability,
+)
 
 # the package's module when imported from nnfmu (the builder), the FMU's `<module>_core.py` inside an FMU
 _core = import_module(f"{__package__}.sampled_component" if __package__ else f"{__name__}_core")

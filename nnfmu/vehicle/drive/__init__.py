@@ -1,11 +1,11 @@
 """Drive signals for a virtual four-post road test simulator: ISO 8608 road synthesis and events (the file
 formats are `nnfmu.data.drive_files`)."""
 
-from .errors import DriveError
-from .events import KerbStrike, Pothole
-from .generator import CHANNELS, generate_drive
-from .road import CLASS_LEVELS, displacement_psd, track_coherence
-from .settings import DriveSettings
+from nnfmu.vehicle.drive.errors import DriveError
+from nnfmu.vehicle.drive.events import KerbStrike, Pothole
+from nnfmu.vehicle.drive.generator import CHANNELS, generate_drive
+from nnfmu.vehicle.drive.road import CLASS_LEVELS, displacement_psd, track_coherence
+from nnfmu.vehicle.drive.settings import DriveSettings
 
 __all__ = [
     "CHANNELS",

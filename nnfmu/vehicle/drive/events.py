@@ -13,7 +13,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from .errors import DriveError
+from nnfmu.vehicle.drive.errors import DriveError
 
 SIDES = ("left", "right", "both")
 

@@ -19,11 +19,11 @@ import math
 import numpy as np
 from scipy.fft import irfft, next_fast_len, rfft, rfftfreq
 
-from ...data import Measurement
-from .events import hits
-from .rig_filter import controller_gain
-from .road import CLASS_LEVELS, track_spectra
-from .settings import DriveSettings
+from nnfmu.data import Measurement
+from nnfmu.vehicle.drive.events import hits
+from nnfmu.vehicle.drive.rig_filter import controller_gain
+from nnfmu.vehicle.drive.road import CLASS_LEVELS, track_spectra
+from nnfmu.vehicle.drive.settings import DriveSettings
 
 CHANNELS = (
     "actuator_fl_displacement",

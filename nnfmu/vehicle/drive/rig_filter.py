@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .settings import DriveSettings
+from nnfmu.vehicle.drive.settings import DriveSettings
 
 
 def controller_gain(frequencies: np.ndarray, settings: DriveSettings) -> np.ndarray:

@@ -21,7 +21,7 @@ import numpy as np
 from scipy.fft import rfftfreq
 from scipy.special import k1
 
-from .settings import ROAD_CLASSES, DriveSettings
+from nnfmu.vehicle.drive.settings import ROAD_CLASSES, DriveSettings
 
 REFERENCE_FREQUENCY = 0.1  # n0 [cycles/m]
 WAVINESS = 2.0  # w [1]

@@ -6,8 +6,8 @@ import math
 import numbers
 from dataclasses import dataclass
 
-from .errors import DriveError
-from .events import Event, KerbStrike, Pothole
+from nnfmu.vehicle.drive.errors import DriveError
+from nnfmu.vehicle.drive.events import Event, KerbStrike, Pothole
 
 ROAD_CLASSES = ("A", "B", "C", "D", "E", "F", "G", "H")
 COHERENCE_MODELS = ("isotropic", "independent", "identical")

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..models.errors import VehicleModelError
+from nnfmu.vehicle.dynamics.errors import VehicleModelError
 
 
 class VehicleBuildError(VehicleModelError):

@@ -7,14 +7,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from nnfmu.fmu.options import BACKENDS, FMI_VERSIONS, Backend, FmiVersion
-
-from ..models.components import CHOICES
-from ..models.ports import CORNERS
-from .errors import VehicleBuildError
+from nnfmu.vehicle.dynamics.components import CHOICES
+from nnfmu.vehicle.dynamics.ports import CORNERS
+from nnfmu.vehicle.fmu.errors import VehicleBuildError
 
 MODELS = ("quarter-car", "full-vehicle")
 # Internal sample period [s]: the linear part is exact at any period, the spline dampers are stepped explicitly and
-# need sub-steps of at most MAX_SUBSTEP (the sub-step of `nnfmu.vehicle.models.simulate`); 1e-4 s makes one sub-step
+# need sub-steps of at most MAX_SUBSTEP (the sub-step of `nnfmu.vehicle.dynamics.simulate`); 1e-4 s makes one sub-step
 # per sample, so the FMU answers every 0.1 ms and any communication step that is a multiple of it.
 DEFAULT_SAMPLE_PERIOD = 1e-4
 MAX_SUBSTEP = 1e-4
@@ -30,7 +29,7 @@ class VehicleBuildSettings:
     cross compiler is installed). `corner` (fl, fr, rl, rr) is the quarter car's: None takes a quarter-car file's
     own corner, or fl of a full-vehicle file. `initial_state` [q, q'] the FMU starts in (None: the static equilibrium
     on the linear reference elements, `initial_state`; a road test gives the rest state on the components it
-    connects, `nnfmu.vehicle.models.rest_state`).
+    connects, `nnfmu.vehicle.dynamics.rest_state`).
     A stabilised port holds its reference from the start of each *sample*: sample at the communication step, or
     the stabilisation is renewed at every sample inside a step and mostly lost."""
 

@@ -10,11 +10,11 @@ first_next. `first` is 1 only at sample 0, which reports the initial state witho
 advanced + first x, exact for first in {0, 1}); it is 0 afterwards.
 
 The linear part advances exactly (first-order hold): x_k = Ad x + Bd0 u_start + Bd1 u + fd. Built-in spline dampers
-(forces g) are stepped as `nnfmu.vehicle.models.DiscreteVehicle.step` does: the graph unrolls its predictor-corrector
+(forces g) are stepped as `nnfmu.vehicle.dynamics.DiscreteVehicle.step` does: the graph unrolls its predictor-corrector
 sub-steps, and evaluates each spline as f0 + s0 (v - v0) + sum_i (s_i - s_{i-1}) Relu(v - v_i), which is its
 piecewise-linear table extended linearly beyond the end points. Stabilised force ports hold their deviation from the
 reference element, u_start - S x with S x at the sample's start, over the interval (see
-`nnfmu.vehicle.models.linear`). Operators: Concat, Gemm, MatMul, Mul, Add, Sub, Relu, Identity (built with the
+`nnfmu.vehicle.dynamics.linear`). Operators: Concat, Gemm, MatMul, Mul, Add, Sub, Relu, Identity (built with the
 exporter's GraphBuilder).
 """
 
@@ -27,10 +27,9 @@ import onnx
 from onnx import TensorProto, helper
 
 from nnfmu.export.graph import IR_VERSION, OPSET, GraphBuilder
-
-from ..models.linear import DiscreteVehicle, LinearVehicle
-from ..models.reference import SplineDamper
-from .errors import VehicleBuildError
+from nnfmu.vehicle.dynamics.builtin_elements import SplineDamper
+from nnfmu.vehicle.dynamics.linear import DiscreteVehicle, LinearVehicle
+from nnfmu.vehicle.fmu.errors import VehicleBuildError
 
 STATE_IN, STATE_OUT, INPUTS, OUTPUTS = "x", "x_next", "u", "y"
 INPUTS_START = "u_start"  # the inputs at the previous sample: the start of the interval

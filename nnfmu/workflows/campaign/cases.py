@@ -11,8 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from .hashing import json_sha256
-from .spec import Campaign, EventSpec, MetricSpec, VariantSpec
+from nnfmu.workflows.campaign.hashing import json_sha256
+from nnfmu.workflows.campaign.spec import Campaign, EventSpec, MetricSpec, VariantSpec
 
 PART_FORMAT = 1  # bump when the rows a case writes change meaning, so old parts are not reused
 

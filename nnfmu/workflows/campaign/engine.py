@@ -27,9 +27,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .cases import Case
-from .errors import CampaignError
-from .execute import FAILED, CaseOutcome, release_instances, run_case, run_cases
+from nnfmu.workflows.campaign.cases import Case
+from nnfmu.workflows.campaign.errors import CampaignError
+from nnfmu.workflows.campaign.execute import FAILED, CaseOutcome, release_instances, run_case, run_cases
 
 ALLOWED_FAILURES = 1  # worker deaths a case may be involved in before it is given up (LocalCluster)
 LOCAL_CONFIG = {

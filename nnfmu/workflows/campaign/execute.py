@@ -27,17 +27,16 @@ from nnfmu.cosim.instances import InstancePool
 from nnfmu.cosim.master import CosimSettings, cosimulate
 from nnfmu.cosim.ssp import Connection, Connector, Element, SystemStructure
 from nnfmu.data import Measurement
+from nnfmu.data.drive_files import read_drive
 from nnfmu.errors import NnfmuError
 from nnfmu.validate.compare import ValidationSettings
 from nnfmu.validate.damage import pseudo_damage
 from nnfmu.validate.metrics import rms
 from nnfmu.vehicle.drive import generate_drive
-from nnfmu.data.drive_files import read_drive
+from nnfmu.workflows.campaign.cases import Case
+from nnfmu.workflows.campaign.hashing import json_sha256
+from nnfmu.workflows.campaign.spec import EventSpec, FileRef, drive_settings
 from nnfmu.workflows.vehicle_binding import vehicle_binding
-
-from .cases import Case
-from .hashing import json_sha256
-from .spec import EventSpec, FileRef, drive_settings
 
 OK, FAILED = "ok", "failed"
 DRIVES_KEPT = 4  # drives a process keeps in memory: the cases of one event usually follow each other

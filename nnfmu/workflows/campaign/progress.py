@@ -7,7 +7,7 @@ import time
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
-from .execute import FAILED, CaseOutcome
+from nnfmu.workflows.campaign.execute import FAILED, CaseOutcome
 
 
 class CaseProgress:

@@ -18,8 +18,8 @@ from nnfmu.cosim.linear_damper import linear_damper_graph
 from nnfmu.cosim.ssp import connect_by_name, write_ssd
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.vehicle.fmu.build import build_vehicle_fmu
 from nnfmu.vehicle.fmu.settings import VehicleBuildSettings
+from nnfmu.vehicle.fmu.vehicle_fmu import build_vehicle_fmu
 
 DAMPER_ELEMENT = "damper"
 NO_FILTER = {"filter_cutoff": 0.0}

@@ -11,10 +11,9 @@ from pathlib import Path
 from typing import Any
 
 from nnfmu.atomic import write_text_atomic
-
-from .cases import PART_FORMAT, Case
-from .engine import EngineInfo
-from .spec import Campaign
+from nnfmu.workflows.campaign.cases import PART_FORMAT, Case
+from nnfmu.workflows.campaign.engine import EngineInfo
+from nnfmu.workflows.campaign.spec import Campaign
 
 RECORD = "campaign.json"
 PACKAGES = ("nnfmu", "numpy", "scipy", "fmpy", "dask", "distributed", "pyarrow", "rainflow", "matplotlib")

@@ -47,9 +47,8 @@ from typing import Any
 from nnfmu.cosim.master import CosimSettings
 from nnfmu.cosim.ssp import Element, SspError, SystemStructure, check_against_fmus, open_system
 from nnfmu.vehicle.drive import DriveError, DriveSettings, KerbStrike, Pothole
-
-from .errors import CampaignError
-from .hashing import bytes_sha256, file_sha256
+from nnfmu.workflows.campaign.errors import CampaignError
+from nnfmu.workflows.campaign.hashing import bytes_sha256, file_sha256
 
 TOP_KEYS = ("name", "description", "coupling", "metrics", "drive", "events", "variants")
 METRIC_KEYS = ("channels", "basquin_slope", "slopes", "reference")

@@ -17,9 +17,8 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from nnfmu.atomic import atomic_path
-
-from .cases import Case
-from .execute import FAILED, OK, CaseOutcome
+from nnfmu.workflows.campaign.cases import Case
+from nnfmu.workflows.campaign.execute import FAILED, OK, CaseOutcome
 
 PARTS = "parts"
 TABLE = "results.parquet"

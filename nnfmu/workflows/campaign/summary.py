@@ -20,8 +20,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from nnfmu.atomic import atomic_path, write_text_atomic
-
-from .execute import FAILED, OK
+from nnfmu.workflows.campaign.execute import FAILED, OK
 
 TEMPLATE = "summary.html.j2"
 SUMMARY = "summary.html"

@@ -10,9 +10,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from nnfmu.data import Measurement
-
-from .errors import LoopError
-from .settings import LoopSettings
+from nnfmu.workflows.loop.errors import LoopError
+from nnfmu.workflows.loop.settings import LoopSettings
 
 PARTS = ("train", "validation", "diagnosis", "test")
 

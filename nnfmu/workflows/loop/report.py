@@ -18,8 +18,7 @@ from nnfmu.data.units import base_name
 from nnfmu.models.features import FeatureSpec
 from nnfmu.validate import welch_psd
 from nnfmu.validate.plots import axis_label, new_axes, psd_unit
-
-from .results import LoopReport
+from nnfmu.workflows.loop.results import LoopReport
 
 TEMPLATE = "loop_report.html.j2"
 LOOP_WINDOW = 2.0  # s of the first test block drawn in the force-velocity and force-displacement loops

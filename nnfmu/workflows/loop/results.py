@@ -9,8 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from nnfmu.diagnosis import Diagnosis
-
-from .trials import TRIAL_TIE
+from nnfmu.workflows.loop.trials import TRIAL_TIE
 
 
 @dataclass

@@ -24,17 +24,16 @@ from nnfmu.diagnosis import Diagnosis, FamilyGains, diagnose
 from nnfmu.export import ExportError, export_onnx, read_step_graph
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.out_paths import check_output_dir, mark_output_dir
 from nnfmu.models.features import FeatureSpec
 from nnfmu.models.trained import TrainedModel
+from nnfmu.out_paths import check_output_dir, mark_output_dir
 from nnfmu.validate import ValidationSettings, channel_metrics
-
-from .blocks import RecordBlocks, part_measurement, plan_blocks
-from .errors import LoopError
-from .report import write_loop_report
-from .results import Iteration, LoopReport
-from .settings import LoopSettings
-from .trials import nrmse, retrain_rivals, trial_group
+from nnfmu.workflows.loop.blocks import RecordBlocks, part_measurement, plan_blocks
+from nnfmu.workflows.loop.errors import LoopError
+from nnfmu.workflows.loop.report import write_loop_report
+from nnfmu.workflows.loop.results import Iteration, LoopReport
+from nnfmu.workflows.loop.settings import LoopSettings
+from nnfmu.workflows.loop.trials import nrmse, retrain_rivals, trial_group
 
 
 def _load(data: str | os.PathLike[str] | Measurement) -> Measurement:

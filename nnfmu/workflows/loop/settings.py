@@ -7,8 +7,7 @@ from dataclasses import dataclass, field
 
 from nnfmu.diagnosis import DiagnosisSettings
 from nnfmu.models.retrain import RetrainSettings
-
-from .errors import LoopError
+from nnfmu.workflows.loop.errors import LoopError
 
 
 @dataclass(frozen=True)

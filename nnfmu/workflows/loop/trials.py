@@ -16,8 +16,7 @@ from nnfmu.diagnosis.ranking import GainTest
 from nnfmu.models.features import FeatureSpec
 from nnfmu.models.retrain import Retrained, retrain
 from nnfmu.models.trained import TrainedModel
-
-from .settings import LoopSettings
+from nnfmu.workflows.loop.settings import LoopSettings
 
 SIGNIFICANT = "significant in the diagnosis"
 # Rival explanations of one residual (a compliance lag, inertia and viscoelastic states all look like the force's

@@ -19,19 +19,24 @@ import onnx
 
 from nnfmu.component import Component
 from nnfmu.data import Measurement, save_measurement
+from nnfmu.data.drive_files import write_drive
 from nnfmu.data.rigs import DriveDesign, RigOptions, write_vehicle_rig
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.workflows.train import TrainRequest
 from nnfmu.validate import ChannelComparison, ValidationSettings, compare
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
-from nnfmu.data.drive_files import write_drive
-
-from .envelope import Excursion, excursion
-from .record_training import train_on_record
-from .reference import monolithic_reference
-from .runs import RoadTestSettings, _open_loop, _ports
-from .systems import BUSHING_MODELS, RoadTestError, bushing_elements, bushing_onnx, vehicle_components
+from nnfmu.workflows.roadtest.envelope import Excursion, excursion
+from nnfmu.workflows.roadtest.record_training import train_on_record
+from nnfmu.workflows.roadtest.runs import RoadTestSettings, _open_loop, _ports
+from nnfmu.workflows.roadtest.systems import (
+    BUSHING_MODELS,
+    RoadTestError,
+    bushing_elements,
+    bushing_onnx,
+    vehicle_components,
+)
+from nnfmu.workflows.roadtest.truth_reference import monolithic_reference
+from nnfmu.workflows.train import TrainRequest
 
 SYSTEM = "full-vehicle"
 

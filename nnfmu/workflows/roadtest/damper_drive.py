@@ -14,10 +14,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from nnfmu.data.rigs import RIG_BANDS, DriveDesign, RigOptions, write_vehicle_damper_dyno
+from nnfmu.workflows.roadtest.record_training import train_on_record
+from nnfmu.workflows.roadtest.systems import DAMPER_MODELS, damper_elements
 from nnfmu.workflows.train import TrainRequest
-
-from .record_training import train_on_record
-from .systems import DAMPER_MODELS, damper_elements
 
 SYSTEM = "full-vehicle"
 

@@ -28,20 +28,28 @@ from nnfmu.cosim.master import CosimSettings, cosimulate
 from nnfmu.cosim.replay import replay_fmu
 from nnfmu.cosim.ssp import open_system
 from nnfmu.data import Measurement, save_measurement
+from nnfmu.data.drive_files import write_drive
 from nnfmu.validate import ChannelComparison, ValidationSettings, compare, write_report
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
-from nnfmu.data.drive_files import write_drive
-from nnfmu.workflows.vehicle_binding import vehicle_binding
-
-from .budget import BudgetRow, budget_rows
-from .envelope import Excursion, excursion
-from .reference import Reference, monolithic_reference
-from .report import write_system_report
-from .systems import (
-    DAMPER_MODELS, RoadTestError, ComponentFmus, bushing_elements, build_component_fmus, build_truth_fmus,
-    build_vehicle, check_models, damper_elements, vehicle_components, write_system,
+from nnfmu.workflows.roadtest.budget import BudgetRow, budget_rows
+from nnfmu.workflows.roadtest.envelope import Excursion, excursion
+from nnfmu.workflows.roadtest.report import write_system_report
+from nnfmu.workflows.roadtest.systems import (
+    DAMPER_MODELS,
+    ComponentFmus,
+    RoadTestError,
+    build_component_fmus,
+    build_truth_fmus,
+    build_vehicle,
+    bushing_elements,
+    check_models,
+    damper_elements,
+    vehicle_components,
+    write_system,
 )
-from .thesis import ThesisRow, thesis_row
+from nnfmu.workflows.roadtest.thesis import ThesisRow, thesis_row
+from nnfmu.workflows.roadtest.truth_reference import Reference, monolithic_reference
+from nnfmu.workflows.vehicle_binding import vehicle_binding
 
 COMPARED = {
     "quarter-car": ("damper_force", "damper_displacement", "damper_velocity", "body_acceleration",

@@ -5,7 +5,7 @@ A bushing has one network per channel (axial and radial force, axial and conical
 into one step graph (`nnfmu.export.merge`), so one FMU per bushing carries all four and its ports (`axial_force`,
 `axial_displacement`, ...) meet the vehicle's `bushing_fl_front_axial_force` etc. by `connect_by_name`'s rule.
 Every element is a native FMU. The vehicle's dampers are external force ports; its LCA bushings are stabilised
-ports (`nnfmu.vehicle.models.linear`): a 4.5 kg arm on bushings of several kN/mm has modes near 240 Hz, which a force
+ports (`nnfmu.vehicle.dynamics.linear`): a 4.5 kg arm on bushings of several kN/mm has modes near 240 Hz, which a force
 held for the networks' 1 ms cannot carry (every plain exchange diverges within milliseconds), so the vehicle keeps the
 parameter file's linear bushing over each step and applies the network force plus the linear bushing's change since
 the step start. The vehicle FMU samples at the communication step, so each step starts at a sample.
@@ -26,14 +26,13 @@ from nnfmu.errors import NnfmuError
 from nnfmu.export.merge import merge_step_graphs
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
+from nnfmu.vehicle.dynamics import truth_laws
+from nnfmu.vehicle.dynamics.components import STABILISED
+from nnfmu.vehicle.dynamics.full_vehicle import FRONT_CORNERS
+from nnfmu.vehicle.dynamics.ports import CORNERS
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
-from nnfmu.vehicle.models import truth_laws
-from nnfmu.vehicle.models.components import STABILISED
-from nnfmu.vehicle.models.full_vehicle import FRONT_CORNERS
-from nnfmu.vehicle.models.ports import CORNERS
-
-from .reference import settled_state
-from .truth_graphs import bushing_truth_graph, damper_truth_graph
+from nnfmu.workflows.roadtest.truth_graphs import bushing_truth_graph, damper_truth_graph
+from nnfmu.workflows.roadtest.truth_reference import settled_state
 
 SYSTEMS = ("quarter-car", "full-vehicle")
 DAMPER_MODELS = ("damper-spline", "damper-hysteresis")

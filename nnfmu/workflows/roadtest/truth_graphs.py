@@ -23,9 +23,9 @@ import onnx
 
 from nnfmu.component import Component, Port, StatePort
 from nnfmu.data.rigs import BUSHING_CHANNELS, BushingChannelTruth, DamperTruth
-from nnfmu.physics.damper import ValveSide
 from nnfmu.errors import NnfmuError
 from nnfmu.export.graph import GraphBuilder
+from nnfmu.physics.damper import ValveSide
 
 DAMPER_SUBSTEPS = 10  # RK4 steps per sample: 0.1 ms at 1 kHz, the monolithic reference's step
 

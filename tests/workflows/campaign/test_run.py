@@ -12,11 +12,11 @@ import pytest
 import rainflow
 from campaign_helpers import campaign_text, metrics_of, read_rows, write_campaign
 
-from nnfmu.workflows.campaign import run_campaign
-from nnfmu.workflows.campaign.execute import CaseOutcome
 from nnfmu.cosim.master import CosimSettings, cosimulate
 from nnfmu.cosim.ssp import open_system
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.workflows.campaign import run_campaign
+from nnfmu.workflows.campaign.execute import CaseOutcome
 
 BAD_DRIVE = '[[events]]\nname = "bad-file"\ndrive = "bad.csv"'
 

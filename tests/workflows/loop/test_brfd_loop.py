@@ -10,11 +10,11 @@ from pathlib import Path
 import numpy as np
 
 from nnfmu.data.importers import load_brfd_series
-from nnfmu.export import export_onnx
 from nnfmu.diagnosis import EFFECTS, DiagnosisSettings
-from nnfmu.workflows.loop import LoopSettings, part_measurement, plan_blocks, run_loop
+from nnfmu.export import export_onnx
 from nnfmu.models import Architecture, TrainSettings, train_model
 from nnfmu.models.features import FeatureSpec, SmoothSign, Tap
+from nnfmu.workflows.loop import LoopSettings, part_measurement, plan_blocks, run_loop
 
 SLICE = Path(__file__).parents[2] / "data" / "brfd"
 RUNS = [SLICE / f"1Hz36lbtension{a}amplitude.json.gz" for a in ("0.5", "1", "1.5")]

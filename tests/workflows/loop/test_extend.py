@@ -13,15 +13,15 @@ import torch
 
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import RigOptions, simulate_rig
-from nnfmu.export.graph import GraphBuilder
 from nnfmu.diagnosis import EFFECTS, DiagnosisSettings
-from nnfmu.workflows.loop import LoopError, LoopSettings, plan_blocks
-from nnfmu.models import retrain as warm_start_module
-from nnfmu.models.retrain import RetrainSettings, _warm_network, fresh_start, retrain, warm_start
+from nnfmu.export.graph import GraphBuilder
 from nnfmu.models import Architecture, TrainSettings, train_model
+from nnfmu.models import retrain as warm_start_module
 from nnfmu.models.features import FeatureSpec, LowpassSquare, Tap, derived_from_dict
 from nnfmu.models.networks import MLP
+from nnfmu.models.retrain import RetrainSettings, _warm_network, fresh_start, retrain, warm_start
 from nnfmu.models.stopping import FitHistory
+from nnfmu.workflows.loop import LoopError, LoopSettings, plan_blocks
 
 T = 0.001
 SPEC = FeatureSpec((Tap("velocity", (0, 2)),), "force")

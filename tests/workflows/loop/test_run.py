@@ -16,22 +16,30 @@ from types import SimpleNamespace
 import numpy as np
 import onnx
 import pytest
+from plain_master import plain_replay
 
 from nnfmu.component import Component
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import RigOptions, simulate_rig
-from nnfmu.export import export_onnx, run_step_graph
 from nnfmu.diagnosis import Extension
 from nnfmu.diagnosis.ranking import GainTest
-from nnfmu.workflows.loop import LoopError, LoopReport, LoopSettings, run_loop, training_part
-from nnfmu.workflows.loop import trials as trials_module
-from nnfmu.workflows.loop.trials import (SIGNIFICANT, TRIAL_TIE, _best_trial, _partner_rivals, _simpler_cover,
-                                         _together, extension, retrain_rivals)
-from nnfmu.models.retrain import Retrained
+from nnfmu.export import export_onnx, run_step_graph
 from nnfmu.models import Architecture, TrainSettings, get_preset, train_model
 from nnfmu.models.features import Difference, FeatureSpec, SmoothSign
+from nnfmu.models.retrain import Retrained
 from nnfmu.out_paths import MARKER
-from plain_master import plain_replay
+from nnfmu.workflows.loop import LoopError, LoopReport, LoopSettings, run_loop, training_part
+from nnfmu.workflows.loop import trials as trials_module
+from nnfmu.workflows.loop.trials import (
+    SIGNIFICANT,
+    TRIAL_TIE,
+    _best_trial,
+    _partner_rivals,
+    _simpler_cover,
+    _together,
+    extension,
+    retrain_rivals,
+)
 
 # Rig sensors at half their default noise: a 5 N rms load cell (0.05 % of its 10 kN range) and a 1 mm/s velocity
 # transducer, the quiet end of a damper dyno (0.05-0.1 % of range). At the default noise the floor that no model fed

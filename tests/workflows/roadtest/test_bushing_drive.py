@@ -11,14 +11,18 @@ import pytest
 
 from nnfmu.component import Component
 from nnfmu.data import load_measurement
-from nnfmu.workflows.train import TrainRequest
+from nnfmu.data.drive_files import read_drive
+from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.workflows.roadtest import (
-    BUSHING_MODELS, BushingDriveSettings, RoadTestError, RoadTestSettings, VehicleBushingModels,
+    BUSHING_MODELS,
+    BushingDriveSettings,
+    RoadTestError,
+    RoadTestSettings,
+    VehicleBushingModels,
     train_vehicle_bushings,
 )
 from nnfmu.workflows.roadtest.systems import bushing_elements
-from nnfmu.vehicle.drive import DriveSettings, generate_drive
-from nnfmu.data.drive_files import read_drive
+from nnfmu.workflows.train import TrainRequest
 
 
 @pytest.fixture(scope="module")

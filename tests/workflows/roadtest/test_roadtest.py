@@ -17,16 +17,24 @@ from nnfmu.cosim.ssp import open_system
 from nnfmu.data.rigs import RigOptions, write_rig
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
-from nnfmu.workflows.train import TrainRequest, train_from_file
+from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.vehicle.dynamics import LinearLaw, MonolithicSettings, simulate_monolithic
+from nnfmu.vehicle.fmu import VehicleBuildSettings, vehicle_model
 from nnfmu.workflows.roadtest import (
-    BUSHING_MODELS, DAMPER_MODELS, RoadTestError, RoadTestResult, RoadTestSettings, SystemRun, actuator_inputs,
-    build_vehicle, run_road_test, write_system,
+    BUSHING_MODELS,
+    DAMPER_MODELS,
+    RoadTestError,
+    RoadTestResult,
+    RoadTestSettings,
+    SystemRun,
+    actuator_inputs,
+    build_vehicle,
+    run_road_test,
+    write_system,
 )
 from nnfmu.workflows.roadtest.runs import COMPARED
 from nnfmu.workflows.roadtest.systems import bushing_elements, damper_elements
-from nnfmu.vehicle.drive import DriveSettings, generate_drive
-from nnfmu.vehicle.fmu import VehicleBuildSettings, vehicle_model
-from nnfmu.vehicle.models import LinearLaw, MonolithicSettings, simulate_monolithic
+from nnfmu.workflows.train import TrainRequest, train_from_file
 
 DAMPING = 2500.0  # [N.s/m] of the linear damper
 PERIOD = 1e-3  # [s] the rigs' sample period

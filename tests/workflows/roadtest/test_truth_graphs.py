@@ -14,7 +14,7 @@ from scipy.integrate import solve_ivp
 from nnfmu.cosim.replay import replay_fmu
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import BUSHING_CHANNELS, BushingChannelTruth, BushingParams, DamperParams, DamperTruth
-from nnfmu.export.run import run_step_graph
+from nnfmu.export.step_runner import run_step_graph
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.workflows.roadtest.truth_graphs import TruthGraphError, bushing_truth_graph, damper_truth_graph

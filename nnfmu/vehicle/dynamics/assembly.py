@@ -15,10 +15,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import VehicleModelError
-from .linear import LinearVehicle
-from .ports import VehiclePort
-from .reference import LinearSpring, SplineDamper
+from nnfmu.vehicle.dynamics.builtin_elements import LinearSpring, SplineDamper
+from nnfmu.vehicle.dynamics.errors import VehicleModelError
+from nnfmu.vehicle.dynamics.linear import LinearVehicle
+from nnfmu.vehicle.dynamics.ports import VehiclePort
 
 
 def skew(p: np.ndarray) -> np.ndarray:

@@ -19,13 +19,27 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from .assembly import Assembly, Deflection, RigidMotion
-from .components import REFERENCE, STABILISED, resolve_components
-from .geometry import SIDES, BushingFrame, mirror_point, mirror_rotation, unit
-from .linear import LinearVehicle
-from .parameters import AxleParameters, BushingParameters, DamperParameters, VehicleParameters, corner_sprung_mass
-from .ports import CORNERS, VehiclePort, actuator_ports, bushing_inputs, bushing_outputs, damper_input, damper_outputs
-from .reference import LinearSpring, SplineDamper
+from nnfmu.vehicle.dynamics.assembly import Assembly, Deflection, RigidMotion
+from nnfmu.vehicle.dynamics.builtin_elements import LinearSpring, SplineDamper
+from nnfmu.vehicle.dynamics.components import REFERENCE, STABILISED, resolve_components
+from nnfmu.vehicle.dynamics.geometry import SIDES, BushingFrame, mirror_point, mirror_rotation, unit
+from nnfmu.vehicle.dynamics.linear import LinearVehicle
+from nnfmu.vehicle.dynamics.parameters import (
+    AxleParameters,
+    BushingParameters,
+    DamperParameters,
+    VehicleParameters,
+    corner_sprung_mass,
+)
+from nnfmu.vehicle.dynamics.ports import (
+    CORNERS,
+    VehiclePort,
+    actuator_ports,
+    bushing_inputs,
+    bushing_outputs,
+    damper_input,
+    damper_outputs,
+)
 
 FRONT_CORNERS = ("fl", "fr")
 REAR_CORNERS = ("rl", "rr")

@@ -13,12 +13,12 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from .assembly import Assembly, Deflection
-from .components import REFERENCE, STABILISED, resolve_components
-from .linear import LinearVehicle
-from .ports import VehiclePort, actuator_ports, damper_input, damper_outputs
-from .quarter_car_parameters import QuarterCarParameters
-from .reference import LinearSpring, SplineDamper
+from nnfmu.vehicle.dynamics.assembly import Assembly, Deflection
+from nnfmu.vehicle.dynamics.builtin_elements import LinearSpring, SplineDamper
+from nnfmu.vehicle.dynamics.components import REFERENCE, STABILISED, resolve_components
+from nnfmu.vehicle.dynamics.linear import LinearVehicle
+from nnfmu.vehicle.dynamics.ports import VehiclePort, actuator_ports, damper_input, damper_outputs
+from nnfmu.vehicle.dynamics.quarter_car_parameters import QuarterCarParameters
 
 COMPONENTS = ["damper"]
 

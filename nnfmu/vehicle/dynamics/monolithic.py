@@ -22,11 +22,11 @@ import numpy as np
 from scipy.optimize import root
 from scipy.sparse import csr_array
 
-from .errors import VehicleModelError
-from .law_tables import LawTable, law_table, spline_table
-from .laws import BushingTruthBank, BushingTruthLaw, ComponentLaw
-from .linear import LinearVehicle, input_samples
-from .ports import component_channels
+from nnfmu.vehicle.dynamics.errors import VehicleModelError
+from nnfmu.vehicle.dynamics.law_tables import LawTable, law_table, spline_table
+from nnfmu.vehicle.dynamics.laws import BushingTruthBank, BushingTruthLaw, ComponentLaw
+from nnfmu.vehicle.dynamics.linear import LinearVehicle, input_samples
+from nnfmu.vehicle.dynamics.ports import component_channels
 
 
 @dataclass(frozen=True)
@@ -189,7 +189,7 @@ def _outputs(vehicle: LinearVehicle, states: np.ndarray, u: np.ndarray) -> np.nd
 def _solve_compiled(vehicle: LinearVehicle, table: LawTable, wiring: _Wiring, x: np.ndarray, u_samples: np.ndarray,
                     substeps: int, h: float) -> Solved:
     """The RK4 loop in the compiled kernel; only the output rows the laws read are evaluated at each stage."""
-    from . import rk4_kernel  # numba takes about a second to load; only solving needs it
+    from nnfmu.vehicle.dynamics import rk4_kernel  # numba takes about a second to load; only solving needs it
 
     rows = np.concatenate([wiring.disp_rows, wiring.rate_rows])
     splines = spline_table(vehicle.feedback_laws)

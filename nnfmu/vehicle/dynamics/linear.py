@@ -34,9 +34,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import expm
 
-from .errors import VehicleModelError
-from .ports import VehiclePort
-from .reference import SplineDamper
+from nnfmu.vehicle.dynamics.builtin_elements import SplineDamper
+from nnfmu.vehicle.dynamics.errors import VehicleModelError
+from nnfmu.vehicle.dynamics.ports import VehiclePort
 
 HOLDS = ("zoh", "foh")
 

@@ -16,8 +16,8 @@ import numpy as np
 
 from nnfmu.data import Measurement
 from nnfmu.data.derive import derive_rates
+from nnfmu.vehicle.dynamics import LinearVehicle, MonolithicSettings, rest_state, simulate_monolithic, truth_laws
 from nnfmu.vehicle.fmu import VehicleBuildSettings, initial_state, vehicle_model
-from nnfmu.vehicle.models import LinearVehicle, MonolithicSettings, rest_state, simulate_monolithic, truth_laws
 
 
 @dataclass(frozen=True)

@@ -8,26 +8,25 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ...atomic import atomic_path
-from ...errors import SettingsError
-from ..errors import DataError
-from ..measurement import Measurement
-from ..save import save_measurement
-from ...physics.bushing import BushingParams
-from .bushing_rig import UNITS as BUSHING_UNITS
-from .bushing_rig import BushingRig, describe_params, run_bushing_rig
-from ...physics.damper import DamperParams
-from .damper_rig import UNITS as DAMPER_UNITS
-from .damper_rig import DamperDyno, run_damper_dyno
-from .semiactive_rig import PARAMS as SEMIACTIVE_PARAMS
-from .semiactive_rig import UNITS as SEMIACTIVE_UNITS
-from .semiactive_rig import run_semiactive_dyno
-from .options import VEHICLE_EXCITATION, RigOptions, check_options, resolve_duration, resolve_effects
-from ...physics.cdc_damper import CDCDamperParams
-from ...physics.mr_damper import MRDamperParams
-from ...physics.parameters import describe
-from .truth import build_truth, truth_path, truth_text
-
+from nnfmu.atomic import atomic_path
+from nnfmu.data.errors import DataError
+from nnfmu.data.measurement import Measurement
+from nnfmu.data.rigs.bushing_rig import UNITS as BUSHING_UNITS
+from nnfmu.data.rigs.bushing_rig import BushingRig, describe_params, run_bushing_rig
+from nnfmu.data.rigs.damper_rig import UNITS as DAMPER_UNITS
+from nnfmu.data.rigs.damper_rig import DamperDyno, run_damper_dyno
+from nnfmu.data.rigs.options import VEHICLE_EXCITATION, RigOptions, check_options, resolve_duration, resolve_effects
+from nnfmu.data.rigs.semiactive_rig import PARAMS as SEMIACTIVE_PARAMS
+from nnfmu.data.rigs.semiactive_rig import UNITS as SEMIACTIVE_UNITS
+from nnfmu.data.rigs.semiactive_rig import run_semiactive_dyno
+from nnfmu.data.rigs.truth import build_truth, truth_path, truth_text
+from nnfmu.data.save import save_measurement
+from nnfmu.errors import SettingsError
+from nnfmu.physics.bushing import BushingParams
+from nnfmu.physics.cdc_damper import CDCDamperParams
+from nnfmu.physics.damper import DamperParams
+from nnfmu.physics.mr_damper import MRDamperParams
+from nnfmu.physics.parameters import describe
 
 RigParams = DamperParams | BushingParams | MRDamperParams | CDCDamperParams
 

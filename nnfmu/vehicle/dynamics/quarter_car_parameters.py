@@ -19,8 +19,8 @@ import os
 from dataclasses import dataclass
 from typing import Any
 
-from .errors import ParameterError, VehicleModelError
-from .parameters import (
+from nnfmu.vehicle.dynamics.errors import ParameterError, VehicleModelError
+from nnfmu.vehicle.dynamics.parameters import (
     DAMPER_MODELS,
     DEFAULT_FILE,
     QUARTER_CAR_TABLE,
@@ -31,7 +31,7 @@ from .parameters import (
     read_force_velocity_table,
     read_toml,
 )
-from .ports import CORNERS
+from nnfmu.vehicle.dynamics.ports import CORNERS
 
 DEFAULT_CORNER = "fl"
 # keys a full-vehicle file has and a quarter-car file must not, with what a quarter car takes instead

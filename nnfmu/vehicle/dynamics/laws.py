@@ -12,9 +12,9 @@ from typing import Protocol
 
 import numpy as np
 
-from ...physics import BushingChannelTruth, BushingParams, DamperParams, DamperTruth, DEFAULT_EFFECTS
-from .errors import VehicleModelError
-from .ports import component_channels
+from nnfmu.physics import DEFAULT_EFFECTS, BushingChannelTruth, BushingParams, DamperParams, DamperTruth
+from nnfmu.vehicle.dynamics.errors import VehicleModelError
+from nnfmu.vehicle.dynamics.ports import component_channels
 
 
 class ComponentLaw(Protocol):

@@ -14,16 +14,15 @@ from typing import Protocol
 
 import nnfmu
 from nnfmu.out_paths import OutputPathError, check_output_dir, mark_output_dir
-
-from .cases import Case, expand_cases
-from .engine import EngineInfo, dask_client, run_dask, run_serial
-from .errors import CampaignError
-from .execute import FAILED, CaseOutcome
-from .hashing import file_sha256
-from .record import inputs, write_record
-from .spec import read_campaign
-from .store import assemble, finished, write_part, write_table
-from .summary import write_summary
+from nnfmu.workflows.campaign.cases import Case, expand_cases
+from nnfmu.workflows.campaign.engine import EngineInfo, dask_client, run_dask, run_serial
+from nnfmu.workflows.campaign.errors import CampaignError
+from nnfmu.workflows.campaign.execute import FAILED, CaseOutcome
+from nnfmu.workflows.campaign.hashing import file_sha256
+from nnfmu.workflows.campaign.record import inputs, write_record
+from nnfmu.workflows.campaign.spec import read_campaign
+from nnfmu.workflows.campaign.store import assemble, finished, write_part, write_table
+from nnfmu.workflows.campaign.summary import write_summary
 
 
 class Progress(Protocol):

@@ -12,9 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...physics import BushingChannelTruth, DamperTruth, ValveSide
-from .laws import BushingTruthLaw, ComponentLaw, DamperTruthLaw, LinearLaw
-from .reference import SplineDamper
+from nnfmu.physics import BushingChannelTruth, DamperTruth, ValveSide
+from nnfmu.vehicle.dynamics.builtin_elements import SplineDamper
+from nnfmu.vehicle.dynamics.laws import BushingTruthLaw, ComponentLaw, DamperTruthLaw, LinearLaw
 
 LINEAR, DAMPER, BUSHING = 0, 1, 2  # law kinds, column KIND of the layout
 KIND, VALUES, STATES, FLAG0, FLAG1, FLAG2, FLAG3 = range(7)  # layout columns

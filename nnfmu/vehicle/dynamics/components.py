@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from .errors import VehicleModelError
+from nnfmu.vehicle.dynamics.errors import VehicleModelError
 
 EXTERNAL = "external"
 REFERENCE = "reference"

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .law_tables import BUSHING, DAMPER, FLAG0, FLAG1, FLAG2, FLAG3, KIND, STATES, VALUES
+from nnfmu.vehicle.dynamics.law_tables import BUSHING, DAMPER, FLAG0, FLAG1, FLAG2, FLAG3, KIND, STATES, VALUES
 
 # Offsets of a damper's numbers in the law values (see law_tables._damper).
 _REBOUND, _JOUNCE = 0, 5

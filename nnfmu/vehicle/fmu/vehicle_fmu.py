@@ -21,15 +21,29 @@ import nnfmu
 from nnfmu.component import Component, Port, StatePort
 from nnfmu.fmu.build import build_fmu_from_model
 from nnfmu.fmu.options import BuildOptions
-
-from ..models import DEFAULT_FILE, LinearVehicle, QuarterCarParameters, VehicleModelError, VehicleParameters
-from ..models.full_vehicle import build_full_vehicle
-from ..models.linear import DiscreteVehicle
-from ..models.ports import CORNERS
-from ..models.quarter_car import build_quarter_car
-from .errors import VehicleBuildError
-from .settings import MAX_SUBSTEP, MODELS, VehicleBuildSettings
-from .step_graph import FIRST_IN, FIRST_OUT, INPUTS, INPUTS_START, OUTPUTS, STATE_IN, STATE_OUT, discrete_step_graph
+from nnfmu.vehicle.dynamics import (
+    DEFAULT_FILE,
+    LinearVehicle,
+    QuarterCarParameters,
+    VehicleModelError,
+    VehicleParameters,
+)
+from nnfmu.vehicle.dynamics.full_vehicle import build_full_vehicle
+from nnfmu.vehicle.dynamics.linear import DiscreteVehicle
+from nnfmu.vehicle.dynamics.ports import CORNERS
+from nnfmu.vehicle.dynamics.quarter_car import build_quarter_car
+from nnfmu.vehicle.fmu.errors import VehicleBuildError
+from nnfmu.vehicle.fmu.settings import MAX_SUBSTEP, MODELS, VehicleBuildSettings
+from nnfmu.vehicle.fmu.step_graph import (
+    FIRST_IN,
+    FIRST_OUT,
+    INPUTS,
+    INPUTS_START,
+    OUTPUTS,
+    STATE_IN,
+    STATE_OUT,
+    discrete_step_graph,
+)
 
 
 def vehicle_model(model: str, settings: VehicleBuildSettings) -> LinearVehicle:

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import VehicleModelError
+from nnfmu.vehicle.dynamics.errors import VehicleModelError
 
 
 @dataclass(frozen=True)

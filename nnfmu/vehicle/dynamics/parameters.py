@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import ParameterError
+from nnfmu.vehicle.dynamics.errors import ParameterError
 
 DEFAULTS_DIR = Path(__file__).resolve().parent.parent / "parameters"
 DEFAULT_FILE = DEFAULTS_DIR / "midsize_sedan.toml"
