@@ -42,11 +42,15 @@ WARM_UP = 4  # cases each engine runs before it is timed
 
 def campaign(folder: Path, paths: dict[str, Path], name: str, events: int, duration: float, seed: int) -> Path:
     """A campaign file of `events` class C drives (seeds from `seed`) x the linear and the firm damper."""
-    variants = "".join(f'[[variants]]\nname = "{v}"\nsystem = "{paths["system"]}"\nfmus = {{ damper = "{paths[v]}" }}\n'
-                       for v in ("linear", "firm"))
-    text = (f'[metrics]\nchannels = ["damper_force", "body_acceleration", "spindle_vertical_force"]\n'
-            f'[[events]]\nname = "C-20"\nclass = "C"\nspeed = 20.0\nduration = {duration}\nseed = {seed}\n'
-            f'repeats = {events}\n{variants}')
+    variants = "".join(
+        f'[[variants]]\nname = "{v}"\nsystem = "{paths["system"]}"\nfmus = {{ damper = "{paths[v]}" }}\n'
+        for v in ("linear", "firm")
+    )
+    text = (
+        f'[metrics]\nchannels = ["damper_force", "body_acceleration", "spindle_vertical_force"]\n'
+        f'[[events]]\nname = "C-20"\nclass = "C"\nspeed = 20.0\nduration = {duration}\nseed = {seed}\n'
+        f"repeats = {events}\n{variants}"
+    )
     path = folder / f"{name}.toml"
     path.write_text(text)
     return path
@@ -80,9 +84,14 @@ def timed_serial(path: Path, warm: Path, reuse_instances: bool = True) -> dict:
     started, cpu = time.perf_counter(), cpu_seconds()
     run_serial(cases, blobs, lambda case, outcome: walls.append(outcome.wall_s), reuse_instances)
     wall, cpu = time.perf_counter() - started, cpu_seconds() - cpu
-    return {"reuse_instances": reuse_instances, "cases": len(cases), "wall_s": wall, "cpu_s": cpu,
-            "cases_per_hour": len(cases) / wall * 3600,
-            "median_case_s": statistics.median(walls)}
+    return {
+        "reuse_instances": reuse_instances,
+        "cases": len(cases),
+        "wall_s": wall,
+        "cpu_s": cpu,
+        "cases_per_hour": len(cases) / wall * 3600,
+        "median_case_s": statistics.median(walls),
+    }
 
 
 def timed_dask(client, path: Path) -> dict:
@@ -92,8 +101,13 @@ def timed_dask(client, path: Path) -> dict:
     started, cpu = time.perf_counter(), cpu_seconds()
     run_dask(client, cases, blobs, lambda case, outcome: walls.append(outcome.wall_s))
     wall, cpu = time.perf_counter() - started, cpu_seconds() - cpu
-    return {"cases": len(cases), "wall_s": wall, "cpu_s": cpu, "cases_per_hour": len(cases) / wall * 3600,
-            "median_case_s": statistics.median(walls)}
+    return {
+        "cases": len(cases),
+        "wall_s": wall,
+        "cpu_s": cpu,
+        "cases_per_hour": len(cases) / wall * 3600,
+        "median_case_s": statistics.median(walls),
+    }
 
 
 def started_cluster(workers: int, warm: Path) -> tuple[contextlib.AbstractContextManager, object, float]:
@@ -126,8 +140,9 @@ def timed_processes(path: Path, warm: Path, processes: int) -> dict:
     share of the events (both variants of an event in one process, as a Dask group has them)."""
     context = multiprocessing.get_context("spawn")
     barrier, walls = context.Barrier(processes + 1), context.Queue()
-    workers = [context.Process(target=_share, args=(path, warm, i, processes, barrier, walls))
-               for i in range(processes)]
+    workers = [
+        context.Process(target=_share, args=(path, warm, i, processes, barrier, walls)) for i in range(processes)
+    ]
     for worker in workers:
         worker.start()
     barrier.wait()
@@ -137,8 +152,13 @@ def timed_processes(path: Path, warm: Path, processes: int) -> dict:
     for worker in workers:
         worker.join()
     cases = sum(n for n, _ in done)
-    return {"processes": processes, "cases": cases, "wall_s": wall, "cases_per_hour": cases / wall * 3600,
-            "process_wall_s": [w for _, w in done]}
+    return {
+        "processes": processes,
+        "cases": cases,
+        "wall_s": wall,
+        "cases_per_hour": cases / wall * 3600,
+        "process_wall_s": [w for _, w in done],
+    }
 
 
 def worker_state() -> dict:
@@ -147,19 +167,23 @@ def worker_state() -> dict:
     import psutil
 
     process = psutil.Process()
-    return {"rss_mb": process.memory_info().rss / 1e6, "open_fds": process.num_fds(),
-            "maps": sum(1 for _ in open(f"/proc/{os.getpid()}/maps"))}
+    return {
+        "rss_mb": process.memory_info().rss / 1e6,
+        "open_fds": process.num_fds(),
+        "maps": sum(1 for _ in open(f"/proc/{os.getpid()}/maps")),
+    }
 
 
-def memory(folder: Path, paths: dict[str, Path], total: int, duration: float, on_dask: bool,
-           checkpoints: int = 4) -> dict:
+def memory(
+    folder: Path, paths: dict[str, Path], total: int, duration: float, on_dask: bool, checkpoints: int = 4
+) -> dict:
     """The state of one Dask worker (or, `on_dask` False, of this process running the cases serially) after 10
     cases, then after each of `checkpoints` equal blocks up to `total` cases."""
     block = (total - 10) // checkpoints // 2  # events per block (x 2 variants)
     seed = 1000 if on_dask else 100_000
     states, failed, done = {}, [], 0
     started = time.perf_counter()
-    with (dask_client(None, 1) if on_dask else contextlib.nullcontext((None, None))) as (client, _):
+    with dask_client(None, 1) if on_dask else contextlib.nullcontext((None, None)) as (client, _):
         for i, events in enumerate([5] + [block] * checkpoints):
             cases, blobs = cases_of(campaign(folder, paths, f"memory-{on_dask}-{i}", events, duration, seed))
             seed += events
@@ -174,8 +198,13 @@ def memory(folder: Path, paths: dict[str, Path], total: int, duration: float, on
                 run_serial(cases, blobs, count)
             done += len(cases)
             states[done] = next(iter(client.run(worker_state).values())) if on_dask else worker_state()
-    return {"cases": done, "failed": len(failed), "wall_s": time.perf_counter() - started, "states": states,
-            "rss_growth": states[done]["rss_mb"] / states[10]["rss_mb"] - 1.0}
+    return {
+        "cases": done,
+        "failed": len(failed),
+        "wall_s": time.perf_counter() - started,
+        "states": states,
+        "rss_growth": states[done]["rss_mb"] / states[10]["rss_mb"] - 1.0,
+    }
 
 
 def fmu_setup(paths: dict[str, Path], repeats: int = 200) -> dict:
@@ -253,36 +282,49 @@ def main() -> None:
     plain = memory(folder, paths, args.memory_cases, args.memory_duration, on_dask=False)
     print(json.dumps({"memory_serial": plain}), flush=True)
     per_case_setup = setup["vehicle"]["instantiate_ms"] + setup["linear"]["instantiate_ms"]
-    print(json.dumps({
-        "cases": serial["cases"], "drive_s": args.duration, "cpu_count": os.cpu_count(),
-        "load_average_at_start": [round(x, 2) for x in load],
-        "load_average_at_end": [round(x, 2) for x in os.getloadavg()],
-        "serial_cases_per_hour": round(serial["cases_per_hour"]),
-        "serial_fresh_instances_cases_per_hour": round(fresh["cases_per_hour"]),
-        "local_2_cases_per_hour": round(two["cases_per_hour"]),
-        "parallel_efficiency": round(statistics.median(efficiency), 3),
-        "parallel_efficiency_by_round": [round(e, 3) for e in efficiency],
-        "plain_processes_2_efficiency_by_round": [round(e, 3) for e in ceiling],
-        "local_2_vs_plain_processes_2": round(statistics.median(
-            r["local_2"]["cases_per_hour"] / r["processes_2"]["cases_per_hour"] for r in rounds), 3),
-        "case_slowdown_two_at_once": round(median("local_2", "median_case_s") / serial["median_case_s"], 3),
-        "cpu_s_per_case": {"serial": round(serial["cpu_s"] / serial["cases"], 4),
-                           "local_1": round(one["cpu_s"] / one["cases"], 4),
-                           "local_2": round(two["cpu_s"] / two["cases"], 4)},
-        "parallel_efficiency_by_cpu_time": round(serial["cpu_s"] / two["cpu_s"], 3),
-        "engine_overhead_per_case_s": round((one["wall_s"] - serial_1["wall_s"]) / serial_1["cases"], 4),
-        "local_cluster_start_s": {"1": round(up_1, 2), "2": round(up_2, 2)},
-        "fmu_open_per_case_ms": round(per_case_setup, 2),
-        "fmu_reset_per_case_ms": round(setup["vehicle"]["reset_ms"] + setup["linear"]["reset_ms"], 4),
-        "fmu_open_share_of_fresh_serial_case": round(per_case_setup / 1e3 / fresh["median_case_s"], 3),
-        "worker_rss_mb_by_cases": {n: round(state["rss_mb"], 1) for n, state in rss["states"].items()},
-        "worker_open_fds_by_cases": {n: state["open_fds"] for n, state in rss["states"].items()},
-        "worker_memory_maps_by_cases": {n: state["maps"] for n, state in rss["states"].items()},
-        "rss_growth_10_to_last": round(rss["rss_growth"], 4), "memory_cases_failed": rss["failed"],
-        "serial_rss_mb_by_cases": {n: round(state["rss_mb"], 1) for n, state in plain["states"].items()},
-        "serial_open_fds_by_cases": {n: state["open_fds"] for n, state in plain["states"].items()},
-        "serial_rss_growth_10_to_last": round(plain["rss_growth"], 4),
-    }))
+    print(
+        json.dumps(
+            {
+                "cases": serial["cases"],
+                "drive_s": args.duration,
+                "cpu_count": os.cpu_count(),
+                "load_average_at_start": [round(x, 2) for x in load],
+                "load_average_at_end": [round(x, 2) for x in os.getloadavg()],
+                "serial_cases_per_hour": round(serial["cases_per_hour"]),
+                "serial_fresh_instances_cases_per_hour": round(fresh["cases_per_hour"]),
+                "local_2_cases_per_hour": round(two["cases_per_hour"]),
+                "parallel_efficiency": round(statistics.median(efficiency), 3),
+                "parallel_efficiency_by_round": [round(e, 3) for e in efficiency],
+                "plain_processes_2_efficiency_by_round": [round(e, 3) for e in ceiling],
+                "local_2_vs_plain_processes_2": round(
+                    statistics.median(
+                        r["local_2"]["cases_per_hour"] / r["processes_2"]["cases_per_hour"] for r in rounds
+                    ),
+                    3,
+                ),
+                "case_slowdown_two_at_once": round(median("local_2", "median_case_s") / serial["median_case_s"], 3),
+                "cpu_s_per_case": {
+                    "serial": round(serial["cpu_s"] / serial["cases"], 4),
+                    "local_1": round(one["cpu_s"] / one["cases"], 4),
+                    "local_2": round(two["cpu_s"] / two["cases"], 4),
+                },
+                "parallel_efficiency_by_cpu_time": round(serial["cpu_s"] / two["cpu_s"], 3),
+                "engine_overhead_per_case_s": round((one["wall_s"] - serial_1["wall_s"]) / serial_1["cases"], 4),
+                "local_cluster_start_s": {"1": round(up_1, 2), "2": round(up_2, 2)},
+                "fmu_open_per_case_ms": round(per_case_setup, 2),
+                "fmu_reset_per_case_ms": round(setup["vehicle"]["reset_ms"] + setup["linear"]["reset_ms"], 4),
+                "fmu_open_share_of_fresh_serial_case": round(per_case_setup / 1e3 / fresh["median_case_s"], 3),
+                "worker_rss_mb_by_cases": {n: round(state["rss_mb"], 1) for n, state in rss["states"].items()},
+                "worker_open_fds_by_cases": {n: state["open_fds"] for n, state in rss["states"].items()},
+                "worker_memory_maps_by_cases": {n: state["maps"] for n, state in rss["states"].items()},
+                "rss_growth_10_to_last": round(rss["rss_growth"], 4),
+                "memory_cases_failed": rss["failed"],
+                "serial_rss_mb_by_cases": {n: round(state["rss_mb"], 1) for n, state in plain["states"].items()},
+                "serial_open_fds_by_cases": {n: state["open_fds"] for n, state in plain["states"].items()},
+                "serial_rss_growth_10_to_last": round(plain["rss_growth"], 4),
+            }
+        )
+    )
 
 
 if __name__ == "__main__":

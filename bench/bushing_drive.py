@@ -49,8 +49,7 @@ def reference(out: Path, seed: int, duration: float) -> tuple[Path, float | None
     if path.is_file():
         log(f"reusing {path}")
         return path, None
-    drive = generate_drive(DriveSettings(seed=seed, duration=duration + 1e-3, sample_rate=1000.0,
-                                         fade_in=fade))
+    drive = generate_drive(DriveSettings(seed=seed, duration=duration + 1e-3, sample_rate=1000.0, fade_in=fade))
     solved = monolithic_reference(SYSTEM, drive, vehicle_components(SYSTEM))
     log(f"reference on drive seed {seed}: {duration:g} s solved in {solved.seconds:.0f} s")
     return save_measurement(solved.measurement, path), solved.seconds
@@ -66,8 +65,11 @@ def train_set(record: Path, folder: Path, reuse: Path | None) -> tuple[dict[str,
             continue
         trained = train_from_file(record, TrainRequest(preset=preset), folder / f"{preset}.onnx")
         models[preset] = trained.path
-        described[preset] = {"train_s": round(trained.seconds, 1), "hidden": trained.model.settings["hidden"],
-                             "test_split_nrmse": trained.metrics["test"].nrmse}
+        described[preset] = {
+            "train_s": round(trained.seconds, 1),
+            "hidden": trained.model.settings["hidden"],
+            "test_split_nrmse": trained.metrics["test"].nrmse,
+        }
         log(f"{preset} on {record.name}: {trained.seconds:.0f} s, test-split NRMSE {trained.metrics['test'].nrmse:.4f}")
     return models, described
 
@@ -79,10 +81,11 @@ def judged(models: dict[str, Path], held_out: Path, folder: Path) -> dict[str, o
     for e in replay.excursions:
         envelope[e.port] = max(envelope.get(e.port, 0.0), e.range_used)
     return {
-        "nrmse": {element: {c.name.removeprefix(f"{element}_"): c.metrics.nrmse for c in comparisons}
-                  for element, comparisons in replay.comparisons.items()},
-        "mean_shift": {c.name.removeprefix(f"{CHECKED}_"): c.metrics.mean_shift
-                       for c in replay.comparisons[CHECKED]},
+        "nrmse": {
+            element: {c.name.removeprefix(f"{element}_"): c.metrics.nrmse for c in comparisons}
+            for element, comparisons in replay.comparisons.items()
+        },
+        "mean_shift": {c.name.removeprefix(f"{CHECKED}_"): c.metrics.mean_shift for c in replay.comparisons[CHECKED]},
         "largest_envelope_use": envelope,
     }
 
@@ -95,11 +98,18 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--heldout-seed", type=int, default=0)
     parser.add_argument("--rig-duration", type=float, default=60.0)
     parser.add_argument("--margin", type=float, default=1.2)
-    parser.add_argument("--elements", nargs="+", default=bushing_elements(SYSTEM),
-                        help="bushings the drive is derived from (default: all four front LCA bushings)")
+    parser.add_argument(
+        "--elements",
+        nargs="+",
+        default=bushing_elements(SYSTEM),
+        help="bushings the drive is derived from (default: all four front LCA bushings)",
+    )
     parser.add_argument("--lab-models", type=Path, help="folder with the lab-trained bushing-*.onnx to reuse")
-    parser.add_argument("--unsettled", action="store_true",
-                        help="start the rig record at zero deflection, not at the car's static deflection")
+    parser.add_argument(
+        "--unsettled",
+        action="store_true",
+        help="start the rig record at zero deflection, not at the car's static deflection",
+    )
     args = parser.parse_args(argv)
     if args.source_seed == args.heldout_seed:
         parser.error("the held-out drive must differ from the source drive")
@@ -109,9 +119,13 @@ def main(argv: list[str] | None = None) -> None:
     held_out, held_out_s = reference(out, args.heldout_seed, args.duration)
     lab_record, _ = write_rig("bushing", out / "lab" / "bushing_lab.csv", RigOptions(seed=0))
     started = time.perf_counter()
-    vehicle_record, truth = write_vehicle_rig(source, args.elements, out / "vehicle" / "bushing_vehicle.csv",
-                                              RigOptions(seed=0, duration=args.rig_duration),
-                                              DriveDesign(margin=args.margin, settled=not args.unsettled))
+    vehicle_record, truth = write_vehicle_rig(
+        source,
+        args.elements,
+        out / "vehicle" / "bushing_vehicle.csv",
+        RigOptions(seed=0, duration=args.rig_duration),
+        DriveDesign(margin=args.margin, settled=not args.unsettled),
+    )
     rig_s = time.perf_counter() - started
     lab_models, lab_training = train_set(lab_record, out / "lab", args.lab_models)
     vehicle_models, vehicle_training = train_set(vehicle_record, out / "vehicle", None)
@@ -120,27 +134,46 @@ def main(argv: list[str] | None = None) -> None:
     design = json.loads(truth.read_text())
     drives = design["excitation"]["drives"]
     checked = after["nrmse"][CHECKED]
-    print(json.dumps({
-        "benchmark": "bushing networks: lab rig record vs vehicle-derived rig record, open loop along a held-out "
-                     "car motion against the truth physics",
-        "settings": {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items()},
-        "reference_s": {"source": source_s, "held_out": held_out_s},
-        "rig_design_s": round(rig_s, 2),
-        "rig_design": {key: {k: c[k] for k in ("unit", "start", "working_point", "target_low", "target_high",
-                                               "designed", "designed_rms_over_simulated_rms",
-                                               "simulated_variance_outside_band")}
-                       | {"simulated": c["simulated"][args.elements[0]]}
-                       for key, c in drives["channels"].items()},
-        "sensors_full_scale": {name: {"test": s["full_scale"], "rig_default": s["rig_default_full_scale"]}
-                               for name, s in design["sensors"].items()},
-        "training": {"lab": lab_training, "vehicle": vehicle_training},
-        "heldout": {"lab": before, "vehicle": after},
-        "checked_element": CHECKED,
-        "nrmse_lab_vs_vehicle": {channel: [before["nrmse"][CHECKED][channel], value]
-                                 for channel, value in checked.items()},
-        "target_nrmse": TARGET_NRMSE,
-        "pass": all(value <= TARGET_NRMSE for value in checked.values()),
-    }))
+    print(
+        json.dumps(
+            {
+                "benchmark": "bushing networks: lab rig record vs vehicle-derived rig record, open loop along a "
+                "held-out car motion against the truth physics",
+                "settings": {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items()},
+                "reference_s": {"source": source_s, "held_out": held_out_s},
+                "rig_design_s": round(rig_s, 2),
+                "rig_design": {
+                    key: {
+                        k: c[k]
+                        for k in (
+                            "unit",
+                            "start",
+                            "working_point",
+                            "target_low",
+                            "target_high",
+                            "designed",
+                            "designed_rms_over_simulated_rms",
+                            "simulated_variance_outside_band",
+                        )
+                    }
+                    | {"simulated": c["simulated"][args.elements[0]]}
+                    for key, c in drives["channels"].items()
+                },
+                "sensors_full_scale": {
+                    name: {"test": s["full_scale"], "rig_default": s["rig_default_full_scale"]}
+                    for name, s in design["sensors"].items()
+                },
+                "training": {"lab": lab_training, "vehicle": vehicle_training},
+                "heldout": {"lab": before, "vehicle": after},
+                "checked_element": CHECKED,
+                "nrmse_lab_vs_vehicle": {
+                    channel: [before["nrmse"][CHECKED][channel], value] for channel, value in checked.items()
+                },
+                "target_nrmse": TARGET_NRMSE,
+                "pass": all(value <= TARGET_NRMSE for value in checked.values()),
+            }
+        )
+    )
 
 
 if __name__ == "__main__":

@@ -42,8 +42,14 @@ QUICK_RECORDS = {"damper": 40.0, "bushing": 20.0}  # [s] rig records for the qui
 QUICK_TRAINING = {"restarts": 1, "max_epochs": 15}
 # [s] for 50 s simulated (full vehicle: 20x real time)
 TARGETS = {"full_vehicle_wall_s": 2.5, "quarter_car_wall_s": 1.0}
-MOTION_CHANNELS = ("body_heave", "body_pitch", "lca_fl_angle", "damper_fl_displacement",
-                   "bushing_fl_front_axial_displacement", "bushing_fl_front_radial_displacement")
+MOTION_CHANNELS = (
+    "body_heave",
+    "body_pitch",
+    "lca_fl_angle",
+    "damper_fl_displacement",
+    "bushing_fl_front_axial_displacement",
+    "bushing_fl_front_radial_displacement",
+)
 BOUNDED_RATIO = 10.0  # a diverging loop grows by orders of magnitude; a stable one stays within tens of percent
 
 
@@ -54,12 +60,16 @@ def log(line: str) -> None:
 def linear_bushing_vehicle(out: Path) -> Path:
     """The full vehicle with the parameter file's linear LCA bushings built in (the boundedness yardstick)."""
     components = {name: REFERENCE for name in bushing_elements("full-vehicle")}
-    return build_vehicle_fmu("full-vehicle", out / "full-vehicle-linear-bushings.fmu",
-                             VehicleBuildSettings(components=components, sample_period=STEP))
+    return build_vehicle_fmu(
+        "full-vehicle",
+        out / "full-vehicle-linear-bushings.fmu",
+        VehicleBuildSettings(components=components, sample_period=STEP),
+    )
 
 
-def timed_runs(ssd: Path, drive: Measurement, duration: float, repeats: int) -> tuple[list[float], list[float],
-                                                                                     Measurement | None, str]:
+def timed_runs(
+    ssd: Path, drive: Measurement, duration: float, repeats: int
+) -> tuple[list[float], list[float], Measurement | None, str]:
     """(wall times [s] of whole runs, their stepping times [s], the last result, error text or '')."""
     walls, loops, result = [], [], None
     settings = CosimSettings(step=STEP, stop_time=duration)
@@ -78,9 +88,14 @@ def timed_runs(ssd: Path, drive: Measurement, duration: float, repeats: int) -> 
 def summary(name: str, fmus: int, walls: list[float], loops: list[float], duration: float, error: str) -> dict:
     """One system's timings: every run, medians, real-time factor (None if the run failed) and the error text."""
     wall = statistics.median(walls)
-    record = {"system": name, "fmus": fmus, "wall_s": [round(w, 3) for w in walls], "median_wall_s": round(wall, 3),
-              "median_loop_s": round(statistics.median(loops), 3) if loops else None,
-              "real_time_factor": round(duration / wall, 2) if not error else None}
+    record = {
+        "system": name,
+        "fmus": fmus,
+        "wall_s": [round(w, 3) for w in walls],
+        "median_wall_s": round(wall, 3),
+        "median_loop_s": round(statistics.median(loops), 3) if loops else None,
+        "real_time_factor": round(duration / wall, 2) if not error else None,
+    }
     return record | ({"error": error} if error else {})
 
 
@@ -91,17 +106,24 @@ def boundedness(result: Measurement | None, yardstick: Measurement) -> dict:
     finite = all(bool(np.all(np.isfinite(result[c]))) for c in result.names)
     ratios = {c: float(np.max(np.abs(result[c])) / np.max(np.abs(yardstick[c]))) for c in MOTION_CHANNELS}
     largest = max(result.names, key=lambda c: float(np.max(np.abs(result[c]))))
-    return {"bounded": finite and all(r < BOUNDED_RATIO for r in ratios.values()), "all_finite": finite,
-            "peak_ratio_to_linear_bushings": {c: round(r, 3) for c, r in ratios.items()},
-            "largest_channel": f"{largest} [{result.units[largest]}]",
-            "largest_abs_value": float(np.max(np.abs(result[largest])))}
+    return {
+        "bounded": finite and all(r < BOUNDED_RATIO for r in ratios.values()),
+        "all_finite": finite,
+        "peak_ratio_to_linear_bushings": {c: round(r, 3) for c, r in ratios.items()},
+        "largest_channel": f"{largest} [{result.units[largest]}]",
+        "largest_abs_value": float(np.max(np.abs(result[largest]))),
+    }
 
 
 def met(records: dict[str, dict], duration: float) -> dict[str, bool]:
     """Whether each system ran without error within its target, scaled to the simulated duration."""
-    return {key: "error" not in records[system] and records[system]["median_wall_s"] <= limit * duration / 50.0
-            for key, system, limit in (("full_vehicle_wall_s", "full-vehicle", TARGETS["full_vehicle_wall_s"]),
-                                       ("quarter_car_wall_s", "quarter-car", TARGETS["quarter_car_wall_s"]))}
+    return {
+        key: "error" not in records[system] and records[system]["median_wall_s"] <= limit * duration / 50.0
+        for key, system, limit in (
+            ("full_vehicle_wall_s", "full-vehicle", TARGETS["full_vehicle_wall_s"]),
+            ("quarter_car_wall_s", "quarter-car", TARGETS["quarter_car_wall_s"]),
+        )
+    }
 
 
 def main() -> None:
@@ -110,15 +132,26 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="nnfmu-bench-cosim-") as scratch:
         work = Path(scratch)
         prepared = time.perf_counter()
-        models = models_in(Path(sys.argv[1]) if len(sys.argv) > 1 else work / "models", QUICK_RECORDS,
-                           **QUICK_TRAINING)
+        models = models_in(Path(sys.argv[1]) if len(sys.argv) > 1 else work / "models", QUICK_RECORDS, **QUICK_TRAINING)
         fmus = build_component_fmus(models, work / "fmu", with_bushing=True)
         drive = generate_drive(DriveSettings(duration=duration + STEP))
-        ssds = {system: write_system(system, build_vehicle(system, work / "fmu", STEP), fmus.dampers[DAMPER],
-                                     fmus.bushing if bushing_elements(system) else None, work / system)
-                for system in ("quarter-car", "full-vehicle")}
-        linear = write_system("full-vehicle", linear_bushing_vehicle(work / "fmu"), fmus.dampers[DAMPER], None,
-                              work / "full-vehicle-linear-bushings")
+        ssds = {
+            system: write_system(
+                system,
+                build_vehicle(system, work / "fmu", STEP),
+                fmus.dampers[DAMPER],
+                fmus.bushing if bushing_elements(system) else None,
+                work / system,
+            )
+            for system in ("quarter-car", "full-vehicle")
+        }
+        linear = write_system(
+            "full-vehicle",
+            linear_bushing_vehicle(work / "fmu"),
+            fmus.dampers[DAMPER],
+            None,
+            work / "full-vehicle-linear-bushings",
+        )
         log(f"prepared in {time.perf_counter() - prepared:.1f} s")
         load = os.getloadavg()[0]  # other work on the machine slows the timed runs
         records, results = {}, {}
@@ -130,22 +163,41 @@ def main() -> None:
         if yardstick is None:
             raise SystemExit(f"the linear-bushing yardstick run failed: {error}")
     full, quarter = records["full-vehicle"], records["quarter-car"]
-    print(json.dumps({
-        "simulated_s": duration, "step_s": STEP, "steps": round(duration / STEP), "repeats": repeats,
-        "full_vehicle_wall_s": full["median_wall_s"], "quarter_car_wall_s": quarter["median_wall_s"],
-        "real_time_factor": {"full_vehicle": full["real_time_factor"], "quarter_car": quarter["real_time_factor"]},
-        "fmus": {"full_vehicle": full["fmus"], "quarter_car": quarter["fmus"]},
-        "targets_s": TARGETS, "targets_met": met(records, duration),
-        "full_vehicle_stability": boundedness(results["full-vehicle"], yardstick),
-        "systems": records,
-        "setup": {"scheme": "the master's defaults (vehicle first, linear extrapolation, refresh)",
-                  "inner_loop": results["full-vehicle"].notes.get("inner_loop") if results["full-vehicle"] else None,
-                  "vehicle_sample_period_s": STEP, "damper_network": DAMPER,
-                  "bushings": "network FMUs on stabilised vehicle ports", "network_output_filter": "FMU default (off)",
-                  "models": sys.argv[1] if len(sys.argv) > 1 else "quick-trained (bench)",
-                  "cpus": os.cpu_count(), "load_average_1min_before_runs": round(load, 2),
-                  "python": platform.python_version(), "machine": platform.machine()},
-    }, allow_nan=False))
+    print(
+        json.dumps(
+            {
+                "simulated_s": duration,
+                "step_s": STEP,
+                "steps": round(duration / STEP),
+                "repeats": repeats,
+                "full_vehicle_wall_s": full["median_wall_s"],
+                "quarter_car_wall_s": quarter["median_wall_s"],
+                "real_time_factor": {
+                    "full_vehicle": full["real_time_factor"],
+                    "quarter_car": quarter["real_time_factor"],
+                },
+                "fmus": {"full_vehicle": full["fmus"], "quarter_car": quarter["fmus"]},
+                "targets_s": TARGETS,
+                "targets_met": met(records, duration),
+                "full_vehicle_stability": boundedness(results["full-vehicle"], yardstick),
+                "systems": records,
+                "setup": {
+                    "scheme": "the master's defaults (vehicle first, linear extrapolation, refresh)",
+                    "inner_loop": results["full-vehicle"].notes.get("inner_loop") if results["full-vehicle"] else None,
+                    "vehicle_sample_period_s": STEP,
+                    "damper_network": DAMPER,
+                    "bushings": "network FMUs on stabilised vehicle ports",
+                    "network_output_filter": "FMU default (off)",
+                    "models": sys.argv[1] if len(sys.argv) > 1 else "quick-trained (bench)",
+                    "cpus": os.cpu_count(),
+                    "load_average_1min_before_runs": round(load, 2),
+                    "python": platform.python_version(),
+                    "machine": platform.machine(),
+                },
+            },
+            allow_nan=False,
+        )
+    )
 
 
 if __name__ == "__main__":

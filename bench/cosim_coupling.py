@@ -51,11 +51,19 @@ CHANNELS = ("damper_force", "damper_velocity", "damper_displacement", "body_acce
 def quarter_car_drive(duration: float) -> Measurement:
     """The front-left track of a class C drive: the displacement and velocity of the post the quarter car stands on."""
     four = generate_drive(DriveSettings(duration=duration + 0.01))
-    single = Measurement(four.time, {"actuator_fl_displacement": four["actuator_fl_displacement"]},
-                         {"actuator_fl_displacement": "m"}, "class C drive, front left")
+    single = Measurement(
+        four.time,
+        {"actuator_fl_displacement": four["actuator_fl_displacement"]},
+        {"actuator_fl_displacement": "m"},
+        "class C drive, front left",
+    )
     rates = derive_rates(single)
-    return Measurement(rates.time, {k: rates[k] for k in ("actuator_fl_displacement", "actuator_fl_velocity")},
-                       {"actuator_fl_displacement": "m", "actuator_fl_velocity": "m/s"}, single.source)
+    return Measurement(
+        rates.time,
+        {k: rates[k] for k in ("actuator_fl_displacement", "actuator_fl_velocity")},
+        {"actuator_fl_displacement": "m", "actuator_fl_velocity": "m/s"},
+        single.source,
+    )
 
 
 def errors(result: Measurement, reference: dict[str, np.ndarray], period: float) -> dict[str, dict[str, float]]:
@@ -66,8 +74,10 @@ def errors(result: Measurement, reference: dict[str, np.ndarray], period: float)
     for name in CHANNELS:
         got, want = result[name][on_grid], reference[name][k[on_grid]]
         spread = np.sqrt(np.mean((want - want.mean()) ** 2))
-        found[name] = {"nrmse": float(np.sqrt(np.mean((got - want) ** 2)) / spread),
-                       "rel_peak_error": float(np.max(np.abs(got - want)) / np.max(np.abs(want)))}
+        found[name] = {
+            "nrmse": float(np.sqrt(np.mean((got - want) ** 2)) / spread),
+            "rel_peak_error": float(np.max(np.abs(got - want)) / np.max(np.abs(want))),
+        }
     return found
 
 
@@ -81,29 +91,45 @@ def main() -> None:
     damper = build_fmu(folder / "damper.onnx", BuildOptions(out=folder / "damper.fmu"))
     vehicle = build_quarter_car(params)
     started = time.perf_counter()
-    exact = simulate_monolithic(vehicle, {"damper_force": LinearLaw(0.0, damping)},
-                                {k: drive[k] for k in drive.names},
-                                MonolithicSettings(sample_period=drive.sample_period, step=5e-5),
-                                x0=np.array(initial_state(vehicle)))
+    exact = simulate_monolithic(
+        vehicle,
+        {"damper_force": LinearLaw(0.0, damping)},
+        {k: drive[k] for k in drive.names},
+        MonolithicSettings(sample_period=drive.sample_period, step=5e-5),
+        x0=np.array(initial_state(vehicle)),
+    )
     monolithic_s = time.perf_counter() - started
     table = {}
     for h in STEPS:
         car = build_vehicle_fmu("quarter-car", folder / f"car_{h:g}.fmu", VehicleBuildSettings(sample_period=h))
-        ssd = write_ssd(connect_by_name("quarter car", ("vehicle", car), {"damper": damper}, folder),
-                        folder / f"system_{h:g}.ssd")
+        ssd = write_ssd(
+            connect_by_name("quarter car", ("vehicle", car), {"damper": damper}, folder), folder / f"system_{h:g}.ssd"
+        )
         with open_system(ssd) as system:
             for name, kw in SCHEMES.items():
                 started = time.perf_counter()
                 run = cosimulate(system, drive, CosimSettings(step=h, stop_time=duration, **kw))
-                row = {"step_ms": h * 1e3, "scheme": name,
-                       "errors": errors(run.measurement, exact, drive.sample_period),
-                       "mean_iterations": round(run.mean_iterations, 2), "unconverged": run.unconverged_steps,
-                       "wall_s": round(time.perf_counter() - started, 2)}
+                row = {
+                    "step_ms": h * 1e3,
+                    "scheme": name,
+                    "errors": errors(run.measurement, exact, drive.sample_period),
+                    "mean_iterations": round(run.mean_iterations, 2),
+                    "unconverged": run.unconverged_steps,
+                    "wall_s": round(time.perf_counter() - started, 2),
+                }
                 table[(h, name)] = row
                 print(json.dumps(row), flush=True)
     at_1ms = {name: {c: round(table[(1e-3, name)]["errors"][c]["nrmse"], 6) for c in CHANNELS} for name in SCHEMES}
-    print(json.dumps({"duration_s": duration, "monolithic_rk4_step_s": 5e-5,
-                      "monolithic_wall_s": round(monolithic_s, 1), "nrmse_at_1ms": at_1ms}))
+    print(
+        json.dumps(
+            {
+                "duration_s": duration,
+                "monolithic_rk4_step_s": 5e-5,
+                "monolithic_wall_s": round(monolithic_s, 1),
+                "nrmse_at_1ms": at_1ms,
+            }
+        )
+    )
 
 
 if __name__ == "__main__":

@@ -42,8 +42,12 @@ def record(case: str, duration: float | None) -> Measurement:
     if case != "passive":
         return m
     steps = np.random.default_rng(5).uniform(0.0, 5.0, len(m) // 100 + 1)
-    return Measurement(m.time, {**m.channels, "voltage": np.repeat(steps, 100)[: len(m)]},
-                       {**m.units, "voltage": "V"}, f"{m.source} (unrelated voltage)")
+    return Measurement(
+        m.time,
+        {**m.channels, "voltage": np.repeat(steps, 100)[: len(m)]},
+        {**m.units, "voltage": "V"},
+        f"{m.source} (unrelated voltage)",
+    )
 
 
 def trained(m: Measurement, preset: str, path: Path, settings: LoopSettings):
@@ -72,11 +76,15 @@ def bench_case(case: str, duration: float | None, folder: Path) -> dict:
     trained(m, "damper-hysteresis", folder / f"{case}_first.onnx", settings)
     report = run_loop(m, folder / f"{case}_first.onnx", "force", folder / f"{case}_loop", settings)
     result = {
-        "case": case, "samples": len(m), "effects_added": report.effects_added,
+        "case": case,
+        "samples": len(m),
+        "effects_added": report.effects_added,
         "features_added": [list(it.features_added) for it in report.iterations if it.accepted],
-        "nrmse_before": report.error_before["nrmse"], "nrmse_after": report.error_after["nrmse"],
+        "nrmse_before": report.error_before["nrmse"],
+        "nrmse_after": report.error_after["nrmse"],
         "voltage_or_current_significant": [
-            [e.name for e in d.ranking if e.name.startswith("input:") and e.significant] for d in report.diagnoses],
+            [e.name for e in d.ranking if e.name.startswith("input:") and e.significant] for d in report.diagnoses
+        ],
         "loop_seconds": round(time.perf_counter() - started, 1),
     }
     if case != "passive":
@@ -100,11 +108,23 @@ def main(argv: list[str] | None = None) -> None:
         for case in args.case:
             results.append(bench_case(case, args.duration, Path(tmp)))
             print(json.dumps(results[-1]), flush=True)
-    print(json.dumps({"benchmark": "loop adds a measured channel the model does not use", "target_ratio": TARGET_RATIO,
-                      "cases": {r["case"]: {k: r[k] for k in ("effects_added", "nrmse_before", "nrmse_after",
-                                                              "semiactive_nrmse", "target_met") if k in r}
-                                for r in results},
-                      "seconds": round(time.perf_counter() - started, 1)}))
+    print(
+        json.dumps(
+            {
+                "benchmark": "loop adds a measured channel the model does not use",
+                "target_ratio": TARGET_RATIO,
+                "cases": {
+                    r["case"]: {
+                        k: r[k]
+                        for k in ("effects_added", "nrmse_before", "nrmse_after", "semiactive_nrmse", "target_met")
+                        if k in r
+                    }
+                    for r in results
+                },
+                "seconds": round(time.perf_counter() - started, 1),
+            }
+        )
+    )
 
 
 if __name__ == "__main__":

@@ -52,8 +52,9 @@ HISTORY = get_preset("damper-hysteresis").spec  # velocity, its differences over
 
 
 def _without(spec: FeatureSpec, kind: type) -> FeatureSpec:
-    return FeatureSpec(taps=spec.taps, output=spec.output, derived=tuple(d for d in spec.derived
-                                                                          if not isinstance(d, kind)))
+    return FeatureSpec(
+        taps=spec.taps, output=spec.output, derived=tuple(d for d in spec.derived if not isinstance(d, kind))
+    )
 
 
 NO_SIGN = _without(HISTORY, SmoothSign)  # cannot form the seal's Coulomb step
@@ -84,11 +85,13 @@ CASES = {
     "seal_friction": Case(FULL, NO_SIGN, ("seal_friction",)),
     "hysteresis": Case(("hysteresis", "seal_friction"), STATIC, ("hysteresis",)),
     "inertia": Case(("seal_friction", "inertia"), STATIC, ("inertia",)),
-    "gas_force+temperature": Case((*FULL, "gas_force", "temperature"), HISTORY, ("gas_force", "temperature"),
-                                  duration=HEATING),
+    "gas_force+temperature": Case(
+        (*FULL, "gas_force", "temperature"), HISTORY, ("gas_force", "temperature"), duration=HEATING
+    ),
     "gas_force+seal_friction": Case((*FULL, "gas_force"), NO_SIGN, ("gas_force", "seal_friction")),
-    "temperature+inertia": Case(("seal_friction", "inertia", "temperature"), STATIC, ("temperature", "inertia"),
-                                duration=HEATING),
+    "temperature+inertia": Case(
+        ("seal_friction", "inertia", "temperature"), STATIC, ("temperature", "inertia"), duration=HEATING
+    ),
     "none": Case(FULL, HISTORY, ()),
     "noise_only": Case(FULL, HISTORY, (), noise_only=True),
 }
@@ -104,8 +107,9 @@ def predict(path: Path, m: Measurement) -> np.ndarray:
 
 
 def record(effects: tuple[str, ...], duration: float, seed: int, noise: float) -> Measurement:
-    return simulate_rig("damper", RigOptions(duration=duration, seed=seed, effects=effects, excitation="random",
-                                             noise=noise)).measurement
+    return simulate_rig(
+        "damper", RigOptions(duration=duration, seed=seed, effects=effects, excitation="random", noise=noise)
+    ).measurement
 
 
 def perfect_model(effects: tuple[str, ...], m: Measurement, clean: Measurement) -> np.ndarray:
@@ -119,8 +123,9 @@ def perfect_model(effects: tuple[str, ...], m: Measurement, clean: Measurement) 
     return force[::substeps]
 
 
-def missing_effect_nrmse(case: Case, clean: np.ndarray, duration: float, seed: int, measured: Measurement,
-                         rows: np.ndarray) -> float:
+def missing_effect_nrmse(
+    case: Case, clean: np.ndarray, duration: float, seed: int, measured: Measurement, rows: np.ndarray
+) -> float:
     """Rms about its mean, on `rows`, of the missing effects' force (`clean`, the noise-free force of the case's
     record, minus the same record without them), as a share of the rms measured force there."""
     kept = tuple(e for e in case.effects if e not in case.missing)
@@ -159,24 +164,36 @@ def run_case(name: str, duration: float, noise: float, seed: int, settings: Loop
             "noise_free": nrmse(predict(path, m)[test], clean[test]),
             "fresh_truth": nrmse(predict(path, fresh), fresh["force"]),
         }
-    ratios = {k: errors["after"][k] / before if (before := errors["before"][k]) > 0 else None
-              for k in errors["before"]}
+    ratios = {k: errors["after"][k] / before if (before := errors["before"][k]) > 0 else None for k in errors["before"]}
     present = set(case.missing)
     missing = missing_effect_nrmse(case, clean, duration, seed, m, test) if present else None
     perfect = None if ideal is None else nrmse(ideal[test], m["force"][test])
     first_error, final_error = errors["before"]["measured"], errors["after"]["measured"]
     return {
-        "case": name, "seed": seed, "duration_s": duration, "rig_effects": list(case.effects),
-        "start_features": case.spec.feature_names, "missing": list(case.missing), "effects_added": report.effects_added,
+        "case": name,
+        "seed": seed,
+        "duration_s": duration,
+        "rig_effects": list(case.effects),
+        "start_features": case.spec.feature_names,
+        "missing": list(case.missing),
+        "effects_added": report.effects_added,
         "named_correctly": set(report.effects_added) == present,
-        "nrmse_before": errors["before"], "nrmse_after": errors["after"], "ratio": ratios,
+        "nrmse_before": errors["before"],
+        "nrmse_after": errors["after"],
+        "ratio": ratios,
         "halved": bool(ratios["measured"] <= TARGET_RATIO) if present else None,
-        "missing_effect_nrmse": missing, "perfect_model": None if perfect is None else {
-            "nrmse": perfect, "ratio": perfect / first_error},
-        "removed": ((first_error**2 - final_error**2) / (first_error**2 - perfect**2)
-                    if present and perfect is not None else None),
-        "consistent_with_noise": report.consistent_with_noise, "summary": report.summary, "notes": report.notes,
-        "first_fit_seconds": first_fit, "loop_seconds": looped,
+        "missing_effect_nrmse": missing,
+        "perfect_model": None if perfect is None else {"nrmse": perfect, "ratio": perfect / first_error},
+        "removed": (
+            (first_error**2 - final_error**2) / (first_error**2 - perfect**2)
+            if present and perfect is not None
+            else None
+        ),
+        "consistent_with_noise": report.consistent_with_noise,
+        "summary": report.summary,
+        "notes": report.notes,
+        "first_fit_seconds": first_fit,
+        "loop_seconds": looped,
     }
 
 
@@ -194,14 +211,24 @@ def main() -> None:
             results.append(run_case(name, args.duration, args.noise, args.seed, settings, Path(tmp)))
             print(json.dumps(results[-1]), flush=True)
     effect_cases = [r for r in results if r["missing"]]
-    print(json.dumps({
-        "summary": True, "duration_s": args.duration, "noise": args.noise, "seed": args.seed, "cases": len(results),
-        "named_correctly": sum(r["named_correctly"] for r in results),
-        "halved": sum(bool(r["halved"]) for r in effect_cases), "effect_cases": len(effect_cases),
-        "worst_measured_ratio": max((r["ratio"]["measured"] for r in effect_cases), default=None),
-        "least_removed": min((r["removed"] for r in effect_cases), default=None),
-        "seconds": sum(r["first_fit_seconds"] + r["loop_seconds"] for r in results),
-    }), flush=True)
+    print(
+        json.dumps(
+            {
+                "summary": True,
+                "duration_s": args.duration,
+                "noise": args.noise,
+                "seed": args.seed,
+                "cases": len(results),
+                "named_correctly": sum(r["named_correctly"] for r in results),
+                "halved": sum(bool(r["halved"]) for r in effect_cases),
+                "effect_cases": len(effect_cases),
+                "worst_measured_ratio": max((r["ratio"]["measured"] for r in effect_cases), default=None),
+                "least_removed": min((r["removed"] for r in effect_cases), default=None),
+                "seconds": sum(r["first_fit_seconds"] + r["loop_seconds"] for r in results),
+            }
+        ),
+        flush=True,
+    )
 
 
 if __name__ == "__main__":

@@ -52,20 +52,36 @@ def main() -> None:
         warm_up = time.perf_counter() - started
         full = first_seconds(drive, duration)
         walls = [monolithic_reference(system, full, components, STEP).seconds for _ in range(repeats)]
-        print(f"{system}: {duration:g} s in {statistics.median(walls):.2f} s (median of {walls})", file=sys.stderr,
-              flush=True)
+        print(
+            f"{system}: {duration:g} s in {statistics.median(walls):.2f} s (median of {walls})",
+            file=sys.stderr,
+            flush=True,
+        )
         stretch = first_seconds(drive, check)
         compiled = monolithic_reference(system, stretch, components, STEP)
         generic = monolithic_reference(system, stretch, components, STEP, compiled=False)
         systems[system] = {
-            "wall_s_median": round(statistics.median(walls), 2), "wall_s_runs": [round(w, 2) for w in walls],
-            "warm_up_s": round(warm_up, 2), "check_s": check, "check_compiled_wall_s": round(compiled.seconds, 3),
-            "check_generic_wall_s": round(generic.seconds, 2), "speed_up": round(generic.seconds / compiled.seconds, 1),
+            "wall_s_median": round(statistics.median(walls), 2),
+            "wall_s_runs": [round(w, 2) for w in walls],
+            "warm_up_s": round(warm_up, 2),
+            "check_s": check,
+            "check_compiled_wall_s": round(compiled.seconds, 3),
+            "check_generic_wall_s": round(generic.seconds, 2),
+            "speed_up": round(generic.seconds / compiled.seconds, 1),
             "max_relative_difference": max_relative_difference(compiled.measurement, generic.measurement),
         }
-    print(json.dumps({"simulated_s": duration, "rk4_step_s": STEP, "repeats": repeats, "cpus": os.cpu_count(),
-                      "load_average_1min": [round(load_before, 2), round(os.getloadavg()[0], 2)],
-                      "systems": systems}))
+    print(
+        json.dumps(
+            {
+                "simulated_s": duration,
+                "rk4_step_s": STEP,
+                "repeats": repeats,
+                "cpus": os.cpu_count(),
+                "load_average_1min": [round(load_before, 2), round(os.getloadavg()[0], 2)],
+                "systems": systems,
+            }
+        )
+    )
 
 
 if __name__ == "__main__":

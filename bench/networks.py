@@ -38,9 +38,9 @@ def _train(name: str, lab, variant: str):
     """Train preset `name` as `variant` says: "default", "thesis" (its inputs, delays and fixed size) or "gru"."""
     preset = get_preset(name)
     spec = preset.thesis_spec if variant == "thesis" else preset.spec
-    architecture = {
-        "default": preset.architecture, "thesis": preset.thesis, "gru": recurrent(preset.architecture)
-    }[variant]
+    architecture = {"default": preset.architecture, "thesis": preset.thesis, "gru": recurrent(preset.architecture)}[
+        variant
+    ]
     started = time.perf_counter()
     result = train_model(lab.measurement, spec, architecture, preset.settings)
     return spec, result, time.perf_counter() - started
@@ -130,7 +130,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--presets", nargs="+", default=presets, choices=presets)
     parser.add_argument("--test-duration", type=float, default=30.0, help="held-out random record length [s]")
     parser.add_argument(
-        "--variant", choices=("default", "thesis", "gru"), default="default",
+        "--variant",
+        choices=("default", "thesis", "gru"),
+        default="default",
         help="train each preset's default, its thesis network, or the GRU option",
     )
     args = parser.parse_args(argv)
@@ -144,7 +146,9 @@ def main(argv: list[str] | None = None) -> None:
     document = {
         "benchmark": "nnfmu network presets on the rig simulators",
         "machine": {
-            "python": platform.python_version(), "torch": torch.__version__, "threads": torch.get_num_threads()
+            "python": platform.python_version(),
+            "torch": torch.__version__,
+            "threads": torch.get_num_threads(),
         },
         "variant": args.variant,
         "presets": results,

@@ -67,14 +67,24 @@ def main() -> None:
     parser.add_argument("folder", nargs="?", type=Path, default=Path("bench-out/models"), help="MODELS_DIR")
     parser.add_argument("out", nargs="?", type=Path, default=Path("bench-out/road_test"), help="OUT_DIR")
     parser.add_argument("duration", nargs="?", type=float, default=50.0, help="drive length [s]")
-    parser.add_argument("--bushings", choices=("vehicle", "lab"), default="vehicle",
-                        help="train the bushing networks on a vehicle-derived rig record, or use MODELS_DIR's")
-    parser.add_argument("--dampers", choices=("vehicle", "lab"), default="vehicle",
-                        help="train the damper networks on a vehicle-derived dyno record, or use MODELS_DIR's")
+    parser.add_argument(
+        "--bushings",
+        choices=("vehicle", "lab"),
+        default="vehicle",
+        help="train the bushing networks on a vehicle-derived rig record, or use MODELS_DIR's",
+    )
+    parser.add_argument(
+        "--dampers",
+        choices=("vehicle", "lab"),
+        default="vehicle",
+        help="train the damper networks on a vehicle-derived dyno record, or use MODELS_DIR's",
+    )
     args = parser.parse_args()
     if args.dampers == "vehicle" and args.bushings != "vehicle":
-        parser.error("--dampers vehicle derives the dyno drive from the bushing step's source reference: "
-                     "give --bushings vehicle too")
+        parser.error(
+            "--dampers vehicle derives the dyno drive from the bushing step's source reference: "
+            "give --bushings vehicle too"
+        )
     out, duration = args.out, args.duration
     started = time.perf_counter()
     models = models_in(args.folder)
@@ -83,16 +93,25 @@ def main() -> None:
     if args.bushings == "vehicle":
         vehicle = train_vehicle_bushings(out / "vehicle_bushing", settings, BushingDriveSettings(), log=log)
         models |= vehicle.models
-        bushing_networks = {"trained_on": str(vehicle.rig), "source_reference": str(vehicle.source),
-                            "seconds": {k: round(v, 1) for k, v in vehicle.seconds.items()}}
+        bushing_networks = {
+            "trained_on": str(vehicle.rig),
+            "source_reference": str(vehicle.source),
+            "seconds": {k: round(v, 1) for k, v in vehicle.seconds.items()},
+        }
     damper_networks: dict[str, object] = {"trained_on": "the damper dyno's lab record"}
     if args.dampers == "vehicle":
         dampers = train_vehicle_dampers(
-            vehicle.source, out / "vehicle_damper",
-            lambda preset: TrainRequest(preset=preset, moving_mass=MOVING_MASS_BY_RIG["damper"]), log=log)
+            vehicle.source,
+            out / "vehicle_damper",
+            lambda preset: TrainRequest(preset=preset, moving_mass=MOVING_MASS_BY_RIG["damper"]),
+            log=log,
+        )
         models |= dampers.models
-        damper_networks = {"trained_on": str(dampers.rig), "source_reference": str(vehicle.source),
-                           "seconds": {k: round(v, 1) for k, v in dampers.seconds.items()}}
+        damper_networks = {
+            "trained_on": str(dampers.rig),
+            "source_reference": str(vehicle.source),
+            "seconds": {k: round(v, 1) for k, v in dampers.seconds.items()},
+        }
     train_seconds = time.perf_counter() - started
     result = run_road_test(out, models, settings, log=log)
     summary = json.loads(result.summary.read_text())
@@ -102,16 +121,25 @@ def main() -> None:
             key = f"{system['system']}: {e['run']}: {e['element']}.{e['port']}"
             envelope[key] = max(envelope.get(key, 0.0), e["range_used"] or 0.0)
     full = next((s for s in summary["systems"] if s["system"] == "full-vehicle"), None)
-    print(json.dumps({
-        "duration_s": duration, "training_s": round(train_seconds, 1), "road_test_s": round(result.seconds, 1),
-        "bushing_networks": bushing_networks, "damper_networks": damper_networks,
-        "realtime_factor_full_vehicle": round(full["duration_s"] / full["seconds"]["damper-hysteresis"], 2)
-        if full else None,
-        "budget": [row for s in summary["systems"] for row in s["budget"]],
-        "reports": {k: str(v) for k, v in result.reports().items()},
-        "systems": [{k: s[k] for k in ("system", "seconds", "thesis_table")} for s in summary["systems"]],
-        "largest_envelope_use": envelope,
-    }, allow_nan=False))
+    print(
+        json.dumps(
+            {
+                "duration_s": duration,
+                "training_s": round(train_seconds, 1),
+                "road_test_s": round(result.seconds, 1),
+                "bushing_networks": bushing_networks,
+                "damper_networks": damper_networks,
+                "realtime_factor_full_vehicle": round(full["duration_s"] / full["seconds"]["damper-hysteresis"], 2)
+                if full
+                else None,
+                "budget": [row for s in summary["systems"] for row in s["budget"]],
+                "reports": {k: str(v) for k, v in result.reports().items()},
+                "systems": [{k: s[k] for k in ("system", "seconds", "thesis_table")} for s in summary["systems"]],
+                "largest_envelope_use": envelope,
+            },
+            allow_nan=False,
+        )
+    )
 
 
 if __name__ == "__main__":

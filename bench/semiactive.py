@@ -83,8 +83,11 @@ def main(argv: list[str] | None = None) -> None:
         types = {t: bench_type(t, args.models, args.test_duration, Path(tmp)) for t in args.types}
     document = {
         "benchmark": "damper-semiactive on the MR and CDC dyno simulators",
-        "machine": {"python": platform.python_version(), "torch": torch.__version__,
-                    "threads": torch.get_num_threads()},
+        "machine": {
+            "python": platform.python_version(),
+            "torch": torch.__version__,
+            "threads": torch.get_num_threads(),
+        },
         "test_duration_s": args.test_duration,
         "issue_reference_nrmse": {"time_delay_net": 0.152, "recurrent": 0.108},
         "types": types,

@@ -42,28 +42,46 @@ def _table(report: LoopReport) -> str:
     named = [("velocity-only", report.error_before)]
     named += [(f"+ {it.effect}", it.error_after) for it in report.iterations if it.accepted]
     for name, e in named:
-        rows.append(f"| {name} | {e['nrmse']:.3f} | {e['r2']:.3f} | {e['peak_error']:+.3f} | "
-                    f"{e['pseudo_damage_ratio']:.3f} |")
+        rows.append(
+            f"| {name} | {e['nrmse']:.3f} | {e['r2']:.3f} | {e['peak_error']:+.3f} | {e['pseudo_damage_ratio']:.3f} |"
+        )
     return "\n".join(rows)
 
 
-def _summary(files: list[str], m: Any, report: LoopReport, settings: LoopSettings, features: list[str],
-             seconds: dict[str, float]) -> dict[str, Any]:
+def _summary(
+    files: list[str], m: Any, report: LoopReport, settings: LoopSettings, features: list[str], seconds: dict[str, float]
+) -> dict[str, Any]:
     """What the README table needs: the data, the starting model, each effect added and the test errors."""
     return {
         "data": {
-            "files": [Path(f).name for f in files], "samples": len(m), "duration_s": float(m.time[-1]),
-            "sample_rate_hz": 1 / m.sample_period, "runs": m.notes["runs"], "licence": BRFD_LICENCE,
+            "files": [Path(f).name for f in files],
+            "samples": len(m),
+            "duration_s": float(m.time[-1]),
+            "sample_rate_hz": 1 / m.sample_period,
+            "runs": m.notes["runs"],
+            "licence": BRFD_LICENCE,
         },
         "start_model": {"preset": PRESET, "features": features},
-        "loop": {"max_effects": settings.max_effects, "segments": settings.segments,
-                 "effects_ranked": list(settings.diagnosis.effects or EFFECTS), "blocks": report.blocks},
+        "loop": {
+            "max_effects": settings.max_effects,
+            "segments": settings.segments,
+            "effects_ranked": list(settings.diagnosis.effects or EFFECTS),
+            "blocks": report.blocks,
+        },
         "effects_added": report.effects_added,
         "iterations": [
-            {"effect": it.effect, "features_added": list(it.features_added), "accepted": it.accepted,
-             "explained_variance": it.explained_variance, "p_value": it.p_value, "reason": it.reason,
-             "test_error_before": it.error_before, "test_error_after": it.error_after,
-             "extra_hidden_units": it.extra_hidden, "retrained_from": f"{it.start} start"}
+            {
+                "effect": it.effect,
+                "features_added": list(it.features_added),
+                "accepted": it.accepted,
+                "explained_variance": it.explained_variance,
+                "p_value": it.p_value,
+                "reason": it.reason,
+                "test_error_before": it.error_before,
+                "test_error_after": it.error_after,
+                "extra_hidden_units": it.extra_hidden,
+                "retrained_from": f"{it.start} start",
+            }
             for it in report.iterations
         ],
         "test_error_before": report.error_before,
@@ -86,15 +104,21 @@ def main() -> None:
     parser.add_argument("--hidden", type=int, default=5, help="hidden units of the velocity-only network")
     parser.add_argument("--restarts", type=int, default=2, help="training restarts of the velocity-only network")
     parser.add_argument("--segments-per-file", type=int, default=2)
-    parser.add_argument("--effects", help="comma-separated effect families the diagnosis may rank (default: all; "
-                        "e.g. leave out gas_force, the damper has no gas spring)")
+    parser.add_argument(
+        "--effects",
+        help="comma-separated effect families the diagnosis may rank (default: all; "
+        "e.g. leave out gas_force, the damper has no gas spring)",
+    )
     args = parser.parse_args()
 
     started = time.perf_counter()
     m = load_brfd_series(args.files)
     effects = tuple(name.strip() for name in args.effects.split(",")) if args.effects else None
-    settings = LoopSettings(max_effects=args.max_effects, segments=args.segments_per_file * len(args.files),
-                            diagnosis=DiagnosisSettings(effects=effects))
+    settings = LoopSettings(
+        max_effects=args.max_effects,
+        segments=args.segments_per_file * len(args.files),
+        diagnosis=DiagnosisSettings(effects=effects),
+    )
     # Train only on the loop's fit part (its training and validation rows), so the diagnosis and test parts stay
     # unseen by the first model too.
     blocks = plan_blocks(len(m), settings, m.source)
@@ -103,8 +127,13 @@ def main() -> None:
     model = train_model(fit, preset.spec, architecture, training).model
     args.out.mkdir(parents=True, exist_ok=True)
     onnx_path = args.out / "velocity_only.onnx"
-    export_onnx(model, onnx_path, name="brfd_force", verify_on={c: fit[c] for c in model.spec.channels},
-                description=f"velocity-only force model of the BRFD friction damper ({', '.join(args.files)})")
+    export_onnx(
+        model,
+        onnx_path,
+        name="brfd_force",
+        verify_on={c: fit[c] for c in model.spec.channels},
+        description=f"velocity-only force model of the BRFD friction damper ({', '.join(args.files)})",
+    )
     trained = time.perf_counter()
     report = run_loop(m, onnx_path, "force", args.out / "loop", settings)
     done = time.perf_counter()

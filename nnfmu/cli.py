@@ -18,8 +18,11 @@ import typer
 from nnfmu.errors import NnfmuError, SettingsError
 from nnfmu.out_paths import check_output_file
 
-app = typer.Typer(no_args_is_help=True, add_completion=False,
-                  help="Neural-network component models from rig data, shipped as FMI co-simulation FMUs.")
+app = typer.Typer(
+    no_args_is_help=True,
+    add_completion=False,
+    help="Neural-network component models from rig data, shipped as FMI co-simulation FMUs.",
+)
 data_app = typer.Typer(no_args_is_help=True, help="Inspect rig data files.")
 app.add_typer(data_app, name="data")
 vehicle_app = typer.Typer(no_args_is_help=True, help="Vehicle models for the virtual road test simulator.")
@@ -28,8 +31,10 @@ drive_app = typer.Typer(no_args_is_help=True, help="Drive files for a four-post 
 app.add_typer(drive_app, name="drive")
 controller_app = typer.Typer(no_args_is_help=True, help="Controllers of semi-active dampers, as FMUs.")
 app.add_typer(controller_app, name="controller")
-PLATFORMS_HELP = ("Binaries of the native backend, comma-separated: linux64, win64 (default: linux64, plus win64 when "
-                  "the MinGW-w64 cross compiler x86_64-w64-mingw32-gcc is installed).")
+PLATFORMS_HELP = (
+    "Binaries of the native backend, comma-separated: linux64, win64 (default: linux64, plus win64 when "
+    "the MinGW-w64 cross compiler x86_64-w64-mingw32-gcc is installed)."
+)
 
 
 def _interrupt(signum: int, frame: object) -> None:
@@ -91,14 +96,39 @@ def rig(
     duration: Optional[float] = typer.Option(None, help="Record length [s] (default: damper 70, bushing 60)."),
     seed: int = typer.Option(0, help="Seed for excitation and sensor noise."),
     noise: float = typer.Option(1.0, help="Multiplier of the realistic sensor noise (0: exact values)."),
-    effects: Optional[str] = typer.Option(None, help="Comma-separated effects to switch on, or 'none' (default: the kind's defaults)."),
-    excitation: Optional[str] = typer.Option(None, help="lab (default: sine series + random), random (held-out test data), sine, or vehicle (with --drive-from)."),
-    drive_from: Optional[Path] = typer.Option(None, "--drive-from", help="A vehicle result (co-simulation or monolithic reference) whose bushing deflections (bushing rig) or damper strokes (damper dyno: after its sine series) the drive is derived from."),
-    element: Optional[list[str]] = typer.Option(None, help="With --drive-from: element(s) to derive the drive from, e.g. bushing_fl_front or damper_fl (repeat or comma-separate; the envelope covers them all)."),
-    margin: float = typer.Option(1.2, help="With --drive-from: the drive's excursions over the simulated ones on each side of the working point."),
-    band: Optional[str] = typer.Option(None, help="With --drive-from: the rig controller's pass band LOW:HIGH [Hz] (default: bushing rig 0.5:40, damper dyno 0.5:100)."),
-    default_sensors: bool = typer.Option(False, "--default-sensors", help="Bushing rig with --drive-from: record with the rig's default transducers instead of ranges sized for the test (the damper dyno always records with its own)."),
-    damper_type: str = typer.Option("passive", "--type", help="Damper dyno: passive (default), mr (magnetorheological, records the coil's voltage [V]) or cdc (continuously controlled valve, records the valve current [A])."),
+    effects: Optional[str] = typer.Option(
+        None, help="Comma-separated effects to switch on, or 'none' (default: the kind's defaults)."
+    ),
+    excitation: Optional[str] = typer.Option(
+        None,
+        help="lab (default: sine series + random), random (held-out test data), sine, or vehicle (with --drive-from).",
+    ),
+    drive_from: Optional[Path] = typer.Option(
+        None,
+        "--drive-from",
+        help="A vehicle result (co-simulation or monolithic reference) whose bushing deflections (bushing rig) or damper strokes (damper dyno: after its sine series) the drive is derived from.",
+    ),
+    element: Optional[list[str]] = typer.Option(
+        None,
+        help="With --drive-from: element(s) to derive the drive from, e.g. bushing_fl_front or damper_fl (repeat or comma-separate; the envelope covers them all).",
+    ),
+    margin: float = typer.Option(
+        1.2, help="With --drive-from: the drive's excursions over the simulated ones on each side of the working point."
+    ),
+    band: Optional[str] = typer.Option(
+        None,
+        help="With --drive-from: the rig controller's pass band LOW:HIGH [Hz] (default: bushing rig 0.5:40, damper dyno 0.5:100).",
+    ),
+    default_sensors: bool = typer.Option(
+        False,
+        "--default-sensors",
+        help="Bushing rig with --drive-from: record with the rig's default transducers instead of ranges sized for the test (the damper dyno always records with its own).",
+    ),
+    damper_type: str = typer.Option(
+        "passive",
+        "--type",
+        help="Damper dyno: passive (default), mr (magnetorheological, records the coil's voltage [V]) or cdc (continuously controlled valve, records the valve current [A]).",
+    ),
 ) -> None:
     """Simulate a lab rig and write realistic "measured" data plus a separate truth file."""
     from nnfmu.workflows.rig import RigOptions, write_rig_record
@@ -106,11 +136,19 @@ def rig(
     chosen = None if effects is None else () if effects.strip() == "none" else tuple(_split([effects]))
     vehicle = drive_from is not None or excitation == "vehicle"
     try:
-        options = RigOptions(sample_rate=sample_rate, duration=duration, seed=seed, noise=noise, effects=chosen,
-                             excitation=excitation or ("vehicle" if vehicle else "lab"), damper_type=damper_type)
+        options = RigOptions(
+            sample_rate=sample_rate,
+            duration=duration,
+            seed=seed,
+            noise=noise,
+            effects=chosen,
+            excitation=excitation or ("vehicle" if vehicle else "lab"),
+            damper_type=damper_type,
+        )
         target = check_output_file(out, [drive_from] if drive_from is not None else [])
-        data_path, truth_path = write_rig_record(kind, target, options, drive_from, _split(element), margin, band,
-                                                 not default_sensors)
+        data_path, truth_path = write_rig_record(
+            kind, target, options, drive_from, _split(element), margin, band, not default_sensors
+        )
     except NnfmuError as error:
         _fail(error)
     typer.echo(f"data: {data_path}\ntruth (for evaluation only, never for training): {truth_path}")
@@ -126,8 +164,10 @@ def _channel_map(items: Optional[list[str]]) -> dict[str, str]:
         raise typer.BadParameter(f"--map: {error}") from None
 
 
-MAP_HELP = ("Rename a file channel to an nnfmu channel, e.g. --map \"Axial Force=force\" (repeat); "
-            "for MTS exports also picks the time axis (NAME=time).")
+MAP_HELP = (
+    'Rename a file channel to an nnfmu channel, e.g. --map "Axial Force=force" (repeat); '
+    "for MTS exports also picks the time axis (NAME=time)."
+)
 
 
 def _int_list(items: Optional[list[str]], option: str) -> tuple[int, ...]:
@@ -140,22 +180,36 @@ def _int_list(items: Optional[list[str]], option: str) -> tuple[int, ...]:
 @app.command()
 def train(
     data: Path = typer.Argument(..., help="Rig data (CSV with `name [unit]` headers, MDF4, or an MTS 793 export)."),
-    preset: str = typer.Option(..., help="damper-spline, damper-hysteresis, damper-semiactive, bushing-axial-force, bushing-radial-force, bushing-axial-torque or bushing-conical-torque."),
+    preset: str = typer.Option(
+        ...,
+        help="damper-spline, damper-hysteresis, damper-semiactive, bushing-axial-force, bushing-radial-force, bushing-axial-torque or bushing-conical-torque.",
+    ),
     out: str = typer.Option(..., "--out", "-o", help="ONNX step graph to write."),
     output: Optional[str] = typer.Option(None, help="Output channel (default: the preset's, e.g. force)."),
-    inputs: Optional[list[str]] = typer.Option(None, help="Input channels replacing the preset's (comma-separated or repeated)."),
+    inputs: Optional[list[str]] = typer.Option(
+        None, help="Input channels replacing the preset's (comma-separated or repeated)."
+    ),
     delays: Optional[list[str]] = typer.Option(None, help="Sample delays for every input, e.g. 0,1,2."),
-    hidden: Optional[list[str]] = typer.Option(None, help="Hidden size, or several to choose among by validation error."),
+    hidden: Optional[list[str]] = typer.Option(
+        None, help="Hidden size, or several to choose among by validation error."
+    ),
     recurrent: bool = typer.Option(False, help="GRU network instead of the time-delay perceptron."),
     thesis: bool = typer.Option(False, help="The thesis's network exactly: its inputs, delays and fixed hidden size."),
-    select_inputs: bool = typer.Option(False, help="Choose inputs by sensitivity analysis over the candidate taps; prints the ranking."),
+    select_inputs: bool = typer.Option(
+        False, help="Choose inputs by sensitivity analysis over the candidate taps; prints the ranking."
+    ),
     optimizer: Optional[str] = typer.Option(None, help="auto, lm (Levenberg-Marquardt), adam or lbfgs."),
-    restarts: Optional[int] = typer.Option(None, help="Training restarts per hidden size; the best validation error is kept."),
+    restarts: Optional[int] = typer.Option(
+        None, help="Training restarts per hidden size; the best validation error is kept."
+    ),
     max_epochs: Optional[int] = typer.Option(None, help="Epoch limit (early stopping usually ends sooner)."),
     seed: int = typer.Option(0, help="Seed: the same seed gives the same network."),
     name: str = typer.Option("", help="Model name stored in the ONNX metadata (default: from the preset)."),
     channel_map: Optional[list[str]] = typer.Option(None, "--map", help=MAP_HELP),
-    moving_mass: float = typer.Option(0.0, help="Dyno mass [kg] between load cell and actuator (rod, piston, fixture): subtracted from the force as m·a before training, as a dyno's mass compensation does; 0: none."),
+    moving_mass: float = typer.Option(
+        0.0,
+        help="Dyno mass [kg] between load cell and actuator (rod, piston, fixture): subtracted from the force as m·a before training, as a dyno's mass compensation does; 0: none.",
+    ),
 ) -> None:
     """Train a component network on rig data and export it as a verified ONNX step graph."""
     from rich.console import Console
@@ -165,17 +219,33 @@ def train(
 
     from nnfmu.workflows.train import TrainRequest, train_from_file
 
-    request = TrainRequest(preset=preset, output=output, inputs=tuple(_split(inputs)),
-                           delays=_int_list(delays, "--delays"), hidden=_int_list(hidden, "--hidden"),
-                           recurrent=recurrent, thesis=thesis, restarts=restarts, seed=seed, max_epochs=max_epochs,
-                           select_inputs=select_inputs, optimizer=optimizer, name=name,
-                           channel_map=tuple(_channel_map(channel_map).items()), moving_mass=moving_mass)
+    request = TrainRequest(
+        preset=preset,
+        output=output,
+        inputs=tuple(_split(inputs)),
+        delays=_int_list(delays, "--delays"),
+        hidden=_int_list(hidden, "--hidden"),
+        recurrent=recurrent,
+        thesis=thesis,
+        restarts=restarts,
+        seed=seed,
+        max_epochs=max_epochs,
+        select_inputs=select_inputs,
+        optimizer=optimizer,
+        name=name,
+        channel_map=tuple(_channel_map(channel_map).items()),
+        moving_mass=moving_mass,
+    )
     console = Console(markup=False)  # feature and channel names carry brackets: velocity[k]
     try:
         with Progress(console=console, transient=True) as bar:
             task = bar.add_task("training", total=1.0)
-            outcome = train_from_file(data, request, check_output_file(out, [data]),
-                                      lambda what, done: bar.update(task, description=what, completed=done))
+            outcome = train_from_file(
+                data,
+                request,
+                check_output_file(out, [data]),
+                lambda what, done: bar.update(task, description=what, completed=done),
+            )
     except NnfmuError as error:
         _fail(error)
     if outcome.selection is not None:
@@ -196,23 +266,37 @@ def train(
         table.add_row(split, *(f"{values[c]:.4g}" for c in columns))
     console.print(table)
     if len(outcome.trials) > 1:
-        console.print("hidden size by validation MSE (scaled): " + ", ".join(
-            f"{trial.hidden}: {trial.validation_mse:.3g}" for trial in outcome.trials))
+        console.print(
+            "hidden size by validation MSE (scaled): "
+            + ", ".join(f"{trial.hidden}: {trial.validation_mse:.3g}" for trial in outcome.trials)
+        )
     for note in outcome.data_notes:
         console.print(f"note: {note}")
     for warning in outcome.warnings:
         console.print(Text("warning: ", style="yellow") + Text(warning))
-    console.print(f"ONNX: {outcome.path} (onnxruntime vs torch max relative error "
-                  f"{outcome.export.max_relative_error:.2g}); {outcome.seconds:.1f} s")
+    console.print(
+        f"ONNX: {outcome.path} (onnxruntime vs torch max relative error "
+        f"{outcome.export.max_relative_error:.2g}); {outcome.seconds:.1f} s"
+    )
 
 
 @app.command()
 def demo(
     out: Path = typer.Option(Path("demo-out"), "--out", "-o", help="Folder for everything the demo writes."),
     seed: int = typer.Option(0, help="Seed of the rig records and the training."),
-    quick: bool = typer.Option(False, help="Short records and training: checks every stage runs, not results to quote."),
-    lab_bushings: bool = typer.Option(False, "--lab-bushings", help="Road test with the bushing networks of the lab record instead of ones trained on a vehicle-derived rig record (the damper networks then too: their drive comes from the same vehicle result)."),
-    lab_dampers: bool = typer.Option(False, "--lab-dampers", help="Road test with the damper networks of the lab record instead of ones trained on a vehicle-derived dyno record."),
+    quick: bool = typer.Option(
+        False, help="Short records and training: checks every stage runs, not results to quote."
+    ),
+    lab_bushings: bool = typer.Option(
+        False,
+        "--lab-bushings",
+        help="Road test with the bushing networks of the lab record instead of ones trained on a vehicle-derived rig record (the damper networks then too: their drive comes from the same vehicle result).",
+    ),
+    lab_dampers: bool = typer.Option(
+        False,
+        "--lab-dampers",
+        help="Road test with the damper networks of the lab record instead of ones trained on a vehicle-derived dyno record.",
+    ),
 ) -> None:
     """Run the pipeline end to end on built-in data: rig data, networks, ONNX, FMUs, replay, road test, loop."""
     from rich.console import Console
@@ -223,16 +307,28 @@ def demo(
     console = Console(markup=False)  # diagnosis test names carry brackets: test[velocity]
     try:
         with _warnings_as_lines():
-            summary = run_demo(out, DemoSettings(seed=seed, quick=quick, vehicle_bushings=not lab_bushings,
-                                                 vehicle_dampers=not lab_dampers), log=console.print)
+            summary = run_demo(
+                out,
+                DemoSettings(
+                    seed=seed, quick=quick, vehicle_bushings=not lab_bushings, vehicle_dampers=not lab_dampers
+                ),
+                log=console.print,
+            )
     except NnfmuError as error:
         _fail(error)
     table = Table(title="component FMUs replayed on held-out random rig records")
     for column in ("preset", "train [s]", "test-split NRMSE", "FMU NRMSE", "R²", "peak error", "pseudo-damage ratio"):
         table.add_column(column, justify="left" if column == "preset" else "right")
     for m in summary.models:
-        table.add_row(m.preset, f"{m.train_seconds:.1f}", f"{m.test_split_nrmse:.4f}", f"{m.replay_nrmse:.4f}",
-                      f"{m.replay_r2:.4f}", f"{m.replay_peak_error:+.3f}", f"{m.replay_pseudo_damage_ratio:.3f}")
+        table.add_row(
+            m.preset,
+            f"{m.train_seconds:.1f}",
+            f"{m.test_split_nrmse:.4f}",
+            f"{m.replay_nrmse:.4f}",
+            f"{m.replay_r2:.4f}",
+            f"{m.replay_peak_error:+.3f}",
+            f"{m.replay_pseudo_damage_ratio:.3f}",
+        )
     console.print(table)
     console.print(f"component report: {summary.report}")
     for system, report in summary.road_test.items():
@@ -253,12 +349,16 @@ def demo(
 def build(
     model: Path = typer.Argument(..., help="ONNX file: an nnfmu step graph, or any graph the backends support."),
     out: Optional[str] = typer.Option(None, "--out", "-o", help="FMU path (default: exported/NAME.fmu)."),
-    backend: str = typer.Option("native", help="native (generated C, no Python at run time) or pythonfmu (onnxruntime)."),
+    backend: str = typer.Option(
+        "native", help="native (generated C, no Python at run time) or pythonfmu (onnxruntime)."
+    ),
     fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
     name: Optional[str] = typer.Option(None, help="Model name (default: from the ONNX metadata)."),
     filter_cutoff: Optional[float] = typer.Option(
-        None, help="Start value [Hz] of the FMU's output low-pass (default: the model's, 0 = off; the thesis used 100 "
-                   "for stability of a stiff coupling, at a large cost in accuracy: docs/fmu.md)."),
+        None,
+        help="Start value [Hz] of the FMU's output low-pass (default: the model's, 0 = off; the thesis used 100 "
+        "for stability of a stiff coupling, at a large cost in accuracy: docs/fmu.md).",
+    ),
     platforms: Optional[list[str]] = typer.Option(None, help=PLATFORMS_HELP),
 ) -> None:
     """Build a standalone FMI co-simulation FMU from an ONNX model."""
@@ -267,8 +367,17 @@ def build(
     try:
         target = None if out is None else check_output_file(out, [model])
         with _warnings_as_lines():
-            path = build_fmu(model, BuildOptions(out=target, backend=backend, fmi_version=fmi, name=name,
-                                                 filter_cutoff=filter_cutoff, platforms=_platforms(platforms)))
+            path = build_fmu(
+                model,
+                BuildOptions(
+                    out=target,
+                    backend=backend,
+                    fmi_version=fmi,
+                    name=name,
+                    filter_cutoff=filter_cutoff,
+                    platforms=_platforms(platforms),
+                ),
+            )
     except NnfmuError as error:
         _fail(error)
     typer.echo(f"FMU: {path}")
@@ -287,8 +396,12 @@ def _echo_reference_results(fmu: Path) -> None:
 
 @app.command()
 def check(
-    fmu: Path = typer.Argument(..., help="FMU carrying reference results (FMI-LS-REF, extra/org.fmi-standard.fmi-ls-ref)."),
-    tolerance: Optional[float] = typer.Option(None, help="Allowed max error of each output as a fraction of its peak (default: the experiment's)."),
+    fmu: Path = typer.Argument(
+        ..., help="FMU carrying reference results (FMI-LS-REF, extra/org.fmi-standard.fmi-ls-ref)."
+    ),
+    tolerance: Optional[float] = typer.Option(
+        None, help="Allowed max error of each output as a fraction of its peak (default: the experiment's)."
+    ),
 ) -> None:
     """Replay the reference results an FMU carries with fmpy and report pass/fail per output (exit 1 on failure)."""
     from nnfmu.workflows.fmu_build import check_fmu, report_lines
@@ -307,12 +420,24 @@ def check(
 def vehicle_build(
     model: str = typer.Argument(..., help="quarter-car or full-vehicle."),
     out: str = typer.Option(..., "--out", "-o", help="FMU path to write."),
-    params: Optional[Path] = typer.Option(None, help="Parameter file (TOML, SI units): a full-vehicle file (both models; default: the packaged mid-size sedan) or, for quarter-car, a quarter-car file (one with a quarter_car table, e.g. the packaged midsize_sedan_quarter_car_fl.toml)."),
-    reference: Optional[list[str]] = typer.Option(None, help="Components to model inside the vehicle (linear bushing, spline damper), e.g. damper_fl,bushing_fl_front; the rest are ports."),
-    stabilise: Optional[list[str]] = typer.Option(None, help="Ports to stabilise with their linear reference over each step (stiff bushings on a light arm), e.g. bushing_fl_front,bushing_fl_rear."),
+    params: Optional[Path] = typer.Option(
+        None,
+        help="Parameter file (TOML, SI units): a full-vehicle file (both models; default: the packaged mid-size sedan) or, for quarter-car, a quarter-car file (one with a quarter_car table, e.g. the packaged midsize_sedan_quarter_car_fl.toml).",
+    ),
+    reference: Optional[list[str]] = typer.Option(
+        None,
+        help="Components to model inside the vehicle (linear bushing, spline damper), e.g. damper_fl,bushing_fl_front; the rest are ports.",
+    ),
+    stabilise: Optional[list[str]] = typer.Option(
+        None,
+        help="Ports to stabilise with their linear reference over each step (stiff bushings on a light arm), e.g. bushing_fl_front,bushing_fl_rear.",
+    ),
     sample_period: float = typer.Option(1e-4, help="Internal sample period [s] of the exact discrete model."),
     fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
-    corner: Optional[str] = typer.Option(None, help="Quarter car only: the corner it stands on, fl, fr, rl or rr; its actuator inputs read that corner's drive channels (default: a quarter-car file's own corner, fl of a full-vehicle file)."),
+    corner: Optional[str] = typer.Option(
+        None,
+        help="Quarter car only: the corner it stands on, fl, fr, rl or rr; its actuator inputs read that corner's drive channels (default: a quarter-car file's own corner, fl of a full-vehicle file).",
+    ),
     backend: str = typer.Option("native", help="native or pythonfmu."),
     platforms: Optional[list[str]] = typer.Option(None, help=PLATFORMS_HELP),
 ) -> None:
@@ -323,10 +448,15 @@ def vehicle_build(
     from nnfmu.workflows.fmu_build import VehicleBuildSettings, build_vehicle_fmu
 
     try:
-        settings = VehicleBuildSettings(params_path=params, components={n: "reference" for n in _split(reference)}
-                                        | {n: "stabilised" for n in _split(stabilise)},
-                                        sample_period=sample_period, fmi_version=fmi, corner=corner, backend=backend,
-                                        platforms=_platforms(platforms))
+        settings = VehicleBuildSettings(
+            params_path=params,
+            components={n: "reference" for n in _split(reference)} | {n: "stabilised" for n in _split(stabilise)},
+            sample_period=sample_period,
+            fmi_version=fmi,
+            corner=corner,
+            backend=backend,
+            platforms=_platforms(platforms),
+        )
         with _warnings_as_lines():
             path = build_vehicle_fmu(model, check_output_file(out, [params] if params else []), settings)
     except NnfmuError as error:
@@ -355,9 +485,14 @@ def controller_build(
     from nnfmu.workflows.controller import SkyhookSettings, build_controller_fmu, known_command
 
     try:
-        settings = SkyhookSettings(c_sky=c_sky, c_min=c_min, c_max=c_max, epsilon=epsilon,
-                                   command=known_command(command, command_min, command_max),
-                                   sample_period=sample_period)
+        settings = SkyhookSettings(
+            c_sky=c_sky,
+            c_min=c_min,
+            c_max=c_max,
+            epsilon=epsilon,
+            command=known_command(command, command_min, command_max),
+            sample_period=sample_period,
+        )
         with _warnings_as_lines():
             path = build_controller_fmu(law, settings, check_output_file(out, []), fmi)
     except NnfmuError as error:
@@ -375,11 +510,17 @@ def cosim(
     scheme: str = typer.Option("gauss-seidel", help="gauss-seidel (one element after another) or jacobi."),
     order: str = typer.Option("vehicle-first", help="Gauss-Seidel order: vehicle-first or components-first."),
     extrapolate: bool = typer.Option(True, help="Extrapolate coupling inputs linearly over the step."),
-    refresh: bool = typer.Option(True, help="Give FMUs with feedthrough (vehicles) their inputs at the step end and "
-                                            "read their outputs again (accelerations see the forces there)."),
+    refresh: bool = typer.Option(
+        True,
+        help="Give FMUs with feedthrough (vehicles) their inputs at the step end and "
+        "read their outputs again (accelerations see the forces there).",
+    ),
     iterations: int = typer.Option(0, help="Iterate each step up to N times with get/set FMU state (strong coupling)."),
-    master: str = typer.Option("fmpy", help="fmpy (this package's master) or libcosim (cross-check: only --scheme "
-                                            "jacobi --no-extrapolate --no-refresh, libcosim's own algorithm)."),
+    master: str = typer.Option(
+        "fmpy",
+        help="fmpy (this package's master) or libcosim (cross-check: only --scheme "
+        "jacobi --no-extrapolate --no-refresh, libcosim's own algorithm).",
+    ),
 ) -> None:
     """Co-simulate a vehicle FMU with component FMUs on a drive file."""
     from rich.progress import Progress
@@ -388,17 +529,32 @@ def cosim(
 
     try:
         target = check_output_file(out, [system, drive])
-        settings = CosimSettings(step=step, stop_time=stop, scheme=scheme, order=order, refresh=refresh,
-                                 extrapolation="linear" if extrapolate else "none", iterations=iterations)
+        settings = CosimSettings(
+            step=step,
+            stop_time=stop,
+            scheme=scheme,
+            order=order,
+            refresh=refresh,
+            extrapolation="linear" if extrapolate else "none",
+            iterations=iterations,
+        )
         with Progress(transient=True) as bar:
             task = bar.add_task("co-simulation", total=None)
-            result = run_cosim(system, drive, settings, target, master=master,
-                               progress=lambda done, total: bar.update(task, completed=done, total=total))
+            result = run_cosim(
+                system,
+                drive,
+                settings,
+                target,
+                master=master,
+                progress=lambda done, total: bar.update(task, completed=done, total=total),
+            )
     except NnfmuError as error:
         _fail(error)
     typer.echo(f"{result.steps} steps of {step:g} s; result: {out}")
     if iterations:
-        typer.echo(f"mean iterations per step {result.mean_iterations:.2f}, unconverged steps {result.unconverged_steps}")
+        typer.echo(
+            f"mean iterations per step {result.mean_iterations:.2f}, unconverged steps {result.unconverged_steps}"
+        )
 
 
 @app.command()
@@ -406,9 +562,14 @@ def batch(
     campaign: Path = typer.Argument(..., help="Campaign file (TOML): events, variants, coupling settings, metrics."),
     out: Path = typer.Option(..., "--out", "-o", help="Folder: results.parquet, campaign.json, summary.html, parts/."),
     scheduler: Optional[str] = typer.Option(None, help="Address of an existing Dask scheduler, e.g. tcp://HOST:8786."),
-    workers: Optional[int] = typer.Option(None, help="LocalCluster worker processes (default: one per core); 0 runs the cases here, one after another."),
+    workers: Optional[int] = typer.Option(
+        None, help="LocalCluster worker processes (default: one per core); 0 runs the cases here, one after another."
+    ),
     retry_failed: bool = typer.Option(False, help="Run the cases that failed in an earlier run into --out again."),
-    reuse_instances: bool = typer.Option(True, help="Keep FMU instances between cases and reset them (fmi2Reset/fmi3Reset) instead of opening them again; --no-reuse-instances for FMUs whose reset is unreliable."),
+    reuse_instances: bool = typer.Option(
+        True,
+        help="Keep FMU instances between cases and reset them (fmi2Reset/fmi3Reset) instead of opening them again; --no-reuse-instances for FMUs whose reset is unreliable.",
+    ),
 ) -> None:
     """Run a road-test campaign (events x variants) on Dask into one Parquet table of pseudo-damage per channel."""
     from nnfmu.workflows.campaign import run_campaign
@@ -417,12 +578,21 @@ def batch(
     if workers is not None and workers < 0:
         raise typer.BadParameter(f"--workers {workers}: give 0 (here, serially) or more")
     try:
-        run = run_campaign(campaign, out, scheduler=scheduler, workers=workers, retry_failed=retry_failed,
-                           reuse_instances=reuse_instances, progress=CaseProgress())
+        run = run_campaign(
+            campaign,
+            out,
+            scheduler=scheduler,
+            workers=workers,
+            retry_failed=retry_failed,
+            reuse_instances=reuse_instances,
+            progress=CaseProgress(),
+        )
     except NnfmuError as error:
         _fail(error)
-    typer.echo(f"{run.cases} cases: {run.ok} ok, {run.failed} failed, {run.skipped} finished before "
-               f"({run.wall_s:.1f} s on {run.engine.kind})")
+    typer.echo(
+        f"{run.cases} cases: {run.ok} ok, {run.failed} failed, {run.skipped} finished before "
+        f"({run.wall_s:.1f} s on {run.engine.kind})"
+    )
     typer.echo(f"table: {run.table}\nsummary: {run.summary}\nrecord: {run.record}")
 
 
@@ -431,7 +601,9 @@ def loop(
     data: Path = typer.Argument(..., help="Measurement (CSV or MDF4) with the model's inputs and the output channel."),
     model: Path = typer.Option(..., help="nnfmu ONNX step graph to check and extend."),
     output: str = typer.Option("force", help="Measured output channel the model predicts."),
-    out: Path = typer.Option(..., "--out", "-o", help="Folder for every iteration's ONNX and FMU, report.json and report.html."),
+    out: Path = typer.Option(
+        ..., "--out", "-o", help="Folder for every iteration's ONNX and FMU, report.json and report.html."
+    ),
     max_effects: int = typer.Option(3, help="Most effects to add."),
 ) -> None:
     """Replay the model's FMU on measured data, trace the residual to missing physical effects, add them, report."""
@@ -500,18 +672,32 @@ def drive_generate(
     lowpass: float = typer.Option(40.0, help="Rig controller low-pass cut-off [Hz]; 0 = off."),
     seed: int = typer.Option(0, help="Seed of the random road phases."),
     pothole: Optional[list[str]] = typer.Option(None, help="Pothole TIME[:DEPTH:LENGTH:SIDE] [s, m, m] (repeat)."),
-    kerb: Optional[list[str]] = typer.Option(None, help="Kerb strike TIME[:HEIGHT:RAMP:LENGTH:SIDE] [s, m, m, m] (repeat)."),
+    kerb: Optional[list[str]] = typer.Option(
+        None, help="Kerb strike TIME[:HEIGHT:RAMP:LENGTH:SIDE] [s, m, m, m] (repeat)."
+    ),
     rpc_data_type: str = typer.Option("int16", help="RPC III sample type: int16 or float32."),
 ) -> None:
     """Write four actuator displacement channels from an ISO 8608 road at a given speed, with optional events."""
     from nnfmu.workflows.drive import DriveSettings, KerbStrike, Pothole, write_generated_drive
 
     events = [Pothole(**_event_fields(p, "--pothole", ("time", "depth", "length", "side"))) for p in pothole or []]
-    events += [KerbStrike(**_event_fields(k, "--kerb", ("time", "height", "ramp_length", "length", "side")))
-               for k in kerb or []]
-    settings = DriveSettings(road_class=road_class, speed=speed, duration=duration, sample_rate=sample_rate,
-                             wheelbase=wheelbase, track_width=track_width, coherence=coherence,
-                             highpass=highpass or None, lowpass=lowpass or None, seed=seed, events=tuple(events))
+    events += [
+        KerbStrike(**_event_fields(k, "--kerb", ("time", "height", "ramp_length", "length", "side")))
+        for k in kerb or []
+    ]
+    settings = DriveSettings(
+        road_class=road_class,
+        speed=speed,
+        duration=duration,
+        sample_rate=sample_rate,
+        wheelbase=wheelbase,
+        track_width=track_width,
+        coherence=coherence,
+        highpass=highpass or None,
+        lowpass=lowpass or None,
+        seed=seed,
+        events=tuple(events),
+    )
     try:
         target = check_output_file(out, [])
         path = write_generated_drive(settings, target, rpc_data_type=rpc_data_type)
@@ -563,29 +749,47 @@ def _window(text: Optional[str]) -> Optional[tuple[float, float]]:
 def validate(
     result: Path = typer.Argument(..., help="Result file (CSV with 'name [unit]' headers, or MDF4)."),
     reference: Path = typer.Argument(..., help="Reference file (measurement or baseline simulation)."),
-    channels: Optional[list[str]] = typer.Option(None, "--channels", "-c", help="Channels to compare (repeat, or comma-separated); default: every channel both files hold."),
+    channels: Optional[list[str]] = typer.Option(
+        None,
+        "--channels",
+        "-c",
+        help="Channels to compare (repeat, or comma-separated); default: every channel both files hold.",
+    ),
     out: Path = typer.Option(Path("report"), "--out", "-o", help="Report folder (index.html, summary.json, PNGs)."),
-    slope: float = typer.Option(5.0, "--slope", help="Basquin slope m for the pseudo-damage (5 suits forces and torques)."),
-    slope_for: Optional[list[str]] = typer.Option(None, "--slope-for", help="Override m per quantity or channel: QUANTITY_OR_CHANNEL=M (repeat)."),
+    slope: float = typer.Option(
+        5.0, "--slope", help="Basquin slope m for the pseudo-damage (5 suits forces and torques)."
+    ),
+    slope_for: Optional[list[str]] = typer.Option(
+        None, "--slope-for", help="Override m per quantity or channel: QUANTITY_OR_CHANNEL=M (repeat)."
+    ),
     fmax: float = typer.Option(50.0, "--fmax", help="Upper PSD frequency [Hz]."),
     psd_resolution: float = typer.Option(0.25, "--psd-resolution", help="Welch frequency resolution [Hz]."),
-    window_length: float = typer.Option(5.0, "--window-length", help="Time-history plot length around the global peak [s]."),
+    window_length: float = typer.Option(
+        5.0, "--window-length", help="Time-history plot length around the global peak [s]."
+    ),
     window: Optional[str] = typer.Option(None, "--window", help="Fixed time-history window START,END [s], e.g. 30,35."),
 ) -> None:
     """Compare a result with a reference: NRMSE, R², peaks, mean shift, RMS, PSD and rainflow pseudo-damage."""
     from nnfmu.workflows.validation import ValidationSettings, validate_files
 
     try:
-        settings = ValidationSettings(basquin_slope=slope, slopes=_slopes(slope_for or []), fmax=fmax,
-                                      psd_resolution=psd_resolution, window_length=window_length,
-                                      window=_window(window))
+        settings = ValidationSettings(
+            basquin_slope=slope,
+            slopes=_slopes(slope_for or []),
+            fmax=fmax,
+            psd_resolution=psd_resolution,
+            window_length=window_length,
+            window=_window(window),
+        )
         report = validate_files(result, reference, _split(channels) or None, out, settings)
     except NnfmuError as error:
         _fail(error)
     for c in report.comparisons:
         m = c.metrics
-        typer.echo(f"{c.name} [{c.unit}]: NRMSE {m.nrmse:.4g}, R2 {m.r2:.4g}, peak error {m.peak_error:+.3g}, "
-                   f"pseudo-damage ratio {m.pseudo_damage_ratio:.4g} (m = {c.basquin_slope:g})")
+        typer.echo(
+            f"{c.name} [{c.unit}]: NRMSE {m.nrmse:.4g}, R2 {m.r2:.4g}, peak error {m.peak_error:+.3g}, "
+            f"pseudo-damage ratio {m.pseudo_damage_ratio:.4g} (m = {c.basquin_slope:g})"
+        )
     typer.echo(f"report: {report.index_html}")
 
 

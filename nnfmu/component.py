@@ -30,6 +30,8 @@ def same_period(a: float, b: float) -> bool:
     """Whether two sample periods [s] name the same clock (within PERIOD_TOLERANCE, relative): the one test every
     comparison of a record's period with a model's, or of two models', uses."""
     return abs(a - b) <= PERIOD_TOLERANCE * max(abs(a), abs(b))
+
+
 # Most ports (tensor elements) one graph from another tool may have: each becomes an FMU variable, so a declared
 # input of a billion elements is refused before any port is made.
 MAX_PORTS = 100_000
@@ -113,14 +115,17 @@ class Component:
         if period is not None:
             low, high = SAMPLE_PERIOD_RANGE
             if isinstance(period, bool) or not isinstance(period, (int, float)) or not low <= period <= high:
-                raise ValueError(f"component {self.name!r}: sample period {period!r} s must be a number from {low:g} "
-                                 f"to {high:g} s")
+                raise ValueError(
+                    f"component {self.name!r}: sample period {period!r} s must be a number from {low:g} to {high:g} s"
+                )
             self.sample_period = float(period)
         if self.interval_starts:
             tensors = {p.tensor for p in self.inputs}
             if set(self.interval_starts) != tensors:
-                raise ValueError(f"component {self.name!r}: interval_starts names {sorted(self.interval_starts)}, "
-                                 f"but the input tensors are {sorted(tensors)}; name each input tensor once")
+                raise ValueError(
+                    f"component {self.name!r}: interval_starts names {sorted(self.interval_starts)}, "
+                    f"but the input tensors are {sorted(tensors)}; name each input tensor once"
+                )
             if self.sample_period is None:
                 raise ValueError(f"component {self.name!r}: interpolated inputs need a sample period")
 
@@ -175,8 +180,9 @@ class Component:
                 try:
                     decoded = json.loads(prop.value)
                 except RecursionError:
-                    raise ValueError(f"metadata {METADATA_KEY!r} is nested too deeply to be a component "
-                                     "description") from None
+                    raise ValueError(
+                        f"metadata {METADATA_KEY!r} is nested too deeply to be a component description"
+                    ) from None
                 component = cls.from_dict(decoded)
                 if name:
                     component.name = name
@@ -221,10 +227,15 @@ def _port(value: Any, where: str) -> Port:
     unknown = sorted(set(d) - {"name", "unit", "description", "tensor", "index", "min", "max"})
     if unknown:
         raise ValueError(f"{where}: unknown field(s) {', '.join(map(repr, unknown))}")
-    port = Port(name=_typed(d, "name", str, where), unit=_typed(d, "unit", str, where, ""),
-                description=_typed(d, "description", str, where, ""), tensor=_typed(d, "tensor", str, where, ""),
-                index=_typed(d, "index", int, where, 0), min=_typed(d, "min", NUMBER, where, None),
-                max=_typed(d, "max", NUMBER, where, None))
+    port = Port(
+        name=_typed(d, "name", str, where),
+        unit=_typed(d, "unit", str, where, ""),
+        description=_typed(d, "description", str, where, ""),
+        tensor=_typed(d, "tensor", str, where, ""),
+        index=_typed(d, "index", int, where, 0),
+        min=_typed(d, "min", NUMBER, where, None),
+        max=_typed(d, "max", NUMBER, where, None),
+    )
     if port.index < 0:
         raise ValueError(f"{where}: index {port.index} is negative")
     return port
@@ -237,8 +248,12 @@ def _state(value: Any, where: str) -> StatePort:
     for x in initial:
         if isinstance(x, bool) or not isinstance(x, NUMBER):
             raise ValueError(f"{where}: initial value {repr(x)[:60]} is not a number")
-    return StatePort(_typed(d, "input", str, where), _typed(d, "output", str, where), tuple(initial),
-                     _typed(d, "description", str, where, ""))
+    return StatePort(
+        _typed(d, "input", str, where),
+        _typed(d, "output", str, where),
+        tuple(initial),
+        _typed(d, "description", str, where, ""),
+    )
 
 
 def _static_size(value_info: onnx.ValueInfoProto) -> int:
@@ -257,8 +272,10 @@ def _ports_of(value_infos: list[onnx.ValueInfoProto]) -> list[Port]:
         if size > MAX_PORTS:
             raise ValueError(f"tensor {vi.name!r} has {size} elements, more than the {MAX_PORTS} ports an FMU may have")
     if sum(sizes) > MAX_PORTS:
-        raise ValueError(f"tensors {', '.join(repr(vi.name) for vi in value_infos)} have {sum(sizes)} elements "
-                         f"together, more than the {MAX_PORTS} ports an FMU may have")
+        raise ValueError(
+            f"tensors {', '.join(repr(vi.name) for vi in value_infos)} have {sum(sizes)} elements "
+            f"together, more than the {MAX_PORTS} ports an FMU may have"
+        )
     ports: list[Port] = []
     for vi, size in zip(value_infos, sizes):
         if size == 1:

@@ -48,20 +48,24 @@ def file_output(text: str | os.PathLike[str], option: str = "--out") -> Path:
     if not raw.strip():
         raise OutputPathError(f"{option} is empty; give the path of the file to write")
     if raw.endswith(("/", os.sep)):
-        raise OutputPathError(f"{option} {raw}: ends with a slash, so it names a folder; give the path of a "
-                              f"file (inside it, if that is where it should go)")
+        raise OutputPathError(
+            f"{option} {raw}: ends with a slash, so it names a folder; give the path of a "
+            f"file (inside it, if that is where it should go)"
+        )
     return Path(raw)
 
 
-def check_output_file(out: str | os.PathLike[str], inputs: Iterable[str | os.PathLike[str]],
-                      option: str = "--out") -> Path:
+def check_output_file(
+    out: str | os.PathLike[str], inputs: Iterable[str | os.PathLike[str]], option: str = "--out"
+) -> Path:
     """`out` as a Path once it is safe to write a file there: not one of `inputs`, not an existing folder, not
     under a file. OutputPathError naming the path otherwise."""
     out = file_output(out, option)
     for given in inputs:
         if _same(out, Path(given)):
-            raise OutputPathError(f"{option} {out}: is the input {given}; writing it would destroy the input, so "
-                                  f"give another path")
+            raise OutputPathError(
+                f"{option} {out}: is the input {given}; writing it would destroy the input, so give another path"
+            )
     if out.is_dir():
         raise OutputPathError(f"{option} {out}: is an existing folder; give a file path (e.g. inside it)")
     for parent in out.parents:
@@ -78,8 +82,9 @@ def marker_kind(folder: Path) -> str | None:
         return None
 
 
-def check_output_dir(out: str | os.PathLike[str], kind: str, inputs: Iterable[str | os.PathLike[str]] = (),
-                     option: str = "--out") -> Path:
+def check_output_dir(
+    out: str | os.PathLike[str], kind: str, inputs: Iterable[str | os.PathLike[str]] = (), option: str = "--out"
+) -> Path:
     """`out` as a Path once it is safe for a `kind` command to replace or fill it: not a file, holding neither an
     input nor the current folder, and new, empty or an earlier `kind` output (its marker says so)."""
     raw = os.fspath(out)
@@ -93,11 +98,14 @@ def check_output_dir(out: str | os.PathLike[str], kind: str, inputs: Iterable[st
             raise OutputPathError(f"{option} {out}: {parent} is a file, not a folder")
     for given in inputs:
         if _inside(Path(given), out):
-            raise OutputPathError(f"{option} {out}: holds the input {given}, which writing the {kind} result there "
-                                  f"would delete or replace; give a new folder")
+            raise OutputPathError(
+                f"{option} {out}: holds the input {given}, which writing the {kind} result there "
+                f"would delete or replace; give a new folder"
+            )
     if _inside(Path.cwd(), out):
-        raise OutputPathError(f"{option} {out}: is the current folder or holds it; give a new folder for the {kind} "
-                              f"result")
+        raise OutputPathError(
+            f"{option} {out}: is the current folder or holds it; give a new folder for the {kind} result"
+        )
     if out.is_dir() and any(out.iterdir()):
         found = marker_kind(out)
         if found != kind:
@@ -105,7 +113,8 @@ def check_output_dir(out: str | os.PathLike[str], kind: str, inputs: Iterable[st
             raise OutputPathError(
                 f"{option} {out}: the folder is not empty and is {earlier}, not a {kind} result (no {MARKER} file "
                 f"saying {kind!r}); nnfmu replaces only what it wrote, so give a new or empty folder, or remove "
-                f"this one yourself")
+                f"this one yourself"
+            )
     return out
 
 

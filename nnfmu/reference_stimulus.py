@@ -44,14 +44,21 @@ class ReferenceStimulus:
         return len(next(iter(self.inputs.values())))
 
     @classmethod
-    def take(cls, channels: Mapping[str, np.ndarray], names: Sequence[str], source: str,
-             samples: int = REFERENCE_SAMPLES) -> "ReferenceStimulus":
+    def take(
+        cls, channels: Mapping[str, np.ndarray], names: Sequence[str], source: str, samples: int = REFERENCE_SAMPLES
+    ) -> "ReferenceStimulus":
         """The first `samples` samples of the channels `names` (the graph's input ports) of `channels`."""
         return cls(source, {n: tuple(float(v) for v in np.asarray(channels[n], dtype=float)[:samples]) for n in names})
 
     def to_json(self) -> str:
-        return json.dumps({"format_version": FORMAT_VERSION, "source": self.source,
-                           "inputs": {k: list(v) for k, v in self.inputs.items()}}, allow_nan=False)
+        return json.dumps(
+            {
+                "format_version": FORMAT_VERSION,
+                "source": self.source,
+                "inputs": {k: list(v) for k, v in self.inputs.items()},
+            },
+            allow_nan=False,
+        )
 
     def attach_to(self, model: onnx.ModelProto) -> None:
         """Store this stimulus in the ONNX model's metadata (replacing an earlier one)."""
@@ -66,8 +73,9 @@ class ReferenceStimulus:
                     data = json.loads(prop.value)
                     if data.get("format_version", FORMAT_VERSION) > FORMAT_VERSION:
                         raise ValueError(f"format {data['format_version']} is newer than this nnfmu's")
-                    return cls(str(data["source"]),
-                               {str(k): tuple(float(x) for x in v) for k, v in data["inputs"].items()})
+                    return cls(
+                        str(data["source"]), {str(k): tuple(float(x) for x in v) for k, v in data["inputs"].items()}
+                    )
                 except (ValueError, KeyError, TypeError, AttributeError) as err:
                     raise ValueError(f"ONNX metadata {METADATA_KEY!r} is malformed: {err}") from err
         return None

@@ -49,12 +49,16 @@ def check_members(archive: zipfile.ZipFile, path: Path) -> list[zipfile.ZipInfo]
             raise ArchiveError(f"{path}: member {member.filename!r} {why}; refusing to extract the archive")
         ratio = member.file_size / max(member.compress_size, 1)
         if member.file_size > RATIO_FLOOR and ratio > MAX_RATIO:
-            raise ArchiveError(f"{path}: member {member.filename!r} inflates {ratio:.0f}-fold ({member.compress_size} "
-                               f"-> {member.file_size} bytes), more than the {MAX_RATIO:g}-fold limit (a zip bomb?)")
+            raise ArchiveError(
+                f"{path}: member {member.filename!r} inflates {ratio:.0f}-fold ({member.compress_size} "
+                f"-> {member.file_size} bytes), more than the {MAX_RATIO:g}-fold limit (a zip bomb?)"
+            )
         total += member.file_size
         if total > MAX_TOTAL_BYTES:
-            raise ArchiveError(f"{path}: the members unpack to more than the limit of {MAX_TOTAL_BYTES} bytes "
-                               f"(reached at {member.filename!r})")
+            raise ArchiveError(
+                f"{path}: the members unpack to more than the limit of {MAX_TOTAL_BYTES} bytes "
+                f"(reached at {member.filename!r})"
+            )
     return members
 
 
@@ -73,8 +77,7 @@ def extract_zip(path: Path, folder: Path) -> None:
         for member in check_members(archive, path):
             target = (root / member.filename).resolve()
             if root not in target.parents:
-                raise ArchiveError(f"{path}: member {member.filename!r} would be written outside the archive's "
-                                   f"folder")
+                raise ArchiveError(f"{path}: member {member.filename!r} would be written outside the archive's folder")
             if member.is_dir():
                 target.mkdir(parents=True, exist_ok=True)
                 continue

@@ -50,8 +50,9 @@ def test_data_check_lists_channels_and_names_missing_ones(dyno: Path) -> None:
 
 def test_train_build_and_validate_chain(dyno: Path, tmp_path: Path) -> None:
     onnx_path = tmp_path / "damper.onnx"
-    trained = invoke("train", dyno, "--preset", "damper-hysteresis", "--out", onnx_path,
-                     "--max-epochs", "5", "--restarts", "1")
+    trained = invoke(
+        "train", dyno, "--preset", "damper-hysteresis", "--out", onnx_path, "--max-epochs", "5", "--restarts", "1"
+    )
     assert trained.exit_code == 0, trained.output
     assert "test" in trained.output and onnx_path.exists()
     assert "velocity[k]" in trained.output  # printed as is, not eaten as console markup
@@ -73,26 +74,48 @@ def _vehicle_cosim_and_loop_chain(dyno: Path, onnx_path: Path, damper_fmu: Path,
     vehicle = tmp_path / "car.fmu"
     built = invoke("vehicle", "build", "quarter-car", "--out", vehicle, "--sample-period", "1e-3")
     assert built.exit_code == 0, built.output
-    stabilised = invoke("vehicle", "build", "full-vehicle", "--out", tmp_path / "full.fmu",
-                        "--stabilise", "bushing_fl_front,bushing_fl_rear")
+    stabilised = invoke(
+        "vehicle",
+        "build",
+        "full-vehicle",
+        "--out",
+        tmp_path / "full.fmu",
+        "--stabilise",
+        "bushing_fl_front,bushing_fl_rear",
+    )
     assert stabilised.exit_code == 0 and (tmp_path / "full.fmu").exists(), stabilised.output
     drive = tmp_path / "drive.csv"
     assert invoke("drive", "generate", "--out", drive, "--duration", "2").exit_code == 0
-    ssd = write_ssd(connect_by_name("quarter car", ("vehicle", vehicle), {"damper": damper_fmu}, tmp_path / "system"),
-                    tmp_path / "system" / "SystemStructure.ssd")
+    ssd = write_ssd(
+        connect_by_name("quarter car", ("vehicle", vehicle), {"damper": damper_fmu}, tmp_path / "system"),
+        tmp_path / "system" / "SystemStructure.ssd",
+    )
     results = {}
     for master in ("fmpy", "libcosim"):
         out = tmp_path / f"{master}.csv"
-        run = invoke("cosim", ssd, "--drive", drive, "--out", out, "--scheme", "jacobi", "--no-extrapolate",
-                     "--no-refresh", "--master", master)
+        run = invoke(
+            "cosim",
+            ssd,
+            "--drive",
+            drive,
+            "--out",
+            out,
+            "--scheme",
+            "jacobi",
+            "--no-extrapolate",
+            "--no-refresh",
+            "--master",
+            master,
+        )
         assert run.exit_code == 0, run.output
         results[master] = load_measurement(out)
     assert "damper_force" in results["fmpy"].names and results["fmpy"].units["damper_force"] == "N"
     for name in ("damper_force", "body_acceleration"):
         scale = np.max(np.abs(results["fmpy"][name]))
         np.testing.assert_allclose(results["libcosim"][name], results["fmpy"][name], rtol=0, atol=1e-6 * scale)
-    loop = invoke("loop", dyno, "--model", onnx_path, "--output", "force", "--out", tmp_path / "loop",
-                  "--max-effects", "0")
+    loop = invoke(
+        "loop", dyno, "--model", onnx_path, "--output", "force", "--out", tmp_path / "loop", "--max-effects", "0"
+    )
     assert loop.exit_code == 0, loop.output
     assert "effects added: none" in loop.output and (tmp_path / "loop" / "report.json").exists()
     refused = invoke("loop", drive, "--model", onnx_path, "--out", tmp_path / "refused")
@@ -114,9 +137,11 @@ def test_vehicle_build_takes_a_quarter_car_file_and_refuses_what_does_not_fit(tm
     assert "(fl corner)" in description.description
     inputs = [v.name for v in description.modelVariables if v.causality == "input"]
     assert inputs == ["actuator_fl_displacement", "actuator_fl_velocity", "damper_force"]
-    for args, message in ((("quarter-car", "--corner", "fr"), "stands on corner 'fl'"),
-                          (("full-vehicle",), "a quarter-car parameter file"),
-                          (("quarter-car", "--corner", "left"), "corner 'left'")):
+    for args, message in (
+        (("quarter-car", "--corner", "fr"), "stands on corner 'fl'"),
+        (("full-vehicle",), "a quarter-car parameter file"),
+        (("quarter-car", "--corner", "left"), "corner 'left'"),
+    ):
         refused = invoke("vehicle", "build", *args, "--params", quarter, "--out", tmp_path / "no.fmu")
         assert refused.exit_code != 0 and message in refused.output, refused.output
         assert str(quarter) in refused.output or "left" in message

@@ -19,12 +19,18 @@ runner = CliRunner()
 # (command line with {tmp} for the test's folder, the function the command calls: module, name)
 COMMANDS = {
     "rig": (["rig", "damper", "--out", "{tmp}/d.csv"], ("nnfmu.workflows.rig", "write_rig_record")),
-    "train": (["train", "{tmp}/d.csv", "--preset", "damper-spline", "--out", "{tmp}/m.onnx"],
-              ("nnfmu.workflows.train", "train_from_file")),
-    "cosim": (["cosim", "{tmp}/system", "--drive", "{tmp}/drive.csv", "--out", "{tmp}/r.csv"],
-              ("nnfmu.workflows.cosim", "run_cosim")),
-    "validate": (["validate", "{tmp}/a.csv", "{tmp}/b.csv", "--out", "{tmp}/report"],
-                 ("nnfmu.workflows.validation", "validate_files")),
+    "train": (
+        ["train", "{tmp}/d.csv", "--preset", "damper-spline", "--out", "{tmp}/m.onnx"],
+        ("nnfmu.workflows.train", "train_from_file"),
+    ),
+    "cosim": (
+        ["cosim", "{tmp}/system", "--drive", "{tmp}/drive.csv", "--out", "{tmp}/r.csv"],
+        ("nnfmu.workflows.cosim", "run_cosim"),
+    ),
+    "validate": (
+        ["validate", "{tmp}/a.csv", "{tmp}/b.csv", "--out", "{tmp}/report"],
+        ("nnfmu.workflows.validation", "validate_files"),
+    ),
     "data check": (["data", "check", "{tmp}/d.csv"], ("nnfmu.workflows.data_check", "check_data_file")),
     "build": (["build", "{tmp}/m.onnx", "--out", "{tmp}/m.fmu"], ("nnfmu.workflows.fmu_build", "build_fmu")),
 }
@@ -42,10 +48,14 @@ def invoke_raising(monkeypatch: pytest.MonkeyPatch, tmp_path: Path, command: str
 
 
 @pytest.mark.parametrize("command", COMMANDS)
-@pytest.mark.parametrize("error", [ZeroDivisionError("division by zero"), ValueError("a bug's message")],
-                         ids=["ZeroDivisionError", "ValueError"])
-def test_a_programming_error_inside_a_command_propagates(monkeypatch: pytest.MonkeyPatch, tmp_path: Path,
-                                                         command: str, error: Exception) -> None:
+@pytest.mark.parametrize(
+    "error",
+    [ZeroDivisionError("division by zero"), ValueError("a bug's message")],
+    ids=["ZeroDivisionError", "ValueError"],
+)
+def test_a_programming_error_inside_a_command_propagates(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, command: str, error: Exception
+) -> None:
     result = invoke_raising(monkeypatch, tmp_path, command, error)
     assert result.exception is error, result.output
     assert result.exit_code != 2
@@ -53,8 +63,9 @@ def test_a_programming_error_inside_a_command_propagates(monkeypatch: pytest.Mon
 
 
 @pytest.mark.parametrize("command", COMMANDS)
-def test_an_nnfmu_error_inside_a_command_is_one_error_line(monkeypatch: pytest.MonkeyPatch, tmp_path: Path,
-                                                           command: str) -> None:
+def test_an_nnfmu_error_inside_a_command_is_one_error_line(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, command: str
+) -> None:
     """The control: the same place raising an NnfmuError ends in exit status 2 and its message, no traceback."""
     result = invoke_raising(monkeypatch, tmp_path, command, SettingsError("--knob 7 is out of range"))
     assert result.exit_code == 2, result.output
@@ -68,10 +79,15 @@ def test_loop_on_a_model_with_malformed_metadata_is_one_error_line(tmp_path: Pat
     replace_metadata(model, METADATA_KEY, "[1, 2]")
     onnx.save(model, tmp_path / "odd.onnx")
     data = tmp_path / "dyno.csv"
-    assert runner.invoke(app, ["rig", "damper", "--out", str(data), "--duration", "20",
-                               "--excitation", "random"]).exit_code == 0
-    result = runner.invoke(app, ["loop", str(data), "--model", str(tmp_path / "odd.onnx"), "--out",
-                                 str(tmp_path / "loop")])
+    assert (
+        runner.invoke(
+            app, ["rig", "damper", "--out", str(data), "--duration", "20", "--excitation", "random"]
+        ).exit_code
+        == 0
+    )
+    result = runner.invoke(
+        app, ["loop", str(data), "--model", str(tmp_path / "odd.onnx"), "--out", str(tmp_path / "loop")]
+    )
     assert result.exit_code == 2, result.output
     assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
     assert result.output.startswith("error: ") and "odd.onnx: cannot read the component description" in result.output

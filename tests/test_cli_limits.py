@@ -43,21 +43,26 @@ def refused(result, *words: str) -> None:
 def system(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A quarter car with a linear damper, the damper's filter start value given in the SSD, and a 1 s drive."""
     folder = tmp_path_factory.mktemp("limits")
-    assert invoke("vehicle", "build", "quarter-car", "--out", folder / "car.fmu",
-                  "--sample-period", "1e-3").exit_code == 0
+    assert (
+        invoke("vehicle", "build", "quarter-car", "--out", folder / "car.fmu", "--sample-period", "1e-3").exit_code == 0
+    )
     onnx.save(linear_damper_graph(2400.0, name="damper"), folder / "damper.onnx")
     assert invoke("build", folder / "damper.onnx", "--out", folder / "damper.fmu").exit_code == 0
     assert invoke("drive", "generate", "--out", folder / "drive.csv", "--duration", "1").exit_code == 0
-    connected = connect_by_name("quarter car", ("vehicle", folder / "car.fmu"), {"damper": folder / "damper.fmu"},
-                                folder, {"damper": {"filter_cutoff": 0.0}})
+    connected = connect_by_name(
+        "quarter car",
+        ("vehicle", folder / "car.fmu"),
+        {"damper": folder / "damper.fmu"},
+        folder,
+        {"damper": {"filter_cutoff": 0.0}},
+    )
     return write_ssd(connected, folder / "SystemStructure.ssd")
 
 
 def test_rig_and_drive_durations_past_the_sample_limit_are_refused(tmp_path: Path) -> None:
     refused(invoke("rig", "damper", "--out", tmp_path / "d.csv", "--duration", "1e9"), "1e+09", "samples", "limit")
     refused(invoke("rig", "bushing", "--out", tmp_path / "b.csv", "--sample-rate", "1e12"), "samples", "limit")
-    refused(invoke("drive", "generate", "--out", tmp_path / "r.csv", "--duration", "1e9"), "1e+09", "samples",
-            "limit")
+    refused(invoke("drive", "generate", "--out", tmp_path / "r.csv", "--duration", "1e9"), "1e+09", "samples", "limit")
     refused(invoke("drive", "generate", "--out", tmp_path / "r.csv", "--speed", "1e-9"), "samples", "limit")
     assert list(tmp_path.iterdir()) == []
 
@@ -65,16 +70,44 @@ def test_rig_and_drive_durations_past_the_sample_limit_are_refused(tmp_path: Pat
 def test_a_hidden_size_past_the_limit_is_refused_before_training(system: Path, tmp_path: Path) -> None:
     data = tmp_path / "dyno.csv"
     assert invoke("rig", "damper", "--out", data, "--duration", "20", "--excitation", "random").exit_code == 0
-    refused(invoke("train", data, "--preset", "damper-spline", "--out", tmp_path / "m.onnx", "--hidden", "100000",
-                   "--max-epochs", "1"), "100000", "hidden", "limit")
+    refused(
+        invoke(
+            "train",
+            data,
+            "--preset",
+            "damper-spline",
+            "--out",
+            tmp_path / "m.onnx",
+            "--hidden",
+            "100000",
+            "--max-epochs",
+            "1",
+        ),
+        "100000",
+        "hidden",
+        "limit",
+    )
     assert not (tmp_path / "m.onnx").exists()
 
 
 @pytest.mark.parametrize("master", ["fmpy", "libcosim"])
 def test_a_result_past_the_size_limit_is_refused_before_the_run(system: Path, tmp_path: Path, master: str) -> None:
     plain = ("--scheme", "jacobi", "--no-extrapolate", "--no-refresh") if master == "libcosim" else ()
-    result = invoke("cosim", system, "--drive", system.parent / "drive.csv", "--out", tmp_path / "r.csv",
-                    "--step", "1e-9", "--stop", "0.9", "--master", master, *plain)
+    result = invoke(
+        "cosim",
+        system,
+        "--drive",
+        system.parent / "drive.csv",
+        "--out",
+        tmp_path / "r.csv",
+        "--step",
+        "1e-9",
+        "--stop",
+        "0.9",
+        "--master",
+        master,
+        *plain,
+    )
     refused(result, "900000000 steps", "limit")
     assert not (tmp_path / "r.csv").exists()
 
@@ -85,8 +118,12 @@ def test_a_parameter_that_is_not_finite_is_refused_naming_element_and_parameter(
         odd = system.with_name(f"odd_{value}.ssd")
         assert text.count('value="0.0"') == 1
         odd.write_text(text.replace('value="0.0"', f'value="{value}"'), encoding="utf-8")
-        refused(invoke("cosim", odd, "--drive", system.parent / "drive.csv", "--out", tmp_path / "r.csv"),
-                "element 'damper'", "parameter 'filter_cutoff'", value)
+        refused(
+            invoke("cosim", odd, "--drive", system.parent / "drive.csv", "--out", tmp_path / "r.csv"),
+            "element 'damper'",
+            "parameter 'filter_cutoff'",
+            value,
+        )
 
 
 def test_rig_leaves_the_old_data_when_the_truth_file_cannot_be_written(tmp_path: Path) -> None:
@@ -96,8 +133,10 @@ def test_rig_leaves_the_old_data_when_the_truth_file_cannot_be_written(tmp_path:
     before = data.read_bytes(), data.with_name("dyno.truth.json").read_bytes()
     data.with_name("dyno.truth.json").unlink()
     data.with_name("dyno.truth.json").mkdir()  # the truth file's name is taken by a folder
-    refused(invoke("rig", "damper", "--out", data, "--duration", "20", "--seed", "2", "--excitation", "random"),
-            "dyno.truth.json")
+    refused(
+        invoke("rig", "damper", "--out", data, "--duration", "20", "--seed", "2", "--excitation", "random"),
+        "dyno.truth.json",
+    )
     assert data.read_bytes() == before[0]
     # a name whose data file (and its temporary) fits the file system's 255 bytes but whose truth file's does not
     long = tmp_path / ("x" * 235 + ".csv")
@@ -109,5 +148,6 @@ def test_rig_leaves_the_old_data_when_the_truth_file_cannot_be_written(tmp_path:
 def test_a_step_that_is_not_a_number_and_negative_iterations_are_refused(system: Path, tmp_path: Path) -> None:
     drive = system.parent / "drive.csv"
     refused(invoke("cosim", system, "--drive", drive, "--out", tmp_path / "r.csv", "--step", "nan"), "step nan")
-    refused(invoke("cosim", system, "--drive", drive, "--out", tmp_path / "r.csv", "--iterations", "-3"),
-            "iterations -3")
+    refused(
+        invoke("cosim", system, "--drive", drive, "--out", tmp_path / "r.csv", "--iterations", "-3"), "iterations -3"
+    )

@@ -28,12 +28,25 @@ def snapshot(folder: Path) -> dict[str, bytes]:
 def work(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A user's folder: a dyno record, a small model trained on it, and an unrelated file."""
     folder = tmp_path_factory.mktemp("mywork")
-    made = invoke("rig", "damper", "--out", folder / "dyno.csv", "--duration", "20", "--seed", "2",
-                  "--excitation", "random")
+    made = invoke(
+        "rig", "damper", "--out", folder / "dyno.csv", "--duration", "20", "--seed", "2", "--excitation", "random"
+    )
     assert made.exit_code == 0, made.output
     (folder / "dyno.truth.json").unlink()
-    trained = invoke("train", folder / "dyno.csv", "--preset", "damper-spline", "--out", folder / "model.onnx",
-                     "--max-epochs", "5", "--restarts", "1", "--hidden", "3")
+    trained = invoke(
+        "train",
+        folder / "dyno.csv",
+        "--preset",
+        "damper-spline",
+        "--out",
+        folder / "model.onnx",
+        "--max-epochs",
+        "5",
+        "--restarts",
+        "1",
+        "--hidden",
+        "3",
+    )
     assert trained.exit_code == 0, trained.output
     (folder / "notes.txt").write_text("my unrelated notes\n")
     return folder
@@ -84,8 +97,12 @@ def test_loop_refuses_a_foreign_folder_and_replaces_its_own_earlier_result(work:
 def test_build_train_cosim_and_convert_refuse_to_overwrite_their_input(work: Path, tmp_path: Path) -> None:
     before = snapshot(work)
     refused(invoke("build", work / "model.onnx", "--out", work / "model.onnx"), work / "model.onnx")
-    refused(invoke("train", work / "dyno.csv", "--preset", "damper-spline", "--out", work / "dyno.csv",
-                   "--max-epochs", "1"), work / "dyno.csv")
+    refused(
+        invoke(
+            "train", work / "dyno.csv", "--preset", "damper-spline", "--out", work / "dyno.csv", "--max-epochs", "1"
+        ),
+        work / "dyno.csv",
+    )
     ssd = tmp_path / "SystemStructure.ssd"
     ssd.write_text("<not read: the output is checked first/>")
     drive = work / "dyno.csv"

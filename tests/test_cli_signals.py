@@ -24,8 +24,13 @@ runner = CliRunner()
 def terminated_when(args: list[object], ready: Callable[[], bool], tmpdir: Path) -> subprocess.CompletedProcess:
     """Run `nnfmu ARGS` in a new process with TMPDIR=`tmpdir`, send SIGTERM once `ready()` holds, wait for it."""
     env = dict(os.environ, TMPDIR=str(tmpdir))
-    process = subprocess.Popen([sys.executable, "-m", "nnfmu.cli", *map(str, args)], env=env,
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "nnfmu.cli", *map(str, args)],
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 120
     while not ready():
         if process.poll() is not None or time.monotonic() > deadline:
@@ -49,8 +54,7 @@ def test_sigterm_during_a_build_leaves_no_temporaries(tmp_path: Path) -> None:
     scratch = tmp_path / "tmp"
     scratch.mkdir()
     out = tmp_path / "out" / "x.fmu"
-    done = terminated_when(["build", model, "--out", out],
-                           lambda: any(scratch.glob("nnfmu-build-*")), scratch)
+    done = terminated_when(["build", model, "--out", out], lambda: any(scratch.glob("nnfmu-build-*")), scratch)
     assert done.returncode != 0, done.stdout
     assert ours(scratch) == []
     assert not out.exists()
@@ -61,14 +65,32 @@ def test_sigterm_during_a_loop_leaves_no_staging_folder(tmp_path: Path) -> None:
     data, model = tmp_path / "dyno.csv", tmp_path / "model.onnx"
     made = runner.invoke(app, ["rig", "damper", "--out", str(data), "--duration", "20", "--excitation", "random"])
     assert made.exit_code == 0, made.output
-    trained = runner.invoke(app, ["train", str(data), "--preset", "damper-spline", "--out", str(model),
-                                  "--max-epochs", "2", "--restarts", "1", "--hidden", "3"])
+    trained = runner.invoke(
+        app,
+        [
+            "train",
+            str(data),
+            "--preset",
+            "damper-spline",
+            "--out",
+            str(model),
+            "--max-epochs",
+            "2",
+            "--restarts",
+            "1",
+            "--hidden",
+            "3",
+        ],
+    )
     assert trained.exit_code == 0, trained.output
     scratch = tmp_path / "tmp"
     scratch.mkdir()
     out = tmp_path / "results" / "loop"
-    done = terminated_when(["loop", data, "--model", model, "--out", out, "--max-effects", "1"],
-                           lambda: out.parent.exists() and any(out.parent.glob(".loop.staging-*")), scratch)
+    done = terminated_when(
+        ["loop", data, "--model", model, "--out", out, "--max-effects", "1"],
+        lambda: out.parent.exists() and any(out.parent.glob(".loop.staging-*")),
+        scratch,
+    )
     assert done.returncode != 0, done.stdout
     assert list(out.parent.iterdir()) == [], list(out.parent.iterdir())
     assert ours(scratch) == []

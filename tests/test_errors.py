@@ -31,8 +31,11 @@ def _nnfmu_exception_classes() -> dict[str, type]:
     """{module.qualname: class} of every exception class defined in an nnfmu module, after importing them all."""
     for module in pkgutil.walk_packages(nnfmu.__path__, "nnfmu."):
         importlib.import_module(module.name)
-    return {f"{c.__module__}.{c.__qualname__}": c for c in _subclasses(BaseException)
-            if c.__module__ == "nnfmu" or c.__module__.startswith("nnfmu.")}
+    return {
+        f"{c.__module__}.{c.__qualname__}": c
+        for c in _subclasses(BaseException)
+        if c.__module__ == "nnfmu" or c.__module__.startswith("nnfmu.")
+    }
 
 
 CLASSES = _nnfmu_exception_classes()
@@ -40,9 +43,13 @@ CLASSES = _nnfmu_exception_classes()
 
 def test_the_walk_finds_the_package_errors() -> None:
     """A guard on the walk itself: errors of the lowest and highest stages are among those it finds."""
-    for name in ("nnfmu.errors.SettingsError", "nnfmu.data.errors.DataError",
-                 "nnfmu.workflows.campaign.errors.CampaignError",
-                 "nnfmu.fmu.native.codegen.errors.UnsupportedGraphError", "nnfmu.cosim.master._Diverged"):
+    for name in (
+        "nnfmu.errors.SettingsError",
+        "nnfmu.data.errors.DataError",
+        "nnfmu.workflows.campaign.errors.CampaignError",
+        "nnfmu.fmu.native.codegen.errors.UnsupportedGraphError",
+        "nnfmu.cosim.master._Diverged",
+    ):
         assert name in CLASSES, sorted(CLASSES)
     assert len(CLASSES) >= 25
 

@@ -9,8 +9,21 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_wheel_ships_templates_and_package_data(tmp_path: Path) -> None:
-    subprocess.run([sys.executable, "-m", "pip", "wheel", str(ROOT), "--no-deps", "--no-build-isolation", "-q",
-                    "-w", str(tmp_path)], check=True)
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "wheel",
+            str(ROOT),
+            "--no-deps",
+            "--no-build-isolation",
+            "-q",
+            "-w",
+            str(tmp_path),
+        ],
+        check=True,
+    )
     (wheel,) = tmp_path.glob("nnfmu-*.whl")
     names = set(zipfile.ZipFile(wheel).namelist())
     for template in (ROOT / "templates").rglob("*"):
@@ -19,6 +32,9 @@ def test_wheel_ships_templates_and_package_data(tmp_path: Path) -> None:
     assert "nnfmu/validate/report.html.j2" in names
     assert "nnfmu/workflows/campaign/summary.html.j2" in names
     assert "nnfmu/workflows/loop/loop_report.html.j2" in names
-    assert {"nnfmu/diagnosis/__init__.py", "nnfmu/diagnosis/effects/__init__.py",
-            "nnfmu/diagnosis/effects/friction.py"} <= names  # subpackages found by find_packages
+    assert {
+        "nnfmu/diagnosis/__init__.py",
+        "nnfmu/diagnosis/effects/__init__.py",
+        "nnfmu/diagnosis/effects/friction.py",
+    } <= names  # subpackages found by find_packages
     assert not any(n.startswith(("tests/", "bench/", "exported/")) for n in names)

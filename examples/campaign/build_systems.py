@@ -20,8 +20,9 @@ BUILD = HERE / "build"
 
 damping = VehicleParameters.load().front_damper.damping
 paths = build_quarter_car_system(BUILD, {"linear": damping, "soft": 0.7 * damping, "firm": 1.4 * damping})
-drive = write_drive(generate_drive(DriveSettings(road_class="D", speed=15.0, duration=10.0, seed=7)),
-                    BUILD / "rough-road.csv")
+drive = write_drive(
+    generate_drive(DriveSettings(road_class="D", speed=15.0, duration=10.0, seed=7)), BUILD / "rough-road.csv"
+)
 for name, path in paths.items():
     print(f"{name}: {path}")
 print(f"drive file: {drive}")

@@ -49,11 +49,15 @@ JACOBI = CosimSettings(step=STEP, scheme="jacobi", extrapolation="none", refresh
 
 def _command_input(damper: Path) -> str:
     """The damper FMU's command input: its one Real input besides the stroke's velocity and displacement."""
-    inputs = [v.name for v in read_model_description(str(damper)).modelVariables
-              if v.causality == "input" and v.name not in ("velocity", "displacement")]
+    inputs = [
+        v.name
+        for v in read_model_description(str(damper)).modelVariables
+        if v.causality == "input" and v.name not in ("velocity", "displacement")
+    ]
     if len(inputs) != 1:
-        raise SystemExit(f"{damper}: expected one command input besides velocity/displacement, found {inputs}; "
-                         "give --command")
+        raise SystemExit(
+            f"{damper}: expected one command input besides velocity/displacement, found {inputs}; give --command"
+        )
     return inputs[0]
 
 
@@ -64,10 +68,12 @@ def _rms(x: np.ndarray) -> float:
 def _ride(result: Any, command: str) -> dict[str, float]:
     """Ride comfort, road holding and travel of one run (SI units)."""
     m = result.measurement
-    return {"body_acceleration_rms": _rms(m["body_acceleration"]),
-            "tyre_force_std": float(np.std(m["spindle_vertical_force"])),
-            "damper_stroke_std": float(np.std(m["damper_displacement"])),
-            "mean_command": float(np.mean(m[f"controller_{command}"]))}
+    return {
+        "body_acceleration_rms": _rms(m["body_acceleration"]),
+        "tyre_force_std": float(np.std(m["spindle_vertical_force"])),
+        "damper_stroke_std": float(np.std(m["damper_displacement"])),
+        "mean_command": float(np.mean(m[f"controller_{command}"])),
+    }
 
 
 def main() -> None:
@@ -91,42 +97,69 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     damper = args.damper
     if damper is None:
-        damper = build_graph_fmu(semiactive_damper_graph(command=args.command or "voltage",
-                                                         unit=known_command(args.command or "voltage").unit),
-                                 out / "analytic_damper.fmu")
+        damper = build_graph_fmu(
+            semiactive_damper_graph(
+                command=args.command or "voltage", unit=known_command(args.command or "voltage").unit
+            ),
+            out / "analytic_damper.fmu",
+        )
     command = known_command(args.command or _command_input(damper), args.command_min, args.command_max)
     vehicle = build_vehicle_fmu("quarter-car", out / "quarter_car.fmu")
     settings = SkyhookSettings(c_sky=args.c_sky, c_min=args.c_min, c_max=args.c_max, command=command)
-    controllers = {"skyhook": build_skyhook_fmu(settings, out / "skyhook.fmu"),
-                   "soft": build_fixed_command_fmu(command, command.soft, out / "soft.fmu"),
-                   "hard": build_fixed_command_fmu(command, command.hard, out / "hard.fmu")}
-    drive_settings = DriveSettings(road_class=args.road_class, speed=args.speed, duration=args.duration,
-                                   seed=args.seed, fade_in=1.0)
+    controllers = {
+        "skyhook": build_skyhook_fmu(settings, out / "skyhook.fmu"),
+        "soft": build_fixed_command_fmu(command, command.soft, out / "soft.fmu"),
+        "hard": build_fixed_command_fmu(command, command.hard, out / "hard.fmu"),
+    }
+    drive_settings = DriveSettings(
+        road_class=args.road_class, speed=args.speed, duration=args.duration, seed=args.seed, fade_in=1.0
+    )
     drive = write_drive(generate_drive(drive_settings), out / "drive.csv")
     rides, systems = {}, {}
     for name, controller in controllers.items():
         (out / name).mkdir(exist_ok=True)
         systems[name] = write_closed_loop(out / name, vehicle, damper, controller)
-        rides[name] = _ride(run_cosim(systems[name], drive, CosimSettings(step=STEP), out / f"{name}.csv"),
-                            command.name)
+        rides[name] = _ride(
+            run_cosim(systems[name], drive, CosimSettings(step=STEP), out / f"{name}.csv"), command.name
+        )
     fmpy = run_cosim(systems["skyhook"], drive, JACOBI).measurement
     libcosim = run_cosim(systems["skyhook"], drive, JACOBI, master="libcosim").measurement
-    cross = max(float(np.max(np.abs(libcosim[n] - fmpy[n])) / max(float(np.max(np.abs(fmpy[n]))), 1e-300))
-                for n in fmpy.names)
+    cross = max(
+        float(np.max(np.abs(libcosim[n] - fmpy[n])) / max(float(np.max(np.abs(fmpy[n]))), 1e-300)) for n in fmpy.names
+    )
 
-    print(f"| controller | body acceleration RMS [m/s^2] | tyre force std [N] | stroke std [mm] | mean {command.name} "
-          f"[{command.unit}] |")
+    print(
+        f"| controller | body acceleration RMS [m/s^2] | tyre force std [N] | stroke std [mm] | mean {command.name} "
+        f"[{command.unit}] |"
+    )
     print("|---|---|---|---|---|")
     for name, ride in rides.items():
-        print(f"| {name} | {ride['body_acceleration_rms']:.3f} | {ride['tyre_force_std']:.0f} | "
-              f"{1e3 * ride['damper_stroke_std']:.2f} | {ride['mean_command']:.2f} |")
+        print(
+            f"| {name} | {ride['body_acceleration_rms']:.3f} | {ride['tyre_force_std']:.0f} | "
+            f"{1e3 * ride['damper_stroke_std']:.2f} | {ride['mean_command']:.2f} |"
+        )
     print(f"fmpy vs libcosim (Jacobi, skyhook loop): largest difference {cross:.1e} of a channel's peak")
-    summary = {"damper": str(damper), "command": command.name, "drive": {"road_class": args.road_class,
-               "speed_m_s": args.speed, "duration_s": args.duration, "seed": args.seed}, "settings": {
-               "c_sky": settings.c_sky, "c_min": settings.c_min, "c_max": settings.c_max,
-               "command_soft": command.soft, "command_hard": command.hard}, "ride": rides,
-               "skyhook_vs_soft_body_acceleration": rides["skyhook"]["body_acceleration_rms"]
-               / rides["soft"]["body_acceleration_rms"], "fmpy_vs_libcosim_max_relative_difference": cross}
+    summary = {
+        "damper": str(damper),
+        "command": command.name,
+        "drive": {
+            "road_class": args.road_class,
+            "speed_m_s": args.speed,
+            "duration_s": args.duration,
+            "seed": args.seed,
+        },
+        "settings": {
+            "c_sky": settings.c_sky,
+            "c_min": settings.c_min,
+            "c_max": settings.c_max,
+            "command_soft": command.soft,
+            "command_hard": command.hard,
+        },
+        "ride": rides,
+        "skyhook_vs_soft_body_acceleration": rides["skyhook"]["body_acceleration_rms"]
+        / rides["soft"]["body_acceleration_rms"],
+        "fmpy_vs_libcosim_max_relative_difference": cross,
+    }
     if args.json:
         write_text_atomic(args.json, json.dumps(summary, indent=2) + "\n")
     print(json.dumps(summary))

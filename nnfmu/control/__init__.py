@@ -6,5 +6,12 @@ from nnfmu.control.command import KNOWN_COMMANDS, SENSOR_PORTS, Command, known_c
 from nnfmu.control.fixed import fixed_command_graph
 from nnfmu.control.skyhook import SkyhookSettings, skyhook_graph
 
-__all__ = ["KNOWN_COMMANDS", "SENSOR_PORTS", "Command", "SkyhookSettings", "fixed_command_graph", "known_command",
-           "skyhook_graph"]
+__all__ = [
+    "KNOWN_COMMANDS",
+    "SENSOR_PORTS",
+    "Command",
+    "SkyhookSettings",
+    "fixed_command_graph",
+    "known_command",
+    "skyhook_graph",
+]

@@ -31,17 +31,21 @@ class Command:
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not _NAME.fullmatch(self.name) or self.name in SENSOR_PORTS:
-            raise SettingsError(f"command name {self.name!r} must be a plain identifier (letters, digits, _) other "
-                                f"than the controller's inputs {', '.join(SENSOR_PORTS)}")
+            raise SettingsError(
+                f"command name {self.name!r} must be a plain identifier (letters, digits, _) other "
+                f"than the controller's inputs {', '.join(SENSOR_PORTS)}"
+            )
         if not isinstance(self.unit, str) or not self.unit.strip():
             raise SettingsError(f"command {self.name!r}: the unit {self.unit!r} must be named (V, A, ...)")
         for what, value in (("soft", self.soft), ("hard", self.hard)):
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-                raise SettingsError(f"command {self.name!r}: the {what} command {value!r} {self.unit} must be a "
-                                    "finite number")
+                raise SettingsError(
+                    f"command {self.name!r}: the {what} command {value!r} {self.unit} must be a finite number"
+                )
         if self.soft == self.hard:
-            raise SettingsError(f"command {self.name!r}: soft and hard command are both {self.soft!r} {self.unit}; "
-                                "they must differ")
+            raise SettingsError(
+                f"command {self.name!r}: soft and hard command are both {self.soft!r} {self.unit}; they must differ"
+            )
 
 
 def known_command(name: str, soft: float | None = None, hard: float | None = None) -> Command:
@@ -53,15 +57,18 @@ def known_command(name: str, soft: float | None = None, hard: float | None = Non
     return Command(name, unit, low if soft is None else soft, high if hard is None else hard)
 
 
-def controller_component(name: str, command: Command, what: str, sample_period: float, description: str,
-                         metadata: dict[str, Any]) -> Component:
+def controller_component(
+    name: str, command: Command, what: str, sample_period: float, description: str, metadata: dict[str, Any]
+) -> Component:
     """The component of a damper controller: the two sensor inputs (the vehicle's sign convention) and the command
     output, sampled every `sample_period` [s], stateless."""
     body, stroke = SENSOR_PORTS
     return Component(
         name=name,
-        inputs=[Port(body, "m/s", "absolute vertical velocity of the sprung mass, up positive"),
-                Port(stroke, "m/s", "damper stroke velocity, rebound (extension) positive")],
+        inputs=[
+            Port(body, "m/s", "absolute vertical velocity of the sprung mass, up positive"),
+            Port(stroke, "m/s", "damper stroke velocity, rebound (extension) positive"),
+        ],
         outputs=[Port(command.name, command.unit, what)],
         sample_period=sample_period,
         description=description,

@@ -33,8 +33,9 @@ def _number(name: str, value: object, unit: str, low: float, strict: bool) -> No
     """SettingsError naming `name` unless `value` is a finite number above `low` (or at it when not `strict`)."""
     ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
     if not ok or value < low or (strict and value == low):
-        raise SettingsError(f"skyhook {name} {value!r} {unit} must be a finite number {'>' if strict else '>='} "
-                            f"{low:g}")
+        raise SettingsError(
+            f"skyhook {name} {value!r} {unit} must be a finite number {'>' if strict else '>='} {low:g}"
+        )
 
 
 @dataclass(frozen=True)
@@ -85,24 +86,30 @@ def skyhook_graph(settings: SkyhookSettings | None = None, name: str = "skyhook"
     product = g.node("Mul", [BODY_VELOCITY, DAMPER_VELOCITY], "body_times_stroke_rate")
     numerator = g.node("Mul", [product, _scalar(g, "c_sky", s.c_sky)], "sky_numerator")
     stroke_squared = g.node("Mul", [DAMPER_VELOCITY, DAMPER_VELOCITY], "stroke_rate_squared")
-    denominator = g.node("Add", [stroke_squared, _scalar(g, "epsilon_squared", s.epsilon ** 2)],
-                         "regularised_stroke_rate_squared")
+    denominator = g.node(
+        "Add", [stroke_squared, _scalar(g, "epsilon_squared", s.epsilon**2)], "regularised_stroke_rate_squared"
+    )
     desired = g.node("Div", [numerator, denominator], "desired_damping")
-    above_min = g.node("Relu", [g.node("Sub", [desired, _scalar(g, "c_min", s.c_min)], "over_c_min")],
-                       "above_c_min")
-    above_max = g.node("Relu", [g.node("Sub", [desired, _scalar(g, "c_max", s.c_max)], "over_c_max")],
-                       "above_c_max")
+    above_min = g.node("Relu", [g.node("Sub", [desired, _scalar(g, "c_min", s.c_min)], "over_c_min")], "above_c_min")
+    above_max = g.node("Relu", [g.node("Sub", [desired, _scalar(g, "c_max", s.c_max)], "over_c_max")], "above_c_max")
     span = g.node("Sub", [above_min, above_max], "clipped_damping_above_c_min")
     gain = _scalar(g, "command_per_damping", s.command_per_damping)
     scaled = g.node("Mul", [span, gain], "command_change")
     command = g.node("Add", [scaled, _scalar(g, "soft_command", s.command.soft)], "command")
     g.output(command, out)
-    law = (f"skyhook: c = clip(c_sky v_b v_r / (v_r^2 + eps^2), c_min, c_max), c_sky = {s.c_sky:g} N.s/m, "
-           f"eps = {s.epsilon:g} m/s, c in [{s.c_min:g}, {s.c_max:g}] N.s/m -> {out} {s.command.soft:g} to "
-           f"{s.command.hard:g} {s.command.unit}")
+    law = (
+        f"skyhook: c = clip(c_sky v_b v_r / (v_r^2 + eps^2), c_min, c_max), c_sky = {s.c_sky:g} N.s/m, "
+        f"eps = {s.epsilon:g} m/s, c in [{s.c_min:g}, {s.c_max:g}] N.s/m -> {out} {s.command.soft:g} to "
+        f"{s.command.hard:g} {s.command.unit}"
+    )
     model = g.model(name, law, [(BODY_VELOCITY, 1), (DAMPER_VELOCITY, 1)], [(out, 1)])
-    controller_component(name, s.command, "semi-active damper command from the skyhook law", s.sample_period, law,
-                         {"controller": "skyhook", "settings": asdict(s)}).attach_to(model)
+    controller_component(
+        name,
+        s.command,
+        "semi-active damper command from the skyhook law",
+        s.sample_period,
+        law,
+        {"controller": "skyhook", "settings": asdict(s)},
+    ).attach_to(model)
     onnx.checker.check_model(model)
     return model
-

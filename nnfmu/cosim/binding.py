@@ -24,8 +24,10 @@ class DriveBinding:
 
     def __post_init__(self) -> None:
         if len(self.inputs) != len(self.channels):
-            raise DriveInputError(f"element {self.element!r}: {len(self.inputs)} inputs but {len(self.channels)} drive "
-                               "channels; each input reads exactly one channel")
+            raise DriveInputError(
+                f"element {self.element!r}: {len(self.inputs)} inputs but {len(self.channels)} drive "
+                "channels; each input reads exactly one channel"
+            )
         if len(set(self.inputs)) != len(self.inputs):
             raise DriveInputError(f"element {self.element!r}: an input is bound twice in {self.inputs}")
 
@@ -42,8 +44,11 @@ def free_inputs(system: SystemStructure) -> dict[str, list[str]]:
     connected = {(c.end_element, c.end_connector) for c in system.connections}
     free: dict[str, list[str]] = {}
     for element in system.elements:
-        names = [v.name for v in read_model_description(str(system.fmu_path(element))).modelVariables
-                 if v.causality == "input" and (element.name, v.name) not in connected]
+        names = [
+            v.name
+            for v in read_model_description(str(system.fmu_path(element))).modelVariables
+            if v.causality == "input" and (element.name, v.name) not in connected
+        ]
         if names:
             free[element.name] = names
     return free
@@ -55,7 +60,9 @@ def bind_free_inputs(system: SystemStructure) -> DriveBinding:
     free = free_inputs(system)
     if len(free) != 1:
         listed = "; ".join(f"{name}: {', '.join(inputs)}" for name, inputs in free.items()) or "none"
-        raise DriveInputError(f"system {system.name!r}: the drive feeds the free inputs of exactly one element; "
-                              f"elements with free inputs: {listed}")
-    (element, inputs), = free.items()
+        raise DriveInputError(
+            f"system {system.name!r}: the drive feeds the free inputs of exactly one element; "
+            f"elements with free inputs: {listed}"
+        )
+    ((element, inputs),) = free.items()
     return DriveBinding.by_name(element, inputs)

@@ -26,8 +26,9 @@ _TRANSFER2 = CFUNCTYPE(c_int, c_void_p, _REFERENCES, c_size_t, _DOUBLES)
 _TRANSFER3 = CFUNCTYPE(c_int, c_void_p, _REFERENCES, c_size_t, _DOUBLES, c_size_t)
 _SLOPES2 = CFUNCTYPE(c_int, c_void_p, _REFERENCES, c_size_t, POINTER(c_int), _DOUBLES)
 _DO_STEP2 = CFUNCTYPE(c_int, c_void_p, c_double, c_double, c_int)
-_DO_STEP3 = CFUNCTYPE(c_int, c_void_p, c_double, c_double, c_bool, POINTER(c_bool), POINTER(c_bool),
-                      POINTER(c_bool), _DOUBLES)
+_DO_STEP3 = CFUNCTYPE(
+    c_int, c_void_p, c_double, c_double, c_bool, POINTER(c_bool), POINTER(c_bool), POINTER(c_bool), _DOUBLES
+)
 
 
 class FmiStatusError(NnfmuError, RuntimeError):
@@ -38,8 +39,9 @@ class FmiStatusError(NnfmuError, RuntimeError):
         self.status = status
         name = STATUS_NAMES[status] if 0 <= status < len(STATUS_NAMES) else str(status)
         logged = "; ".join(message for _, _, message in slave.messages[-LOGGED_LINES:])
-        super().__init__(f"{slave.instance_name} ({slave.path.name}): {function} returned {name}"
-                         + (f": {logged}" if logged else ""))
+        super().__init__(
+            f"{slave.instance_name} ({slave.path.name}): {function} returned {name}" + (f": {logged}" if logged else "")
+        )
 
 
 class RealBlock:
@@ -53,8 +55,10 @@ class RealBlock:
         n = len(names)
         self.values = np.zeros(n) if values is None else values
         if self.values.shape != (n,) or self.values.dtype != np.float64 or not self.values.flags.c_contiguous:
-            raise ValueError(f"{slave.instance_name}: a block of {n} Real variables needs a contiguous float64 "
-                             f"array of {n} values, got shape {self.values.shape} {self.values.dtype}")
+            raise ValueError(
+                f"{slave.instance_name}: a block of {n} Real variables needs a contiguous float64 "
+                f"array of {n} values, got shape {self.values.shape} {self.values.dtype}"
+            )
         self.slave = slave
         self.names = list(names)
         references = (c_uint32 * n)(*slave.value_references(self.names))

@@ -58,8 +58,12 @@ class DriveInputs:
         outside = (times < self.start - self._slack) | (times > self.end + self._slack)
         if np.any(outside):
             t = float(times[np.argmax(outside)])
-            raise DriveInputError(f"{self.source}: time {t:.9g} s lies outside the drive ({self.start:.9g} s to "
-                                  f"{self.end:.9g} s)")
+            raise DriveInputError(
+                f"{self.source}: time {t:.9g} s lies outside the drive ({self.start:.9g} s to {self.end:.9g} s)"
+            )
         clipped = np.clip(times, self.start, self.end)
-        return np.column_stack([np.interp(clipped, self.time, column) for column in self._columns]) \
-            if self._columns else np.zeros((len(times), 0))
+        return (
+            np.column_stack([np.interp(clipped, self.time, column) for column in self._columns])
+            if self._columns
+            else np.zeros((len(times), 0))
+        )

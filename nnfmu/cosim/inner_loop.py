@@ -31,20 +31,39 @@ _LIBRARY: CDLL | None = None
 class _CElement(Structure):
     """`nn_element` of inner_loop.c."""
 
-    _fields_ = [(name, c_void_p) for name in ("instance", "set_real", "get_real", "set_slopes", "do_step",
-                                               "input_references", "inputs")] + [
-        ("n_coupled", c_int64), ("n_driven", c_int64), ("sources", c_void_p), ("slope_references", c_void_p),
-        ("slope_orders", c_void_p), ("slopes", c_void_p), ("output_references", c_void_p), ("n_outputs", c_int64),
-        ("span_start", c_int64), ("is_driven", c_int64), ("feedthrough", c_int64)]
+    _fields_ = [
+        (name, c_void_p)
+        for name in ("instance", "set_real", "get_real", "set_slopes", "do_step", "input_references", "inputs")
+    ] + [
+        ("n_coupled", c_int64),
+        ("n_driven", c_int64),
+        ("sources", c_void_p),
+        ("slope_references", c_void_p),
+        ("slope_orders", c_void_p),
+        ("slopes", c_void_p),
+        ("output_references", c_void_p),
+        ("n_outputs", c_int64),
+        ("span_start", c_int64),
+        ("is_driven", c_int64),
+        ("feedthrough", c_int64),
+    ]
 
 
 class _CPlan(Structure):
     """`nn_plan` of inner_loop.c."""
 
-    _fields_ = [("elements", c_void_p), ("n_elements", c_int64), ("group_starts", c_void_p), ("n_groups", c_int64),
-                ("refreshed", c_void_p), ("n_refreshed", c_int64), ("n_values", c_int64), ("n_drive", c_int64),
-                ("linear_extrapolation", c_int64), ("gauss_seidel", c_int64)] + [
-        (name, c_void_p) for name in ("values", "now", "before", "estimate", "fresh")]
+    _fields_ = [
+        ("elements", c_void_p),
+        ("n_elements", c_int64),
+        ("group_starts", c_void_p),
+        ("n_groups", c_int64),
+        ("refreshed", c_void_p),
+        ("n_refreshed", c_int64),
+        ("n_values", c_int64),
+        ("n_drive", c_int64),
+        ("linear_extrapolation", c_int64),
+        ("gauss_seidel", c_int64),
+    ] + [(name, c_void_p) for name in ("values", "now", "before", "estimate", "fresh")]
 
 
 class _CFailure(Structure):
@@ -93,8 +112,7 @@ def library() -> CDLL | None:
                     return None
                 os.replace(built, path)  # atomic: a concurrent master finds the whole library or none
         loaded = CDLL(str(path))
-        loaded.nn_cosim_steps.argtypes = [c_void_p, c_int64, c_int64, c_double, c_double, c_void_p, c_void_p,
-                                          c_void_p]
+        loaded.nn_cosim_steps.argtypes = [c_void_p, c_int64, c_int64, c_double, c_double, c_void_p, c_void_p, c_void_p]
         loaded.nn_cosim_steps.restype = c_int
         _LIBRARY = loaded
     return _LIBRARY
@@ -149,12 +167,22 @@ class CompiledLoop:
         self.estimate, self.fresh = np.zeros(n), np.zeros(n)
         keep += [starts, refreshed]
         self.plan = _CPlan(
-            elements=cast(elements, c_void_p).value, n_elements=len(order), group_starts=_pointer(starts),
-            n_groups=len(groups), refreshed=_pointer(refreshed), n_refreshed=len(refreshed), n_values=n,
-            n_drive=drive_size, linear_extrapolation=int(settings.extrapolation == "linear"),
-            gauss_seidel=int(settings.scheme == "gauss-seidel"), values=_pointer(self.values),
-            now=_pointer(self.now), before=_pointer(self.before), estimate=_pointer(self.estimate),
-            fresh=_pointer(self.fresh))
+            elements=cast(elements, c_void_p).value,
+            n_elements=len(order),
+            group_starts=_pointer(starts),
+            n_groups=len(groups),
+            refreshed=_pointer(refreshed),
+            n_refreshed=len(refreshed),
+            n_values=n,
+            n_drive=drive_size,
+            linear_extrapolation=int(settings.extrapolation == "linear"),
+            gauss_seidel=int(settings.scheme == "gauss-seidel"),
+            values=_pointer(self.values),
+            now=_pointer(self.now),
+            before=_pointer(self.before),
+            estimate=_pointer(self.estimate),
+            fresh=_pointer(self.fresh),
+        )
         self._keep = (keep, elements)
         self.failure = _CFailure()
 
@@ -163,8 +191,12 @@ class CompiledLoop:
         """Whether the C loop can run `system`: one pass per step (no iterations, scheme not plain), every FMU FMI 2,
         and the loop compiled on this machine."""
         settings = system.settings
-        return (settings.iterations == 0 and not settings.plain
-                and all(slave.fmi_version == 2 for slave in system.slaves.values()) and library() is not None)
+        return (
+            settings.iterations == 0
+            and not settings.plain
+            and all(slave.fmi_version == 2 for slave in system.slaves.values())
+            and library() is not None
+        )
 
     def start(self) -> None:
         """Take the coupling values at t0 from the initialised system."""
@@ -178,10 +210,16 @@ class CompiledLoop:
         into `rows` (last - first rows); the failing call, or None."""
         drive = np.ascontiguousarray(drive, dtype=np.float64)
         if rows.shape != (last - first, len(self.values)) or not rows.flags.c_contiguous or rows.dtype != np.float64:
-            raise ValueError(f"rows for steps {first}..{last} must be a C-contiguous float64 array of shape "
-                             f"({last - first}, {len(self.values)}), got {rows.shape} {rows.dtype}")
-        if self.library.nn_cosim_steps(byref(self.plan), first, last, t0, h, _pointer(drive), _pointer(rows),
-                                       byref(self.failure)) == 0:
+            raise ValueError(
+                f"rows for steps {first}..{last} must be a C-contiguous float64 array of shape "
+                f"({last - first}, {len(self.values)}), got {rows.shape} {rows.dtype}"
+            )
+        if (
+            self.library.nn_cosim_steps(
+                byref(self.plan), first, last, t0, h, _pointer(drive), _pointer(rows), byref(self.failure)
+            )
+            == 0
+        ):
             return None
         failure = self.failure
         return LoopFailure(failure.step, self.order[failure.element], CALL_NAMES[failure.call], failure.status)
@@ -191,4 +229,3 @@ class CompiledLoop:
         """The coupling values the elements were set from in the latest step (the estimate, with fresh outputs
         under Gauss-Seidel)."""
         return self.fresh if self.system.settings.scheme == "gauss-seidel" else self.estimate
-

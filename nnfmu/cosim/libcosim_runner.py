@@ -36,15 +36,18 @@ def _nanoseconds(seconds: float, what: str) -> int:
 
 def _check_settings(settings: CosimSettings) -> None:
     if settings.scheme != "jacobi" or not settings.plain or settings.refresh:
-        raise CosimError("libcosim's fixed-step algorithm is Jacobi without extrapolation, iteration or refresh; got "
-                         f"scheme {settings.scheme!r}, extrapolation {settings.extrapolation!r}, "
-                         f"iterations {settings.iterations}, refresh {settings.refresh}")
+        raise CosimError(
+            "libcosim's fixed-step algorithm is Jacobi without extrapolation, iteration or refresh; got "
+            f"scheme {settings.scheme!r}, extrapolation {settings.extrapolation!r}, "
+            f"iterations {settings.iterations}, refresh {settings.refresh}"
+        )
     if settings.start_time != 0.0:
         raise CosimError(f"libcosim's SSP executions start at t = 0, not {settings.start_time!r} s")
 
 
-def run_libcosim(ssd_path: str | os.PathLike[str], drive: Measurement, settings: CosimSettings,
-                 binding: DriveBinding | None = None) -> CosimResult:
+def run_libcosim(
+    ssd_path: str | os.PathLike[str], drive: Measurement, settings: CosimSettings, binding: DriveBinding | None = None
+) -> CosimResult:
     """Co-simulate the system of `ssd_path` (.ssd, its folder or .ssp) in libcosim, the drive fed as `binding` says
     (None: `bind_free_inputs`); channels named as fmpy names them."""
     from libcosimpy.CosimEnums import CosimVariableCausality, CosimVariableType
@@ -67,14 +70,21 @@ def run_libcosim(ssd_path: str | os.PathLike[str], drive: Measurement, settings:
         if execution.num_slaves() != len(system.elements):
             raise CosimError(f"{path}: libcosim could not load the system")
         index = {e.name: execution.slave_index_from_instance_name(e.name) for e in system.elements}
-        refs = {name: {v.name.decode(): (v.reference, v.causality) for v in execution.slave_variables(i)}
-                for name, i in index.items()}
+        refs = {
+            name: {v.name.decode(): (v.reference, v.causality) for v in execution.slave_variables(i)}
+            for name, i in index.items()
+        }
         connected = {(c.end_element, c.end_connector) for c in system.connections}
-        wrong = [n for n in binding.inputs if refs[driven].get(n, (0, None))[1] != CosimVariableCausality.INPUT.value
-                 or (driven, n) in connected]
+        wrong = [
+            n
+            for n in binding.inputs
+            if refs[driven].get(n, (0, None))[1] != CosimVariableCausality.INPUT.value or (driven, n) in connected
+        ]
         if wrong:
-            raise CosimError(f"{path}: element {driven!r}: bound input(s) {', '.join(wrong)} are not free inputs of "
-                             "its FMU (no such input, or connected)")
+            raise CosimError(
+                f"{path}: element {driven!r}: bound input(s) {', '.join(wrong)} are not free inputs of "
+                "its FMU (no such input, or connected)"
+            )
         drive_names = list(binding.inputs)
         inputs = DriveInputs(drive, binding.channels)
         h = settings.step
@@ -94,8 +104,7 @@ def run_libcosim(ssd_path: str | os.PathLike[str], drive: Measurement, settings:
             execution.real_initial_value(index[driven], ref, float(value))
         for n in range(n_steps):
             if drive_refs:
-                manipulator.slave_real_values(index[driven], drive_refs,
-                                              [float(x) for x in inputs.at(n * h)])
+                manipulator.slave_real_values(index[driven], drive_refs, [float(x) for x in inputs.at(n * h)])
             if not execution.step(1):
                 raise CosimError(f"{path}: libcosim failed at step {n} (t = {n * h_ns} ns)")
             rows[n + 1] = _read(last, index, refs, channels)

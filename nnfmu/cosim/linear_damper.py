@@ -13,8 +13,12 @@ from nnfmu.component import Component, Port
 from nnfmu.export.graph import GraphBuilder
 
 
-def linear_damper_graph(damping: float, sample_period: float | None = None, name: str = "damper",
-                        velocity_range: tuple[float, float] | None = None) -> onnx.ModelProto:
+def linear_damper_graph(
+    damping: float,
+    sample_period: float | None = None,
+    name: str = "damper",
+    velocity_range: tuple[float, float] | None = None,
+) -> onnx.ModelProto:
     """Step graph `velocity` [m/s] -> `force` = damping·velocity [N] (damping in N.s/m).
 
     `sample_period` None makes it stateless (evaluated once per communication step); `velocity_range` is the
@@ -24,7 +28,12 @@ def linear_damper_graph(damping: float, sample_period: float | None = None, name
     graph.output(graph.node("Mul", ["velocity", graph.constant("c", np.array([damping]))], "viscous"), "force")
     model = graph.model(name, f"linear damper F = {damping:g} N.s/m * v", [("velocity", 1)], [("force", 1)])
     low, high = velocity_range if velocity_range is not None else (None, None)
-    Component(name=name, inputs=[Port("velocity", "m/s", min=low, max=high)], outputs=[Port("force", "N")],
-              sample_period=sample_period, description="linear damper").attach_to(model)
+    Component(
+        name=name,
+        inputs=[Port("velocity", "m/s", min=low, max=high)],
+        outputs=[Port("force", "N")],
+        sample_period=sample_period,
+        description="linear damper",
+    ).attach_to(model)
     onnx.checker.check_model(model)
     return model

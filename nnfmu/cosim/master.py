@@ -106,9 +106,12 @@ class CosimSettings:
     def __post_init__(self) -> None:
         if not (math.isfinite(self.step) and self.step > 0):
             raise CosimError(f"communication step {self.step!r} must be a positive number of seconds")
-        for name, value, choices in (("scheme", self.scheme, SCHEMES), ("order", self.order, ORDERS),
-                                     ("extrapolation", self.extrapolation, EXTRAPOLATIONS),
-                                     ("inner_loop", self.inner_loop, INNER_LOOPS)):
+        for name, value, choices in (
+            ("scheme", self.scheme, SCHEMES),
+            ("order", self.order, ORDERS),
+            ("extrapolation", self.extrapolation, EXTRAPOLATIONS),
+            ("inner_loop", self.inner_loop, INNER_LOOPS),
+        ):
             if value not in choices:
                 raise CosimError(f"{name} {value!r} is not one of {', '.join(choices)}")
         if not (isinstance(self.iterations, int) and self.iterations >= 0):
@@ -127,8 +130,10 @@ def step_count(start: float, stop: float, step: float) -> int:
     exact = (stop - start) / step
     n = round(exact)
     if n < 1 or abs(n - exact) > STEP_COUNT_TOLERANCE * max(1.0, exact):
-        raise CosimError(f"the span {start:.9g} s to {stop:.9g} s is not a whole, positive number of "
-                         f"{step:.9g} s steps ({exact:.9g})")
+        raise CosimError(
+            f"the span {start:.9g} s to {stop:.9g} s is not a whole, positive number of "
+            f"{step:.9g} s steps ({exact:.9g})"
+        )
     return n
 
 
@@ -137,8 +142,10 @@ def result_table(n_steps: int, channels: int) -> np.ndarray:
     exceed MAX_RESULT_BYTES (a tiny step over a long span), before anything is allocated or run."""
     size = (n_steps + 1) * max(channels, 1) * 8
     if size > MAX_RESULT_BYTES:
-        raise CosimError(f"{n_steps} steps of {channels} channels make a result of {size / 1024**3:.3g} GiB, more than "
-                         f"the limit of {MAX_RESULT_BYTES / 1024**3:g} GiB; choose a larger step or an earlier stop")
+        raise CosimError(
+            f"{n_steps} steps of {channels} channels make a result of {size / 1024**3:.3g} GiB, more than "
+            f"the limit of {MAX_RESULT_BYTES / 1024**3:g} GiB; choose a larger step or an earlier stop"
+        )
     return np.empty((n_steps + 1, channels))
 
 
@@ -188,21 +195,29 @@ class _System:
     row is what a result row records. `now`, `before` and the estimates have the same layout.
     """
 
-    def __init__(self, system: SystemStructure, drive: Measurement, settings: CosimSettings,
-                 pool: InstancePool | None = None, binding: DriveBinding | None = None) -> None:
+    def __init__(
+        self,
+        system: SystemStructure,
+        drive: Measurement,
+        settings: CosimSettings,
+        pool: InstancePool | None = None,
+        binding: DriveBinding | None = None,
+    ) -> None:
         self.settings = settings
         self.pool = pool
         binding = binding if binding is not None else bind_free_inputs(system)
         self.driven = binding.element
-        self.links = [_Link(c.start_element, c.start_connector, c.end_element, c.end_connector)
-                      for c in system.connections]
+        self.links = [
+            _Link(c.start_element, c.start_connector, c.end_element, c.end_connector) for c in system.connections
+        ]
         self.parameters = {e.name: dict(e.parameters) for e in system.elements}
         self.slaves: dict[str, FmuSlave] = {}
         try:
             for element in system.elements:
                 path = system.fmu_path(element)
-                self.slaves[element.name] = (pool.take(path, element.name) if pool is not None
-                                             else FmuSlave(path, instance_name=element.name))
+                self.slaves[element.name] = (
+                    pool.take(path, element.name) if pool is not None else FmuSlave(path, instance_name=element.name)
+                )
             connected = {(link.target, link.input) for link in self.links}
             self._check_binding(system.name, binding, connected)
             self.drive_names = list(binding.inputs)
@@ -211,10 +226,13 @@ class _System:
             for name, slave in self.slaves.items():
                 free = [n for n in slave.names("input") if (name, n) not in connected | bound]
                 if free:
-                    raise CosimError(f"system {system.name!r}: element {name!r}: input(s) {', '.join(free)} are "
-                                     "connected to nothing")
-            self.outputs = {name: [n for n in slave.names("output") if slave.variables[n].type in ("Real", "Float64")]
-                            for name, slave in self.slaves.items()}
+                    raise CosimError(
+                        f"system {system.name!r}: element {name!r}: input(s) {', '.join(free)} are connected to nothing"
+                    )
+            self.outputs = {
+                name: [n for n in slave.names("output") if slave.variables[n].type in ("Real", "Float64")]
+                for name, slave in self.slaves.items()
+            }
             self.elements = self._wire(system.name)
         except BaseException:
             self.close(healthy=False)
@@ -238,20 +256,26 @@ class _System:
                 continue
             samples = round(h / period)
             if samples < 1 or not same_period(samples * period, h):
-                raise CosimError(f"system {system_name!r}: element {name!r} samples every {period:.9g} s and its "
-                                 f"outputs follow inputs set at its sample times (feedthrough), so the communication "
-                                 f"step must be a whole multiple of {period:.9g} s; it is {h:.9g} s")
+                raise CosimError(
+                    f"system {system_name!r}: element {name!r} samples every {period:.9g} s and its "
+                    f"outputs follow inputs set at its sample times (feedthrough), so the communication "
+                    f"step must be a whole multiple of {period:.9g} s; it is {h:.9g} s"
+                )
 
     def _check_binding(self, system_name: str, binding: DriveBinding, connected: set[tuple[str, str]]) -> None:
         """The bound element exists and every bound input is one of its inputs that no connection reaches."""
         if binding.element not in self.slaves:
-            raise CosimError(f"system {system_name!r}: the drive binding names element {binding.element!r}, which the "
-                             f"system does not have ({', '.join(self.slaves)})")
+            raise CosimError(
+                f"system {system_name!r}: the drive binding names element {binding.element!r}, which the "
+                f"system does not have ({', '.join(self.slaves)})"
+            )
         inputs = set(self.slaves[binding.element].names("input"))
         wrong = [n for n in binding.inputs if n not in inputs or (binding.element, n) in connected]
         if wrong:
-            raise CosimError(f"system {system_name!r}: element {binding.element!r}: bound input(s) "
-                             f"{', '.join(wrong)} are not free inputs of its FMU (no such input, or connected)")
+            raise CosimError(
+                f"system {system_name!r}: element {binding.element!r}: bound input(s) "
+                f"{', '.join(wrong)} are not free inputs of its FMU (no such input, or connected)"
+            )
 
     def _wire(self, system_name: str) -> dict[str, _Element]:
         """The values row, every output's place in it, and each element's prepared transfers."""
@@ -260,8 +284,11 @@ class _System:
             spans[name] = slice(start, start + len(outputs))
             position.update({(name, output): start + j for j, output in enumerate(outputs)})
             start += len(outputs)
-        unknown = [f"{link.source}.{link.output} -> {link.target}.{link.input}" for link in self.links
-                   if (link.source, link.output) not in position]
+        unknown = [
+            f"{link.source}.{link.output} -> {link.target}.{link.input}"
+            for link in self.links
+            if (link.source, link.output) not in position
+        ]
         if unknown:
             raise CosimError(f"system {system_name!r}: connection(s) {'; '.join(unknown)} start at no Real output")
         self.values = np.zeros(start)
@@ -274,11 +301,16 @@ class _System:
             inputs = RealBlock(slave, names) if names else None
             buffer = inputs.values if inputs is not None else np.zeros(0)
             elements[name] = _Element(
-                name=name, driven_element=is_driven, feedthrough=slave.feedthrough,
+                name=name,
+                driven_element=is_driven,
+                feedthrough=slave.feedthrough,
                 sources=np.array([position[(link.source, link.output)] for link in incoming], dtype=np.intp),
-                coupled=buffer[:len(incoming)], driven=buffer[len(incoming):], inputs=inputs,
+                coupled=buffer[: len(incoming)],
+                driven=buffer[len(incoming) :],
+                inputs=inputs,
                 slopes=SlopeBlock(slave, names) if names and slave.feedthrough and slave.takes_input_slopes else None,
-                outputs=RealBlock(slave, self.outputs[name], self.values[spans[name]]), stepper=Stepper(slave),
+                outputs=RealBlock(slave, self.outputs[name], self.values[spans[name]]),
+                stepper=Stepper(slave),
                 span=spans[name],
             )
         return elements
@@ -360,11 +392,14 @@ class _System:
         for i in bad:
             link, slave = incoming[i], self.slaves[incoming[i].source]
             unit = slave.unit(link.output)
-            described.append(f"{link.source} ({slave.path.name}) output {link.output} went from "
-                             f"{self.now[element.sources[i]]:.6g} to {source[element.sources[i]]:.6g} {unit} "
-                             f"over {h:g} s")
-        return _Diverged(f"the coupling diverged: {'; '.join(described)} (a rate that is not finite, refused by "
-                         f"{element.name})")
+            described.append(
+                f"{link.source} ({slave.path.name}) output {link.output} went from "
+                f"{self.now[element.sources[i]]:.6g} to {source[element.sources[i]]:.6g} {unit} "
+                f"over {h:g} s"
+            )
+        return _Diverged(
+            f"the coupling diverged: {'; '.join(described)} (a rate that is not finite, refused by {element.name})"
+        )
 
     def refresh(self, drive: np.ndarray) -> None:
         """Inputs at the current communication point for every element with feedthrough, then its outputs again."""
@@ -375,8 +410,9 @@ class _System:
             element.inputs.set()
             element.outputs.get()
 
-    def exchange(self, t: float, h: float, source: np.ndarray, drive: np.ndarray, end: np.ndarray,
-                 fresh: np.ndarray | None) -> None:
+    def exchange(
+        self, t: float, h: float, source: np.ndarray, drive: np.ndarray, end: np.ndarray, fresh: np.ndarray | None
+    ) -> None:
         """One pass over the groups: set each element's inputs (`source`: the coupling values to use; `drive` and
         `end`: the drive at t_n and t_{n+1}), step the group, read its outputs into the values row (and into `fresh`,
         if given, for the elements stepped later in the pass); then the refresh at t_{n+1}."""
@@ -450,8 +486,9 @@ def _compiled_loop(parts: _System, settings: CosimSettings) -> CompiledLoop | No
     if CompiledLoop.usable(parts):
         return CompiledLoop(parts, len(parts.drive_names))
     if settings.inner_loop == "c":
-        raise CosimError("inner_loop 'c' needs a one-pass scheme (iterations 0, not plain), FMI 2 FMUs only and a host "
-                         "C compiler")
+        raise CosimError(
+            "inner_loop 'c' needs a one-pass scheme (iterations 0, not plain), FMI 2 FMUs only and a host C compiler"
+        )
     return None
 
 
@@ -468,9 +505,14 @@ def _loop_error(parts: _System, loop: CompiledLoop, failure: LoopFailure, t: flo
     return element.inputs.set_error(status)
 
 
-def cosimulate(system: SystemStructure, drive: Measurement, settings: CosimSettings,
-               progress: Progress | None = None, pool: InstancePool | None = None,
-               binding: DriveBinding | None = None) -> CosimResult:
+def cosimulate(
+    system: SystemStructure,
+    drive: Measurement,
+    settings: CosimSettings,
+    progress: Progress | None = None,
+    pool: InstancePool | None = None,
+    binding: DriveBinding | None = None,
+) -> CosimResult:
     """Run `system` driven by `drive` on fmpy; every FMU output at t_n = t0 + n h, n = 0..N.
 
     `binding` says which element's free inputs read which drive channels (None: `bind_free_inputs`, the one element
@@ -504,7 +546,7 @@ def cosimulate(system: SystemStructure, drive: Measurement, settings: CosimSetti
                 if loop is not None:
                     for start in range(first, last, every):
                         stop = min(start + every, last)
-                        failure = loop.steps(start, stop, t0, h, block[start - first:], rows[start + 1:stop + 1])
+                        failure = loop.steps(start, stop, t0, h, block[start - first :], rows[start + 1 : stop + 1])
                         if failure is not None:
                             t = t0 + failure.step * h
                             raise _loop_error(parts, loop, failure, t, h)

@@ -44,13 +44,17 @@ def replay_fmu(
         inputs = slave.names("input")
         missing = [name for name in inputs if name not in measurement]
         if missing:
-            raise ReplayError(f"{measurement.source}: no channel {', '.join(map(repr, missing))} for the inputs of "
-                              f"{fmu_path} (the measurement has: {', '.join(measurement.names)})")
+            raise ReplayError(
+                f"{measurement.source}: no channel {', '.join(map(repr, missing))} for the inputs of "
+                f"{fmu_path} (the measurement has: {', '.join(measurement.names)})"
+            )
         dt = measurement.sample_period
         period = slave.sample_period
         if period is not None and not same_period(period, dt):
-            raise ReplayError(f"{measurement.source}: sample period {dt:.9g} s differs from the period {period:.9g} s "
-                              f"{fmu_path} was trained at; resample the data first")
+            raise ReplayError(
+                f"{measurement.source}: sample period {dt:.9g} s differs from the period {period:.9g} s "
+                f"{fmu_path} was trained at; resample the data first"
+            )
         outputs = [name for name in slave.names("output") if slave.variables[name].type in ("Real", "Float64")]
         values = np.column_stack([measurement[name] for name in inputs])
         result = np.empty((len(measurement), len(outputs)))

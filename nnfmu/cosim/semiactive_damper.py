@@ -21,19 +21,29 @@ from nnfmu.export.graph import GraphBuilder
 STATE, STATE_NEXT = "state", "state_next"
 
 
-def semiactive_damper_graph(c0: float = 1000.0, c1: float = 600.0, tau: float = 0.0053, command: str = "voltage",
-                            unit: str = "V", sample_period: float = 1e-3,
-                            name: str = "semiactive_damper") -> onnx.ModelProto:
+def semiactive_damper_graph(
+    c0: float = 1000.0,
+    c1: float = 600.0,
+    tau: float = 0.0053,
+    command: str = "voltage",
+    unit: str = "V",
+    sample_period: float = 1e-3,
+    name: str = "semiactive_damper",
+) -> onnx.ModelProto:
     """Step graph `velocity` [m/s], `command` [unit] -> `force` = (c0 + c1·u_f)·velocity [N], c0 [N.s/m], c1
     [N.s/m per command unit], lag time constant `tau` [s] (defaults: an MR damper's 1-4 kN.s/m over 0-5 V, coil lag
     5.3 ms); SettingsError naming the value when one is out of range."""
-    checks = {"c0 [N.s/m]": (c0, c0 >= 0), "tau [s]": (tau, tau > 0), "sample_period [s]": (sample_period,
-                                                                                         sample_period > 0),
-              f"c1 [N.s/m/{unit}]": (c1, True)}
+    checks = {
+        "c0 [N.s/m]": (c0, c0 >= 0),
+        "tau [s]": (tau, tau > 0),
+        "sample_period [s]": (sample_period, sample_period > 0),
+        f"c1 [N.s/m/{unit}]": (c1, True),
+    }
     for what, (value, ok) in checks.items():
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or not ok:
-            raise SettingsError(f"semi-active damper {what} {value!r} is out of range (finite; c0 >= 0, tau and "
-                                "sample_period > 0)")
+            raise SettingsError(
+                f"semi-active damper {what} {value!r} is out of range (finite; c0 >= 0, tau and sample_period > 0)"
+            )
     if command in ("velocity", "force", STATE):
         raise SettingsError(f"semi-active damper command name {command!r} clashes with its other ports")
     a = 1.0 - math.exp(-sample_period / tau)
@@ -48,8 +58,10 @@ def semiactive_damper_graph(c0: float = 1000.0, c1: float = 600.0, tau: float = 
     model = g.model(name, doc, [("velocity", 1), (command, 1), (STATE, 1)], [("force", 1), (STATE_NEXT, 1)])
     Component(
         name=name,
-        inputs=[Port("velocity", "m/s", "damper stroke velocity, rebound (extension) positive"),
-                Port(command, unit, "damper command (coil voltage or valve current)")],
+        inputs=[
+            Port("velocity", "m/s", "damper stroke velocity, rebound (extension) positive"),
+            Port(command, unit, "damper command (coil voltage or valve current)"),
+        ],
         outputs=[Port("force", "N", "damper force, rebound (tension) positive")],
         states=[StatePort(STATE, STATE_NEXT, (0.0,), f"lagged {command} [{unit}]")],
         sample_period=sample_period,

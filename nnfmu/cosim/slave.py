@@ -65,8 +65,12 @@ class FmuSlave:
         self._unzip_dir = tempfile.mkdtemp(prefix="nnfmu-fmu-")
         directory = extract(str(self.path), unzipdir=self._unzip_dir)
         self.sample_period = read_sample_period(Path(directory) / "modelDescription.xml")
-        kwargs = dict(guid=self.description.guid, unzipDirectory=directory, instanceName=instance_name,
-                      modelIdentifier=self.description.coSimulation.modelIdentifier)
+        kwargs = dict(
+            guid=self.description.guid,
+            unzipDirectory=directory,
+            instanceName=instance_name,
+            modelIdentifier=self.description.coSimulation.modelIdentifier,
+        )
         if self.fmi_version == 2:
             from fmpy.fmi2 import FMU2Slave, defaultCallbacks, fmi2CallbackFunctions
             from fmpy.logging import addLoggerProxy

@@ -112,13 +112,16 @@ def write_ssd(system: SystemStructure, path: str | os.PathLike[str]) -> Path:
     sys_el = ET.SubElement(root, _q(SSD, "System"), {"name": system.name})
     elements = ET.SubElement(sys_el, _q(SSD, "Elements"))
     for element in system.elements:
-        comp = ET.SubElement(elements, _q(SSD, "Component"),
-                             {"name": element.name, "source": element.source, "type": FMU_TYPE})
+        comp = ET.SubElement(
+            elements, _q(SSD, "Component"), {"name": element.name, "source": element.source, "type": FMU_TYPE}
+        )
         connectors = ET.SubElement(comp, _q(SSD, "Connectors"))
         for connector in element.connectors:
             if connector.kind not in KINDS:
-                raise SspError(f"element {element.name!r}, connector {connector.name!r}: kind {connector.kind!r} "
-                               f"is not one of {', '.join(KINDS)}")
+                raise SspError(
+                    f"element {element.name!r}, connector {connector.name!r}: kind {connector.kind!r} "
+                    f"is not one of {', '.join(KINDS)}"
+                )
             conn = ET.SubElement(connectors, _q(SSD, "Connector"), {"name": connector.name, "kind": connector.kind})
             ET.SubElement(conn, _q(SSC, "Real"))
         if element.parameters:
@@ -131,10 +134,16 @@ def write_ssd(system: SystemStructure, path: str | os.PathLike[str]) -> Path:
                 ET.SubElement(param, _q(SSV, "Real"), {"value": _number(value)})
     connections = ET.SubElement(sys_el, _q(SSD, "Connections"))
     for c in system.connections:
-        ET.SubElement(connections, _q(SSD, "Connection"), {
-            "startElement": c.start_element, "startConnector": c.start_connector,
-            "endElement": c.end_element, "endConnector": c.end_connector,
-        })
+        ET.SubElement(
+            connections,
+            _q(SSD, "Connection"),
+            {
+                "startElement": c.start_element,
+                "startConnector": c.start_connector,
+                "endElement": c.end_element,
+                "endConnector": c.end_connector,
+            },
+        )
     experiment = {"startTime": _number(system.start_time)}
     if system.stop_time is not None:
         experiment["stopTime"] = _number(system.stop_time)
@@ -181,15 +190,18 @@ def _read_element(node: ET.Element, path: Path) -> Element:
     parameters: dict[str, float] = {}
     for binding in node.findall(f"{_q(SSD, 'ParameterBindings')}/{_q(SSD, 'ParameterBinding')}"):
         if binding.get("source"):
-            raise SspError(f"{where}: parameter file {binding.get('source')!r} is not supported; "
-                           "give the values inline (ssd:ParameterValues)")
+            raise SspError(
+                f"{where}: parameter file {binding.get('source')!r} is not supported; "
+                "give the values inline (ssd:ParameterValues)"
+            )
         for param in binding.iter(_q(SSV, "Parameter")):
             pname = _required(param, "name", f"{where}: ssv:Parameter")
             real = param.find(_q(SSV, "Real"))
             if real is None:
                 raise SspError(f"{where}, parameter {pname!r}: only ssv:Real values are supported")
-            parameters[pname] = _float(_required(real, "value", f"{where}, parameter {pname!r}"),
-                                       f"{where}, parameter {pname!r}")
+            parameters[pname] = _float(
+                _required(real, "value", f"{where}, parameter {pname!r}"), f"{where}, parameter {pname!r}"
+            )
     return Element(name, source, tuple(connectors), parameters)
 
 
@@ -213,10 +225,18 @@ def read_ssd(path: str | os.PathLike[str], base: Path | None = None) -> SystemSt
     for node in sys_el.findall(f"{_q(SSD, 'Connections')}/{_q(SSD, 'Connection')}"):
         where = f"{path}: ssd:Connection"
         if node.get("startElement") is None or node.get("endElement") is None:
-            raise SspError(f"{where}: connections to the system's own connectors are not supported (startConnector "
-                           f"{node.get('startConnector')!r}, endConnector {node.get('endConnector')!r})")
-        connections.append(Connection(_required(node, "startElement", where), _required(node, "startConnector", where),
-                                      _required(node, "endElement", where), _required(node, "endConnector", where)))
+            raise SspError(
+                f"{where}: connections to the system's own connectors are not supported (startConnector "
+                f"{node.get('startConnector')!r}, endConnector {node.get('endConnector')!r})"
+            )
+        connections.append(
+            Connection(
+                _required(node, "startElement", where),
+                _required(node, "startConnector", where),
+                _required(node, "endElement", where),
+                _required(node, "endConnector", where),
+            )
+        )
     experiment = root.find(_q(SSD, "DefaultExperiment"))
     start, stop = 0.0, None
     if experiment is not None:
@@ -225,8 +245,12 @@ def read_ssd(path: str | os.PathLike[str], base: Path | None = None) -> SystemSt
             stop = _float(experiment.get("stopTime", ""), f"{path}: DefaultExperiment stopTime")
     system = SystemStructure(
         name=root.get("name") or sys_el.get("name") or path.stem,
-        elements=elements, connections=connections,
-        base=path.parent if base is None else base, start_time=start, stop_time=stop, path=path,
+        elements=elements,
+        connections=connections,
+        base=path.parent if base is None else base,
+        start_time=start,
+        stop_time=stop,
+        path=path,
     )
     _check_structure(system, path)
     return system
@@ -240,16 +264,22 @@ def _check_structure(system: SystemStructure, path: Path) -> None:
         raise SspError(f"{path}: element name(s) used twice: {', '.join(map(repr, duplicates))}")
     driven: dict[tuple[str, str], Connection] = {}
     for c in system.connections:
-        for element_name, connector_name, want in ((c.start_element, c.start_connector, "output"),
-                                                   (c.end_element, c.end_connector, "input")):
+        for element_name, connector_name, want in (
+            (c.start_element, c.start_connector, "output"),
+            (c.end_element, c.end_connector, "input"),
+        ):
             element = system.element(element_name)
             connector = element.connector(connector_name)
             if connector is None:
-                raise SspError(f"{path}: connection {c}: element {element_name!r} declares no connector "
-                               f"{connector_name!r} (has: {', '.join(x.name for x in element.connectors)})")
+                raise SspError(
+                    f"{path}: connection {c}: element {element_name!r} declares no connector "
+                    f"{connector_name!r} (has: {', '.join(x.name for x in element.connectors)})"
+                )
             if connector.kind != want:
-                raise SspError(f"{path}: connection {c}: connector {element_name}.{connector_name} is an "
-                               f"{connector.kind}, expected an {want}")
+                raise SspError(
+                    f"{path}: connection {c}: connector {element_name}.{connector_name} is an "
+                    f"{connector.kind}, expected an {want}"
+                )
         key = (c.end_element, c.end_connector)
         if key in driven:
             raise SspError(f"{path}: input {c.end_element}.{c.end_connector} is driven twice ({driven[key]}; {c})")
@@ -275,16 +305,23 @@ def check_against_fmus(system: SystemStructure) -> None:
         for name, kind in declared:
             variable = variables.get(name)
             if variable is None:
-                raise SspError(f"system {system.name!r}: element {element.name!r}: connector {name!r} is not a "
-                               f"variable of {fmu.name} (its variables: {', '.join(variables)})")
+                raise SspError(
+                    f"system {system.name!r}: element {element.name!r}: connector {name!r} is not a "
+                    f"variable of {fmu.name} (its variables: {', '.join(variables)})"
+                )
             if variable.type not in ("Real", "Float64"):
-                raise SspError(f"system {system.name!r}: element {element.name!r}: connector {name!r} is of type "
-                               f"{variable.type}; only Real connectors are supported")
+                raise SspError(
+                    f"system {system.name!r}: element {element.name!r}: connector {name!r} is of type "
+                    f"{variable.type}; only Real connectors are supported"
+                )
             if variable.causality != kind:
-                raise SspError(f"system {system.name!r}: element {element.name!r}: connector {name!r} is declared "
-                               f"{kind} but is {variable.causality} in {fmu.name}")
-            units[(element.name, name)] = variable.unit or (variable.declaredType.unit if variable.declaredType
-                                                            else None) or ""
+                raise SspError(
+                    f"system {system.name!r}: element {element.name!r}: connector {name!r} is declared "
+                    f"{kind} but is {variable.causality} in {fmu.name}"
+                )
+            units[(element.name, name)] = (
+                variable.unit or (variable.declaredType.unit if variable.declaredType else None) or ""
+            )
     _check_units(system, units)
 
 
@@ -296,8 +333,10 @@ def _check_units(system: SystemStructure, units: Mapping[tuple[str, str], str]) 
         start = units.get((c.start_element, c.start_connector), "")
         end = units.get((c.end_element, c.end_connector), "")
         if start and end and normalise_unit(start) != normalise_unit(end):
-            raise SspError(f"system {system.name!r}: connection {c}: the output is in {start!r}, the input in "
-                           f"{end!r}; connect variables of the same unit")
+            raise SspError(
+                f"system {system.name!r}: connection {c}: the output is in {start!r}, the input in "
+                f"{end!r}; connect variables of the same unit"
+            )
 
 
 @contextmanager
@@ -334,7 +373,10 @@ def open_system(path: str | os.PathLike[str]) -> Iterator[SystemStructure]:
 
 
 def connect_by_name(
-    name: str, vehicle: tuple[str, Path], components: Mapping[str, Path], base: Path,
+    name: str,
+    vehicle: tuple[str, Path],
+    components: Mapping[str, Path],
+    base: Path,
     parameters: Mapping[str, Mapping[str, float]] | None = None,
 ) -> SystemStructure:
     """A system of one vehicle and components wired by name; FMU sources are written relative to `base`.
@@ -348,8 +390,11 @@ def connect_by_name(
     parameters = parameters or {}
 
     def ports(path: Path) -> dict[str, str]:
-        return {v.name: v.causality for v in read_model_description(str(path)).modelVariables
-                if v.type in ("Real", "Float64") and v.causality in ("input", "output")}
+        return {
+            v.name: v.causality
+            for v in read_model_description(str(path)).modelVariables
+            if v.type in ("Real", "Float64") and v.causality in ("input", "output")
+        }
 
     vehicle_name, vehicle_path = vehicle
     vehicle_ports = ports(vehicle_path)
@@ -361,15 +406,30 @@ def connect_by_name(
             partner = next((p for p in (f"{element_name}_{port}", port) if p in vehicle_ports), None)
             wanted = "output" if causality == "input" else "input"
             if partner is None or vehicle_ports[partner] != wanted:
-                raise SspError(f"system {name!r}: element {element_name!r}, connector {port!r}: the vehicle has no "
-                               f"{wanted} {element_name + '_' + port!r} or {port!r} to connect it to")
+                raise SspError(
+                    f"system {name!r}: element {element_name!r}, connector {port!r}: the vehicle has no "
+                    f"{wanted} {element_name + '_' + port!r} or {port!r} to connect it to"
+                )
             if causality == "input":
                 connections.append(Connection(vehicle_name, partner, element_name, port))
             else:
                 connections.append(Connection(element_name, port, vehicle_name, partner))
-        elements.append(Element(element_name, os.path.relpath(path, base),
-                                tuple(Connector(p, c) for p, c in own.items()), dict(parameters.get(element_name, {}))))
+        elements.append(
+            Element(
+                element_name,
+                os.path.relpath(path, base),
+                tuple(Connector(p, c) for p, c in own.items()),
+                dict(parameters.get(element_name, {})),
+            )
+        )
     vehicle_connectors = tuple(Connector(p, c) for p, c in vehicle_ports.items())
-    elements.insert(0, Element(vehicle_name, os.path.relpath(vehicle_path, base), vehicle_connectors,
-                               dict(parameters.get(vehicle_name, {}))))
+    elements.insert(
+        0,
+        Element(
+            vehicle_name,
+            os.path.relpath(vehicle_path, base),
+            vehicle_connectors,
+            dict(parameters.get(vehicle_name, {})),
+        ),
+    )
     return SystemStructure(name=name, elements=elements, connections=connections, base=base)

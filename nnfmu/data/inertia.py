@@ -23,11 +23,14 @@ def compensate_inertia(m: Measurement, mass: float, force: str = "force") -> Mea
     if not (isinstance(mass, (int, float)) and math.isfinite(mass) and mass >= 0.0):
         raise DataError(f"{m.source}: moving mass {mass!r} must be a finite number of kg >= 0")
     if force not in m.channels:
-        raise DataError(f"{m.source}: no channel {force!r} to compensate for the moving mass "
-                        f"(has: {', '.join(m.names)})")
+        raise DataError(
+            f"{m.source}: no channel {force!r} to compensate for the moving mass (has: {', '.join(m.names)})"
+        )
     if m.units[force] != "N":
-        raise DataError(f"{m.source}: channel {force!r} is in {m.units[force]}, not N: only a force can be compensated "
-                        "for a moving mass")
+        raise DataError(
+            f"{m.source}: channel {force!r} is in {m.units[force]}, not N: only a force can be compensated "
+            "for a moving mass"
+        )
     if "acceleration" in m.channels and m.units["acceleration"] == "m/s^2":
         acceleration, source = m["acceleration"], "the measured acceleration"
     elif "velocity" in m.channels and m.units["velocity"] == "m/s":
@@ -35,8 +38,10 @@ def compensate_inertia(m: Measurement, mass: float, force: str = "force") -> Mea
     elif "displacement" in m.channels and m.units["displacement"] == "m":
         acceleration, source = derivative(m["displacement"], m.sample_period, 2), "d²/dt² of the measured displacement"
     else:
-        raise DataError(f"{m.source}: compensating {force!r} for a moving mass needs an acceleration [m/s^2], "
-                        f"velocity [m/s] or displacement [m] channel (has: {', '.join(m.names)})")
+        raise DataError(
+            f"{m.source}: compensating {force!r} for a moving mass needs an acceleration [m/s^2], "
+            f"velocity [m/s] or displacement [m] channel (has: {', '.join(m.names)})"
+        )
     channels = dict(m.channels) | {force: m[force] - mass * acceleration}
     note = f"{force} compensated for {mass:g} kg of moving mass (force - m·a, a from {source})"
     return replace(m, channels=channels, notes=dict(m.notes) | {"inertia": note})

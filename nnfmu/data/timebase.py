@@ -222,4 +222,3 @@ def uniform_time(m: Measurement, resolution: Resolution | None = None) -> Measur
     if fit is None or fit.exact:
         return m
     return replace(m, time=fit.times(), notes={**m.notes, "time": _note(fit, resolution)})
-

@@ -117,9 +117,7 @@ QUANTITIES: dict[str, Quantity] = {
         Quantity(
             "pressure",
             "Pa",
-            _linear(
-                {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "bar": 1e5, "mbar": 1e2, "psi": POUND_FORCE / INCH**2}
-            ),
+            _linear({"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "bar": 1e5, "mbar": 1e2, "psi": POUND_FORCE / INCH**2}),
         ),
         Quantity("mass", "kg", _linear({"kg": 1.0, "g": 1e-3, "mg": 1e-6, "lbm": POUND_MASS, "lb": POUND_MASS})),
         Quantity("voltage", "V", _linear({"V": 1.0, "mV": 1e-3, "uV": 1e-6, "kV": 1e3})),
@@ -242,8 +240,10 @@ def to_si(values: np.ndarray, unit: str, channel: str, source: str | None = None
     if quantity is None:
         if kept_unit(unit):
             return np.array(values, dtype=np.float64), spelling
-        raise DataError(f"{where}channel {channel!r}: {unit!r} is not a unit (a letter, then letters, digits and "
-                        f". / ^ -); known units are {_all_units()}")
+        raise DataError(
+            f"{where}channel {channel!r}: {unit!r} is not a unit (a letter, then letters, digits and "
+            f". / ^ -); known units are {_all_units()}"
+        )
     if spelling not in quantity.units:
         if of_unit:
             raise DataError(

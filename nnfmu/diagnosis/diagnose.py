@@ -91,8 +91,9 @@ def _summary(ranking: list[EffectEvidence], consistent: bool, tests: list[Residu
     return "missing effect(s), in order of evidence: " + "; ".join(parts)
 
 
-def _residual_setup(measurement: Measurement, predicted: np.ndarray, output: str, inputs: tuple[str, ...],
-                    settings: DiagnosisSettings) -> tuple[EffectSignals, np.ndarray, np.ndarray]:
+def _residual_setup(
+    measurement: Measurement, predicted: np.ndarray, output: str, inputs: tuple[str, ...], settings: DiagnosisSettings
+) -> tuple[EffectSignals, np.ndarray, np.ndarray]:
     """The checked input's effect signals, residual (measured - predicted) and recalibration columns (predicted
     output and model inputs), shared by `diagnose` and `FamilyGains`."""
     predicted = np.asarray(predicted, dtype=float)
@@ -154,10 +155,17 @@ class FamilyGains:
     it (three low-passed displacements against the displacement). The signals, the recalibration and each family's
     regressors are computed once per residual. Same input checks and set-up as `diagnose`."""
 
-    def __init__(self, measurement: Measurement, predicted: np.ndarray, output: str, model_inputs: Sequence[str],
-                 settings: DiagnosisSettings = DiagnosisSettings()) -> None:
+    def __init__(
+        self,
+        measurement: Measurement,
+        predicted: np.ndarray,
+        output: str,
+        model_inputs: Sequence[str],
+        settings: DiagnosisSettings = DiagnosisSettings(),
+    ) -> None:
         self._signals, self._residual, self._base = _residual_setup(
-            measurement, predicted, output, tuple(model_inputs), settings)
+            measurement, predicted, output, tuple(model_inputs), settings
+        )
         self._settings = settings
         self._fold = fold_mask(len(self._residual), settings.blocks)
         self._matrices: dict[str, np.ndarray] = {}

@@ -83,8 +83,14 @@ def correlation_test(
     p_value = float(min(1.0, m * 2 * stats.norm.sf(statistic / sigma)))
     band = float(stats.norm.isf(settings.alpha / (2 * m)) * sigma)
     return ResidualTest(
-        name, description, statistic, band, p_value, p_value >= settings.alpha,
-        tuple(int(k) for k in all_lags[chosen]), tuple(float(r) for r in values),
+        name,
+        description,
+        statistic,
+        band,
+        p_value,
+        p_value >= settings.alpha,
+        tuple(int(k) for k in all_lags[chosen]),
+        tuple(float(r) for r in values),
     )
 
 
@@ -103,17 +109,28 @@ def residual_tests(
                 f"cross_correlation[{name}]", f"residual vs {name} over lags -{lag}..{lag}", residual, u, both, settings
             ),
             correlation_test(
-                f"residual_vs_squared_input[{name}]", f"residual vs {name}² (Billings-Voon)", residual, u2, both,
+                f"residual_vs_squared_input[{name}]",
+                f"residual vs {name}² (Billings-Voon)",
+                residual,
+                u2,
+                both,
                 settings,
             ),
             correlation_test(
-                f"squared_residual_vs_squared_input[{name}]", f"residual² vs {name}² (Billings-Voon)", squared, u2,
-                both, settings,
+                f"squared_residual_vs_squared_input[{name}]",
+                f"residual² vs {name}² (Billings-Voon)",
+                squared,
+                u2,
+                both,
+                settings,
             ),
             correlation_test(
                 f"residual_vs_residual_input_product[{name}]",
                 f"residual vs lagged residual·{name}, lags 1..{lag + 1} (Billings-Voon)",
-                residual, residual * u, range(1, lag + 2), settings,
+                residual,
+                residual * u,
+                range(1, lag + 2),
+                settings,
             ),
         ]
     return tests

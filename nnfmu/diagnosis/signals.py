@@ -48,9 +48,7 @@ def direction_prefix(output: str) -> str:
     return output[: len(output) - len(base)] if base else ""
 
 
-def build_signals(
-    m: Measurement, predicted: np.ndarray, output: str, model_inputs: tuple[str, ...]
-) -> EffectSignals:
+def build_signals(m: Measurement, predicted: np.ndarray, output: str, model_inputs: tuple[str, ...]) -> EffectSignals:
     """Collect the channels sharing the output's direction prefix, deriving missing rates (Savitzky-Golay)."""
     try:
         full = derive_rates(m)

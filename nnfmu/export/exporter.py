@@ -61,8 +61,9 @@ def export_onnx(
     ValidationError for a malformed graph).
     """
     name = name or f"{model.spec.output}_model"
-    component = build_component(model, name,
-                                description or f"{model.spec.output} of a component, learnt from rig data by nnfmu")
+    component = build_component(
+        model, name, description or f"{model.spec.output} of a component, learnt from rig data by nnfmu"
+    )
     onnx_model = build_step_graph(model, name, _graph_doc(model, component))
     onnx_model.producer_version = nnfmu.__version__
     onnx_model.doc_string = component.description
@@ -76,10 +77,12 @@ def export_onnx(
     names = [p.name for p in component.inputs]
     n = min(REFERENCE_SAMPLES, len(channels[names[0]]))
     what = "the input data" if verify_on is not None else "the random inputs inside the training envelope"
-    ReferenceStimulus.take(channels, names, f"the first {n} samples of {what} the export was verified on",
-                           n).attach_to(onnx_model)
+    ReferenceStimulus.take(channels, names, f"the first {n} samples of {what} the export was verified on", n).attach_to(
+        onnx_model
+    )
     path = Path(path)
     with atomic_path(path) as tmp:
         onnx.save(onnx_model, tmp)
-    return ExportResult(path=path, component=component, max_relative_error=error, verified_samples=samples,
-                        verified_on=source)
+    return ExportResult(
+        path=path, component=component, max_relative_error=error, verified_samples=samples, verified_on=source
+    )

@@ -19,8 +19,24 @@ OPSET = 17
 # onnx 1.23 writes IR 11 by default; IR 8 is what opset 17 was released with and every onnxruntime >= 1.14 loads.
 IR_VERSION = 8
 ALLOWED_OPS = frozenset(
-    {"Gemm", "MatMul", "Add", "Sub", "Mul", "Div", "Tanh", "Relu", "Sqrt", "Concat", "Slice", "Gather", "Reshape",
-     "Identity", "Constant", "GRU"}
+    {
+        "Gemm",
+        "MatMul",
+        "Add",
+        "Sub",
+        "Mul",
+        "Div",
+        "Tanh",
+        "Relu",
+        "Sqrt",
+        "Concat",
+        "Slice",
+        "Gather",
+        "Reshape",
+        "Identity",
+        "Constant",
+        "GRU",
+    }
 )
 
 
@@ -59,8 +75,9 @@ class GraphBuilder:
     def node_outputs(self, op_type: str, inputs: list[str], names: list[str], **attributes: Any) -> list[str]:
         """Add a node with several outputs (an empty name skips an optional output); return their tensor names."""
         if op_type not in ALLOWED_OPS:
-            raise ExportError(f"operator {op_type!r} (node {names[0]!r}) is not in nnfmu's operator set "
-                              f"{sorted(ALLOWED_OPS)}")
+            raise ExportError(
+                f"operator {op_type!r} (node {names[0]!r}) is not in nnfmu's operator set {sorted(ALLOWED_OPS)}"
+            )
         outputs = [self._unique(n) if n else "" for n in names]
         self.nodes.append(helper.make_node(op_type, inputs, outputs, name=outputs[0], **attributes))
         return outputs
@@ -70,8 +87,9 @@ class GraphBuilder:
         self.nodes.append(helper.make_node("Identity", [source], [name], name=f"output {name}"))
         return name
 
-    def model(self, graph_name: str, doc: str, inputs: list[tuple[str, int]],
-              outputs: list[tuple[str, int]]) -> onnx.ModelProto:
+    def model(
+        self, graph_name: str, doc: str, inputs: list[tuple[str, int]], outputs: list[tuple[str, int]]
+    ) -> onnx.ModelProto:
         """Wrap the nodes in a model; inputs/outputs are (tensor name, length) pairs of float64 vectors."""
         graph = helper.make_graph(
             self.nodes,

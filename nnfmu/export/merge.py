@@ -41,7 +41,8 @@ def _sample_period(components: Sequence[Component]) -> float | None:
     first = periods[0]
     for component, period in zip(components, periods):
         same = (period is None and first is None) or (
-            period is not None and first is not None and same_period(period, first))
+            period is not None and first is not None and same_period(period, first)
+        )
         if not same:
             listed = ", ".join(f"{c.name}: {p!r} s" for c, p in zip(components, periods))
             raise MergeError(f"sample periods differ ({listed}); merged networks must share one sample clock")
@@ -71,9 +72,11 @@ def merge_inputs(components: Sequence[Component]) -> list[Port]:
                 merged[port.name] = port
                 continue
             if (seen.unit, seen.tensor, seen.index) != (port.unit, port.tensor, port.index):
-                raise MergeError(f"input {port.name!r}: {component.name} has unit {port.unit!r}, tensor "
-                                 f"{port.tensor!r}[{port.index}] but an earlier part has {seen.unit!r}, "
-                                 f"{seen.tensor!r}[{seen.index}]")
+                raise MergeError(
+                    f"input {port.name!r}: {component.name} has unit {port.unit!r}, tensor "
+                    f"{port.tensor!r}[{port.index}] but an earlier part has {seen.unit!r}, "
+                    f"{seen.tensor!r}[{seen.index}]"
+                )
             lo, hi = _envelope(seen.min, port.min, max), _envelope(seen.max, port.max, min)
             if lo is not None and hi is not None and lo > hi:
                 raise MergeError(f"input {port.name!r}: the parts' training envelopes do not overlap")
@@ -97,8 +100,9 @@ def _check_outputs(components: Sequence[Component], inputs: list[Port]) -> list[
 def _state_shape(model: onnx.ModelProto, tensor: str) -> list[int]:
     for vi in model.graph.input:
         if vi.name == tensor:
-            return [d.dim_value if d.HasField("dim_value") and d.dim_value > 0 else 1
-                    for d in vi.type.tensor_type.shape.dim]
+            return [
+                d.dim_value if d.HasField("dim_value") and d.dim_value > 0 else 1 for d in vi.type.tensor_type.shape.dim
+            ]
     raise MergeError(f"graph {model.graph.name!r}: state tensor {tensor!r} is not a graph input")
 
 
@@ -113,8 +117,9 @@ class _Renamer:
         return name if not name or name in self.keep else self.prefix + name
 
 
-def _copy_part(model: onnx.ModelProto, rename: _Renamer, nodes: list[onnx.NodeProto],
-               initializers: list[onnx.TensorProto]) -> None:
+def _copy_part(
+    model: onnx.ModelProto, rename: _Renamer, nodes: list[onnx.NodeProto], initializers: list[onnx.TensorProto]
+) -> None:
     for init in model.graph.initializer:
         copied = TensorProto()
         copied.CopyFrom(init)
@@ -122,8 +127,10 @@ def _copy_part(model: onnx.ModelProto, rename: _Renamer, nodes: list[onnx.NodePr
         initializers.append(copied)
     for node in model.graph.node:
         if any(a.type in (onnx.AttributeProto.GRAPH, onnx.AttributeProto.GRAPHS) for a in node.attribute):
-            raise MergeError(f"graph {model.graph.name!r}: node {node.name!r} ({node.op_type}) holds a sub-graph, "
-                             "which the merge does not rename")
+            raise MergeError(
+                f"graph {model.graph.name!r}: node {node.name!r} ({node.op_type}) holds a sub-graph, "
+                "which the merge does not rename"
+            )
         copied = onnx.NodeProto()
         copied.CopyFrom(node)
         copied.name = rename(node.name or node.output[0])
@@ -136,8 +143,10 @@ def _check_opsets(models: Sequence[onnx.ModelProto]) -> None:
     for model in models:
         domains = {o.domain: o.version for o in model.opset_import}
         if domains.get("", OPSET) != OPSET or set(domains) - {"", "ai.onnx"}:
-            raise MergeError(f"graph {model.graph.name!r} imports opsets {domains}; merging needs the default "
-                             f"domain at version {OPSET}")
+            raise MergeError(
+                f"graph {model.graph.name!r} imports opsets {domains}; merging needs the default "
+                f"domain at version {OPSET}"
+            )
 
 
 def merge_step_graphs(models: Sequence[onnx.ModelProto], name: str, description: str = "") -> onnx.ModelProto:
@@ -166,28 +175,42 @@ def merge_step_graphs(models: Sequence[onnx.ModelProto], name: str, description:
         for state in component.states:
             start, size = len(initial), state.size
             shape = _state_shape(model, state.input)
-            bounds = [numpy_helper.from_array(np.array([v], dtype=np.int64), rename(f"merge_{state.input}_{tag}"))
-                      for tag, v in (("start", start), ("end", start + size), ("axis", 0))]
+            bounds = [
+                numpy_helper.from_array(np.array([v], dtype=np.int64), rename(f"merge_{state.input}_{tag}"))
+                for tag, v in (("start", start), ("end", start + size), ("axis", 0))
+            ]
             initializers.extend(bounds)
             sliced = rename(f"merge_{state.input}_slice")
             nodes.append(helper.make_node("Slice", [STATE, *(b.name for b in bounds)], [sliced], name=sliced))
             shape_init = numpy_helper.from_array(np.array(shape, dtype=np.int64), rename(f"merge_{state.input}_shape"))
             flat_init = numpy_helper.from_array(np.array([size], dtype=np.int64), rename(f"merge_{state.output}_flat"))
             initializers.extend([shape_init, flat_init])
-            nodes.append(helper.make_node("Reshape", [sliced, shape_init.name], [rename(state.input)],
-                                          name=rename(state.input)))
+            nodes.append(
+                helper.make_node("Reshape", [sliced, shape_init.name], [rename(state.input)], name=rename(state.input))
+            )
             flat = rename(f"merge_{state.output}_flat_value")
             flatten.append(helper.make_node("Reshape", [rename(state.output), flat_init.name], [flat], name=flat))
             state_parts.append(flat)
             initial.extend(state.initial)
-            layout.append({"part": component.name, "state": state.input, "start": start, "size": size,
-                           "description": state.description})
+            layout.append(
+                {
+                    "part": component.name,
+                    "state": state.input,
+                    "start": start,
+                    "size": size,
+                    "description": state.description,
+                }
+            )
         _copy_part(model, rename, nodes, initializers)
         nodes.extend(flatten)
-    graph_inputs = [helper.make_tensor_value_info(t, TensorProto.DOUBLE, _port_shape(models, components, t, True))
-                    for t in dict.fromkeys(p.tensor for p in inputs)]
-    graph_outputs = [helper.make_tensor_value_info(t, TensorProto.DOUBLE, _port_shape(models, components, t, False))
-                     for t in dict.fromkeys(p.tensor for p in outputs)]
+    graph_inputs = [
+        helper.make_tensor_value_info(t, TensorProto.DOUBLE, _port_shape(models, components, t, True))
+        for t in dict.fromkeys(p.tensor for p in inputs)
+    ]
+    graph_outputs = [
+        helper.make_tensor_value_info(t, TensorProto.DOUBLE, _port_shape(models, components, t, False))
+        for t in dict.fromkeys(p.tensor for p in outputs)
+    ]
     states: list[StatePort] = []
     if state_parts:
         nodes.append(helper.make_node("Concat", state_parts, [STATE_NEXT], name=STATE_NEXT, axis=0))
@@ -201,10 +224,17 @@ def merge_step_graphs(models: Sequence[onnx.ModelProto], name: str, description:
     merged.ir_version = IR_VERSION
     merged.doc_string = doc
     Component(
-        name=name, inputs=inputs, outputs=outputs, states=states, sample_period=period, description=doc,
+        name=name,
+        inputs=inputs,
+        outputs=outputs,
+        states=states,
+        sample_period=period,
+        description=doc,
         filter_cutoff=cutoff,
-        metadata={"merged_from": [{"name": c.name, "description": c.description, "metadata": c.metadata}
-                                  for c in components], "state_layout": layout},
+        metadata={
+            "merged_from": [{"name": c.name, "description": c.description, "metadata": c.metadata} for c in components],
+            "state_layout": layout,
+        },
     ).attach_to(merged)
     stimulus = merge_stimuli([_stimulus(m, i) for i, m in enumerate(models)])
     if stimulus is not None:
@@ -220,8 +250,9 @@ def _stimulus(model: onnx.ModelProto, index: int) -> ReferenceStimulus | None:
         raise MergeError(f"graph {index} ({model.graph.name!r}): {err}") from err
 
 
-def _port_shape(models: Sequence[onnx.ModelProto], components: Sequence[Component], tensor: str,
-                is_input: bool) -> list[int]:
+def _port_shape(
+    models: Sequence[onnx.ModelProto], components: Sequence[Component], tensor: str, is_input: bool
+) -> list[int]:
     """Declared shape of port tensor `tensor` in the first part that has it (symbolic dimensions as 1)."""
     for model in models:
         infos = model.graph.input if is_input else model.graph.output
@@ -229,7 +260,11 @@ def _port_shape(models: Sequence[onnx.ModelProto], components: Sequence[Componen
             if vi.name == tensor:
                 if vi.type.tensor_type.elem_type != TensorProto.DOUBLE:
                     raise MergeError(f"graph {model.graph.name!r}: port tensor {tensor!r} is not float64")
-                return [d.dim_value if d.HasField("dim_value") and d.dim_value > 0 else 1
-                        for d in vi.type.tensor_type.shape.dim]
-    raise MergeError(f"port tensor {tensor!r} is not a graph {'input' if is_input else 'output'} of any part "
-                     f"({', '.join(c.name for c in components)})")
+                return [
+                    d.dim_value if d.HasField("dim_value") and d.dim_value > 0 else 1
+                    for d in vi.type.tensor_type.shape.dim
+                ]
+    raise MergeError(
+        f"port tensor {tensor!r} is not a graph {'input' if is_input else 'output'} of any part "
+        f"({', '.join(c.name for c in components)})"
+    )

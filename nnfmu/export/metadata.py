@@ -71,8 +71,12 @@ def build_component(model: TrainedModel, name: str, description: str) -> Compone
         "feature_spec": spec.to_dict(),
         "network": {"kind": kind, "sizes": sizes},
         "state_layout": [
-            {"name": s.name, "unit": model.units.get(s.channel, "1"), "initial": s.initial,
-             "description": s.description}
+            {
+                "name": s.name,
+                "unit": model.units.get(s.channel, "1"),
+                "initial": s.initial,
+                "description": s.description,
+            }
             for s in layout
         ],
         "training": model.settings,

@@ -51,8 +51,10 @@ def read_step_graph(path: str | os.PathLike[str]) -> tuple[TrainedModel, Compone
         raise ExportError(f"{path}: cannot read the component description: {err}") from None
     meta = component.metadata
     if "feature_spec" not in meta or "network" not in meta:
-        raise ExportError(f"{path}: no nnfmu feature spec in the ONNX metadata: only graphs exported by nnfmu "
-                          "(`nnfmu train`) say which features and network they hold")
+        raise ExportError(
+            f"{path}: no nnfmu feature spec in the ONNX metadata: only graphs exported by nnfmu "
+            "(`nnfmu train`) say which features and network they hold"
+        )
     kind = meta["network"].get("kind")
     if kind != "mlp":
         raise ExportError(f"{path}: network kind {kind!r}; only MLP step graphs are read back into a model")

@@ -32,8 +32,9 @@ def _shapes(value_infos: list[onnx.ValueInfoProto]) -> dict[str, tuple[tuple[int
     return shapes
 
 
-def run_step_graph(source: str | os.PathLike[str] | onnx.ModelProto,
-                   channels: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+def run_step_graph(
+    source: str | os.PathLike[str] | onnx.ModelProto, channels: dict[str, np.ndarray]
+) -> dict[str, np.ndarray]:
     """Evaluate the graph once per sample over `channels` (input port name -> (n,)), starting from the initial state.
 
     Returns output port name -> (n,). The state output of sample k is fed back as the state input of sample k+1.
@@ -56,8 +57,10 @@ def run_step_graph(source: str | os.PathLike[str] | onnx.ModelProto,
 
     session = ort.InferenceSession(model.SerializeToString(), providers=["CPUExecutionProvider"])
     output_names = [o.name for o in session.get_outputs()]
-    state = {s.input: np.asarray(s.initial, dtype=in_shapes[s.input][1]).reshape(in_shapes[s.input][0])
-             for s in component.states}
+    state = {
+        s.input: np.asarray(s.initial, dtype=in_shapes[s.input][1]).reshape(in_shapes[s.input][0])
+        for s in component.states
+    }
     feeds = {name: np.zeros(shape, dtype) for name, (shape, dtype) in in_shapes.items() if name not in state}
     results = {port.name: np.empty(n) for port in component.outputs}
     for k in range(n):

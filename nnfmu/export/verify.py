@@ -26,8 +26,9 @@ def envelope_signal(model: TrainedModel, n: int = 200, seed: int = 0) -> dict[st
     return {c: rng.uniform(*model.envelope[c], size=n) for c in model.spec.channels}
 
 
-def verify_step_graph(graph: onnx.ModelProto, model: TrainedModel,
-                      channels: dict[str, np.ndarray]) -> tuple[float, int]:
+def verify_step_graph(
+    graph: onnx.ModelProto, model: TrainedModel, channels: dict[str, np.ndarray]
+) -> tuple[float, int]:
     """(relative error, samples) of the graph's output against `model.predict` over `channels`.
 
     Raises ExportError when the error exceeds MAX_RELATIVE_ERROR or there are no samples.

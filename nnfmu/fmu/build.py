@@ -36,8 +36,9 @@ def build_fmu(onnx_path: Path, options: BuildOptions | None = None) -> Path:
     return _build(plan)
 
 
-def build_fmu_from_model(model: onnx.ModelProto, options: BuildOptions | None = None,
-                         component: Component | None = None) -> Path:
+def build_fmu_from_model(
+    model: onnx.ModelProto, options: BuildOptions | None = None, component: Component | None = None
+) -> Path:
     """Build an FMU from the in-memory graph `model` (described by `component`, default the graph's own metadata)
     and return its path; any failure raises FmuBuildError and writes no `.fmu`. `model` is not modified."""
     return _build(plan_build(model, options or BuildOptions(), component))

@@ -32,9 +32,16 @@ from nnfmu.fmu.reference_results import EXPERIMENTS_TYPE, LS_FOLDER, MANIFEST
 from nnfmu.safe_zip import ArchiveError, check_members, extract_zip
 
 DEFAULT_TOLERANCE = 1e-6
-CHECKSUMS = {"SHA3-224": hashlib.sha3_224, "SHA3-256": hashlib.sha3_256, "SHA3-384": hashlib.sha3_384,
-             "SHA3-512": hashlib.sha3_512, "SHA-224": hashlib.sha224, "SHA-256": hashlib.sha256,
-             "SHA-384": hashlib.sha384, "SHA-512": hashlib.sha512}
+CHECKSUMS = {
+    "SHA3-224": hashlib.sha3_224,
+    "SHA3-256": hashlib.sha3_256,
+    "SHA3-384": hashlib.sha3_384,
+    "SHA3-512": hashlib.sha3_512,
+    "SHA-224": hashlib.sha224,
+    "SHA-256": hashlib.sha256,
+    "SHA-384": hashlib.sha384,
+    "SHA-512": hashlib.sha512,
+}
 MANIFEST_PATH = f"{LS_FOLDER}/{MANIFEST}"
 
 
@@ -166,13 +173,32 @@ def _experiments_in(root: ET.Element, base: str, unsupported_type: str = "") -> 
                 if child.get("type", default) != default:
                     unsupported = f"{tag} of type {child.get('type')!r} (nnfmu check reads {default})"
                 parts[tag] = _resolve(base, child.get("source", ""), where)
-        if any(_local(e.tag) in ("SteadyState", "ParameterOptimization", "SetPointOptimization",
-                                  "SensitivityAnalysis", "TrajectoryOptimization", "Linearization") for e in element):
+        if any(
+            _local(e.tag)
+            in (
+                "SteadyState",
+                "ParameterOptimization",
+                "SetPointOptimization",
+                "SensitivityAnalysis",
+                "TrajectoryOptimization",
+                "Linearization",
+            )
+            for e in element
+        ):
             unsupported = "not a transient simulation"
-        experiments.append(Experiment(
-            name, _float(timing.get("startTime"), where), _float(timing.get("stopTime"), where),
-            _float(timing.get("stepSize"), where), _float(element.get("tolerance"), where),
-            parts["Parameters"], parts["Stimuli"], parts["References"], unsupported))
+        experiments.append(
+            Experiment(
+                name,
+                _float(timing.get("startTime"), where),
+                _float(timing.get("stopTime"), where),
+                _float(timing.get("stepSize"), where),
+                _float(element.get("tolerance"), where),
+                parts["Parameters"],
+                parts["Stimuli"],
+                parts["References"],
+                unsupported,
+            )
+        )
     return experiments
 
 
@@ -195,8 +221,9 @@ def read_experiments(archive: _Archive) -> tuple[list[Experiment], list[str]]:
         role, mime = related.get("role", ""), related.get("type", "")
         if role.split("/")[0] == "experiment":
             known = mime in (EXPERIMENTS_TYPE, "application/x-ma-ls-experiments") or path.endswith(".exp")
-            experiments += _experiments_in(archive.xml(path, "experiment file"), path,
-                                           "" if known else f"experiment file of type {mime!r}")
+            experiments += _experiments_in(
+                archive.xml(path, "experiment file"), path, "" if known else f"experiment file of type {mime!r}"
+            )
     return experiments, checksum_errors
 
 
@@ -270,24 +297,36 @@ def _run(folder: str, experiment: Experiment, archive: _Archive, tolerance: floa
     stop = experiment.stop if experiment.stop is not None else float(times[-1])
     parameters = _parameters(archive, experiment.parameters) if experiment.parameters else {}
     try:
-        simulated = simulate_fmu(folder, start_time=start, stop_time=stop, step_size=step, output_interval=step,
-                                 input=signals, output=header[1:], start_values=parameters)
+        simulated = simulate_fmu(
+            folder,
+            start_time=start,
+            stop_time=stop,
+            step_size=step,
+            output_interval=step,
+            input=signals,
+            output=header[1:],
+            start_values=parameters,
+        )
     except Exception as err:  # fmpy raises plain Exceptions for FMU errors
         raise CheckError(f"{archive.path}: experiment {experiment.name!r}: the simulation failed: {err}") from err
     tol = tolerance if tolerance is not None else (experiment.tolerance or DEFAULT_TOLERANCE)
     result.samples, result.step_size, result.tolerance = len(times), step, tol
     sim_time = np.asarray(simulated["time"], dtype=float)
     if times[0] < sim_time[0] - 1e-9 * max(1.0, abs(sim_time[0])) or times[-1] > sim_time[-1] + 1e-9 * max(
-            1.0, abs(sim_time[-1])):
-        raise CheckError(f"{archive.path}: {experiment.references}: reference times {times[0]}..{times[-1]} s lie "
-                         f"outside the simulated {sim_time[0]}..{sim_time[-1]} s")
+        1.0, abs(sim_time[-1])
+    ):
+        raise CheckError(
+            f"{archive.path}: {experiment.references}: reference times {times[0]}..{times[-1]} s lie "
+            f"outside the simulated {sim_time[0]}..{sim_time[-1]} s"
+        )
     for i, name in enumerate(header[1:], start=1):
         got = np.interp(times, sim_time, np.asarray(simulated[name], dtype=float))
         error = np.abs(got - reference[:, i])
         worst = int(np.argmax(error))
         peak = float(np.max(np.abs(reference[:, i])))
-        result.outputs.append(OutputResult(name, float(error[worst]), float(times[worst]),
-                                           tol * peak if peak > 0 else tol))
+        result.outputs.append(
+            OutputResult(name, float(error[worst]), float(times[worst]), tol * peak if peak > 0 else tol)
+        )
     return result
 
 
@@ -316,11 +355,15 @@ def report_lines(report: CheckReport) -> list[str]:
         if experiment.skipped:
             lines.append(f"experiment {experiment.name!r}: skipped ({experiment.skipped})")
             continue
-        lines.append(f"experiment {experiment.name!r}: {experiment.samples} reference points, step "
-                     f"{experiment.step_size:g} s, tolerance {experiment.tolerance:g} x each output's peak")
+        lines.append(
+            f"experiment {experiment.name!r}: {experiment.samples} reference points, step "
+            f"{experiment.step_size:g} s, tolerance {experiment.tolerance:g} x each output's peak"
+        )
         for o in experiment.outputs:
-            lines.append(f"  {o.name}: max error {o.max_error:.3g} at t = {o.at_time:g} s, allowed {o.allowed:.3g}: "
-                         f"{'pass' if o.passed else 'FAIL'}")
+            lines.append(
+                f"  {o.name}: max error {o.max_error:.3g} at t = {o.at_time:g} s, allowed {o.allowed:.3g}: "
+                f"{'pass' if o.passed else 'FAIL'}"
+            )
     failed = [f"{o.name} (experiment {e.name!r})" for e in report.experiments for o in e.outputs if not o.passed]
     failed += ["checksums"] if report.checksum_errors else []
     lines.append("result: pass" if report.passed else f"result: FAIL: {', '.join(failed) or 'no experiment ran'}")

@@ -76,8 +76,13 @@ def in_memory_source(model: onnx.ModelProto) -> str:
     return f"ONNX graph {model.graph.name!r} (in memory)"
 
 
-def plan_build(model: onnx.ModelProto, options: BuildOptions, component: Component | None = None,
-               source: str | None = None, source_name: str | None = None) -> BuildPlan:
+def plan_build(
+    model: onnx.ModelProto,
+    options: BuildOptions,
+    component: Component | None = None,
+    source: str | None = None,
+    source_name: str | None = None,
+) -> BuildPlan:
     """Derive everything the backends share, once: the component (given, or read from the graph's metadata, with the
     options' name and filter start value), identifier, output path, variables and dependencies. The graph is copied,
     so a backend may attach metadata to its copy without touching the caller's."""
@@ -87,8 +92,17 @@ def plan_build(model: onnx.ModelProto, options: BuildOptions, component: Compone
     described = options.describe(component) if component is not None else options.component_of(private, source)
     identifier = c_identifier(described.name)
     target = Path(options.out) if options.out is not None else default_output(identifier)
-    return BuildPlan(private, described, options, source, source_name or source, identifier, target,
-                     fmu_variables(described), tensor_dependencies(private))
+    return BuildPlan(
+        private,
+        described,
+        options,
+        source,
+        source_name or source,
+        identifier,
+        target,
+        fmu_variables(described),
+        tensor_dependencies(private),
+    )
 
 
 def assemble(plan: BuildPlan, backend: Backend) -> Path:

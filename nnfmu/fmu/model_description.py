@@ -168,13 +168,22 @@ class ModelDescriptionView:
 
     @staticmethod
     def _clean(v: FmuVariable) -> FmuVariable:
-        return FmuVariable(v.name, v.value_reference, v.causality, v.type, xml_text(v.unit), xml_text(v.description),
-                           v.start, v.port_index)
+        return FmuVariable(
+            v.name,
+            v.value_reference,
+            v.causality,
+            v.type,
+            xml_text(v.unit),
+            xml_text(v.description),
+            v.start,
+            v.port_index,
+        )
 
     @staticmethod
     def variability(v: FmuVariable) -> str:
         return {"input": "continuous", "output": "discrete", "parameter": "fixed", "independent": "continuous"}[
-            v.causality]
+            v.causality
+        ]
 
     @staticmethod
     def initial(v: FmuVariable) -> str | None:
@@ -274,5 +283,6 @@ def render_model_description(view: ModelDescriptionView) -> str:
 
 def render_build_description(identifier: str, source_files: list[str]) -> str:
     """sources/buildDescription.xml: how another platform compiles the FMU from its sources."""
-    return _environment().get_template("buildDescription.xml.j2").render(
-        identifier=identifier, source_files=source_files)
+    return (
+        _environment().get_template("buildDescription.xml.j2").render(identifier=identifier, source_files=source_files)
+    )

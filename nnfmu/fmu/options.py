@@ -39,8 +39,9 @@ class BuildOptions:
         if self.fmi_version not in FMI_VERSIONS:
             raise FmuBuildError(f"unsupported FMI version {self.fmi_version!r}; choose 2 or 3")
         if self.platforms is not None and self.backend != "native":
-            raise FmuBuildError(f"platforms apply to the native backend; the {self.backend} backend ships its "
-                                "runtime's own binaries")
+            raise FmuBuildError(
+                f"platforms apply to the native backend; the {self.backend} backend ships its runtime's own binaries"
+            )
         cutoff = self.filter_cutoff
         if cutoff is not None and not (isinstance(cutoff, (int, float)) and math.isfinite(cutoff) and cutoff >= 0):
             raise FmuBuildError(f"filter cut-off {cutoff!r} Hz must be a finite number >= 0 (0 turns the filter off)")

@@ -68,8 +68,9 @@ def stored_stimulus(model: onnx.ModelProto, where: str) -> ReferenceStimulus | N
         raise FmuBuildError(f"{where}: {err}") from err
 
 
-def reference_run(model: onnx.ModelProto, component: Component, variables: FmuVariables,
-                  stimulus: ReferenceStimulus) -> ReferenceRun | None:
+def reference_run(
+    model: onnx.ModelProto, component: Component, variables: FmuVariables, stimulus: ReferenceStimulus
+) -> ReferenceRun | None:
     """What the FMU must report for `stimulus`, or None when the graph has no sample period or the stimulus lacks an
     input port. Sample 0 sees stimulus row 0; sample k >= 1 the row k-1 set before doStep(t_{k-1}, T); then the
     first-order output filter at the FMU's default `filter_cutoff` and `output_gain`."""
@@ -109,13 +110,22 @@ def _xml(root: ET.Element) -> bytes:
 
 
 def _experiments(run: ReferenceRun, component: Component) -> bytes:
-    root = ET.Element("Experiments", name=f"{component.name} reference results",
-                      description="nnfmu: the ONNX graph's outputs for a stored input record, to verify the FMU")
-    experiment = ET.SubElement(root, "Experiment", name="reference", tolerance=repr(TOLERANCE),
-                               description=f"stimuli: {run.source}; references: onnxruntime on the ONNX graph")
+    root = ET.Element(
+        "Experiments",
+        name=f"{component.name} reference results",
+        description="nnfmu: the ONNX graph's outputs for a stored input record, to verify the FMU",
+    )
+    experiment = ET.SubElement(
+        root,
+        "Experiment",
+        name="reference",
+        tolerance=repr(TOLERANCE),
+        description=f"stimuli: {run.source}; references: onnxruntime on the ONNX graph",
+    )
     times = run.times
-    ET.SubElement(experiment, "TransientSimulation", startTime=repr(times[0]), stopTime=repr(times[-1]),
-                  stepSize=repr(run.period))
+    ET.SubElement(
+        experiment, "TransientSimulation", startTime=repr(times[0]), stopTime=repr(times[-1]), stepSize=repr(run.period)
+    )
     ET.SubElement(experiment, "Stimuli", source=STIMULI_FILE, type="text/csv")
     ET.SubElement(experiment, "References", source=REFERENCES_FILE, type="text/csv")
     return _xml(root)
@@ -123,12 +133,25 @@ def _experiments(run: ReferenceRun, component: Component) -> bytes:
 
 def _manifest(files: dict[str, tuple[bytes, str, str, str]]) -> bytes:
     ET.register_namespace("fmi-ls", LS_NAMESPACE)
-    root = ET.Element("fmiReferences", {f"{{{LS_NAMESPACE}}}fmi-ls-name": LS_NAME,
-                                        f"{{{LS_NAMESPACE}}}fmi-ls-version": LS_VERSION,
-                                        f"{{{LS_NAMESPACE}}}fmi-ls-description": LS_DESCRIPTION})
+    root = ET.Element(
+        "fmiReferences",
+        {
+            f"{{{LS_NAMESPACE}}}fmi-ls-name": LS_NAME,
+            f"{{{LS_NAMESPACE}}}fmi-ls-version": LS_VERSION,
+            f"{{{LS_NAMESPACE}}}fmi-ls-description": LS_DESCRIPTION,
+        },
+    )
     for source, (content, mime, role, description) in files.items():
-        ET.SubElement(root, "Related", type=mime, source=source, role=role, description=description,
-                      checksum=hashlib.sha3_256(content).hexdigest(), checksumType="SHA3-256")
+        ET.SubElement(
+            root,
+            "Related",
+            type=mime,
+            source=source,
+            role=role,
+            description=description,
+            checksum=hashlib.sha3_256(content).hexdigest(),
+            checksumType="SHA3-256",
+        )
     return _xml(root)
 
 
@@ -154,20 +177,27 @@ def has_reference_results(fmu: Path) -> bool:
         return f"{LS_FOLDER}/{MANIFEST}" in archive.namelist()
 
 
-def write_reference_results(tree: Path, model: onnx.ModelProto, component: Component,
-                            variables: FmuVariables) -> bool:
+def write_reference_results(tree: Path, model: onnx.ModelProto, component: Component, variables: FmuVariables) -> bool:
     """Write the reference results into the FMU folder `tree` if the graph carries a stimulus; True if written."""
     stimulus = stored_stimulus(model, component.name)
     run = None if stimulus is None else reference_run(model, component, variables, stimulus)
     if run is None:
         return False
     files = {
-        EXPERIMENTS_FILE: (_experiments(run, component), EXPERIMENTS_TYPE, "experiment/smoke-test",
-                           "stimuli and expected outputs of the ONNX graph"),
+        EXPERIMENTS_FILE: (
+            _experiments(run, component),
+            EXPERIMENTS_TYPE,
+            "experiment/smoke-test",
+            "stimuli and expected outputs of the ONNX graph",
+        ),
         STIMULI_FILE: (_csv(run.times, run.inputs), "text/csv", "other", "stimuli of the experiment"),
         REFERENCES_FILE: (_csv(run.times, run.outputs), "text/csv", "result", "expected outputs (onnxruntime)"),
-        f"../../{DOCUMENTATION_FILE}": (_documentation(run, component), "text/plain", "document",
-                                        "what the reference results are and how they are checked"),
+        f"../../{DOCUMENTATION_FILE}": (
+            _documentation(run, component),
+            "text/plain",
+            "document",
+            "what the reference results are and how they are checked",
+        ),
     }
     folder = tree / LS_FOLDER
     folder.mkdir(parents=True, exist_ok=True)

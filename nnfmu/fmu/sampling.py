@@ -34,8 +34,10 @@ def read_sample_period(model_description: Path) -> float | None:
     """The sample period [s] annotated in the model description file, or None (no annotation: a stateless graph or
     another tool's FMU). A malformed annotation raises SamplingAnnotationError naming the file."""
     root = ET.parse(model_description).getroot()
-    paths = (f"./VendorAnnotations/Tool[@name='{ANNOTATION_TOOL}']/Sampling",
-             f"./Annotations/Annotation[@type='{ANNOTATION_TOOL}']/Sampling")
+    paths = (
+        f"./VendorAnnotations/Tool[@name='{ANNOTATION_TOOL}']/Sampling",
+        f"./Annotations/Annotation[@type='{ANNOTATION_TOOL}']/Sampling",
+    )
     node = next((found for path in paths if (found := root.find(path)) is not None), None)
     if node is None:
         return None
@@ -45,6 +47,8 @@ def read_sample_period(model_description: Path) -> float | None:
     except ValueError:
         period = math.nan
     if not (math.isfinite(period) and period > 0) or node.get("unit", "s") != "s":
-        raise SamplingAnnotationError(f"{model_description}: sampling annotation period={text!r} "
-                                      f"unit={node.get('unit')!r} is not a positive time in s")
+        raise SamplingAnnotationError(
+            f"{model_description}: sampling annotation period={text!r} "
+            f"unit={node.get('unit')!r} is not a positive time in s"
+        )
     return period

@@ -80,15 +80,31 @@ def fmu_variables(component: Component) -> FmuVariables:
         outputs.append(FmuVariable(name, vr, "output", "Real", port.unit, _description(port, name), None, i))
         vr += 1
     extrapolating = FmuVariable(
-        "extrapolating", vr, "output", "Boolean", "",
-        "true while an input of the latest sample lies outside the training envelope", None,
+        "extrapolating",
+        vr,
+        "output",
+        "Boolean",
+        "",
+        "true while an input of the latest sample lies outside the training envelope",
+        None,
     )
     filter_cutoff = FmuVariable(
-        "filter_cutoff", vr + 1, "parameter", "Real", "Hz",
-        "cut-off frequency of the first-order output low-pass filter (0 turns it off)", component.filter_cutoff,
+        "filter_cutoff",
+        vr + 1,
+        "parameter",
+        "Real",
+        "Hz",
+        "cut-off frequency of the first-order output low-pass filter (0 turns it off)",
+        component.filter_cutoff,
     )
     output_gain = FmuVariable(
-        "output_gain", vr + 2, "parameter", "Real", "1", "gain applied to every output", DEFAULT_OUTPUT_GAIN,
+        "output_gain",
+        vr + 2,
+        "parameter",
+        "Real",
+        "1",
+        "gain applied to every output",
+        DEFAULT_OUTPUT_GAIN,
     )
     time = FmuVariable("time", vr + 3, "independent", "Real", "s", "simulation time", None)
     return FmuVariables(inputs, outputs, extrapolating, filter_cutoff, output_gain, time)

@@ -193,7 +193,8 @@ class LowpassSquare(Derived):
     def state_slots(self) -> tuple[StateSlot, ...]:
         return (
             StateSlot(
-                name=f"{self.name}[k-1]", channel=self.channel,
+                name=f"{self.name}[k-1]",
+                channel=self.channel,
                 description=f"previous output of {self.name}, in the square of {self.channel}'s unit",
             ),
         )
@@ -235,7 +236,8 @@ class Highpass(Derived):
     def state_slots(self) -> tuple[StateSlot, ...]:
         return (
             StateSlot(
-                name=f"{self.name}.lowpass[k-1]", channel=self.channel,
+                name=f"{self.name}.lowpass[k-1]",
+                channel=self.channel,
                 description=f"previous low-pass part (input minus output) of {self.name}",
             ),
         )
@@ -277,8 +279,11 @@ class Difference(Derived):
 
     def state_slots(self) -> tuple[StateSlot, ...]:
         return tuple(
-            StateSlot(name=f"{self.name}:{self.channel}[k-{j}]", channel=self.channel,
-                      description=f"{self.channel} delayed by {j} samples, for {self.name}")
+            StateSlot(
+                name=f"{self.name}:{self.channel}[k-{j}]",
+                channel=self.channel,
+                description=f"{self.channel} delayed by {j} samples, for {self.name}",
+            )
             for j in range(1, self.delay + 1)
         )
 
@@ -318,8 +323,11 @@ class Stop(Derived):
 
     def state_slots(self) -> tuple[StateSlot, ...]:
         return (
-            StateSlot(name=f"{self.name}.play[k-1]", channel=self.channel,
-                      description=f"previous play-operator output (driven side of the gap) of {self.name}"),
+            StateSlot(
+                name=f"{self.name}.play[k-1]",
+                channel=self.channel,
+                description=f"previous play-operator output (driven side of the gap) of {self.name}",
+            ),
         )
 
     def compute(self, x: np.ndarray, initial: np.ndarray, sample_period: float) -> np.ndarray:

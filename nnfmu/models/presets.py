@@ -102,7 +102,12 @@ def memory_bank(channel: str) -> tuple[Highpass, ...]:
 
 
 def _preset(
-    name: str, description: str, channels: tuple[str, ...], output: str, thesis_delays: tuple[int, ...], hidden: int,
+    name: str,
+    description: str,
+    channels: tuple[str, ...],
+    output: str,
+    thesis_delays: tuple[int, ...],
+    hidden: int,
     derived: tuple[Derived, ...] = (),
 ) -> Preset:
     """A preset whose thesis net taps `channels` at `thesis_delays` with `hidden` units; the default taps them at the
@@ -138,7 +143,7 @@ def _semiactive() -> Preset:
     return Preset(
         name="damper-semiactive",
         description="semi-active (MR or CDC) damper force from velocity, displacement and the command (coil voltage "
-                    "or valve current) with its low-passed states",
+        "or valve current) with its low-passed states",
         thesis_spec=FeatureSpec(
             taps=(Tap("velocity"), Tap("displacement"), Tap(COMMAND, SEMIACTIVE_THESIS_DELAYS)), output="force"
         ),
@@ -173,7 +178,7 @@ def bind_command(spec: FeatureSpec, available: Iterable[str], source: str) -> Fe
         raise DataError(
             f"{source}: a semi-active damper model needs one command channel, voltage [V] (MR coil) or current [A] "
             f"(CDC valve); the record {problem} them (channels: {', '.join(available)}). Name the command with "
-            f"--map, e.g. --map \"Coil Voltage=voltage\""
+            f'--map, e.g. --map "Coil Voltage=voltage"'
         )
     return rename_channel(spec, COMMAND, found[0])
 
@@ -182,38 +187,65 @@ PRESETS: dict[str, Preset] = {
     p.name: p
     for p in (
         _preset(
-            "damper-spline", "damper force-velocity characteristic (thesis 1-3-1 on velocity)",
-            ("velocity",), "force", (0,), 3,
+            "damper-spline",
+            "damper force-velocity characteristic (thesis 1-3-1 on velocity)",
+            ("velocity",),
+            "force",
+            (0,),
+            3,
             (SmoothSign("velocity", scale=SEAL_FRICTION_VELOCITY), SmoothSign("velocity", scale=VALVE_KNEE_VELOCITY)),
         ),
         _preset(
             "damper-hysteresis",
             "damper force with hysteresis and inertia from velocity history (thesis 2-5-1 time-delay net)",
-            ("velocity",), "force", (0, 1), 5,
+            ("velocity",),
+            "force",
+            (0, 1),
+            5,
             (
                 *(Difference("velocity", delay=d) for d in HYSTERESIS_DIFFERENCES),
                 SmoothSign("velocity", scale=SEAL_FRICTION_VELOCITY),
             ),
         ),
         _preset(
-            "bushing-axial-force", "bushing axial force from axial displacement and velocity (thesis 2-3-1)",
-            ("axial_displacement", "axial_velocity"), "axial_force", (0,), 3, memory_bank("axial_displacement"),
+            "bushing-axial-force",
+            "bushing axial force from axial displacement and velocity (thesis 2-3-1)",
+            ("axial_displacement", "axial_velocity"),
+            "axial_force",
+            (0,),
+            3,
+            memory_bank("axial_displacement"),
         ),
         _preset(
-            "bushing-radial-force", "bushing radial force from radial displacement and velocity (thesis 2-3-1)",
-            ("radial_displacement", "radial_velocity"), "radial_force", (0,), 3, memory_bank("radial_displacement"),
+            "bushing-radial-force",
+            "bushing radial force from radial displacement and velocity (thesis 2-3-1)",
+            ("radial_displacement", "radial_velocity"),
+            "radial_force",
+            (0,),
+            3,
+            memory_bank("radial_displacement"),
         ),
         _preset(
             "bushing-axial-torque",
             "bushing axial torque from rotation and angular velocity (thesis 4-7-1 with delays)",
-            ("axial_rotation", "axial_angular_velocity"), "axial_torque", (0, 1), 7, memory_bank("axial_rotation"),
+            ("axial_rotation", "axial_angular_velocity"),
+            "axial_torque",
+            (0, 1),
+            7,
+            memory_bank("axial_rotation"),
         ),
         _preset(
             "bushing-conical-torque",
             "bushing conical torque from conical rotation and rate (thesis 4-7-1 with delays)",
-            ("conical_rotation", "conical_angular_velocity"), "conical_torque", (0, 1), 7,
-            (*memory_bank("conical_rotation"), SmoothSign("conical_angular_velocity", scale=CONICAL_FRICTION_RATE),
-             *(Stop("conical_rotation", radius=r) for r in CONICAL_STOP_RADII)),
+            ("conical_rotation", "conical_angular_velocity"),
+            "conical_torque",
+            (0, 1),
+            7,
+            (
+                *memory_bank("conical_rotation"),
+                SmoothSign("conical_angular_velocity", scale=CONICAL_FRICTION_RATE),
+                *(Stop("conical_rotation", radius=r) for r in CONICAL_STOP_RADII),
+            ),
         ),
         _semiactive(),
     )

@@ -46,12 +46,18 @@ class RetrainSettings:
 
     def __post_init__(self) -> None:
         if self.max_epochs < 1 or self.patience < 1 or self.lm_max_samples < 1:
-            raise SettingsError(f"max_epochs, patience and lm_max_samples must be >= 1, got {self.max_epochs}, "
-                                f"{self.patience} and {self.lm_max_samples}")
-        if not self.extra_hidden or self.extra_hidden[0] < 0 or any(
-                a >= b for a, b in zip(self.extra_hidden, self.extra_hidden[1:])):
-            raise SettingsError(f"extra_hidden must be non-negative unit counts in rising order, got "
-                                f"{self.extra_hidden!r}")
+            raise SettingsError(
+                f"max_epochs, patience and lm_max_samples must be >= 1, got {self.max_epochs}, "
+                f"{self.patience} and {self.lm_max_samples}"
+            )
+        if (
+            not self.extra_hidden
+            or self.extra_hidden[0] < 0
+            or any(a >= b for a, b in zip(self.extra_hidden, self.extra_hidden[1:]))
+        ):
+            raise SettingsError(
+                f"extra_hidden must be non-negative unit counts in rising order, got {self.extra_hidden!r}"
+            )
         if not (math.isfinite(self.lm_mu) and self.lm_mu > 0):
             raise SettingsError(f"lm_mu must be a positive damping, got {self.lm_mu!r}")
 
@@ -99,8 +105,9 @@ def _warm_network(old: TrainedModel, spec: FeatureSpec, extra: int, seed: int) -
         b1 = torch.zeros(hidden + extra, dtype=torch.float64)
         b1[:hidden] = source.hidden.bias
         if extra:
-            w1[hidden:] = EXTRA_WEIGHT_SCALE * torch.randn(extra, spec.n_features, generator=generator,
-                                                           dtype=torch.float64)
+            w1[hidden:] = EXTRA_WEIGHT_SCALE * torch.randn(
+                extra, spec.n_features, generator=generator, dtype=torch.float64
+            )
             b1[hidden:] = EXTRA_WEIGHT_SCALE * torch.randn(extra, generator=generator, dtype=torch.float64)
         w2 = torch.zeros(1, hidden + extra, dtype=torch.float64)
         w2[:, :hidden] = source.out.weight
@@ -127,25 +134,46 @@ class _Problem:
     def fit(self, network: MLP, settings: RetrainSettings, mu: float) -> FitHistory:
         """Levenberg-Marquardt on the training rows from `network`'s weights, early stopping on the validation rows."""
         lm = LMSettings(max_epochs=settings.max_epochs, patience=settings.patience, mu=mu)
-        return fit_lm(network, (self.x[self.train], self.y[self.train]),
-                      (self.x[self.validation], self.y[self.validation]), lm)
+        return fit_lm(
+            network, (self.x[self.train], self.y[self.train]), (self.x[self.validation], self.y[self.validation]), lm
+        )
 
 
-def _problem(old: TrainedModel, spec: FeatureSpec, m: Measurement, train: np.ndarray, validation: np.ndarray,
-             settings: RetrainSettings) -> _Problem:
+def _problem(
+    old: TrainedModel,
+    spec: FeatureSpec,
+    m: Measurement,
+    train: np.ndarray,
+    validation: np.ndarray,
+    settings: RetrainSettings,
+) -> _Problem:
     """`spec`'s features over the whole record, scaled as `_extended_scaler` says, with the rows LM may use."""
     features = spec.features({c: m[c] for c in spec.channels}, old.sample_period)
     target = np.asarray(m[spec.output], dtype=float)
     scaler = _extended_scaler(old, spec, features, train)
-    index_train, index_validation = (torch.from_numpy(rows[:: max(1, math.ceil(len(rows) / settings.lm_max_samples))])
-                                     for rows in (train, validation))
-    return _Problem(spec, target, scaler, torch.from_numpy(scaler.scale(features)),
-                    torch.from_numpy(old.target_scaler.scale(target)), index_train, index_validation)
+    index_train, index_validation = (
+        torch.from_numpy(rows[:: max(1, math.ceil(len(rows) / settings.lm_max_samples))])
+        for rows in (train, validation)
+    )
+    return _Problem(
+        spec,
+        target,
+        scaler,
+        torch.from_numpy(scaler.scale(features)),
+        torch.from_numpy(old.target_scaler.scale(target)),
+        index_train,
+        index_validation,
+    )
 
 
 def warm_start(
-    old: TrainedModel, spec: FeatureSpec, m: Measurement, train: np.ndarray, validation: np.ndarray,
-    settings: RetrainSettings, effect: str,
+    old: TrainedModel,
+    spec: FeatureSpec,
+    m: Measurement,
+    train: np.ndarray,
+    validation: np.ndarray,
+    settings: RetrainSettings,
+    effect: str,
 ) -> Retrained:
     """Retrain `old` on `spec` (an extension of its spec) over rows `train`, early stopping on rows `validation`;
     the extra hidden-unit counts of `settings.extra_hidden` are tried in rising order while each lowers the best
@@ -166,8 +194,14 @@ def warm_start(
 
 
 def fresh_start(
-    old: TrainedModel, spec: FeatureSpec, m: Measurement, train: np.ndarray, validation: np.ndarray,
-    settings: RetrainSettings, effect: str, hidden: int,
+    old: TrainedModel,
+    spec: FeatureSpec,
+    m: Measurement,
+    train: np.ndarray,
+    validation: np.ndarray,
+    settings: RetrainSettings,
+    effect: str,
+    hidden: int,
 ) -> Retrained:
     """A network of `hidden` units on `spec` drawn at random under `settings.seed` (torch's default initialisation,
     as the first fit draws its restarts) and trained like a first fit (LM from trainlm's damping), with `old`'s
@@ -177,13 +211,31 @@ def fresh_start(
     network = MLP(spec.n_features, hidden)
     history = problem.fit(network, settings, LMSettings().mu)
     extra = hidden - _hidden(old)
-    return _retrained(old, problem, network, m, train, validation, effect, "fresh",
-                      {extra: history.best_validation_loss}, len(history.train_loss) - 1, settings)
+    return _retrained(
+        old,
+        problem,
+        network,
+        m,
+        train,
+        validation,
+        effect,
+        "fresh",
+        {extra: history.best_validation_loss},
+        len(history.train_loss) - 1,
+        settings,
+    )
 
 
 def retrain(
-    old: TrainedModel, spec: FeatureSpec, m: Measurement, train: np.ndarray, validation: np.ndarray,
-    settings: RetrainSettings, label: str, start: str = "warm", hidden: int | None = None,
+    old: TrainedModel,
+    spec: FeatureSpec,
+    m: Measurement,
+    train: np.ndarray,
+    validation: np.ndarray,
+    settings: RetrainSettings,
+    label: str,
+    start: str = "warm",
+    hidden: int | None = None,
 ) -> Retrained:
     """Retrain `old` on `spec` from where it stands (`start` "warm") or from a random draw of `hidden` units
     ("fresh"); `label` names what was added (recorded in the model's training settings)."""
@@ -202,8 +254,17 @@ def _hidden(model: TrainedModel) -> int:
 
 
 def _retrained(
-    old: TrainedModel, problem: _Problem, network: MLP, m: Measurement, train: np.ndarray, validation: np.ndarray,
-    effect: str, start: str, scores: dict[int, float], epochs: int, settings: RetrainSettings,
+    old: TrainedModel,
+    problem: _Problem,
+    network: MLP,
+    m: Measurement,
+    train: np.ndarray,
+    validation: np.ndarray,
+    effect: str,
+    start: str,
+    scores: dict[int, float],
+    epochs: int,
+    settings: RetrainSettings,
 ) -> Retrained:
     """`network` packaged as the extended model, with its metrics and the loop's record of how it was trained."""
     spec, target = problem.spec, problem.target
@@ -217,7 +278,14 @@ def _retrained(
         for name, rows in (("train", train), ("validation", validation))
     }
     model = trained_model(
-        spec, network, problem.scaler, old.target_scaler, m, train, old.sample_period, metrics,
+        spec,
+        network,
+        problem.scaler,
+        old.target_scaler,
+        m,
+        train,
+        old.sample_period,
+        metrics,
         {
             **{k: v for k, v in old.settings.items() if k not in FIRST_FIT_KEYS},
             "hidden": network.hidden.out_features,

@@ -133,5 +133,3 @@ def select_inputs(
     count = next(i + 1 for i, e in enumerate(errors) if e <= good_enough)
     chosen = [name for name, _ in ranking[:count]]
     return SelectionResult(ranking=ranking, chosen=chosen, spec=spec_of(taps, chosen, output), validation_mse=errors)
-
-

@@ -48,8 +48,9 @@ class Architecture:
         if not hidden or any(isinstance(h, bool) or not isinstance(h, (int, np.integer)) or h < 1 for h in hidden):
             raise SettingsError(f"hidden sizes must be integers >= 1, got {self.hidden!r}")
         if max(hidden) > MAX_HIDDEN:
-            raise SettingsError(f"hidden size {max(hidden)} is more than the limit of {MAX_HIDDEN} units (component "
-                                f"networks need tens)")
+            raise SettingsError(
+                f"hidden size {max(hidden)} is more than the limit of {MAX_HIDDEN} units (component networks need tens)"
+            )
         object.__setattr__(self, "hidden", tuple(sorted(set(int(h) for h in hidden))))
 
 
@@ -83,7 +84,13 @@ class TrainSettings:
         if self.optimizer not in ("auto", "lm", "adam", "lbfgs"):
             raise SettingsError(f"optimizer must be auto, lm, adam or lbfgs, got {self.optimizer!r}")
         for name in (
-            "max_epochs", "patience", "restarts", "lm_max_samples", "batch_size", "chunk_length", "sequences_per_batch"
+            "max_epochs",
+            "patience",
+            "restarts",
+            "lm_max_samples",
+            "batch_size",
+            "chunk_length",
+            "sequences_per_batch",
         ):
             if getattr(self, name) < 1:
                 raise SettingsError(f"{name} must be >= 1, got {getattr(self, name)!r}")
@@ -382,7 +389,13 @@ def train_model(
     warnings = [w for w in [weight_warning(max_abs_weight(network))] if w]
     n_in = data.x.shape[1]
     model = trained_model(
-        spec, network, data.feature_scaler, data.target_scaler, measurement, train_part, measurement.sample_period,
+        spec,
+        network,
+        data.feature_scaler,
+        data.target_scaler,
+        measurement,
+        train_part,
+        measurement.sample_period,
         {name: m.as_dict() for name, m in metrics.items()},
         {
             **settings.as_dict(),

@@ -59,9 +59,16 @@ def data_hash(measurement: Measurement, names: list[str]) -> str:
 
 
 def trained_model(
-    spec: FeatureSpec, network: MLP | GRUNet, feature_scaler: MinMaxScaler, target_scaler: MinMaxScaler,
-    measurement: Measurement, train_rows: np.ndarray, sample_period: float, metrics: dict[str, dict[str, float]],
-    settings: dict[str, Any], earlier_envelope: Mapping[str, tuple[float, float]] | None = None,
+    spec: FeatureSpec,
+    network: MLP | GRUNet,
+    feature_scaler: MinMaxScaler,
+    target_scaler: MinMaxScaler,
+    measurement: Measurement,
+    train_rows: np.ndarray,
+    sample_period: float,
+    metrics: dict[str, dict[str, float]],
+    settings: dict[str, Any],
+    earlier_envelope: Mapping[str, tuple[float, float]] | None = None,
 ) -> TrainedModel:
     """The one way a fit becomes a TrainedModel (a first fit and a retraining alike): units and the data hash from the
     measurement, each input's envelope over the training rows (widened by `earlier_envelope` where it has the
@@ -73,8 +80,14 @@ def trained_model(
             lo, hi = min(lo, earlier_envelope[c][0]), max(hi, earlier_envelope[c][1])
         envelope[c] = (lo, hi)
     return TrainedModel(
-        spec=spec, network=network, feature_scaler=feature_scaler, target_scaler=target_scaler,
-        sample_period=sample_period, units={c: measurement.units[c] for c in (*spec.channels, spec.output)},
-        envelope=envelope, metrics=metrics, data_hash=data_hash(measurement, [*spec.channels, spec.output]),
+        spec=spec,
+        network=network,
+        feature_scaler=feature_scaler,
+        target_scaler=target_scaler,
+        sample_period=sample_period,
+        units={c: measurement.units[c] for c in (*spec.channels, spec.output)},
+        envelope=envelope,
+        metrics=metrics,
+        data_hash=data_hash(measurement, [*spec.channels, spec.output]),
         settings=settings,
     )

@@ -71,20 +71,36 @@ class BushingParams:
     """Front lower-control-arm bushing; cubic terms add ~50-60 % stiffness at the edge of the vehicle range."""
 
     axial: BushingChannelParams = _translational(
-        stiffness=1.0e6, cubic_stiffness=5.6e10, maxwell_stiffness=(1.2e5, 1.0e5, 0.8e5),
-        maxwell_time=(0.002, 0.015, 0.1), friction_max=50.0, friction_x2=2e-4,
+        stiffness=1.0e6,
+        cubic_stiffness=5.6e10,
+        maxwell_stiffness=(1.2e5, 1.0e5, 0.8e5),
+        maxwell_time=(0.002, 0.015, 0.1),
+        friction_max=50.0,
+        friction_x2=2e-4,
     )
     radial: BushingChannelParams = _translational(
-        stiffness=5.0e6, cubic_stiffness=1.33e12, maxwell_stiffness=(6e5, 5e5, 4e5),
-        maxwell_time=(0.002, 0.015, 0.1), friction_max=200.0, friction_x2=1e-4,
+        stiffness=5.0e6,
+        cubic_stiffness=1.33e12,
+        maxwell_stiffness=(6e5, 5e5, 4e5),
+        maxwell_time=(0.002, 0.015, 0.1),
+        friction_max=200.0,
+        friction_x2=1e-4,
     )
     axial_rotation: BushingChannelParams = _rotational(
-        stiffness=573.0, cubic_stiffness=1.27e4, maxwell_stiffness=(100.0, 80.0, 60.0),
-        maxwell_time=(0.002, 0.015, 0.1), friction_max=3.0, friction_x2=0.005,
+        stiffness=573.0,
+        cubic_stiffness=1.27e4,
+        maxwell_stiffness=(100.0, 80.0, 60.0),
+        maxwell_time=(0.002, 0.015, 0.1),
+        friction_max=3.0,
+        friction_x2=0.005,
     )
     conical_rotation: BushingChannelParams = _rotational(
-        stiffness=2865.0, cubic_stiffness=5.7e5, maxwell_stiffness=(500.0, 400.0, 300.0),
-        maxwell_time=(0.002, 0.015, 0.1), friction_max=10.0, friction_x2=0.002,
+        stiffness=2865.0,
+        cubic_stiffness=5.7e5,
+        maxwell_stiffness=(500.0, 400.0, 300.0),
+        maxwell_time=(0.002, 0.015, 0.1),
+        friction_max=10.0,
+        friction_x2=0.002,
     )
 
 
@@ -118,8 +134,10 @@ class BushingChannelTruth:
             raise SettingsError(f"unknown bushing effect(s) {unknown}; valid: {', '.join(BUSHING_EFFECTS)}")
         k, slip = iwan_elements(self.params.friction_max, self.params.friction_x2)
         object.__setattr__(self, "iwan", (k[: self.n_friction], slip[: self.n_friction]))
-        maxwell = (np.asarray(self.params.maxwell_stiffness[: self.n_maxwell], dtype=float),
-                   np.asarray(self.params.maxwell_time[: self.n_maxwell], dtype=float))
+        maxwell = (
+            np.asarray(self.params.maxwell_stiffness[: self.n_maxwell], dtype=float),
+            np.asarray(self.params.maxwell_time[: self.n_maxwell], dtype=float),
+        )
         object.__setattr__(self, "maxwell", maxwell)  # per-call arrays would dominate a solver's right-hand side
 
     @property

@@ -105,8 +105,9 @@ class CDCDamperTruth:
             total = total + p.moving_mass * np.asarray(a)
         return total
 
-    def simulate(self, dt: float, x: np.ndarray, v: np.ndarray, a: np.ndarray, current: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray]:
+    def simulate(
+        self, dt: float, x: np.ndarray, v: np.ndarray, a: np.ndarray, current: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Force [N] and states (shape (n, 1): the opening) along a motion and valve current [A] every `dt` [s]."""
         h = self.hardness(dt, np.asarray(current, dtype=float))
         return self.force(x, v, a, h), h[:, None]

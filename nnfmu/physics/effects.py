@@ -7,7 +7,9 @@ BUSHING_EFFECTS = ("viscoelastic", "friction")
 MR_DAMPER_EFFECTS = ("command_lag", "gas_force", "inertia")
 CDC_DAMPER_EFFECTS = ("valve_lag", "gas_force", "seal_friction", "inertia")
 EFFECTS: dict[str, tuple[str, ...]] = {
-    "damper": DAMPER_EFFECTS, "bushing": BUSHING_EFFECTS, "mr_damper": MR_DAMPER_EFFECTS,
+    "damper": DAMPER_EFFECTS,
+    "bushing": BUSHING_EFFECTS,
+    "mr_damper": MR_DAMPER_EFFECTS,
     "cdc_damper": CDC_DAMPER_EFFECTS,
 }
 

@@ -60,11 +60,28 @@ class MRDamperParams:
     moving_mass: float = param(2.0, "kg", "rod, piston and fixture mass between load cell and actuator (1-3 kg)")
 
     def __post_init__(self) -> None:
-        positive = {"alpha_a": self.alpha_a, "c0_a": self.c0_a, "c1_a": self.c1_a, "k0": self.k0, "a_bw": self.a_bw,
-                    "eta": self.eta}
+        positive = {
+            "alpha_a": self.alpha_a,
+            "c0_a": self.c0_a,
+            "c1_a": self.c1_a,
+            "k0": self.k0,
+            "a_bw": self.a_bw,
+            "eta": self.eta,
+        }
         bad = {k: v for k, v in positive.items() if not (math.isfinite(v) and v > 0)}
-        bad.update({k: v for k, v in (("alpha_b", self.alpha_b), ("c0_b", self.c0_b), ("c1_b", self.c1_b),
-                                      ("gamma", self.gamma), ("k1", self.k1)) if not (math.isfinite(v) and v >= 0)})
+        bad.update(
+            {
+                k: v
+                for k, v in (
+                    ("alpha_b", self.alpha_b),
+                    ("c0_b", self.c0_b),
+                    ("c1_b", self.c1_b),
+                    ("gamma", self.gamma),
+                    ("k1", self.k1),
+                )
+                if not (math.isfinite(v) and v >= 0)
+            }
+        )
         if not (math.isfinite(self.beta) and self.beta + self.gamma > 0 and self.beta >= -self.gamma):
             bad["beta"] = self.beta
         if bad:
@@ -143,8 +160,9 @@ class MRDamperTruth:
         zeta = _flow(zeta, sigma, p.a_bw, loading)
         return direction * zeta, p.a_bw - loading * zeta * zeta
 
-    def step(self, state: tuple[float, float, float], h: float, x: float, v: float, command: float
-             ) -> tuple[tuple[float, float, float], float]:
+    def step(
+        self, state: tuple[float, float, float], h: float, x: float, v: float, command: float
+    ) -> tuple[tuple[float, float, float], float]:
         """One step of `h` [s] to displacement x [m], velocity v [m/s] and commanded voltage [V] at its end: the new
         state and the damper force [N] without gas, inertia (see `force`)."""
         p = self.params
@@ -182,8 +200,9 @@ class MRDamperTruth:
             total = total + self.params.moving_mass * np.asarray(a)
         return total
 
-    def simulate(self, dt: float, x: np.ndarray, v: np.ndarray, a: np.ndarray, command: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray]:
+    def simulate(
+        self, dt: float, x: np.ndarray, v: np.ndarray, a: np.ndarray, command: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Force [N] and states (shape (n, 3)) along a prescribed motion and commanded voltage [V] sampled every
         `dt` [s], starting at rest (u = v[0] when the lag is off, else 0; w = z = 0)."""
         n = len(x)

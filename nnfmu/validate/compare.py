@@ -42,7 +42,8 @@ class ValidationSettings:
         if not (self.fmax > 0 and self.psd_resolution > 0 and self.window_length > 0):
             raise ValidationError(
                 f"fmax, psd_resolution and window_length must be positive, got {self.fmax!r} Hz, "
-                f"{self.psd_resolution!r} Hz, {self.window_length!r} s")
+                f"{self.psd_resolution!r} Hz, {self.window_length!r} s"
+            )
         if self.window is not None and not self.window[0] < self.window[1]:
             raise ValidationError(f"window start must be before its end, got {self.window!r} s")
 
@@ -75,8 +76,9 @@ def quantity_of(channel: str) -> str:
     return base_name(channel) or channel
 
 
-def compare(result: Measurement, reference: Measurement, channels: Sequence[str],
-            settings: ValidationSettings | None = None) -> list[ChannelComparison]:
+def compare(
+    result: Measurement, reference: Measurement, channels: Sequence[str], settings: ValidationSettings | None = None
+) -> list[ChannelComparison]:
     """Compare `channels` of `result` with `reference`; the result is interpolated onto the reference's time stamps
     within the span both cover when their time axes differ."""
     settings = settings or ValidationSettings()
@@ -86,15 +88,19 @@ def compare(result: Measurement, reference: Measurement, channels: Sequence[str]
         _check_channel(name, result, reference)
     keep, result_on = _common_time(result, reference)
     time = reference.time[keep]
-    return [_compare_channel(name, time, result_on(name), reference[name][keep], reference, settings)
-            for name in channels]
+    return [
+        _compare_channel(name, time, result_on(name), reference[name][keep], reference, settings) for name in channels
+    ]
 
 
 def common_channels(result: Measurement, reference: Measurement) -> list[str]:
     """Channels both measurements recorded, in the reference's order; rates the loader derived (noted as
     `derived:<name>` in either measurement's notes) are left out, as they only repeat a compared channel."""
-    return [name for name in reference.names if name in result
-            and not any(f"derived:{name}" in m.notes for m in (result, reference))]
+    return [
+        name
+        for name in reference.names
+        if name in result and not any(f"derived:{name}" in m.notes for m in (result, reference))
+    ]
 
 
 def _check_channel(name: str, result: Measurement, reference: Measurement) -> None:
@@ -105,8 +111,9 @@ def _check_channel(name: str, result: Measurement, reference: Measurement) -> No
             raise ValidationError(f"{m.source}: channel {name!r} holds NaN or infinite values")
     unit_result, unit_reference = result.units.get(name, ""), reference.units.get(name, "")
     if unit_result != unit_reference:
-        raise ValidationError(f"channel {name!r}: unit {unit_result!r} in {result.source} but {unit_reference!r} "
-                              f"in {reference.source}")
+        raise ValidationError(
+            f"channel {name!r}: unit {unit_result!r} in {result.source} but {unit_reference!r} in {reference.source}"
+        )
 
 
 def _common_time(result: Measurement, reference: Measurement) -> tuple[np.ndarray, Callable[[str], np.ndarray]]:
@@ -114,8 +121,9 @@ def _common_time(result: Measurement, reference: Measurement) -> tuple[np.ndarra
     for m in (result, reference):
         if len(m.time) < 2 or not np.all(np.diff(m.time) > 0):
             raise ValidationError(f"{m.source}: time must be strictly increasing with at least 2 samples")
-    if len(result.time) == len(reference.time) and np.allclose(result.time, reference.time, rtol=0,
-                                                                atol=1e-9 * reference.sample_period):
+    if len(result.time) == len(reference.time) and np.allclose(
+        result.time, reference.time, rtol=0, atol=1e-9 * reference.sample_period
+    ):
         return np.ones(len(reference.time), dtype=bool), lambda name: np.asarray(result[name], dtype=float)
     tol = 1e-9 * reference.sample_period
     start, end = max(result.time[0], reference.time[0]) - tol, min(result.time[-1], reference.time[-1]) + tol
@@ -124,12 +132,14 @@ def _common_time(result: Measurement, reference: Measurement) -> tuple[np.ndarra
     if len(time) < 2:
         raise ValidationError(
             f"{result.source} ({result.time[0]:g}..{result.time[-1]:g} s) and {reference.source} "
-            f"({reference.time[0]:g}..{reference.time[-1]:g} s) share fewer than 2 reference samples")
+            f"({reference.time[0]:g}..{reference.time[-1]:g} s) share fewer than 2 reference samples"
+        )
     return keep, lambda name: np.interp(time, result.time, np.asarray(result[name], dtype=float))
 
 
-def _plot_window(time: np.ndarray, reference: np.ndarray, settings: ValidationSettings,
-                 name: str) -> tuple[float, float]:
+def _plot_window(
+    time: np.ndarray, reference: np.ndarray, settings: ValidationSettings, name: str
+) -> tuple[float, float]:
     t0, t1 = float(time[0]), float(time[-1])
     if settings.window is not None:
         start, end = max(settings.window[0], t0), min(settings.window[1], t1)
@@ -142,8 +152,14 @@ def _plot_window(time: np.ndarray, reference: np.ndarray, settings: ValidationSe
     return start, min(start + settings.window_length, t1)
 
 
-def _compare_channel(name: str, time: np.ndarray, result: np.ndarray, reference: np.ndarray,
-                     reference_measurement: Measurement, settings: ValidationSettings) -> ChannelComparison:
+def _compare_channel(
+    name: str,
+    time: np.ndarray,
+    result: np.ndarray,
+    reference: np.ndarray,
+    reference_measurement: Measurement,
+    settings: ValidationSettings,
+) -> ChannelComparison:
     reference = np.asarray(reference, dtype=float)
     slope = settings.slope_for(name)
     dt = reference_measurement.sample_period

@@ -25,8 +25,11 @@ class ValidationReport:
 
 def settings_context(settings: ValidationSettings) -> dict[str, str]:
     """The settings as report context lines."""
-    window = (f"{settings.window[0]:g} to {settings.window[1]:g} s" if settings.window is not None
-              else f"{settings.window_length:g} s around the reference's global peak")
+    window = (
+        f"{settings.window[0]:g} to {settings.window[1]:g} s"
+        if settings.window is not None
+        else f"{settings.window_length:g} s around the reference's global peak"
+    )
     slopes = ", ".join(f"{k}: {v:g}" for k, v in settings.slopes.items())
     return {
         "Basquin slope m": f"{settings.basquin_slope:g}" + (f" ({slopes})" if slopes else ""),
@@ -35,9 +38,13 @@ def settings_context(settings: ValidationSettings) -> dict[str, str]:
     }
 
 
-def validate_files(result_path: str | os.PathLike[str], reference_path: str | os.PathLike[str],
-                   channels: Sequence[str] | None, out_dir: str | os.PathLike[str],
-                   settings: ValidationSettings | None = None) -> ValidationReport:
+def validate_files(
+    result_path: str | os.PathLike[str],
+    reference_path: str | os.PathLike[str],
+    channels: Sequence[str] | None,
+    out_dir: str | os.PathLike[str],
+    settings: ValidationSettings | None = None,
+) -> ValidationReport:
     """Compare `channels` (default: every channel both files hold) of a result CSV/MDF4 with a reference and write
     the report into `out_dir`. Bad files, missing channels and unit mismatches raise `DataError` naming them; an
     `out_dir` that is a file, holds an input or files nnfmu did not write as a report raises OutputPathError."""

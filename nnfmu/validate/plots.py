@@ -80,8 +80,10 @@ def _exceedance(signal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def plot_rainflow(c: ChannelComparison, path: Path) -> Path:
     """Cumulative rainflow cycle count exceeding each range (log-log), the load spectrum behind the damage ratio."""
-    figure, axes = new_axes(f"{c.name}: rainflow range exceedance (pseudo-damage ratio "
-                             f"{c.metrics.pseudo_damage_ratio:.3g}, m = {c.basquin_slope:g})")
+    figure, axes = new_axes(
+        f"{c.name}: rainflow range exceedance (pseudo-damage ratio "
+        f"{c.metrics.pseudo_damage_ratio:.3g}, m = {c.basquin_slope:g})"
+    )
     any_cycles = False
     for signal, style in ((c.reference, REFERENCE_STYLE), (c.result, RESULT_STYLE)):
         ranges, cumulative = _exceedance(signal)

@@ -50,8 +50,9 @@ def channel_summary(c: ChannelComparison, plots: Mapping[str, str]) -> dict[str,
     }
 
 
-def summary_document(comparisons: Sequence[ChannelComparison], title: str, context: Mapping[str, str],
-                     plots: Sequence[Mapping[str, str]]) -> dict[str, Any]:
+def summary_document(
+    comparisons: Sequence[ChannelComparison], title: str, context: Mapping[str, str], plots: Sequence[Mapping[str, str]]
+) -> dict[str, Any]:
     """The whole `summary.json` content: title, context, metric definitions and every channel."""
     return {
         "title": title,
@@ -79,8 +80,12 @@ def render_html(summary: Mapping[str, Any]) -> str:
     return environment.get_template(TEMPLATE).render(summary=summary)
 
 
-def write_report(comparisons: Sequence[ChannelComparison], out_dir: str | os.PathLike[str], title: str,
-                 context: Mapping[str, str] | None = None) -> Path:
+def write_report(
+    comparisons: Sequence[ChannelComparison],
+    out_dir: str | os.PathLike[str],
+    title: str,
+    context: Mapping[str, str] | None = None,
+) -> Path:
     """Write plots, `summary.json` and `index.html` for `comparisons` into `out_dir`; returns the index.html path."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -27,7 +27,13 @@ def welch_psd(signal: np.ndarray, dt: float, fmax: float = 50.0, resolution: flo
     if not (fmax > 0 and resolution > 0):
         raise ValueError(f"fmax and resolution must be positive, got {fmax!r} Hz and {resolution!r} Hz")
     nperseg = min(len(signal), max(8, int(round(1.0 / (resolution * dt)))))
-    frequency, density = welch(np.asarray(signal, dtype=float), fs=1.0 / dt, window="hann", nperseg=nperseg,
-                               detrend="constant", scaling="density")
+    frequency, density = welch(
+        np.asarray(signal, dtype=float),
+        fs=1.0 / dt,
+        window="hann",
+        nperseg=nperseg,
+        detrend="constant",
+        scaling="density",
+    )
     keep = frequency <= fmax
     return Spectrum(frequency=frequency[keep], density=density[keep])

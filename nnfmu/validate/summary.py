@@ -27,8 +27,12 @@ class ChannelMetrics:
 
     def error_summary(self) -> dict[str, float]:
         """The four numbers that summarise a model error: nrmse, r2, peak_error, pseudo_damage_ratio."""
-        return {"nrmse": self.nrmse, "r2": self.r2, "peak_error": self.peak_error,
-                "pseudo_damage_ratio": self.pseudo_damage_ratio}
+        return {
+            "nrmse": self.nrmse,
+            "r2": self.r2,
+            "peak_error": self.peak_error,
+            "pseudo_damage_ratio": self.pseudo_damage_ratio,
+        }
 
     def to_dict(self) -> dict[str, float | None]:
         """JSON-safe dict: NaN and infinities become None."""

@@ -22,8 +22,18 @@ from nnfmu.errors import SettingsError
 from nnfmu.fmu.build import build_fmu_from_model
 from nnfmu.fmu.options import BuildOptions, FmiVersion
 
-__all__ = ["CONTROLLERS", "Command", "SkyhookSettings", "build_controller_fmu", "build_fixed_command_fmu",
-           "build_graph_fmu", "build_skyhook_fmu", "closed_loop_system", "known_command", "write_closed_loop"]
+__all__ = [
+    "CONTROLLERS",
+    "Command",
+    "SkyhookSettings",
+    "build_controller_fmu",
+    "build_fixed_command_fmu",
+    "build_graph_fmu",
+    "build_skyhook_fmu",
+    "closed_loop_system",
+    "known_command",
+    "write_closed_loop",
+]
 
 CONTROLLERS = ("skyhook",)  # the control laws `nnfmu controller build` knows
 VEHICLE, DAMPER, CONTROLLER = "vehicle", "damper", "controller"
@@ -40,8 +50,9 @@ def build_skyhook_fmu(settings: SkyhookSettings, out: str | os.PathLike[str], fm
     return build_graph_fmu(skyhook_graph(settings), out, fmi_version)
 
 
-def build_controller_fmu(law: str, settings: SkyhookSettings, out: str | os.PathLike[str],
-                         fmi_version: FmiVersion = 2) -> Path:
+def build_controller_fmu(
+    law: str, settings: SkyhookSettings, out: str | os.PathLike[str], fmi_version: FmiVersion = 2
+) -> Path:
     """`nnfmu controller build LAW`: the controller `law` (one of CONTROLLERS) as a native FMU at `out`;
     SettingsError naming an unknown law."""
     if law not in CONTROLLERS:
@@ -49,8 +60,9 @@ def build_controller_fmu(law: str, settings: SkyhookSettings, out: str | os.Path
     return build_skyhook_fmu(settings, out, fmi_version)
 
 
-def build_fixed_command_fmu(command: Command, value: float, out: str | os.PathLike[str],
-                            fmi_version: FmiVersion = 2) -> Path:
+def build_fixed_command_fmu(
+    command: Command, value: float, out: str | os.PathLike[str], fmi_version: FmiVersion = 2
+) -> Path:
     """A controller FMU with the skyhook controller's ports holding `command` at `value` (the passive baseline)."""
     return build_graph_fmu(fixed_command_graph(command, value), out, fmi_version)
 
@@ -59,12 +71,16 @@ def _real_ports(path: Path) -> dict[str, str]:
     """The FMU's Real inputs and outputs: name -> causality."""
     from fmpy import read_model_description
 
-    return {v.name: v.causality for v in read_model_description(str(path)).modelVariables
-            if v.type in ("Real", "Float64") and v.causality in ("input", "output")}
+    return {
+        v.name: v.causality
+        for v in read_model_description(str(path)).modelVariables
+        if v.type in ("Real", "Float64") and v.causality in ("input", "output")
+    }
 
 
-def closed_loop_system(vehicle_fmu: Path, damper_fmu: Path, controller_fmu: Path, base: Path,
-                       name: str = "semi-active quarter car") -> SystemStructure:
+def closed_loop_system(
+    vehicle_fmu: Path, damper_fmu: Path, controller_fmu: Path, base: Path, name: str = "semi-active quarter car"
+) -> SystemStructure:
     """The closed loop of the module docstring; FMU sources relative to `base`. SspError naming the element and
     connector when a port finds no partner (a damper without the controller's command input, a vehicle without
     `body_velocity`, ...)."""
@@ -74,8 +90,10 @@ def closed_loop_system(vehicle_fmu: Path, damper_fmu: Path, controller_fmu: Path
     controller_out = {p for p, c in ports[CONTROLLER].items() if c == "output"}
 
     def missing(element: str, port: str, wanted: str) -> SspError:
-        return SspError(f"system {name!r}: element {element!r} ({paths[element].name}), connector {port!r}: no "
-                        f"{wanted} to connect it to")
+        return SspError(
+            f"system {name!r}: element {element!r} ({paths[element].name}), connector {port!r}: no "
+            f"{wanted} to connect it to"
+        )
 
     connections = []
     for port, causality in ports[DAMPER].items():
@@ -100,13 +118,17 @@ def closed_loop_system(vehicle_fmu: Path, damper_fmu: Path, controller_fmu: Path
     fed = {(c.end_element, c.end_connector) for c in connections}
     if (VEHICLE, f"{DAMPER_PORT}_force") not in fed:
         raise missing(VEHICLE, f"{DAMPER_PORT}_force", "damper output force")
-    elements = [Element(element, os.path.relpath(path, base),
-                        tuple(Connector(p, c) for p, c in ports[element].items())) for element, path in paths.items()]
+    elements = [
+        Element(element, os.path.relpath(path, base), tuple(Connector(p, c) for p, c in ports[element].items()))
+        for element, path in paths.items()
+    ]
     return SystemStructure(name=name, elements=elements, connections=connections, base=base)
 
 
-def write_closed_loop(folder: Path, vehicle_fmu: Path, damper_fmu: Path, controller_fmu: Path,
-                      name: str = "semi-active quarter car") -> Path:
+def write_closed_loop(
+    folder: Path, vehicle_fmu: Path, damper_fmu: Path, controller_fmu: Path, name: str = "semi-active quarter car"
+) -> Path:
     """`closed_loop_system` written as `folder`/SystemStructure.ssd; return its path."""
-    return write_ssd(closed_loop_system(vehicle_fmu, damper_fmu, controller_fmu, folder, name),
-                     folder / "SystemStructure.ssd")
+    return write_ssd(
+        closed_loop_system(vehicle_fmu, damper_fmu, controller_fmu, folder, name), folder / "SystemStructure.ssd"
+    )

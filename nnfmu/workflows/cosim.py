@@ -16,9 +16,14 @@ __all__ = ["CosimSettings", "run_cosim"]
 MASTERS = ("fmpy", "libcosim")
 
 
-def run_cosim(ssd_path: str | os.PathLike[str], drive_path: str | os.PathLike[str], settings: CosimSettings,
-              out_path: str | os.PathLike[str] | None = None, progress: Progress | None = None,
-              master: str = "fmpy") -> CosimResult:
+def run_cosim(
+    ssd_path: str | os.PathLike[str],
+    drive_path: str | os.PathLike[str],
+    settings: CosimSettings,
+    out_path: str | os.PathLike[str] | None = None,
+    progress: Progress | None = None,
+    master: str = "fmpy",
+) -> CosimResult:
     """Co-simulate the system (.ssd, folder or .ssp) on the drive file with `master` (fmpy, this package's master, or
     libcosim, the cross-check); write the result to `out_path` when given."""
     if master not in MASTERS:

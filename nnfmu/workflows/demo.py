@@ -93,7 +93,8 @@ class DemoSettings:
             return RoadTestSettings(
                 quarter_car=SystemRun(2.0, channels=("damper_force", "damper_displacement")),
                 full_vehicle=SystemRun(0.3, channels=("damper_fl_force", "lca_fl_angle")),
-                seed=self.seed)
+                seed=self.seed,
+            )
         return RoadTestSettings(quarter_car=SystemRun(50.0), full_vehicle=SystemRun(50.0), seed=self.seed)
 
     @property
@@ -152,37 +153,63 @@ def _single(m: Measurement, channel: str, label: str) -> Measurement:
 def close_the_loop(out: Path, settings: DemoSettings, log: Callable[[str], None]) -> LoopReport:
     """A damper record with `UNDECLARED_EFFECTS` on, `LOOP_PRESET` (which lacks their inputs) trained on the loop's
     fit blocks only, and `run_loop` on the whole record (its diagnosis and test blocks were not fitted)."""
-    lab, _ = write_rig("damper", out / "rig" / "damper_undeclared.csv",
-                       RigOptions(seed=settings.seed + 1, duration=settings.loop_duration, excitation="random",
-                                  effects=(*DEFAULT_EFFECTS["damper"], *UNDECLARED_EFFECTS), noise=LOOP_NOISE))
+    lab, _ = write_rig(
+        "damper",
+        out / "rig" / "damper_undeclared.csv",
+        RigOptions(
+            seed=settings.seed + 1,
+            duration=settings.loop_duration,
+            excitation="random",
+            effects=(*DEFAULT_EFFECTS["damper"], *UNDECLARED_EFFECTS),
+            noise=LOOP_NOISE,
+        ),
+    )
     measured = load_measurement(lab)
     loop_settings = LoopSettings()
     fit = training_part(measured, loop_settings)
     preset = get_preset(LOOP_PRESET)
-    train = TrainSettings(seed=settings.seed, restarts=1, max_epochs=15) if settings.quick else TrainSettings(
-        seed=settings.seed)
-    first = export_onnx(train_model(fit, preset.spec, preset.architecture, train).model,
-                        out / "models" / f"{LOOP_PRESET}-loop-start.onnx").path  # an input: not in the loop's folder
+    train = (
+        TrainSettings(seed=settings.seed, restarts=1, max_epochs=15)
+        if settings.quick
+        else TrainSettings(seed=settings.seed)
+    )
+    first = export_onnx(
+        train_model(fit, preset.spec, preset.architecture, train).model,
+        out / "models" / f"{LOOP_PRESET}-loop-start.onnx",
+    ).path  # an input: not in the loop's folder
     log(f"loop: {lab} has {', '.join(UNDECLARED_EFFECTS)}, which {first.name} was not given; running the loop")
     report = run_loop(measured, first, "force", out / "loop", loop_settings)
-    log(f"loop: {report.summary}; effects added: {', '.join(report.effects_added) or 'none'}; held-out NRMSE "
-        f"{report.error_before['nrmse']:.4f} -> {report.error_after['nrmse']:.4f}")
+    log(
+        f"loop: {report.summary}; effects added: {', '.join(report.effects_added) or 'none'}; held-out NRMSE "
+        f"{report.error_before['nrmse']:.4f} -> {report.error_after['nrmse']:.4f}"
+    )
     return report
 
 
-def _origin(rig: str, vehicle: VehicleBushingModels | VehicleDamperModels | None, source: Path | None,
-            onnx_files: dict[str, Path]) -> dict[str, object]:
+def _origin(
+    rig: str,
+    vehicle: VehicleBushingModels | VehicleDamperModels | None,
+    source: Path | None,
+    onnx_files: dict[str, Path],
+) -> dict[str, object]:
     """Which record the road test's networks of `rig` were trained on, and their files."""
     if vehicle is None:
-        return {"trained_on": f"the {rig} rig's lab record",
-                "models": {p: str(onnx_files[p]) for p in PRESETS_BY_RIG[rig]}}
-    return {"trained_on": str(vehicle.rig), "source_reference": str(source), "truth": str(vehicle.truth),
-            "models": {p: str(path) for p, path in vehicle.models.items()},
-            "seconds": {k: round(v, 1) for k, v in vehicle.seconds.items()}}
+        return {
+            "trained_on": f"the {rig} rig's lab record",
+            "models": {p: str(onnx_files[p]) for p in PRESETS_BY_RIG[rig]},
+        }
+    return {
+        "trained_on": str(vehicle.rig),
+        "source_reference": str(source),
+        "truth": str(vehicle.truth),
+        "models": {p: str(path) for p, path in vehicle.models.items()},
+        "seconds": {k: round(v, 1) for k, v in vehicle.seconds.items()},
+    }
 
 
-def run_demo(out: str | Path, settings: DemoSettings = DemoSettings(),
-             log: Callable[[str], None] = print) -> DemoSummary:
+def run_demo(
+    out: str | Path, settings: DemoSettings = DemoSettings(), log: Callable[[str], None] = print
+) -> DemoSummary:
     """Run every stage into `out` (rig/, models/, fmu/, report/, vehicle_bushing/, road_test/, loop/, summary.json);
     return what it measured."""
     started = time.perf_counter()
@@ -192,10 +219,14 @@ def run_demo(out: str | Path, settings: DemoSettings = DemoSettings(),
     comparisons = []
     results: list[ModelResult] = []
     for rig, presets in PRESETS_BY_RIG.items():
-        lab, _ = write_rig(rig, out / "rig" / f"{rig}_lab.csv",
-                           RigOptions(seed=settings.seed, duration=settings.lab_duration(rig)))
-        test, _ = write_rig(rig, out / "rig" / f"{rig}_test.csv",
-                            RigOptions(seed=settings.seed + 1, duration=settings.test_duration, excitation="random"))
+        lab, _ = write_rig(
+            rig, out / "rig" / f"{rig}_lab.csv", RigOptions(seed=settings.seed, duration=settings.lab_duration(rig))
+        )
+        test, _ = write_rig(
+            rig,
+            out / "rig" / f"{rig}_test.csv",
+            RigOptions(seed=settings.seed + 1, duration=settings.test_duration, excitation="random"),
+        )
         log(f"rig {rig}: lab record {lab}, held-out random record {test}")
         measured = load_measurement(test)
         if rig in MOVING_MASS_BY_RIG:  # judged on the force the networks learn: the load cell's less m·a
@@ -206,49 +237,98 @@ def run_demo(out: str | Path, settings: DemoSettings = DemoSettings(),
             output = trained.model.spec.output
             replayed = replay_fmu(fmu, measured)
             label = f"{preset.replace('-', '_')}_{output}"
-            (comparison,) = compare(_single(replayed, output, label), _single(measured, output, label), [label],
-                                    ValidationSettings())
+            (comparison,) = compare(
+                _single(replayed, output, label), _single(measured, output, label), [label], ValidationSettings()
+            )
             comparisons.append(comparison)
             errors = comparison.metrics
-            results.append(ModelResult(
-                preset=preset, onnx=str(trained.path), fmu=str(fmu), train_seconds=round(trained.seconds, 2),
-                test_split_nrmse=trained.metrics["test"].nrmse, replay_nrmse=errors.nrmse, replay_r2=errors.r2,
-                replay_peak_error=errors.peak_error, replay_pseudo_damage_ratio=errors.pseudo_damage_ratio,
-            ))
+            results.append(
+                ModelResult(
+                    preset=preset,
+                    onnx=str(trained.path),
+                    fmu=str(fmu),
+                    train_seconds=round(trained.seconds, 2),
+                    test_split_nrmse=trained.metrics["test"].nrmse,
+                    replay_nrmse=errors.nrmse,
+                    replay_r2=errors.r2,
+                    replay_peak_error=errors.peak_error,
+                    replay_pseudo_damage_ratio=errors.pseudo_damage_ratio,
+                )
+            )
             log(f"{preset}: trained in {trained.seconds:.1f} s, FMU {fmu}, held-out NRMSE {errors.nrmse:.4f}")
-    report = write_report(comparisons, out / "report", "nnfmu demo: component FMUs vs held-out rig measurements",
-                          {"seed": str(settings.seed), "quick": str(settings.quick),
-                           "records": "lab: sine series + random (training); test: band-limited random (held out)"})
+    report = write_report(
+        comparisons,
+        out / "report",
+        "nnfmu demo: component FMUs vs held-out rig measurements",
+        {
+            "seed": str(settings.seed),
+            "quick": str(settings.quick),
+            "records": "lab: sine series + random (training); test: band-limited random (held out)",
+        },
+    )
     log(f"component report {report}")
     onnx_files = {r.preset: Path(r.onnx) for r in results}
     vehicle_bushings = None
     if settings.vehicle_bushings:
-        vehicle_bushings = train_vehicle_bushings(out / "vehicle_bushing", settings.road_test, settings.bushing_drive,
-                                                  lambda preset: settings.request(preset, "bushing"), log)
+        vehicle_bushings = train_vehicle_bushings(
+            out / "vehicle_bushing",
+            settings.road_test,
+            settings.bushing_drive,
+            lambda preset: settings.request(preset, "bushing"),
+            log,
+        )
         onnx_files |= vehicle_bushings.models
     vehicle_dampers = None
     if settings.vehicle_dampers and vehicle_bushings is not None:
-        vehicle_dampers = train_vehicle_dampers(vehicle_bushings.source, out / "vehicle_damper",
-                                                lambda preset: settings.request(preset, "damper"),
-                                                rig_seed=settings.seed, rig_duration=settings.lab_duration("damper"),
-                                                log=log)
+        vehicle_dampers = train_vehicle_dampers(
+            vehicle_bushings.source,
+            out / "vehicle_damper",
+            lambda preset: settings.request(preset, "damper"),
+            rig_seed=settings.seed,
+            rig_duration=settings.lab_duration("damper"),
+            log=log,
+        )
         onnx_files |= vehicle_dampers.models
     road = run_road_test(out / "road_test", onnx_files, settings.road_test, log)
     for system, path in road.reports().items():
         log(f"road test {system}: report {path}")
     loop = close_the_loop(out, settings, log)
-    summary = DemoSummary(out=out, report=report, models=results, seconds=time.perf_counter() - started,
-                          road_test=road.reports(), loop=loop, vehicle_bushings=vehicle_bushings,
-                          vehicle_dampers=vehicle_dampers)
-    write_text_atomic(out / "summary.json", json.dumps(
-        {"report": str(report), "seconds": round(summary.seconds, 1), "models": [asdict(r) for r in results],
-         "road_test": {"summary": str(road.summary), "reports": {k: str(v) for k, v in road.reports().items()},
-                       "seconds": round(road.seconds, 1),
-                       "bushing_networks": _origin("bushing", vehicle_bushings,
-                                                   vehicle_bushings.source if vehicle_bushings else None, onnx_files),
-                       "damper_networks": _origin("damper", vehicle_dampers,
-                                                  vehicle_bushings.source if vehicle_bushings else None, onnx_files)},
-         "loop": {"report": str(out / "loop" / "report.json"), "effects_added": loop.effects_added,
-                  "error_before": loop.error_before, "error_after": loop.error_after}},
-        indent=2))
+    summary = DemoSummary(
+        out=out,
+        report=report,
+        models=results,
+        seconds=time.perf_counter() - started,
+        road_test=road.reports(),
+        loop=loop,
+        vehicle_bushings=vehicle_bushings,
+        vehicle_dampers=vehicle_dampers,
+    )
+    write_text_atomic(
+        out / "summary.json",
+        json.dumps(
+            {
+                "report": str(report),
+                "seconds": round(summary.seconds, 1),
+                "models": [asdict(r) for r in results],
+                "road_test": {
+                    "summary": str(road.summary),
+                    "reports": {k: str(v) for k, v in road.reports().items()},
+                    "seconds": round(road.seconds, 1),
+                    "bushing_networks": _origin(
+                        "bushing", vehicle_bushings, vehicle_bushings.source if vehicle_bushings else None, onnx_files
+                    ),
+                    "damper_networks": _origin(
+                        "damper", vehicle_dampers, vehicle_bushings.source if vehicle_bushings else None, onnx_files
+                    ),
+                },
+                "loop": {
+                    "report": str(out / "loop" / "report.json"),
+                    "effects_added": loop.effects_added,
+                    "error_before": loop.error_before,
+                    "error_after": loop.error_after,
+                },
+            },
+            indent=2,
+        ),
+    )
     return summary

@@ -10,9 +10,16 @@ from nnfmu.errors import SettingsError
 __all__ = ["RigOptions", "write_rig_record"]
 
 
-def write_rig_record(kind: str, out: Path, options: RigOptions, drive_from: Path | None = None,
-                     elements: tuple[str, ...] | list[str] = (), margin: float = 1.2, band: str | None = None,
-                     fit_sensors: bool = True) -> tuple[Path, Path]:
+def write_rig_record(
+    kind: str,
+    out: Path,
+    options: RigOptions,
+    drive_from: Path | None = None,
+    elements: tuple[str, ...] | list[str] = (),
+    margin: float = 1.2,
+    band: str | None = None,
+    fit_sensors: bool = True,
+) -> tuple[Path, Path]:
     """Write the record of the `kind` rig to `out` and its truth file beside it; return (data, truth) paths.
 
     With excitation 'vehicle' (`drive_from` a vehicle result), the drive follows the result's `elements` (bushing
@@ -31,8 +38,9 @@ def write_rig_record(kind: str, out: Path, options: RigOptions, drive_from: Path
         example = "damper_fl" if kind == "damper" else "bushing_fl_front"
         raise SettingsError(f"--drive-from needs --element NAME (e.g. {example})")
     if kind == "damper" and not fit_sensors:
-        raise SettingsError("--default-sensors is for the bushing rig; the damper dyno always records with its own "
-                            "transducers")
+        raise SettingsError(
+            "--default-sensors is for the bushing rig; the damper dyno always records with its own transducers"
+        )
     try:
         low, high = (float(v) for v in band.split(":")) if band is not None else RIG_BANDS[kind]
     except ValueError:

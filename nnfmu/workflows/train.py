@@ -109,8 +109,9 @@ def train_from_file(
     """
     started = time.perf_counter()
     preset, architecture, settings = resolve(request)
-    spec = custom_spec(preset.thesis_spec if request.thesis else preset.spec, request.output, request.inputs,
-                       request.delays)
+    spec = custom_spec(
+        preset.thesis_spec if request.thesis else preset.spec, request.output, request.inputs, request.delays
+    )
     selection = None
     if request.select_inputs:
         measurement = _load(data, [spec.output], spec.output, request)
@@ -124,10 +125,14 @@ def train_from_file(
     mass = request.moving_mass
     compensated = f" ({spec.output} compensated for {mass:g} kg of moving mass)" if mass else ""
     candidates = [spec]
-    if preset.variants and architecture.kind == "mlp" and not (request.thesis or request.inputs or request.delays
-                                                               or request.select_inputs):
-        candidates += [bind_command(custom_spec(v, request.output), measurement.channels, str(data))
-                       for v in preset.variants]
+    if (
+        preset.variants
+        and architecture.kind == "mlp"
+        and not (request.thesis or request.inputs or request.delays or request.select_inputs)
+    ):
+        candidates += [
+            bind_command(custom_spec(v, request.output), measurement.channels, str(data)) for v in preset.variants
+        ]
     spec, result, feature_choice = _fit_candidates(measurement, candidates, architecture, settings, progress)
     block = max(result.splits.test, key=lambda part: part.stop - part.start)
     test = measurement.slice(block.start, block.stop)
@@ -154,7 +159,10 @@ def train_from_file(
 
 
 def _fit_candidates(
-    measurement: Measurement, candidates: list[FeatureSpec], architecture: Architecture, settings: TrainSettings,
+    measurement: Measurement,
+    candidates: list[FeatureSpec],
+    architecture: Architecture,
+    settings: TrainSettings,
     progress: Progress | None,
 ) -> tuple[FeatureSpec, TrainResult, list[tuple[FeatureSpec, float]]]:
     """Train on every candidate feature set; keep the one whose chosen network has the lowest validation MSE (the

@@ -21,7 +21,9 @@ def vehicle_binding(system: SystemStructure) -> DriveBinding:
     if not vehicles:
         return bind_free_inputs(system)
     if len(vehicles) > 1:
-        raise DriveInputError(f"system {system.name!r}: one four-poster drives one vehicle; elements with free "
-                              f"actuator inputs: {', '.join(vehicles)}")
-    (element, ports), = vehicles.items()
+        raise DriveInputError(
+            f"system {system.name!r}: one four-poster drives one vehicle; elements with free "
+            f"actuator inputs: {', '.join(vehicles)}"
+        )
+    ((element, ports),) = vehicles.items()
     return DriveBinding.by_name(element, ports)

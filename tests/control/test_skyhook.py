@@ -17,8 +17,22 @@ from nnfmu.errors import SettingsError
 from nnfmu.workflows.controller import build_graph_fmu
 
 # The operators the native C backend translates and nnfmu's exporter uses (docs/architecture.md).
-NNFMU_OPS = {"Add", "Sub", "Mul", "Div", "Relu", "Constant", "Identity", "Concat", "Slice", "Gather", "Reshape",
-             "Gemm", "MatMul", "Tanh"}
+NNFMU_OPS = {
+    "Add",
+    "Sub",
+    "Mul",
+    "Div",
+    "Relu",
+    "Constant",
+    "Identity",
+    "Concat",
+    "Slice",
+    "Gather",
+    "Reshape",
+    "Gemm",
+    "MatMul",
+    "Tanh",
+}
 T = 1e-3
 
 
@@ -40,15 +54,19 @@ def _sensors(n: int) -> tuple[np.ndarray, np.ndarray]:
 
 def _onnxruntime(model: onnx.ModelProto, vb: np.ndarray, vr: np.ndarray, out: str) -> np.ndarray:
     session = ort.InferenceSession(model.SerializeToString())
-    return np.array([session.run([out], {"body_velocity": [b], "damper_velocity": [r]})[0][0]
-                     for b, r in zip(vb, vr)])
+    return np.array([session.run([out], {"body_velocity": [b], "damper_velocity": [r]})[0][0] for b, r in zip(vb, vr)])
 
 
 SETTINGS = {
     "mr": SkyhookSettings(),
     # a CDC valve that softens with more current: the command runs from 1.8 A at c_min down to 0.3 A at c_max
-    "cdc-reversed": SkyhookSettings(c_sky=5000, c_min=800, c_max=3000, epsilon=0.02,  # ints: float64 constants
-                                    command=known_command("current", soft=1.8, hard=0.3)),
+    "cdc-reversed": SkyhookSettings(
+        c_sky=5000,
+        c_min=800,
+        c_max=3000,
+        epsilon=0.02,  # ints: float64 constants
+        command=known_command("current", soft=1.8, hard=0.3),
+    ),
 }
 
 
@@ -115,16 +133,19 @@ def test_fixed_command_holds_its_value(tmp_path: Path) -> None:
         fixed_command_graph(known_command("voltage"), 1.0, sample_period=0)
 
 
-@pytest.mark.parametrize(("changes", "message"), [
-    ({"c_sky": -1.0}, r"c_sky -1\.0 N\.s/m must be a finite number >= 0"),
-    ({"c_min": float("inf")}, r"c_min inf N\.s/m"),
-    ({"c_max": 1000.0}, r"c_max 1000\.0 N\.s/m must be a finite number > 1000"),
-    ({"epsilon": 0.0}, r"epsilon 0\.0 m/s must be a finite number > 0"),
-    ({"sample_period": 0.0}, r"sample_period 0\.0 s"),
-    ({"sample_period": 1e5}, r"sample_period 100000\.0 s must be at most"),
-    ({"c_sky": True}, r"c_sky True"),
-    ({"command": "voltage"}, r"command 'voltage' must be a Command"),
-])
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"c_sky": -1.0}, r"c_sky -1\.0 N\.s/m must be a finite number >= 0"),
+        ({"c_min": float("inf")}, r"c_min inf N\.s/m"),
+        ({"c_max": 1000.0}, r"c_max 1000\.0 N\.s/m must be a finite number > 1000"),
+        ({"epsilon": 0.0}, r"epsilon 0\.0 m/s must be a finite number > 0"),
+        ({"sample_period": 0.0}, r"sample_period 0\.0 s"),
+        ({"sample_period": 1e5}, r"sample_period 100000\.0 s must be at most"),
+        ({"c_sky": True}, r"c_sky True"),
+        ({"command": "voltage"}, r"command 'voltage' must be a Command"),
+    ],
+)
 def test_settings_refuse_bad_values_naming_them(changes: dict, message: str) -> None:
     with pytest.raises(SettingsError, match=message):
         SkyhookSettings(**changes)

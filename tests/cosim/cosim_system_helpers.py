@@ -64,10 +64,10 @@ class LinearPlant:
         nx, nu = self.B.shape
         aug = np.zeros((nx + nu + 1, nx + nu + 1))
         aug[:nx, :nx] = self.A
-        aug[:nx, nx:nx + nu] = self.B
+        aug[:nx, nx : nx + nu] = self.B
         aug[:nx, -1] = self.f
         e = expm(aug * h)
-        return e[:nx, :nx], e[:nx, nx:nx + nu], e[:nx, -1]
+        return e[:nx, :nx], e[:nx, nx : nx + nu], e[:nx, -1]
 
     def simulate(self, held: np.ndarray, h: float) -> np.ndarray:
         """Outputs at t_0..t_N from x_0 = 0, input row n held over [t_n, t_{n+1}] (shape (N, nu)); D u uses row n-1."""
@@ -87,14 +87,28 @@ def quarter_cars() -> tuple[LinearPlant, LinearPlant]:
     cols = [vehicle.input_index(n) for n in (*VEHICLE_DRIVE, "damper_force")]
     a, b, c, d = vehicle.A, vehicle.B[:, cols], vehicle.C[rows], vehicle.D[rows][:, cols]
     units = {p.name: p.unit for p in vehicle.outputs + vehicle.inputs}
-    open_loop = LinearPlant(a, b, vehicle.f, c, d, vehicle.e[rows],
-                            tuple((n, units[v]) for n, v in zip((*DRIVE, "damper_force"),
-                                                                (*VEHICLE_DRIVE, "damper_force"))),
-                            tuple((n, units[n]) for n in OUTPUTS))
+    open_loop = LinearPlant(
+        a,
+        b,
+        vehicle.f,
+        c,
+        d,
+        vehicle.e[rows],
+        tuple((n, units[v]) for n, v in zip((*DRIVE, "damper_force"), (*VEHICLE_DRIVE, "damper_force"))),
+        tuple((n, units[n]) for n in OUTPUTS),
+    )
     assert not np.any(d[:, 2]), "the compared outputs do not feed through the damper force"
     c_v = vehicle.C[vehicle.output_index("damper_velocity")]
-    closed = LinearPlant(a + DAMPING * np.outer(b[:, 2], c_v), b[:, :2], vehicle.f, c, d[:, :2], vehicle.e[rows],
-                         open_loop.inputs[:2], open_loop.outputs)
+    closed = LinearPlant(
+        a + DAMPING * np.outer(b[:, 2], c_v),
+        b[:, :2],
+        vehicle.f,
+        c,
+        d[:, :2],
+        vehicle.e[rows],
+        open_loop.inputs[:2],
+        open_loop.outputs,
+    )
     return open_loop, closed
 
 
@@ -118,16 +132,27 @@ def plant_step_graph(plant: LinearPlant, h: float, name: str) -> onnx.ModelProto
     for j, (out, _) in enumerate(plant.outputs):
         nodes.append(helper.make_node("Slice", ["y", f"start{j}", f"end{j}", "axis0"], [out], name=f"take_{out}"))
     initializers = [
-        _const("step_matrix", np.hstack([ad, bd]).T.copy()), _const("fd", fd),
-        _const("output_matrix", np.hstack([plant.C, plant.D]).T.copy()), _const("e", plant.e),
-        _const("xu_shape", np.array([1, nx + nu], dtype=np.int64)), _const("x_shape", np.array([nx], dtype=np.int64)),
-        _const("y_shape", np.array([ny], dtype=np.int64)), _const("axis0", np.array([0], dtype=np.int64)),
+        _const("step_matrix", np.hstack([ad, bd]).T.copy()),
+        _const("fd", fd),
+        _const("output_matrix", np.hstack([plant.C, plant.D]).T.copy()),
+        _const("e", plant.e),
+        _const("xu_shape", np.array([1, nx + nu], dtype=np.int64)),
+        _const("x_shape", np.array([nx], dtype=np.int64)),
+        _const("y_shape", np.array([ny], dtype=np.int64)),
+        _const("axis0", np.array([0], dtype=np.int64)),
     ]
     for j in range(ny):
-        initializers += [_const(f"start{j}", np.array([j], dtype=np.int64)),
-                         _const(f"end{j}", np.array([j + 1], dtype=np.int64))]
-    graph = helper.make_graph(nodes, name, [_double(n, [1]) for n in in_names] + [_double("x", [nx])],
-                              [_double(n, [1]) for n, _ in plant.outputs] + [_double("x_next", [nx])], initializers)
+        initializers += [
+            _const(f"start{j}", np.array([j], dtype=np.int64)),
+            _const(f"end{j}", np.array([j + 1], dtype=np.int64)),
+        ]
+    graph = helper.make_graph(
+        nodes,
+        name,
+        [_double(n, [1]) for n in in_names] + [_double("x", [nx])],
+        [_double(n, [1]) for n, _ in plant.outputs] + [_double("x_next", [nx])],
+        initializers,
+    )
     model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", OPSET)], ir_version=IR_VERSION)
     Component(
         name=name,
@@ -157,8 +182,13 @@ def write_system(folder: Path, h: float, damper_fmu: Path) -> Path:
     """SystemStructure.ssd in `folder` joining a quarter car FMU for step h and the damper FMU, filters off."""
     open_loop, _ = quarter_cars()
     vehicle_fmu = build(plant_step_graph(open_loop, h, "quarter_car"), folder, "quarter_car")
-    system = connect_by_name("quarter car with damper", ("vehicle", vehicle_fmu), {"damper": damper_fmu}, folder,
-                             parameters={"vehicle": NO_FILTER, "damper": NO_FILTER})
+    system = connect_by_name(
+        "quarter car with damper",
+        ("vehicle", vehicle_fmu),
+        {"damper": damper_fmu},
+        folder,
+        parameters={"vehicle": NO_FILTER, "damper": NO_FILTER},
+    )
     return write_ssd(system, folder / "SystemStructure.ssd")
 
 
@@ -176,8 +206,9 @@ def drive(duration: float, period: float, corner: str | None = None) -> Measurem
     t = np.arange(round(duration / period) + 1) * period
     x, v = drive_signal(t)
     names = DRIVE if corner is None else (f"actuator_{corner}_displacement", f"actuator_{corner}_velocity")
-    return Measurement(time=t, channels=dict(zip(names, (x, v))), units=dict(zip(names, ("m", "m/s"))),
-                       source="test drive")
+    return Measurement(
+        time=t, channels=dict(zip(names, (x, v))), units=dict(zip(names, ("m", "m/s"))), source="test drive"
+    )
 
 
 def reference(duration: float, h: float, mean_hold: bool) -> np.ndarray:

@@ -22,8 +22,9 @@ SETTINGS = CosimSettings(step=1e-3, **BASIC)
 
 def _renamed(m: Measurement, prefix: str) -> Measurement:
     """`m` with every channel renamed `prefix + name` (a drive file whose channels are not named after the inputs)."""
-    return Measurement(m.time, {prefix + n: m[n] for n in m.names}, {prefix + n: m.units[n] for n in m.names},
-                       source=m.source)
+    return Measurement(
+        m.time, {prefix + n: m[n] for n in m.names}, {prefix + n: m.units[n] for n in m.names}, source=m.source
+    )
 
 
 def test_the_default_binds_the_one_element_with_free_inputs(systems: dict[float, Path]) -> None:
@@ -72,4 +73,3 @@ def test_no_or_several_driven_elements_are_refused_naming_them(systems: dict[flo
         unwired = dataclasses.replace(system, connections=[])
         with pytest.raises(DriveInputError, match="exactly one element; elements with free inputs: vehicle: .*; damp"):
             bind_free_inputs(unwired)
-

@@ -69,9 +69,12 @@ def test_a_refused_input_names_instance_function_status_and_logged_message(plant
         _start(other)
         setter = RealBlock(slave, INPUTS)
         setter.values[:] = [0.0, math.nan, 0.0]
-        with pytest.raises(FmiStatusError, match=r"refusing \(quarter_car_2.fmu\): fmi2SetReal\(actuator_displacement, "
-                                                 r"actuator_velocity, damper_force\) returned Error: input "
-                                                 r"'actuator_velocity' set to nan: refused") as refused:
+        with pytest.raises(
+            FmiStatusError,
+            match=r"refusing \(quarter_car_2.fmu\): fmi2SetReal\(actuator_displacement, "
+            r"actuator_velocity, damper_force\) returned Error: input "
+            r"'actuator_velocity' set to nan: refused",
+        ) as refused:
             setter.set()
         assert refused.value.status == 3
         assert other.messages == []  # each FMI 2 instance's messages reach its own slave, not the last one made
@@ -125,6 +128,9 @@ def test_a_failing_fmu_stops_the_run_naming_element_and_time(systems: dict[float
     broken = DRIVE.channels | {"actuator_velocity": np.where(DRIVE.time >= 0.25, math.nan, DRIVE["actuator_velocity"])}
     bad = type(DRIVE)(DRIVE.time, broken, DRIVE.units, "drive with a gap")
     with open_system(systems[H]) as system:
-        with pytest.raises(CosimError, match=r"step from t = 0\.25 s: vehicle \(quarter_car.fmu\): fmi2SetReal.*"
-                                             r"returned Error: input 'actuator_velocity' set to nan"):
+        with pytest.raises(
+            CosimError,
+            match=r"step from t = 0\.25 s: vehicle \(quarter_car.fmu\): fmi2SetReal.*"
+            r"returned Error: input 'actuator_velocity' set to nan",
+        ):
             cosimulate(system, bad, CosimSettings(step=H, stop_time=0.5, **BASIC))

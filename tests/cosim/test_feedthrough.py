@@ -40,8 +40,10 @@ def systems(tmp_path_factory: pytest.TempPathFactory) -> dict[float, Path]:
     ssds = {}
     for h in STEPS:
         vehicle = build_vehicle_fmu("quarter-car", folder / f"car_{h:g}.fmu", VehicleBuildSettings(sample_period=h))
-        ssds[h] = write_ssd(connect_by_name("quarter car", ("vehicle", vehicle), {"damper": damper}, folder),
-                            folder / f"system_{h:g}.ssd")
+        ssds[h] = write_ssd(
+            connect_by_name("quarter car", ("vehicle", vehicle), {"damper": damper}, folder),
+            folder / f"system_{h:g}.ssd",
+        )
     return ssds
 
 

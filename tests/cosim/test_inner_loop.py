@@ -26,8 +26,13 @@ pytestmark = pytest.mark.skipif(library() is None, reason="no host C compiler fo
 
 H = 1e-3  # [s]
 DRIVE = drive(0.5, 0.5e-3, corner="fl")
-SCHEMES = [{}, {"scheme": "jacobi"}, {"refresh": False}, {"order": "components-first"},
-           {"scheme": "jacobi", "refresh": False, "order": "components-first"}]
+SCHEMES = [
+    {},
+    {"scheme": "jacobi"},
+    {"refresh": False},
+    {"order": "components-first"},
+    {"scheme": "jacobi", "refresh": False, "order": "components-first"},
+]
 
 
 def interpolating_system(folder: Path, damping: float) -> Path:
@@ -36,8 +41,9 @@ def interpolating_system(folder: Path, damping: float) -> Path:
     onnx.save(linear_damper_graph(damping), folder / "damper.onnx")
     damper = build_fmu(folder / "damper.onnx", BuildOptions(out=folder / "damper.fmu"))
     vehicle = build_vehicle_fmu("quarter-car", folder / "car.fmu", VehicleBuildSettings(sample_period=H))
-    return write_ssd(connect_by_name("quarter car", ("vehicle", vehicle), {"damper": damper}, folder),
-                     folder / "system.ssd")
+    return write_ssd(
+        connect_by_name("quarter car", ("vehicle", vehicle), {"damper": damper}, folder), folder / "system.ssd"
+    )
 
 
 @pytest.fixture(scope="module")
@@ -53,8 +59,11 @@ def sampled(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def run(ssd: Path, loop: str, **settings: object):
     with open_system(ssd) as system:
-        return cosimulate(system, DRIVE if "interpolating" in str(ssd) else drive(0.5, 0.5e-3),
-                          CosimSettings(step=H, inner_loop=loop, **settings))
+        return cosimulate(
+            system,
+            DRIVE if "interpolating" in str(ssd) else drive(0.5, 0.5e-3),
+            CosimSettings(step=H, inner_loop=loop, **settings),
+        )
 
 
 @pytest.mark.parametrize("settings", SCHEMES, ids=lambda s: ",".join(f"{k}={v}" for k, v in s.items()) or "default")

@@ -32,8 +32,10 @@ def system(tmp_path_factory: pytest.TempPathFactory) -> SystemStructure:
 
 
 def with_damper_parameters(system: SystemStructure, **values: float) -> SystemStructure:
-    elements = [dataclasses.replace(e, parameters=dict(e.parameters) | values) if e.name == "damper" else e
-                for e in system.elements]
+    elements = [
+        dataclasses.replace(e, parameters=dict(e.parameters) | values) if e.name == "damper" else e
+        for e in system.elements
+    ]
     return dataclasses.replace(system, elements=elements)
 
 
@@ -67,10 +69,15 @@ def test_a_pythonfmu_fmi3_damper_resets_too(tmp_path):
     """The other backend and FMI 3's reset: the damper as a pythonfmu FMI 3 FMU beside the native vehicle."""
     paths = build_quarter_car_system(tmp_path / "native", {"linear": 2400.0}, step=H)
     onnx.save(linear_damper_graph(2400.0), tmp_path / "damper.onnx")
-    damper = build_fmu(tmp_path / "damper.onnx", BuildOptions(out=tmp_path / "damper.fmu", backend="pythonfmu",
-                                                              fmi_version=3))
-    ssd = write_ssd(connect_by_name("quarter car", ("vehicle", paths["vehicle"]), {"damper": damper}, tmp_path,
-                                    {"damper": NO_FILTER}), tmp_path / "system.ssd")
+    damper = build_fmu(
+        tmp_path / "damper.onnx", BuildOptions(out=tmp_path / "damper.fmu", backend="pythonfmu", fmi_version=3)
+    )
+    ssd = write_ssd(
+        connect_by_name(
+            "quarter car", ("vehicle", paths["vehicle"]), {"damper": damper}, tmp_path, {"damper": NO_FILTER}
+        ),
+        tmp_path / "system.ssd",
+    )
     with open_system(ssd) as system:
         fresh = channels(cosimulate(system, DRIVE, CosimSettings(step=H)))
         pool = InstancePool()

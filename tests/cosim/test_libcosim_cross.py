@@ -54,8 +54,13 @@ def test_libcosim_equals_fmpy_with_the_vehicle_packages_quarter_car(tmp_path: Pa
     vehicle_build = pytest.importorskip("nnfmu.vehicle.fmu.vehicle_fmu")
     vehicle_fmu = vehicle_build.build_vehicle_fmu("quarter-car", tmp_path / "quarter_car.fmu")
     damper_fmu = build(damper_graph(), tmp_path, "damper")
-    system = connect_by_name("quarter car", ("vehicle", vehicle_fmu), {"damper": damper_fmu}, tmp_path,
-                             parameters={"damper": {"filter_cutoff": 0.0}})
+    system = connect_by_name(
+        "quarter car",
+        ("vehicle", vehicle_fmu),
+        {"damper": damper_fmu},
+        tmp_path,
+        parameters={"damper": {"filter_cutoff": 0.0}},
+    )
     ssd = write_ssd(system, tmp_path / "SystemStructure.ssd")
     settings = CosimSettings(step=2e-3, **LIBCOSIM)
     front_left = drive(1.0, 0.5e-3, corner="fl")  # the channels of the post the quarter car stands on
@@ -68,7 +73,8 @@ def test_libcosim_equals_fmpy_with_the_vehicle_packages_quarter_car(tmp_path: Pa
 
 
 def test_libcosim_loads_the_checked_extracted_system_never_the_archive(
-        systems: dict[float, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    systems: dict[float, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """libcosim would extract an .ssp again without nnfmu's checks (zip-slip): it must get the extracted copy."""
     import zipfile
 

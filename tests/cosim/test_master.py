@@ -51,8 +51,10 @@ def errors(systems: dict[float, Path]) -> dict[str, list[float]]:
         "linear": BASIC | {"extrapolation": "linear"},
         "iterative": BASIC | {"iterations": 30, "tolerance": 1e-12},
     }
-    return {name: [_error(systems, h, CosimSettings(step=h, **kw)) for h in (2e-3, 1e-3, 0.5e-3)]
-            for name, kw in schemes.items()}
+    return {
+        name: [_error(systems, h, CosimSettings(step=h, **kw)) for h in (2e-3, 1e-3, 0.5e-3)]
+        for name, kw in schemes.items()
+    }
 
 
 def test_gauss_seidel_and_jacobi_converge_to_first_order(errors: dict[str, list[float]]) -> None:
@@ -89,8 +91,12 @@ def test_steps_are_counted_in_integers_and_labelled_with_their_time(systems: dic
     long_drive = drive(10.0, 1e-3)
     seen: list[tuple[int, int]] = []
     with open_system(systems[1e-3]) as system:
-        result = cosimulate(system, long_drive, CosimSettings(step=1e-3, stop_time=10.0),
-                            progress=lambda done, total: seen.append((done, total)))
+        result = cosimulate(
+            system,
+            long_drive,
+            CosimSettings(step=1e-3, stop_time=10.0),
+            progress=lambda done, total: seen.append((done, total)),
+        )
     time = result.measurement.time
     assert result.steps == 10_000 and len(time) == 10_001
     assert time[-1] == 10.0
@@ -99,15 +105,26 @@ def test_steps_are_counted_in_integers_and_labelled_with_their_time(systems: dic
 
 
 def test_vehicle_inputs_read_their_own_channels_and_derive_the_velocity(systems: dict[float, Path]) -> None:
-    no_rate = Measurement(time=DRIVE.time, channels={"actuator_displacement": DRIVE["actuator_displacement"]},
-                          units={"actuator_displacement": "m"}, source="displacement-only drive")
+    no_rate = Measurement(
+        time=DRIVE.time,
+        channels={"actuator_displacement": DRIVE["actuator_displacement"]},
+        units={"actuator_displacement": "m"},
+        source="displacement-only drive",
+    )
     settings = CosimSettings(step=1e-3)
     with open_system(systems[1e-3]) as system:
         derived = cosimulate(system, no_rate, settings).measurement
         exact = cosimulate(system, DRIVE, settings).measurement
         with pytest.raises(DriveInputError, match=r"'actuator_displacement'.*the drive has: actuator_fl_displacement"):
-            cosimulate(system, Measurement(DRIVE.time, {"actuator_fl_displacement": DRIVE["actuator_displacement"]},
-                                           {"actuator_fl_displacement": "m"}), settings)
+            cosimulate(
+                system,
+                Measurement(
+                    DRIVE.time,
+                    {"actuator_fl_displacement": DRIVE["actuator_displacement"]},
+                    {"actuator_fl_displacement": "m"},
+                ),
+                settings,
+            )
     v = exact["damper_velocity"]
     assert np.max(np.abs(derived["damper_velocity"] - v)) < 1e-3 * np.max(np.abs(v))  # Savitzky-Golay rate
 
@@ -177,8 +194,13 @@ def test_fmi3_fmus_co_simulate_like_fmi2(systems: dict[float, Path], tmp_path: P
         onnx_path = tmp_path / f"{name}.onnx"
         onnx.save(model, str(onnx_path))
         fmus[name] = build_fmu(onnx_path, BuildOptions(out=tmp_path / f"{name}.fmu", fmi_version=3))
-    system3 = connect_by_name("fmi 3", ("vehicle", fmus["vehicle"]), {"damper": fmus["damper"]}, tmp_path,
-                              parameters={"vehicle": NO_FILTER, "damper": NO_FILTER})
+    system3 = connect_by_name(
+        "fmi 3",
+        ("vehicle", fmus["vehicle"]),
+        {"damper": fmus["damper"]},
+        tmp_path,
+        parameters={"vehicle": NO_FILTER, "damper": NO_FILTER},
+    )
     settings = CosimSettings(step=1e-3, iterations=30, tolerance=1e-12)
     with open_system(write_ssd(system3, tmp_path / "SystemStructure.ssd")) as system:
         fmi3 = cosimulate(system, DRIVE, settings).measurement

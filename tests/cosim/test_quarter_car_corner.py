@@ -43,8 +43,9 @@ def front_right(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Vehicle
     params.write_text(EXAMPLE.read_text(encoding="utf-8").replace('corner = "fl"', 'corner = "fr"'), encoding="utf-8")
     settings = VehicleBuildSettings(params_path=params, components={"damper": "reference"}, sample_period=H)
     fmu = build_vehicle_fmu("quarter-car", folder / "quarter_fr.fmu", settings)
-    return write_ssd(connect_by_name("fr quarter car", ("vehicle", fmu), {}, folder),
-                     folder / "SystemStructure.ssd"), settings
+    return write_ssd(
+        connect_by_name("fr quarter car", ("vehicle", fmu), {}, folder), folder / "SystemStructure.ssd"
+    ), settings
 
 
 def test_a_quarter_car_reads_its_own_corners_channels(front_right: tuple[Path, VehicleBuildSettings]) -> None:
@@ -55,16 +56,25 @@ def test_a_quarter_car_reads_its_own_corners_channels(front_right: tuple[Path, V
         result = cosimulate(system, _drive(t, {"fl": fl, "fr": fr}), CosimSettings(step=H)).measurement
         without_fl = cosimulate(system, _drive(t, {"fr": fr}), CosimSettings(step=H)).measurement
         swapped = cosimulate(system, _drive(t, {"fl": fr, "fr": fl}), CosimSettings(step=H)).measurement
-        with pytest.raises(DriveInputError, match=r"'actuator_fr_displacement', 'actuator_fr_velocity'.*"
-                                                  r"the drive has: actuator_fl_displacement"):
+        with pytest.raises(
+            DriveInputError,
+            match=r"'actuator_fr_displacement', 'actuator_fr_velocity'.*"
+            r"the drive has: actuator_fl_displacement",
+        ):
             cosimulate(system, _drive(t, {"fl": fl}), CosimSettings(step=H))
     for name in result.names:  # the fl channels are not read at all
         np.testing.assert_array_equal(result[name], without_fl[name], err_msg=name)
     vehicle = vehicle_model("quarter-car", settings)
     # the vehicle FMU interpolates its drive inputs over a step: the model's first-order-hold solution
-    expected = {corner: simulate(vehicle, {"actuator_fr_displacement": x, "actuator_fr_velocity": v},
-                                 SimulationSettings(dt=H, hold="foh"), x0=vehicle.equilibrium())["body_displacement"]
-                for corner, (x, v) in (("fl", fl), ("fr", fr))}
+    expected = {
+        corner: simulate(
+            vehicle,
+            {"actuator_fr_displacement": x, "actuator_fr_velocity": v},
+            SimulationSettings(dt=H, hold="foh"),
+            x0=vehicle.equilibrium(),
+        )["body_displacement"]
+        for corner, (x, v) in (("fl", fl), ("fr", fr))
+    }
     got = result["body_displacement"]
     scale = np.max(np.abs(expected["fr"]))
     assert np.max(np.abs(got - expected["fr"])) < 1e-9 * scale

@@ -27,8 +27,12 @@ def _measurement(n: int, seed: int, dt: float = T) -> Measurement:
     t = np.arange(n) * dt
     x = 0.03 * np.sin(2 * np.pi * 1.3 * t) + 0.002 * rng.normal(size=n)
     v = 0.6 * np.sin(2 * np.pi * 4.1 * t + 0.4) + 0.05 * rng.normal(size=n)
-    return Measurement(time=t, channels={"displacement": x, "velocity": v, "force": np.zeros(n)},
-                       units={"displacement": "m", "velocity": "m/s", "force": "N"}, source=f"synthetic-{seed}")
+    return Measurement(
+        time=t,
+        channels={"displacement": x, "velocity": v, "force": np.zeros(n)},
+        units={"displacement": "m", "velocity": "m/s", "force": "N"},
+        source=f"synthetic-{seed}",
+    )
 
 
 @pytest.fixture(scope="module")
@@ -37,10 +41,12 @@ def damper_fmu(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     network = MLP(SPEC.n_features, 5)
     train = _measurement(800, 1)
     model = TrainedModel(
-        spec=SPEC, network=network,
+        spec=SPEC,
+        network=network,
         feature_scaler=MinMaxScaler.fit(SPEC.features(train.channels, T)),
         target_scaler=MinMaxScaler.fit(np.array([-1500.0, 3000.0])),
-        sample_period=T, units=dict(train.units),
+        sample_period=T,
+        units=dict(train.units),
         envelope={c: (float(train[c].min()), float(train[c].max())) for c in SPEC.channels},
     )
     folder = tmp_path_factory.mktemp("replay")

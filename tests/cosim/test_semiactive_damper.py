@@ -58,10 +58,15 @@ def test_fmu_equals_onnxruntime(tmp_path: Path, fmi: int) -> None:
     np.testing.assert_allclose(got, expected, rtol=1e-13, atol=1e-9)
 
 
-@pytest.mark.parametrize(("law", "message"), [
-    ({"c0": -1.0}, r"c0 \[N\.s/m\] -1\.0"), ({"tau": 0.0}, r"tau \[s\] 0\.0"), ({"c1": math.nan}, r"c1 \[N\.s/m/V\]"),
-    ({"command": "force"}, "command name 'force' clashes"),
-])
+@pytest.mark.parametrize(
+    ("law", "message"),
+    [
+        ({"c0": -1.0}, r"c0 \[N\.s/m\] -1\.0"),
+        ({"tau": 0.0}, r"tau \[s\] 0\.0"),
+        ({"c1": math.nan}, r"c1 \[N\.s/m/V\]"),
+        ({"command": "force"}, "command name 'force' clashes"),
+    ],
+)
 def test_bad_laws_are_refused_naming_the_value(law: dict, message: str) -> None:
     with pytest.raises(SettingsError, match=message):
         semiactive_damper_graph(**law)

@@ -25,7 +25,7 @@ from nnfmu.cosim.ssp import (
     write_ssd,
 )
 
-HOSTILE = 'a"b<c>&d\'e\nf\tg ü — ∂'
+HOSTILE = "a\"b<c>&d'e\nf\tg ü — ∂"
 
 
 def test_round_trip_of_a_written_system(systems: dict[float, Path]) -> None:
@@ -33,7 +33,9 @@ def test_round_trip_of_a_written_system(systems: dict[float, Path]) -> None:
     with open_system(ssd) as system:
         assert [e.name for e in system.elements] == ["vehicle", "damper"]
         assert set(map(str, system.connections)) == {
-            "vehicle.damper_velocity -> damper.velocity", "damper.force -> vehicle.damper_force"}
+            "vehicle.damper_velocity -> damper.velocity",
+            "damper.force -> vehicle.damper_force",
+        }
         assert system.element("damper").parameters == {"filter_cutoff": 0.0}
         assert system.fmu_path("damper").resolve().is_file()
         copy = write_ssd(replace(system, stop_time=2.5), ssd.parent / "copy.ssd")
@@ -47,10 +49,13 @@ def test_round_trip_of_a_written_system(systems: dict[float, Path]) -> None:
 def test_hostile_names_are_escaped_and_come_back(tmp_path: Path) -> None:
     system = SystemStructure(
         name=HOSTILE,
-        elements=[Element(HOSTILE, f"{HOSTILE}.fmu", (Connector(HOSTILE, "output"),), {HOSTILE: -1.5e-300}),
-                  Element("b&", "b.fmu", (Connector("in<", "input"),))],
+        elements=[
+            Element(HOSTILE, f"{HOSTILE}.fmu", (Connector(HOSTILE, "output"),), {HOSTILE: -1.5e-300}),
+            Element("b&", "b.fmu", (Connector("in<", "input"),)),
+        ],
         connections=[Connection(HOSTILE, HOSTILE, "b&", "in<")],
-        start_time=0.25, stop_time=1.0,
+        start_time=0.25,
+        stop_time=1.0,
     )
     path = write_ssd(system, tmp_path / "SystemStructure.ssd")
     text = path.read_text(encoding="utf-8")
@@ -86,8 +91,12 @@ def test_connection_to_an_undeclared_connector_names_it(systems: dict[float, Pat
 
 def test_connector_of_the_wrong_kind_is_refused(systems: dict[float, Path]) -> None:
     ssd = systems[1e-3]
-    bad = _edited(ssd, ssd.parent / "bad_kind.ssd", '<ssd:Connector name="force" kind="output">',
-                  '<ssd:Connector name="force" kind="input">')
+    bad = _edited(
+        ssd,
+        ssd.parent / "bad_kind.ssd",
+        '<ssd:Connector name="force" kind="output">',
+        '<ssd:Connector name="force" kind="input">',
+    )
     with pytest.raises(SspError, match=r"connector damper\.force is an input, expected an output"):
         read_ssd(bad)
 
@@ -115,13 +124,22 @@ def test_ssp_archive_opens_with_fmus_inside(systems: dict[float, Path], tmp_path
     assert not folder.exists()  # the extracted archive is removed afterwards
 
 
-def _archive(systems: dict[float, Path], target: Path, sources: dict[str, str] | None = None,
-             extra: dict[str, bytes] | None = None, compression: int = zipfile.ZIP_DEFLATED) -> Path:
+def _archive(
+    systems: dict[float, Path],
+    target: Path,
+    sources: dict[str, str] | None = None,
+    extra: dict[str, bytes] | None = None,
+    compression: int = zipfile.ZIP_DEFLATED,
+) -> Path:
     """An .ssp of the 1 ms system with its FMUs under resources/, element sources replaced by `sources` (element ->
     source) and the `extra` members added as they are named."""
     with open_system(systems[1e-3]) as system:
-        inside = replace(system, elements=[replace(e, source=(sources or {}).get(e.name, f"resources/{e.name}.fmu"))
-                                           for e in system.elements])
+        inside = replace(
+            system,
+            elements=[
+                replace(e, source=(sources or {}).get(e.name, f"resources/{e.name}.fmu")) for e in system.elements
+            ],
+        )
         ssd = write_ssd(inside, target.parent / f"{target.stem}.ssd")
         with zipfile.ZipFile(target, "w", compression) as zf:
             zf.write(ssd, "SystemStructure.ssd")
@@ -132,10 +150,19 @@ def _archive(systems: dict[float, Path], target: Path, sources: dict[str, str] |
     return target
 
 
-@pytest.mark.parametrize("member", ["../../../../../../../../tmp/{}/escaped", "/tmp/{}/escaped",
-                                    "resources/../../{}", "C:/{}", "resources\\..\\..\\{}"])
+@pytest.mark.parametrize(
+    "member",
+    [
+        "../../../../../../../../tmp/{}/escaped",
+        "/tmp/{}/escaped",
+        "resources/../../{}",
+        "C:/{}",
+        "resources\\..\\..\\{}",
+    ],
+)
 def test_an_archive_member_outside_its_folder_is_refused_before_anything_is_written(
-        systems: dict[float, Path], tmp_path: Path, member: str) -> None:
+    systems: dict[float, Path], tmp_path: Path, member: str
+) -> None:
     unique = tmp_path.name + "-zip-slip"
     name = member.format(unique)
     archive = _archive(systems, tmp_path / "system.ssp", extra={name: b"payload"})
@@ -145,28 +172,37 @@ def test_an_archive_member_outside_its_folder_is_refused_before_anything_is_writ
     assert not (Path("/tmp") / unique).exists()
 
 
-def test_a_zip_bomb_and_an_archive_too_large_are_refused(systems: dict[float, Path], tmp_path: Path,
-                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_zip_bomb_and_an_archive_too_large_are_refused(
+    systems: dict[float, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     bomb = _archive(systems, tmp_path / "bomb.ssp", extra={"resources/zeros.bin": bytes(4 * 1024 * 1024)})
     with pytest.raises(SspError, match=r"member 'resources/zeros\.bin' inflates \d+-fold .* limit"):
         with open_system(bomb):
             pass
     monkeypatch.setattr(safe_zip, "MAX_TOTAL_BYTES", 1024 * 1024)  # the FMUs alone are below it
-    large = _archive(systems, tmp_path / "large.ssp", extra={"resources/noise.bin": os.urandom(1024 * 1024)},
-                     compression=zipfile.ZIP_STORED)
+    large = _archive(
+        systems,
+        tmp_path / "large.ssp",
+        extra={"resources/noise.bin": os.urandom(1024 * 1024)},
+        compression=zipfile.ZIP_STORED,
+    )
     with pytest.raises(SspError, match=r"unpack to more than the limit of 1048576 bytes"):
         with open_system(large):
             pass
 
 
 def test_element_sources_outside_the_archive_are_refused_naming_element_and_source(
-        systems: dict[float, Path], tmp_path: Path) -> None:
+    systems: dict[float, Path], tmp_path: Path
+) -> None:
     with open_system(systems[1e-3]) as system:
         outside = str(system.fmu_path("damper").resolve())  # an FMU that exists, outside the archive
     for source in (outside, "../" * 12 + outside.lstrip("/"), "resources/../../damper.fmu", f"file://{outside}"):
         archive = _archive(systems, tmp_path / "system.ssp", sources={"damper": source})
-        with pytest.raises(SspError, match=rf"element 'damper': source {re.escape(repr(source))} .*only use FMUs "
-                                           r"inside itself"):
+        with pytest.raises(
+            SspError,
+            match=rf"element 'damper': source {re.escape(repr(source))} .*only use FMUs "
+            r"inside itself",
+        ):
             with open_system(archive):
                 pass
 
@@ -178,26 +214,37 @@ def test_a_checked_archive_opens_from_its_extracted_folder(systems: dict[float, 
         assert all(system.base.resolve() in system.fmu_path(e).resolve().parents for e in system.elements)
 
 
-def test_a_connection_between_different_units_is_refused_naming_both(systems: dict[float, Path],
-                                                                      tmp_path: Path) -> None:
+def test_a_connection_between_different_units_is_refused_naming_both(
+    systems: dict[float, Path], tmp_path: Path
+) -> None:
     """The master passes values as they are: a force in N fed to a velocity input in m/s is a wiring mistake."""
     with open_system(systems[1e-3]) as system:
-        wired = [c if str(c) != "vehicle.damper_velocity -> damper.velocity"
-                 else Connection("damper", "force", "damper", "velocity") for c in system.connections]
+        wired = [
+            c
+            if str(c) != "vehicle.damper_velocity -> damper.velocity"
+            else Connection("damper", "force", "damper", "velocity")
+            for c in system.connections
+        ]
         assert wired != system.connections
         ssd = write_ssd(replace(system, connections=wired), systems[1e-3].parent / "miswired.ssd")
-    with pytest.raises(SspError, match=r"connection damper\.force -> damper\.velocity: the output is in 'N', the "
-                                       r"input in 'm/s'"):
+    with pytest.raises(
+        SspError,
+        match=r"connection damper\.force -> damper\.velocity: the output is in 'N', the "
+        r"input in 'm/s'",
+    ):
         with open_system(ssd):
             pass
 
 
-def test_an_element_fmu_that_is_a_zip_bomb_is_refused_before_fmpy_reads_it(systems: dict[float, Path],
-                                                                          tmp_path: Path) -> None:
+def test_an_element_fmu_that_is_a_zip_bomb_is_refused_before_fmpy_reads_it(
+    systems: dict[float, Path], tmp_path: Path
+) -> None:
     with open_system(systems[1e-3]) as system:
         bomb = tmp_path / "bomb.fmu"
-        with zipfile.ZipFile(system.fmu_path("damper")) as source, zipfile.ZipFile(bomb, "w",
-                                                                                     zipfile.ZIP_DEFLATED) as out:
+        with (
+            zipfile.ZipFile(system.fmu_path("damper")) as source,
+            zipfile.ZipFile(bomb, "w", zipfile.ZIP_DEFLATED) as out,
+        ):
             for name in source.namelist():
                 out.writestr(name, source.read(name))
             out.writestr("resources/zeros.bin", bytes(4 * 1024 * 1024))

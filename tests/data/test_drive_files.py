@@ -64,8 +64,11 @@ def test_rpc_header_says_what_the_file_holds(tmp_path, drive, data_type, stored)
 
 def test_rpc_time_step_without_a_decimal_point_reads_back(tmp_path):
     # 1e-05 s is written by Python without a '.', which rpc3-file would not read as a number.
-    m = Measurement(time=np.arange(32) * 1e-5, channels={"stroke_displacement": np.linspace(0, 1, 32)},
-                    units={"stroke_displacement": "m"})
+    m = Measurement(
+        time=np.arange(32) * 1e-5,
+        channels={"stroke_displacement": np.linspace(0, 1, 32)},
+        units={"stroke_displacement": "m"},
+    )
     back = read_drive(write_drive(m, tmp_path / "fast.rsp", rpc_data_type="float32"))
     assert back.sample_period == pytest.approx(1e-5, rel=1e-12)
 
@@ -109,8 +112,11 @@ def test_missing_file_and_unknown_type_raise_errors_naming_them(tmp_path, drive)
 
 
 def test_a_failed_rpc_write_leaves_no_file(tmp_path, drive):
-    bad = Measurement(time=drive.time, channels={"x" * 97 + "_displacement": drive[CHANNELS[0]]},
-                      units={"x" * 97 + "_displacement": "m"})
+    bad = Measurement(
+        time=drive.time,
+        channels={"x" * 97 + "_displacement": drive[CHANNELS[0]]},
+        units={"x" * 97 + "_displacement": "m"},
+    )
     with pytest.raises(DataError, match="at most 96 characters"):
         write_drive(bad, tmp_path / "drive.rsp")
     late = Measurement(time=drive.time + 1.0, channels=dict(drive.channels), units=dict(drive.units))

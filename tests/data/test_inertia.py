@@ -39,8 +39,11 @@ def test_compensated_force_is_the_damper_alone(noise: float) -> None:
 
 def test_acceleration_from_displacement_when_velocity_is_missing() -> None:
     with_mass, alone = run((*EFFECTS, "inertia"), 0.0), run(EFFECTS, 0.0)
-    stroke_only = replace(with_mass, channels={k: with_mass[k] for k in ("displacement", "force")},
-                          units={k: with_mass.units[k] for k in ("displacement", "force")})
+    stroke_only = replace(
+        with_mass,
+        channels={k: with_mass[k] for k in ("displacement", "force")},
+        units={k: with_mass.units[k] for k in ("displacement", "force")},
+    )
     compensated = compensate_inertia(stroke_only, DamperParams().moving_mass)
     assert nrmse(compensated["force"], alone["force"]) < 0.002
     assert "displacement" in compensated.notes["inertia"]

@@ -360,7 +360,9 @@ def test_corrupt_mdf_gives_only_the_error_line_on_the_command_line(tmp_path, dam
         _corrupt_channel_offset(path)
     result = subprocess.run(
         [sys.executable, "-c", "from nnfmu.cli import app; app()", "data", "check", str(path)],
-        capture_output=True, text=True, timeout=300,
+        capture_output=True,
+        text=True,
+        timeout=300,
     )
     assert result.returncode == 2, result.stderr  # a crash in asammdf's compiled reader ends with -11 (SIGSEGV)
     assert result.stdout == ""
@@ -372,13 +374,17 @@ def test_an_mr_damper_record_with_a_command_voltage_loads_in_si(tmp_path):
     """Shaped like a public MR-damper record: 3 kHz, stroke in cm, force in N, the coil's command in V (tab-separated);
     the command channel no longer blocks the ones nnfmu needs."""
     path = tmp_path / "mr_damper.csv"
-    rows = [f"{k / 3000:.8g}\t{0.5 * np.sin(k / 50):.6f}\t{10 * np.cos(k / 50):.6f}\t{120 * np.sin(k / 40):.3f}\t"
-            f"{2.5 if k > 60 else 0.0:.2f}" for k in range(120)]
+    rows = [
+        f"{k / 3000:.8g}\t{0.5 * np.sin(k / 50):.6f}\t{10 * np.cos(k / 50):.6f}\t{120 * np.sin(k / 40):.3f}\t"
+        f"{2.5 if k > 60 else 0.0:.2f}"
+        for k in range(120)
+    ]
     path.write_text("time [s]\tdisplacement [cm]\tvelocity [cm/s]\tforce [N]\tvoltage [V]\n" + "\n".join(rows) + "\n")
     m = load_measurement(path)
     assert (m.units["displacement"], m.units["velocity"], m.units["voltage"]) == ("m", "m/s", "V")
-    np.testing.assert_allclose(m["displacement"][:3], [0.0, 0.005 * np.sin(1 / 50), 0.005 * np.sin(2 / 50)],
-                               rtol=0, atol=1e-8)  # printed to 1e-6 cm
+    np.testing.assert_allclose(
+        m["displacement"][:3], [0.0, 0.005 * np.sin(1 / 50), 0.005 * np.sin(2 / 50)], rtol=0, atol=1e-8
+    )  # printed to 1e-6 cm
     assert m["voltage"][0] == 0.0 and m["voltage"][-1] == 2.5
 
 

@@ -185,8 +185,9 @@ def test_unreadable_format_line_is_refused(tmp_path, format_line, message):
 
 
 def test_decimal_comma_is_read(tmp_path):
-    path, t, _, f = write_mts(tmp_path / "comma.dat", duration=1.0, restart_at=2.0,
-                              format_line="MTS793|MPT|DEU|1|2|,|.|:|49|1|0|A")
+    path, t, _, f = write_mts(
+        tmp_path / "comma.dat", duration=1.0, restart_at=2.0, format_line="MTS793|MPT|DEU|1|2|,|.|:|49|1|0|A"
+    )
     path.write_text(path.read_text().replace(".", ","))
     m = load_measurement(path)
     np.testing.assert_allclose(m["force"], f * LBF, atol=1e-5 * LBF)
@@ -228,8 +229,23 @@ def test_cli_data_check_reads_the_export_and_prints_the_notes(dyno):
 def test_cli_train_accepts_the_export_and_prints_the_loader_notes(dyno, tmp_path):
     path, *_ = dyno
     out = tmp_path / "damper.onnx"
-    result = CliRunner().invoke(app, ["train", str(path), "--preset", "damper-spline", "--out", str(out),
-                                      "--max-epochs", "3", "--restarts", "1", "--hidden", "2"])
+    result = CliRunner().invoke(
+        app,
+        [
+            "train",
+            str(path),
+            "--preset",
+            "damper-spline",
+            "--out",
+            str(out),
+            "--max-epochs",
+            "3",
+            "--restarts",
+            "1",
+            "--hidden",
+            "2",
+        ],
+    )
     assert result.exit_code == 0, result.output
     assert out.exists()
     assert "note: time stamps deviate from a uniform base" in result.output

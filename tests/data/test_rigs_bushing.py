@@ -88,7 +88,12 @@ def test_exact_update_matches_integrating_the_derivatives():
     v = np.gradient(x, t)
     ref = solve_ivp(
         lambda tt, s: truth.derivatives(tt, s, np.interp(tt, t, x), np.interp(tt, t, v)),
-        (0, t[-1]), truth.initial_state(), t_eval=t, max_step=0.25 / RATE, rtol=1e-8, atol=1e-6,
+        (0, t[-1]),
+        truth.initial_state(),
+        t_eval=t,
+        max_step=0.25 / RATE,
+        rtol=1e-8,
+        atol=1e-6,
     )
     reference = truth.force(ref.y.T, x)
     assert np.max(np.abs(force - reference)) < 5e-3 * np.max(np.abs(reference))
@@ -131,10 +136,18 @@ def test_channels_units_and_effects():
     run = simulate_rig("bushing", RigOptions(duration=2.0))
     m = run.measurement
     assert m.names == [
-        "axial_displacement", "axial_velocity", "axial_force",
-        "radial_displacement", "radial_velocity", "radial_force",
-        "axial_rotation", "axial_angular_velocity", "axial_torque",
-        "conical_rotation", "conical_angular_velocity", "conical_torque",
+        "axial_displacement",
+        "axial_velocity",
+        "axial_force",
+        "radial_displacement",
+        "radial_velocity",
+        "radial_force",
+        "axial_rotation",
+        "axial_angular_velocity",
+        "axial_torque",
+        "conical_rotation",
+        "conical_angular_velocity",
+        "conical_torque",
     ]
     assert m.units["axial_torque"] == "N.m" and m.units["conical_angular_velocity"] == "rad/s"
     assert run.truth["effects"] == ["viscoelastic", "friction"]

@@ -101,7 +101,13 @@ def test_rig_integration_matches_an_independent_stiff_solver():
     force, states = truth.simulate(1 / rate, x, v, a)
     ref = solve_ivp(
         lambda tt, s: truth.derivatives(tt, s, np.interp(tt, t, x), np.interp(tt, t, v)),
-        (0, t[-1]), truth.initial_state(), method="Radau", t_eval=t, rtol=1e-9, atol=1e-6, max_step=1 / rate,
+        (0, t[-1]),
+        truth.initial_state(),
+        method="Radau",
+        t_eval=t,
+        rtol=1e-9,
+        atol=1e-6,
+        max_step=1 / rate,
     )
     reference = truth.force(ref.y.T, x, v, a)
     assert np.max(np.abs(force - reference)) < 2e-3 * np.max(np.abs(reference))

@@ -141,8 +141,9 @@ def test_wrong_unit_is_named(source: Measurement) -> None:
 
 def test_still_channel_is_refused(source: Measurement) -> None:
     name = f"{ELEMENT}_axial_displacement"
-    still = Measurement(source.time, dict(source.channels) | {name: np.full(len(source), 1e-4)}, source.units,
-                        source.source)
+    still = Measurement(
+        source.time, dict(source.channels) | {name: np.full(len(source), 1e-4)}, source.units, source.source
+    )
     with pytest.raises(DataError, match=r"axial deflection .* does not move"):
         design_vehicle_drive(still, [ELEMENT], RATE, 1000, seed=0)
 
@@ -182,8 +183,25 @@ def test_rig_run_records_with_transducers_sized_for_the_drive(source: Measuremen
 def test_cli_writes_the_record_and_the_design_into_the_truth(tmp_path: Path, source: Measurement) -> None:
     result_file = save_measurement(source, tmp_path / "reference.csv")
     out = tmp_path / "rig.csv"
-    done = CliRunner().invoke(app, ["rig", "bushing", "--drive-from", str(result_file), "--element", ELEMENT,
-                                    "--margin", "1.3", "--duration", "6", "--sample-rate", "500", "--out", str(out)])
+    done = CliRunner().invoke(
+        app,
+        [
+            "rig",
+            "bushing",
+            "--drive-from",
+            str(result_file),
+            "--element",
+            ELEMENT,
+            "--margin",
+            "1.3",
+            "--duration",
+            "6",
+            "--sample-rate",
+            "500",
+            "--out",
+            str(out),
+        ],
+    )
     assert done.exit_code == 0, done.output
     record = load_measurement(out)
     assert {c for ch in BUSHING_CHANNELS.values() for c in (ch.position, ch.rate, ch.force)} <= set(record.names)
@@ -194,26 +212,41 @@ def test_cli_writes_the_record_and_the_design_into_the_truth(tmp_path: Path, sou
     for key in SOURCE:
         channel = drives["channels"][key]
         simulated = channel["simulated"][ELEMENT]
-        assert simulated["rms"] == pytest.approx(np.std(source[f"{ELEMENT}_{BUSHING_CHANNELS[key].position}"]),
-                                                 rel=1e-3)  # the CSV keeps ~7 significant digits
+        assert simulated["rms"] == pytest.approx(
+            np.std(source[f"{ELEMENT}_{BUSHING_CHANNELS[key].position}"]), rel=1e-3
+        )  # the CSV keeps ~7 significant digits
         assert channel["designed"]["max"] > simulated["max"] and channel["designed"]["min"] < simulated["min"]
         assert channel["designed"]["rms"] > 0
 
 
-@pytest.mark.parametrize("args, message", [
-    (["rig", "bushing", "--drive-from", "{src}", "--out", "{out}"], "--element"),
-    (["rig", "damper", "--drive-from", "{src}", "--element", ELEMENT, "--out", "{out}"],
-     "no channel 'bushing_fl_front_displacement' for the stroke of bushing_fl_front"),
-    (["rig", "damper", "--drive-from", "{src}", "--element", ELEMENT, "--default-sensors", "--out", "{out}"],
-     "--default-sensors is for the bushing rig"),
-    (["rig", "bushing", "--drive-from", "{src}", "--element", ELEMENT, "--excitation", "lab", "--out", "{out}"],
-     "cannot be 'lab'"),
-    (["rig", "bushing", "--excitation", "vehicle", "--out", "{out}"], "needs --drive-from"),
-    (["rig", "bushing", "--drive-from", "{src}", "--element", "bushing_rl_front", "--out", "{out}"],
-     "bushing_rl_front_axial_displacement"),
-    (["rig", "bushing", "--drive-from", "{missing}", "--element", ELEMENT, "--out", "{out}"], "no such file"),
-    (["rig", "bushing", "--drive-from", "{src}", "--element", ELEMENT, "--band", "40", "--out", "{out}"], "LOW:HIGH"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["rig", "bushing", "--drive-from", "{src}", "--out", "{out}"], "--element"),
+        (
+            ["rig", "damper", "--drive-from", "{src}", "--element", ELEMENT, "--out", "{out}"],
+            "no channel 'bushing_fl_front_displacement' for the stroke of bushing_fl_front",
+        ),
+        (
+            ["rig", "damper", "--drive-from", "{src}", "--element", ELEMENT, "--default-sensors", "--out", "{out}"],
+            "--default-sensors is for the bushing rig",
+        ),
+        (
+            ["rig", "bushing", "--drive-from", "{src}", "--element", ELEMENT, "--excitation", "lab", "--out", "{out}"],
+            "cannot be 'lab'",
+        ),
+        (["rig", "bushing", "--excitation", "vehicle", "--out", "{out}"], "needs --drive-from"),
+        (
+            ["rig", "bushing", "--drive-from", "{src}", "--element", "bushing_rl_front", "--out", "{out}"],
+            "bushing_rl_front_axial_displacement",
+        ),
+        (["rig", "bushing", "--drive-from", "{missing}", "--element", ELEMENT, "--out", "{out}"], "no such file"),
+        (
+            ["rig", "bushing", "--drive-from", "{src}", "--element", ELEMENT, "--band", "40", "--out", "{out}"],
+            "LOW:HIGH",
+        ),
+    ],
+)
 def test_cli_refuses_bad_drive_options(tmp_path: Path, source: Measurement, args: list[str], message: str) -> None:
     src = save_measurement(source.slice(0, 2000), tmp_path / "reference.csv")
     out = tmp_path / "rig.csv"

@@ -30,15 +30,19 @@ RATE = 1000.0
 ELEMENTS = ("damper_fl", "damper_rl")
 # Strokes unlike the lab's random part (flat velocity 1-20 Hz): body motion plus wheel hop and short road waves up
 # to 80 Hz, about a compressed working point (SI units).
-SHAPES = {"damper_fl": (SpectrumShape(0.8, 1.5, 80.0, 1.5), -0.006, 0.008),
-          "damper_rl": (SpectrumShape(0.8, 1.5, 80.0, 1.5), -0.004, 0.006)}
+SHAPES = {
+    "damper_fl": (SpectrumShape(0.8, 1.5, 80.0, 1.5), -0.006, 0.008),
+    "damper_rl": (SpectrumShape(0.8, 1.5, 80.0, 1.5), -0.004, 0.006),
+}
 
 
 def source_result(seconds: float = 30.0, seed: int = 0) -> Measurement:
     n = int(seconds * RATE)
     rng = np.random.default_rng(seed)
-    channels = {f"{e}_displacement": mean + rms * random_motion(shape, RATE, n, rng, fade=0.5).x
-                for e, (shape, mean, rms) in SHAPES.items()}
+    channels = {
+        f"{e}_displacement": mean + rms * random_motion(shape, RATE, n, rng, fade=0.5).x
+        for e, (shape, mean, rms) in SHAPES.items()
+    }
     return Measurement(np.arange(n) / RATE, channels, {name: "m" for name in channels}, source="vehicle-result.csv")
 
 
@@ -66,7 +70,7 @@ def test_the_stroke_follows_the_cars_spectrum_and_exceeds_its_excursions_and_rat
         powers = np.array([p[(f >= lo) & (f < hi)].sum() for lo, hi in zip(edges[:-1], edges[1:])])
         return powers / powers.sum()
 
-    steady = motion.x[int(2 * RATE):-int(2 * RATE)]
+    steady = motion.x[int(2 * RATE) : -int(2 * RATE)]
     np.testing.assert_allclose(shares(steady), np.mean([shares(x) for x in strokes], axis=0), atol=0.03)
     assert shares(steady)[2] > 1e-3  # content above 40 Hz, where the lab drive has none
 
@@ -79,7 +83,7 @@ def test_the_record_keeps_the_lab_sine_series_and_replaces_only_the_random_part(
     assert [p["type"] for p in parts] == ["sine series", "vehicle-derived stroke"]
     sine_end = int(parts[0]["end_s"] * 1000.0)
     recorded, lab_recorded = vehicle.measurement, lab.measurement
-    np.testing.assert_array_equal(recorded["force"][:sine_end // 2], lab_recorded["force"][:sine_end // 2])
+    np.testing.assert_array_equal(recorded["force"][: sine_end // 2], lab_recorded["force"][: sine_end // 2])
     assert vehicle.truth["options"]["excitation"] == "vehicle"
     assert vehicle.truth["excitation"]["drive"]["elements"] == list(ELEMENTS)
     assert not np.array_equal(recorded["displacement"][sine_end:], lab_recorded["displacement"][sine_end:])
@@ -89,8 +93,12 @@ def test_bad_sources_and_bands_are_refused_naming_them(source: Measurement) -> N
     design = DriveDesign(band=RIG_BANDS["damper"])
     with pytest.raises(DataError, match="no channel 'damper_fr_displacement' for the stroke of damper_fr"):
         design_damper_drive(source, ["damper_fr"], RATE, 1000, 0, design)
-    wrong = Measurement(source.time, {"damper_fl_displacement": source["damper_fl_displacement"]},
-                        {"damper_fl_displacement": "m/s"}, source="speeds.csv")
+    wrong = Measurement(
+        source.time,
+        {"damper_fl_displacement": source["damper_fl_displacement"]},
+        {"damper_fl_displacement": "m/s"},
+        source="speeds.csv",
+    )
     with pytest.raises(DataError, match="'damper_fl_displacement' is in 'm/s'"):
         design_damper_drive(wrong, ["damper_fl"], RATE, 1000, 0, design)
     with pytest.raises(ValueError, match="Nyquist"):
@@ -102,8 +110,21 @@ def test_bad_sources_and_bands_are_refused_naming_them(source: Measurement) -> N
 def test_cli_writes_the_record_with_the_dynos_band_by_default(tmp_path: Path, source: Measurement) -> None:
     result_file = save_measurement(source, tmp_path / "reference.csv")
     out = tmp_path / "dyno.csv"
-    done = CliRunner().invoke(app, ["rig", "damper", "--drive-from", str(result_file), "--element",
-                                    ",".join(ELEMENTS), "--duration", "45", "--out", str(out)])
+    done = CliRunner().invoke(
+        app,
+        [
+            "rig",
+            "damper",
+            "--drive-from",
+            str(result_file),
+            "--element",
+            ",".join(ELEMENTS),
+            "--duration",
+            "45",
+            "--out",
+            str(out),
+        ],
+    )
     assert done.exit_code == 0, done.output
     record = load_measurement(out)
     assert {"displacement", "velocity", "force"} <= set(record.names)

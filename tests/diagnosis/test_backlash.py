@@ -20,8 +20,12 @@ def triangle(period: float = 1.0, amplitude: float = 0.02, dt: float = 0.001, cy
     phase = (t / period) % 1.0
     x = amplitude * (4 * np.abs(phase - 0.5) - 1)
     v = np.gradient(x, dt)
-    return Measurement(t, {"displacement": x, "velocity": v, "force": np.zeros_like(t)},
-                       {"displacement": "m", "velocity": "m/s", "force": "N"}, "triangle")
+    return Measurement(
+        t,
+        {"displacement": x, "velocity": v, "force": np.zeros_like(t)},
+        {"displacement": "m", "velocity": "m/s", "force": "N"},
+        "triangle",
+    )
 
 
 def test_the_backlash_regressors_are_the_feature_kinds_stop_operators():

@@ -32,13 +32,18 @@ DURATION = 12.0  # s of random drive at 1 kHz
 def record(damper_type: str) -> Measurement:
     """A random-drive damper record; the passive one gets a random coil voltage (0-5 V, steps of 0.1 s) that does
     nothing to the force."""
-    m = simulate_rig("damper", RigOptions(duration=DURATION, seed=1, damper_type=damper_type, excitation="random",
-                                          noise=0.5)).measurement
+    m = simulate_rig(
+        "damper", RigOptions(duration=DURATION, seed=1, damper_type=damper_type, excitation="random", noise=0.5)
+    ).measurement
     if damper_type != "passive":
         return m
     steps = np.random.default_rng(5).uniform(0.0, 5.0, len(m) // 100 + 1)
-    return Measurement(m.time, {**m.channels, "voltage": np.repeat(steps, 100)[: len(m)]},
-                       {**m.units, "voltage": "V"}, f"{m.source} (unrelated voltage)")
+    return Measurement(
+        m.time,
+        {**m.channels, "voltage": np.repeat(steps, 100)[: len(m)]},
+        {**m.units, "voltage": "V"},
+        f"{m.source} (unrelated voltage)",
+    )
 
 
 @cache
@@ -46,8 +51,9 @@ def diagnosis_of(damper_type: str):
     """A small velocity-history network fitted on the first half, diagnosed on the second."""
     m = record(damper_type)
     half = len(m) // 2
-    model = train_model(m.slice(0, half), SPEC, Architecture("mlp", (6,)),
-                        TrainSettings(max_epochs=100, restarts=1)).model
+    model = train_model(
+        m.slice(0, half), SPEC, Architecture("mlp", (6,)), TrainSettings(max_epochs=100, restarts=1)
+    ).model
     predicted = model.predict({c: m[c] for c in SPEC.channels})
     rest = m.slice(half, len(m))
     return diagnose(rest, predicted[half:], "force", SPEC.channels)
@@ -58,8 +64,9 @@ def test_candidates_are_the_channels_no_effect_covers():
     assert [e.name for e in channel_effects(m, ("velocity",), "force")] == ["input:voltage"]
     assert channel_effects(m, ("velocity", "voltage"), "force") == []  # a model input is no candidate
     units = {**m.units, "temperature": "K", "pressure": "Pa", "radial_force": "N", "axial_acceleration": "m/s^2"}
-    more = Measurement(m.time, {**m.channels, **{k: m["voltage"] for k in units if k not in m.channels}}, units,
-                       "more channels")
+    more = Measurement(
+        m.time, {**m.channels, **{k: m["voltage"] for k in units if k not in m.channels}}, units, "more channels"
+    )
     # motion, loads and temperature belong to the physical families; the pressure is a candidate
     assert [e.name for e in channel_effects(more, ("velocity",), "force")] == ["input:voltage", "input:pressure"]
 
@@ -69,7 +76,9 @@ def test_the_run_merges_the_library_and_the_records_candidates_and_looks_either_
     every = effects_for(m, ("velocity",), "force", None)
     assert [e.name for e in every] == [*EFFECTS, "input:voltage"]
     assert [e.name for e in effects_for(m, ("velocity",), "force", ("input:voltage", "inertia"))] == [
-        "input:voltage", "inertia"]
+        "input:voltage",
+        "inertia",
+    ]
     with pytest.raises(DiagnosisError, match=r"'input:current'.*channel candidates input:voltage"):
         effects_for(m, ("velocity",), "force", ("input:current",))
     assert isinstance(find_effect("input:voltage"), ChannelInput) and find_effect("inertia") is EFFECTS["inertia"]

@@ -32,8 +32,9 @@ def rig_case(missing: tuple[str, ...], seed: int = 1) -> tuple[Measurement, np.n
     model = tuple(e for e in every if e not in missing)
     options = RigOptions(duration=DURATION, seed=seed, effects=every, excitation="random")
     measured = simulate_rig("damper", options).measurement
-    predicted = simulate_rig("damper", RigOptions(duration=DURATION, seed=seed, effects=model, excitation="random",
-                                                  noise=0.0)).measurement["force"]
+    predicted = simulate_rig(
+        "damper", RigOptions(duration=DURATION, seed=seed, effects=model, excitation="random", noise=0.0)
+    ).measurement["force"]
     return measured, predicted
 
 

@@ -40,8 +40,15 @@ def regressors(name: str, m: Measurement, inputs=("velocity",)):
 
 def test_the_library_has_the_stable_names():
     assert list(EFFECTS) == [
-        "seal_friction", "gas_force", "hysteresis", "backlash", "inertia", "temperature", "frequency_dependence",
-        "amplitude_dependence", "sensor_offset",
+        "seal_friction",
+        "gas_force",
+        "hysteresis",
+        "backlash",
+        "inertia",
+        "temperature",
+        "frequency_dependence",
+        "amplitude_dependence",
+        "sensor_offset",
     ]
     for effect in EFFECTS.values():
         assert effect.description and isinstance(effect.requires, tuple)

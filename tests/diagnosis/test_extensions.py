@@ -18,8 +18,9 @@ SPEC = FeatureSpec((Tap("velocity", (0, 2)),), "force")
 
 @cache
 def rig() -> Measurement:
-    return simulate_rig("damper", RigOptions(duration=6.0, seed=2, excitation="random",
-                                             effects=("inertia", "temperature"))).measurement
+    return simulate_rig(
+        "damper", RigOptions(duration=6.0, seed=2, excitation="random", effects=("inertia", "temperature"))
+    ).measurement
 
 
 @pytest.mark.parametrize(

@@ -46,17 +46,26 @@ FEATURE_SAMPLES = 400  # samples run through the feature nodes one at a time
 # on a record with a coil voltage the model does not use.
 CHANNEL = "input:voltage"
 CASES = [
-    ("seal_friction", "rig"), ("gas_force", "rig"), ("hysteresis", "rig"), ("backlash", "rig"),
-    ("inertia", "rig"), ("inertia", "with_acceleration"), ("temperature", "rig"), ("temperature", "no_temperature"),
-    ("frequency_dependence", "rig"), ("amplitude_dependence", "rig"), (CHANNEL, "with_voltage"),
+    ("seal_friction", "rig"),
+    ("gas_force", "rig"),
+    ("hysteresis", "rig"),
+    ("backlash", "rig"),
+    ("inertia", "rig"),
+    ("inertia", "with_acceleration"),
+    ("temperature", "rig"),
+    ("temperature", "no_temperature"),
+    ("frequency_dependence", "rig"),
+    ("amplitude_dependence", "rig"),
+    (CHANNEL, "with_voltage"),
 ]
 
 
 @cache
 def record(variant: str) -> Measurement:
     """A 3 s random-drive damper record (displacement, velocity, temperature, force), changed as `variant` says."""
-    m = simulate_rig("damper", RigOptions(duration=3.0, seed=2, excitation="random",
-                                          effects=("inertia", "temperature"))).measurement
+    m = simulate_rig(
+        "damper", RigOptions(duration=3.0, seed=2, excitation="random", effects=("inertia", "temperature"))
+    ).measurement
     channels = dict(m.channels)
     if variant == "no_temperature":
         del channels["temperature"]
@@ -138,9 +147,12 @@ def test_the_extension_picks_its_values_from_the_tuples_the_diagnosis_tries():
     one_tau = DiagnosisSettings(channel_taus=(0.05,))
     regressors = find_effect(CHANNEL).regressors(signals, one_tau)
     ext = find_effect(CHANNEL).extension(SPEC, with_voltage, np.arange(len(with_voltage)), one_tau)
-    assert regressors.names == ("voltage - its mean", "lowpass(voltage, 0.05 s) - its mean",
-                                "(voltage - its mean) * predicted force",
-                                "(lowpass(voltage, 0.05 s) - its mean) * predicted force")
+    assert regressors.names == (
+        "voltage - its mean",
+        "lowpass(voltage, 0.05 s) - its mean",
+        "(voltage - its mean) * predicted force",
+        "(lowpass(voltage, 0.05 s) - its mean) * predicted force",
+    )
     assert np.allclose(regressors.matrix.mean(axis=0)[:2], 0.0)  # centred on the record mean
     assert ext.added == ("voltage[k]", "lowpass(voltage, tau=0.05)")  # the channel at delay 0 and its low-pass
 
@@ -173,8 +185,9 @@ def test_added_features_equal_their_onnx_nodes_sample_by_sample(effect, variant)
 
 
 @pytest.mark.parametrize(("effect", "variant"), CASES)
-def test_the_exported_step_graph_of_an_extended_network_reproduces_its_numpy_prediction(effect, variant,
-                                                                                       tmp_path: Path):
+def test_the_exported_step_graph_of_an_extended_network_reproduces_its_numpy_prediction(
+    effect, variant, tmp_path: Path
+):
     ext = extension_of(effect, variant)
     m = record(variant)
     model = train_model(m, ext.spec, Architecture("mlp", (3,)), TrainSettings(max_epochs=3, restarts=1)).model

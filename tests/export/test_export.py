@@ -58,8 +58,9 @@ MLP_SPEC = FeatureSpec(
     output="force",
     derived=(SmoothSign("velocity", scale=0.05), Lowpass("velocity", tau=0.01)),
 )
-GRU_SPEC = FeatureSpec(taps=(Tap("velocity", (0, 1)), Tap("displacement")), output="force",
-                       derived=(Lowpass("displacement", tau=0.02),))
+GRU_SPEC = FeatureSpec(
+    taps=(Tap("velocity", (0, 1)), Tap("displacement")), output="force", derived=(Lowpass("displacement", tau=0.02),)
+)
 
 
 def relative(a: np.ndarray, b: np.ndarray) -> float:
@@ -86,8 +87,9 @@ def test_graph_follows_the_step_convention(tmp_path, spec, recurrent):
     n_state = spec.state_size + (6 if recurrent else 0)
 
     def shapes(vis):
-        return [(v.name, v.type.tensor_type.elem_type, [d.dim_value for d in v.type.tensor_type.shape.dim])
-                for v in vis]
+        return [
+            (v.name, v.type.tensor_type.elem_type, [d.dim_value for d in v.type.tensor_type.shape.dim]) for v in vis
+        ]
 
     double = onnx.TensorProto.DOUBLE
     assert shapes(graph.graph.input) == [(c, double, [1]) for c in spec.channels] + [("state", double, [n_state])]
@@ -123,13 +125,19 @@ def test_component_round_trip_from_file(tmp_path, recurrent):
     assert component.sample_period == T and component.name == "damper" and component.description == "front damper"
     meta = component.metadata
     assert FeatureSpec.from_dict(meta["feature_spec"]) == spec
-    assert meta["network"] == {"kind": "gru" if recurrent else "mlp",
-                               "sizes": [spec.n_features, 6 if recurrent else 7, 1]}
-    assert (meta["data_hash"] == "ab" * 32 and meta["metrics"] == {"test": {"nrmse": 0.05}}
-            and meta["training"]["seed"] == 0)
+    assert meta["network"] == {
+        "kind": "gru" if recurrent else "mlp",
+        "sizes": [spec.n_features, 6 if recurrent else 7, 1],
+    }
+    assert (
+        meta["data_hash"] == "ab" * 32
+        and meta["metrics"] == {"test": {"nrmse": 0.05}}
+        and meta["training"]["seed"] == 0
+    )
     assert [s["name"] for s in meta["state_layout"]][: spec.state_size] == [s.name for s in spec.state_layout()]
     assert meta["max_abs_weight"] == pytest.approx(
-        max(float(p.detach().abs().max()) for p in model.network.parameters()))
+        max(float(p.detach().abs().max()) for p in model.network.parameters())
+    )
 
 
 def test_stateless_model_has_no_state_port(tmp_path):
@@ -180,7 +188,8 @@ def test_run_step_graph_handles_a_foreign_graph_without_metadata():
 
     node = helper.make_node("Mul", ["x", "two"], ["y"])
     graph = helper.make_graph(
-        [node], "foreign",
+        [node],
+        "foreign",
         [helper.make_tensor_value_info("x", TensorProto.FLOAT, ["batch", 2])],
         [helper.make_tensor_value_info("y", TensorProto.FLOAT, ["batch", 2])],
         [helper.make_tensor("two", TensorProto.FLOAT, [1], [2.0])],

@@ -29,10 +29,16 @@ def test_every_operator_the_exporter_may_emit_translates_to_c() -> None:
 def test_a_folded_operator_becomes_a_constant_in_the_c_source() -> None:
     """The one allowed operator without an emitter, a Constant node feeding an Add, generates C holding its value."""
     value = np.array([0.125, -3.5])
-    nodes = [helper.make_node("Constant", [], ["c"], value=numpy_helper.from_array(value, "c"), name="c"),
-             helper.make_node("Add", ["x", "c"], ["y"], name="add")]
-    graph = helper.make_graph(nodes, "folded", [helper.make_tensor_value_info("x", TensorProto.DOUBLE, [2])],
-                              [helper.make_tensor_value_info("y", TensorProto.DOUBLE, [2])])
+    nodes = [
+        helper.make_node("Constant", [], ["c"], value=numpy_helper.from_array(value, "c"), name="c"),
+        helper.make_node("Add", ["x", "c"], ["y"], name="add"),
+    ]
+    graph = helper.make_graph(
+        nodes,
+        "folded",
+        [helper.make_tensor_value_info("x", TensorProto.DOUBLE, [2])],
+        [helper.make_tensor_value_info("y", TensorProto.DOUBLE, [2])],
+    )
     model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", OPSET)])
     model.ir_version = IR_VERSION
     source = generate_c(model).source

@@ -21,20 +21,32 @@ from nnfmu.models.scaling import MinMaxScaler
 from nnfmu.models.trained import TrainedModel
 
 T = 0.001
-UNITS = {"axial_displacement": "m", "axial_velocity": "m/s", "axial_force": "N",
-         "axial_rotation": "rad", "axial_angular_velocity": "rad/s", "axial_torque": "N.m"}
-FORCE = FeatureSpec(taps=(Tap("axial_displacement", (0, 1)), Tap("axial_velocity")), output="axial_force",
-                    derived=(Lowpass("axial_displacement", tau=0.01),))
-TORQUE = FeatureSpec(taps=(Tap("axial_rotation", (0, 1, 2)), Tap("axial_angular_velocity", (0, 1))),
-                     output="axial_torque")
+UNITS = {
+    "axial_displacement": "m",
+    "axial_velocity": "m/s",
+    "axial_force": "N",
+    "axial_rotation": "rad",
+    "axial_angular_velocity": "rad/s",
+    "axial_torque": "N.m",
+}
+FORCE = FeatureSpec(
+    taps=(Tap("axial_displacement", (0, 1)), Tap("axial_velocity")),
+    output="axial_force",
+    derived=(Lowpass("axial_displacement", tau=0.01),),
+)
+TORQUE = FeatureSpec(
+    taps=(Tap("axial_rotation", (0, 1, 2)), Tap("axial_angular_velocity", (0, 1))), output="axial_torque"
+)
 STATELESS = FeatureSpec(taps=(Tap("axial_velocity"),), output="axial_torque")
 
 
 def signals(channels: list[str], n: int, seed: int) -> dict[str, np.ndarray]:
     rng = np.random.default_rng(seed)
     t = np.arange(n) * T
-    return {c: (0.01 + i) * (np.sin(2 * np.pi * rng.uniform(1, 9) * t + rng.uniform(0, 6)) + 0.2 * rng.normal(size=n))
-            for i, c in enumerate(channels)}
+    return {
+        c: (0.01 + i) * (np.sin(2 * np.pi * rng.uniform(1, 9) * t + rng.uniform(0, 6)) + 0.2 * rng.normal(size=n))
+        for i, c in enumerate(channels)
+    }
 
 
 def exported(spec: FeatureSpec, path, seed: int, period: float = T) -> onnx.ModelProto:
@@ -46,11 +58,16 @@ def exported(spec: FeatureSpec, path, seed: int, period: float = T) -> onnx.Mode
             p.mul_(3.0)
     train = signals(spec.channels, 400, seed)
     model = TrainedModel(
-        spec=spec, network=network, feature_scaler=MinMaxScaler.fit(spec.features(train, period)),
+        spec=spec,
+        network=network,
+        feature_scaler=MinMaxScaler.fit(spec.features(train, period)),
         target_scaler=MinMaxScaler.fit(np.random.default_rng(seed).normal(scale=500.0, size=400)),
-        sample_period=period, units=UNITS,
+        sample_period=period,
+        units=UNITS,
         envelope={c: (float(train[c].min()), float(train[c].max())) for c in spec.channels},
-        metrics={"test": {"nrmse": 0.1}}, data_hash="cd" * 32, settings={"seed": seed},
+        metrics={"test": {"nrmse": 0.1}},
+        data_hash="cd" * 32,
+        settings={"seed": seed},
     )
     return onnx.load(export_onnx(model, path, name=f"{spec.output}_{seed}").path)
 

@@ -44,15 +44,19 @@ def filtered_fmus(tmp_path_factory: pytest.TempPathFactory, delay_onnx: Path) ->
     from nnfmu.fmu.options import BuildOptions
 
     out = tmp_path_factory.mktemp("filtered")
-    return {v: build_fmu(delay_onnx, BuildOptions(out=out / f"damper{v}.fmu", fmi_version=v, filter_cutoff=100.0))
-            for v in (2, 3)}
+    return {
+        v: build_fmu(delay_onnx, BuildOptions(out=out / f"damper{v}.fmu", fmi_version=v, filter_cutoff=100.0))
+        for v in (2, 3)
+    }
 
 
 @pytest.fixture(scope="session")
 def pythonfmu_dampers(tmp_path_factory: pytest.TempPathFactory) -> dict[int, tuple[Path, Path]]:
     """The pythonfmu damper graph (seed 0) built by the pythonfmu backend for FMI 2 and FMI 3: (onnx, fmu) each."""
-    return {v: build(tmp_path_factory.mktemp(f"damper{v}"), delay_damper_graph(seed=0), "damper", fmi_version=v)
-            for v in (2, 3)}
+    return {
+        v: build(tmp_path_factory.mktemp(f"damper{v}"), delay_damper_graph(seed=0), "damper", fmi_version=v)
+        for v in (2, 3)
+    }
 
 
 @pytest.fixture

@@ -42,13 +42,18 @@ class Master:
         self.fmi = 3 if self.description.fmiVersion.startswith("3") else 2
         self.variables = {v.name: v for v in self.description.modelVariables}
         self.inputs = [v.name for v in self.description.modelVariables if v.causality == "input"]
-        self.outputs = [v.name for v in self.description.modelVariables
-                        if v.causality == "output" and v.type in ("Real", "Float64")]
+        self.outputs = [
+            v.name for v in self.description.modelVariables if v.causality == "output" and v.type in ("Real", "Float64")
+        ]
         self.messages: list[tuple[int, str, str]] = []
         self._folder = tempfile.mkdtemp(prefix="contract-", dir=Path(fmu).resolve().parent)
         directory = extract(str(fmu), unzipdir=self._folder)
-        kwargs = dict(guid=self.description.guid, unzipDirectory=directory, instanceName=name,
-                      modelIdentifier=self.description.coSimulation.modelIdentifier)
+        kwargs = dict(
+            guid=self.description.guid,
+            unzipDirectory=directory,
+            instanceName=name,
+            modelIdentifier=self.description.coSimulation.modelIdentifier,
+        )
         self._key = next(_KEYS)
         if self.fmi == 2:
             self.fmu = FMU2Slave(**kwargs)
@@ -67,8 +72,9 @@ class Master:
         self._open = True
 
     def _log3(self, env, status, category, message) -> None:  # noqa: ANN001 (ctypes callback)
-        self.messages.append((status, (category or b"").decode(errors="replace"),
-                              (message or b"").decode(errors="replace")))
+        self.messages.append(
+            (status, (category or b"").decode(errors="replace"), (message or b"").decode(errors="replace"))
+        )
 
     def vrs(self, names: list[str]) -> list[int]:
         return [self.variables[n].valueReference for n in names]

@@ -16,12 +16,22 @@ from nnfmu.models.scaling import MinMaxScaler
 from nnfmu.models.trained import TrainedModel
 
 T = 0.001
-UNITS = {"axial_displacement": "m", "axial_velocity": "m/s", "axial_force": "N", "axial_rotation": "rad",
-         "axial_angular_velocity": "rad/s", "axial_torque": "N.m"}
-FORCE = FeatureSpec(taps=(Tap("axial_displacement", (0, 1)), Tap("axial_velocity")), output="axial_force",
-                    derived=(Lowpass("axial_displacement", tau=0.01),))
-TORQUE = FeatureSpec(taps=(Tap("axial_rotation", (0, 1, 2)), Tap("axial_angular_velocity", (0, 1))),
-                     output="axial_torque")
+UNITS = {
+    "axial_displacement": "m",
+    "axial_velocity": "m/s",
+    "axial_force": "N",
+    "axial_rotation": "rad",
+    "axial_angular_velocity": "rad/s",
+    "axial_torque": "N.m",
+}
+FORCE = FeatureSpec(
+    taps=(Tap("axial_displacement", (0, 1)), Tap("axial_velocity")),
+    output="axial_force",
+    derived=(Lowpass("axial_displacement", tau=0.01),),
+)
+TORQUE = FeatureSpec(
+    taps=(Tap("axial_rotation", (0, 1, 2)), Tap("axial_angular_velocity", (0, 1))), output="axial_torque"
+)
 HELD_OUT_SEED_OFFSET = 100
 
 
@@ -29,8 +39,10 @@ def signals(channels: list[str], n: int, seed: int) -> dict[str, np.ndarray]:
     """Sines with noise, one per channel, of growing amplitude."""
     rng = np.random.default_rng(seed)
     t = np.arange(n) * T
-    return {c: (0.01 + i) * (np.sin(2 * np.pi * rng.uniform(1, 9) * t + rng.uniform(0, 6)) + 0.2 * rng.normal(size=n))
-            for i, c in enumerate(channels)}
+    return {
+        c: (0.01 + i) * (np.sin(2 * np.pi * rng.uniform(1, 9) * t + rng.uniform(0, 6)) + 0.2 * rng.normal(size=n))
+        for i, c in enumerate(channels)
+    }
 
 
 def export_network(spec: FeatureSpec, path: Path, seed: int) -> Path:
@@ -42,11 +54,16 @@ def export_network(spec: FeatureSpec, path: Path, seed: int) -> Path:
             p.mul_(3.0)
     train = signals(spec.channels, 400, seed)
     model = TrainedModel(
-        spec=spec, network=network, feature_scaler=MinMaxScaler.fit(spec.features(train, T)),
+        spec=spec,
+        network=network,
+        feature_scaler=MinMaxScaler.fit(spec.features(train, T)),
         target_scaler=MinMaxScaler.fit(np.random.default_rng(seed).normal(scale=500.0, size=400)),
-        sample_period=T, units=UNITS,
+        sample_period=T,
+        units=UNITS,
         envelope={c: (float(train[c].min()), float(train[c].max())) for c in spec.channels},
-        metrics={"test": {"nrmse": 0.1}}, data_hash="ab" * 32, settings={"seed": seed},
+        metrics={"test": {"nrmse": 0.1}},
+        data_hash="ab" * 32,
+        settings={"seed": seed},
     )
     held_out = signals(spec.channels, 700, seed + HELD_OUT_SEED_OFFSET)
     return export_onnx(model, path, name=f"{spec.output}_net", verify_on=held_out).path

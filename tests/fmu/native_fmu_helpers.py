@@ -51,19 +51,27 @@ def delay_step_graph() -> onnx.ModelProto:
         helper.make_node("Concat", ["velocity", "older"], ["state_next"], axis=0, name="push"),
     ]
     initializers = [
-        _const("w1", w1), _const("b1", b1), _const("w2", w2), _const("b2", b2),
-        _const("row_shape", np.array([1, 4], dtype=np.int64)), _const("flat_shape", np.array([2], dtype=np.int64)),
-        _const("zero", np.array([0], dtype=np.int64)), _const("one", np.array([1], dtype=np.int64)),
-        _const("two", np.array([2], dtype=np.int64)), _const("axis0", np.array([0], dtype=np.int64)),
+        _const("w1", w1),
+        _const("b1", b1),
+        _const("w2", w2),
+        _const("b2", b2),
+        _const("row_shape", np.array([1, 4], dtype=np.int64)),
+        _const("flat_shape", np.array([2], dtype=np.int64)),
+        _const("zero", np.array([0], dtype=np.int64)),
+        _const("one", np.array([1], dtype=np.int64)),
+        _const("two", np.array([2], dtype=np.int64)),
+        _const("axis0", np.array([0], dtype=np.int64)),
     ]
     graph = helper.make_graph(
-        nodes, "damper_step",
+        nodes,
+        "damper_step",
         [_double("velocity", [1]), _double("displacement", [1]), _double("state", [2])],
         [_double("force", [1]), _double("torque", [1]), _double("state_next", [2])],
         initializers,
     )
-    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", OPSET)], producer_name="nnfmu-tests",
-                              ir_version=IR_VERSION)
+    model = helper.make_model(
+        graph, opset_imports=[helper.make_opsetid("", OPSET)], producer_name="nnfmu-tests", ir_version=IR_VERSION
+    )
     component = Component(
         name="damper",
         inputs=[
@@ -91,14 +99,20 @@ def generic_graph(input_name: str = "x", output_name: str = "y") -> onnx.ModelPr
         helper.make_node("Reshape", ["z_row", "one_shape"], ["z"], name="flat"),
     ]
     graph = helper.make_graph(
-        nodes, "other_tool",
+        nodes,
+        "other_tool",
         [_double(input_name, [3])],
         [_double(output_name, [2]), _double("z", [1])],
-        [_const("w", w), _const("ones", np.ones((3, 1))), _const("row_shape", np.array([1, 3], dtype=np.int64)),
-         _const("one_shape", np.array([1], dtype=np.int64))],
+        [
+            _const("w", w),
+            _const("ones", np.ones((3, 1))),
+            _const("row_shape", np.array([1, 3], dtype=np.int64)),
+            _const("one_shape", np.array([1], dtype=np.int64)),
+        ],
     )
-    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", OPSET)], producer_name="other-tool",
-                              ir_version=IR_VERSION)
+    model = helper.make_model(
+        graph, opset_imports=[helper.make_opsetid("", OPSET)], producer_name="other-tool", ir_version=IR_VERSION
+    )
     onnx.checker.check_model(model)
     return model
 
@@ -107,15 +121,19 @@ def hostile_graph() -> onnx.ModelProto:
     """A graph from another tool whose tensor names are hostile to C and XML and clash after sanitising."""
     names = ['a"b', "c<d&e", "f*/g", "line\nbreak", "time", "a_b"]
     outputs = ["extrapolating", "out%s'"]
-    nodes = [helper.make_node("Add", [names[0], names[1]], ["s1"], name="add1"),
-             helper.make_node("Add", ["s1", names[2]], ["s2"], name="add2"),
-             helper.make_node("Add", [names[3], names[4]], ["s3"], name="add3"),
-             helper.make_node("Mul", ["s2", names[5]], [outputs[0]], name="mul"),
-             helper.make_node("Tanh", ["s3"], [outputs[1]], name="tanh")]
+    nodes = [
+        helper.make_node("Add", [names[0], names[1]], ["s1"], name="add1"),
+        helper.make_node("Add", ["s1", names[2]], ["s2"], name="add2"),
+        helper.make_node("Add", [names[3], names[4]], ["s3"], name="add3"),
+        helper.make_node("Mul", ["s2", names[5]], [outputs[0]], name="mul"),
+        helper.make_node("Tanh", ["s3"], [outputs[1]], name="tanh"),
+    ]
     graph = helper.make_graph(
-        nodes, "hostile */ <graph>",
+        nodes,
+        "hostile */ <graph>",
         [helper.make_tensor_value_info(n, TensorProto.DOUBLE, [1]) for n in names],
-        [helper.make_tensor_value_info(n, TensorProto.DOUBLE, [1]) for n in outputs])
+        [helper.make_tensor_value_info(n, TensorProto.DOUBLE, [1]) for n in outputs],
+    )
     model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)], ir_version=8)
     model.doc_string = 'doc with "quotes", <tags>, */ and a\nnewline\x01'
     return model

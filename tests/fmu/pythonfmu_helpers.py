@@ -52,8 +52,13 @@ def delay_damper_graph(seed: int) -> onnx.ModelProto:
     def vector(name: str, n: int) -> onnx.ValueInfoProto:
         return helper.make_tensor_value_info(name, TensorProto.DOUBLE, [n])
 
-    graph = helper.make_graph(nodes, f"damper{seed}", [vector("velocity", 1), vector("state", 2)],
-                              [vector("force", 1), vector("state_next", 2)], inits)
+    graph = helper.make_graph(
+        nodes,
+        f"damper{seed}",
+        [vector("velocity", 1), vector("state", 2)],
+        [vector("force", 1), vector("state_next", 2)],
+        inits,
+    )
     model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)], ir_version=9)
     Component(
         name="damper",
@@ -85,15 +90,17 @@ def view_of(onnx_path: Path, fmi_version: int, component: Component | None = Non
     model = onnx.load(str(onnx_path))
     component = component or Component.from_onnx(model)
     identity = FmuIdentity(component.name, component.name, "{00000000-0000-0000-0000-000000000000}", fmi_version)
-    return ModelDescriptionView(identity, component, fmu_variables(component), tensor_dependencies(model),
-                                source_files=["graph.c"])  # FMI 2 lists the C sources; any name will do here
+    return ModelDescriptionView(
+        identity, component, fmu_variables(component), tensor_dependencies(model), source_files=["graph.c"]
+    )  # FMI 2 lists the C sources; any name will do here
 
 
 def native_description(onnx_path: Path, folder: Path, fmi_version: int = 3) -> Path:
     """The modelDescription.xml the native backend renders for `fmi_version` from the same graph, in `folder`."""
     folder.mkdir()
-    (folder / "modelDescription.xml").write_text(render_model_description(view_of(onnx_path, fmi_version)),
-                                                 encoding="utf-8")
+    (folder / "modelDescription.xml").write_text(
+        render_model_description(view_of(onnx_path, fmi_version)), encoding="utf-8"
+    )
     return folder
 
 
@@ -124,8 +131,16 @@ class Reference:
 class Instance(FmuSlave):
     """The package's FmuSlave on a damper FMU of either FMI version, initialised with the given parameters."""
 
-    def __init__(self, fmu: Path, name: str, cutoff: float = 0.0, gain: float = 1.0, velocity: float = 0.0,
-                 start: float = 0.0, logging_on: bool = True):
+    def __init__(
+        self,
+        fmu: Path,
+        name: str,
+        cutoff: float = 0.0,
+        gain: float = 1.0,
+        velocity: float = 0.0,
+        start: float = 0.0,
+        logging_on: bool = True,
+    ):
         super().__init__(fmu, name, logging_on)
         self.initialise(cutoff, gain, velocity, start)
 

@@ -22,11 +22,15 @@ IR_VERSION = 8
 
 def _foreign_model(nodes: list[onnx.NodeProto], input_shape: list[int], output_shape: list[int]) -> onnx.ModelProto:
     """A graph as another tool writes it: no nnfmu metadata, a double input `x` and output `y`."""
-    graph = helper.make_graph(nodes, "other_tool",
-                              [helper.make_tensor_value_info("x", TensorProto.DOUBLE, input_shape)],
-                              [helper.make_tensor_value_info("y", TensorProto.DOUBLE, output_shape)])
-    return helper.make_model(graph, opset_imports=[helper.make_opsetid("", OPSET)], producer_name="other-tool",
-                             ir_version=IR_VERSION)
+    graph = helper.make_graph(
+        nodes,
+        "other_tool",
+        [helper.make_tensor_value_info("x", TensorProto.DOUBLE, input_shape)],
+        [helper.make_tensor_value_info("y", TensorProto.DOUBLE, output_shape)],
+    )
+    return helper.make_model(
+        graph, opset_imports=[helper.make_opsetid("", OPSET)], producer_name="other-tool", ir_version=IR_VERSION
+    )
 
 
 def _vector_graph(n: int) -> onnx.ModelProto:
@@ -55,8 +59,10 @@ def test_build_time_grows_about_linearly_in_ports(tmp_path, monkeypatch):
 
 def test_a_huge_declared_input_is_refused_naming_tensor_size_and_limit(tmp_path, monkeypatch):
     path = tmp_path / "huge.onnx"
-    onnx.save(_foreign_model([helper.make_node("Tanh", ["x"], ["y"], name="tanh")], [1_000_000_000],
-                             [1_000_000_000]), str(path))
+    onnx.save(
+        _foreign_model([helper.make_node("Tanh", ["x"], ["y"], name="tanh")], [1_000_000_000], [1_000_000_000]),
+        str(path),
+    )
     out = tmp_path / "huge.fmu"
     start = time.perf_counter()
     with pytest.raises(FmuBuildError, match=rf"(?s)(?=.*'x')(?=.*1000000000)(?=.*{MAX_PORTS})"):
@@ -80,8 +86,9 @@ def test_a_3000_node_chain_builds_without_recursion_error(tmp_path, monkeypatch)
     monkeypatch.setattr(native_build, "compile_shared_library", lambda *args, **kwargs: None)  # the walks are Python
     n = 3000
     names = ["x", *[f"t{i}" for i in range(1, n)], "y"]
-    nodes = [helper.make_node("Identity" if i % 2 else "Neg", [names[i]], [names[i + 1]], name=f"n{i}")
-             for i in range(n)]
+    nodes = [
+        helper.make_node("Identity" if i % 2 else "Neg", [names[i]], [names[i + 1]], name=f"n{i}") for i in range(n)
+    ]
     path = tmp_path / "chain.onnx"
     onnx.save(_foreign_model(nodes, [1], [1]), str(path))
     fmu = build_fmu(path, BuildOptions(out=tmp_path / "chain.fmu", platforms=("linux64",)))

@@ -24,11 +24,25 @@ _ops = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(_ops)
 CFLAGS, GCC, needs_gcc = _ops.CFLAGS, _ops.GCC, _ops.needs_gcc
 assert_matches, make_model, rand, reference, run_native = (
-    _ops.assert_matches, _ops.make_model, _ops.rand, _ops.reference, _ops.run_native
+    _ops.assert_matches,
+    _ops.make_model,
+    _ops.rand,
+    _ops.reference,
+    _ops.run_native,
 )
 
 HOSTILE = [
-    'quo"te\'s', "a<b>&c", "*/ evil /*", "line\nbreak\\", "ünïcødé 😀", "1st", "int", "return", "??/", "a-b", "a.b"
+    "quo\"te's",
+    "a<b>&c",
+    "*/ evil /*",
+    "line\nbreak\\",
+    "ünïcødé 😀",
+    "1st",
+    "int",
+    "return",
+    "??/",
+    "a-b",
+    "a.b",
 ]
 
 
@@ -82,8 +96,12 @@ def mlp_gru_step_model(hidden: int = 4) -> tuple[onnx.ModelProto, list[str]]:
         helper.make_node("Reshape", ["scaled", "x_shape"], ["x_seq"], name="/x/Reshape"),
         helper.make_node("Reshape", ["state", "h_shape"], ["h0"], name="/h0/Reshape"),
         helper.make_node(
-            "GRU", ["x_seq", "gru.W", "gru.R", "gru.B", "", "h0"], ["", "h1"], hidden_size=hidden,
-            linear_before_reset=1, name="/gru/GRU",
+            "GRU",
+            ["x_seq", "gru.W", "gru.R", "gru.B", "", "h0"],
+            ["", "h1"],
+            hidden_size=hidden,
+            linear_before_reset=1,
+            name="/gru/GRU",
         ),
         helper.make_node("Reshape", ["h1", "flat"], ["state_next"], name="/state/Reshape"),
         helper.make_node("Unsqueeze", ["state_next", "zero"], ["h_row"], name="/h/Unsqueeze"),
@@ -198,7 +216,6 @@ def test_unsupported_op_among_supported_ones_is_named() -> None:
         generate_c(model)
 
 
-
 def _graph(nodes: list, opset: int = 17) -> onnx.ModelProto:
     x = helper.make_tensor_value_info("x", TensorProto.FLOAT, [1])
     y = helper.make_tensor_value_info("y", TensorProto.FLOAT, [1])
@@ -212,12 +229,22 @@ def test_an_operator_set_onnx_does_not_know_is_refused(opset: int) -> None:
         generate_c(_graph([helper.make_node("Relu", ["x"], ["y"])], opset))
 
 
-@pytest.mark.parametrize(("nodes", "tensor"), [
-    ([helper.make_node("Relu", ["x"], ["t"], name="a"), helper.make_node("Neg", ["x"], ["t"], name="b"),
-      helper.make_node("Identity", ["t"], ["y"])], "t"),
-    ([helper.make_node("Relu", ["x"], ["x"], name="b"), helper.make_node("Identity", ["x"], ["y"])], "x"),
-    ([helper.make_node("Relu", ["x"], ["y"], name="a"), helper.make_node("Neg", ["x"], ["y"], name="b")], "y"),
-], ids=["intermediate", "graph input", "graph output"])
+@pytest.mark.parametrize(
+    ("nodes", "tensor"),
+    [
+        (
+            [
+                helper.make_node("Relu", ["x"], ["t"], name="a"),
+                helper.make_node("Neg", ["x"], ["t"], name="b"),
+                helper.make_node("Identity", ["t"], ["y"]),
+            ],
+            "t",
+        ),
+        ([helper.make_node("Relu", ["x"], ["x"], name="b"), helper.make_node("Identity", ["x"], ["y"])], "x"),
+        ([helper.make_node("Relu", ["x"], ["y"], name="a"), helper.make_node("Neg", ["x"], ["y"], name="b")], "y"),
+    ],
+    ids=["intermediate", "graph input", "graph output"],
+)
 def test_a_tensor_written_twice_is_refused_before_the_compiler(nodes: list, tensor: str) -> None:
     with pytest.raises(UnsupportedGraphError, match=rf"node 'b' .*tensor '{tensor}' is written twice"):
         generate_c(_graph(nodes))

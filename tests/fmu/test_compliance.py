@@ -32,27 +32,45 @@ def every_kind(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     torque = export_network(TORQUE, folder / "torque.onnx", 8)
     merged = folder / "bushing.onnx"
     onnx.save(merge_step_graphs([onnx.load(force), onnx.load(torque)], "bushing", "force and torque"), merged)
-    fmus = {f"network native FMI {v}": build_fmu(force, BuildOptions(out=folder / f"n{v}.fmu", fmi_version=v))
-            for v in (2, 3)}
-    fmus |= {f"network pythonfmu FMI {v}": build_fmu(force, BuildOptions(out=folder / f"p{v}.fmu", fmi_version=v,
-                                                                          backend="pythonfmu")) for v in (2, 3)}
+    fmus = {
+        f"network native FMI {v}": build_fmu(force, BuildOptions(out=folder / f"n{v}.fmu", fmi_version=v))
+        for v in (2, 3)
+    }
+    fmus |= {
+        f"network pythonfmu FMI {v}": build_fmu(
+            force, BuildOptions(out=folder / f"p{v}.fmu", fmi_version=v, backend="pythonfmu")
+        )
+        for v in (2, 3)
+    }
     fmus["merged bushing FMI 2"] = build_fmu(merged, BuildOptions(out=folder / "bushing.fmu"))
     fmus["quarter car FMI 2"] = build_vehicle_fmu("quarter-car", folder / "qc.fmu", VehicleBuildSettings())
-    fmus["full vehicle FMI 3"] = build_vehicle_fmu("full-vehicle", folder / "fv3.fmu",
-                                                   VehicleBuildSettings(fmi_version=3))
+    fmus["full vehicle FMI 3"] = build_vehicle_fmu(
+        "full-vehicle", folder / "fv3.fmu", VehicleBuildSettings(fmi_version=3)
+    )
     fmus["full vehicle stabilised FMI 2"] = build_vehicle_fmu(
-        "full-vehicle", folder / "fv2.fmu",
-        VehicleBuildSettings(components={"bushing_fl_front": "stabilised", "bushing_fl_rear": "stabilised"}))
+        "full-vehicle",
+        folder / "fv2.fmu",
+        VehicleBuildSettings(components={"bushing_fl_front": "stabilised", "bushing_fl_rear": "stabilised"}),
+    )
     return fmus
 
 
 def _fmutool_check(fmu: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-c", FMUTOOL, "-input", str(fmu), "-check"], capture_output=True,
-                          text=True, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-c", FMUTOOL, "-input", str(fmu), "-check"], capture_output=True, text=True, timeout=120
+    )
 
 
-KINDS = ["network native FMI 2", "network native FMI 3", "network pythonfmu FMI 2", "network pythonfmu FMI 3",
-         "merged bushing FMI 2", "quarter car FMI 2", "full vehicle FMI 3", "full vehicle stabilised FMI 2"]
+KINDS = [
+    "network native FMI 2",
+    "network native FMI 3",
+    "network pythonfmu FMI 2",
+    "network pythonfmu FMI 3",
+    "merged bushing FMI 2",
+    "quarter car FMI 2",
+    "full vehicle FMI 3",
+    "full vehicle stabilised FMI 2",
+]
 
 
 @pytest.mark.parametrize("kind", KINDS)

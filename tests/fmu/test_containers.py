@@ -33,8 +33,10 @@ RELATIVE = 1e-12
 def network_fmus(tmp_path_factory: pytest.TempPathFactory) -> dict[int, Path]:
     folder = tmp_path_factory.mktemp("containers")
     onnx_path = export_network(FORCE, folder / "force.onnx", 5)
-    return {v: build_fmu(onnx_path, BuildOptions(out=folder / f"force{v}.fmu", fmi_version=v, platforms=("linux64",)))
-            for v in (2, 3)}
+    return {
+        v: build_fmu(onnx_path, BuildOptions(out=folder / f"force{v}.fmu", fmi_version=v, platforms=("linux64",)))
+        for v in (2, 3)
+    }
 
 
 def _stimulus(fmu: Path) -> np.ndarray:
@@ -69,16 +71,30 @@ def test_container_runtime_reproduces_fmpys_direct_run(network_fmus, tmp_path, i
     assert ("extrapolating" in exposed) == (outer == inner)  # Booleans cross no FMI version boundary
     signal = _stimulus(fmu)
     for parameters in ({}, {"filter_cutoff": 30.0, "output_gain": 2.5}):
-        direct = simulate_fmu(str(fmu), stop_time=STOP, step_size=STEP, output_interval=STEP, input=signal,
-                              output=["axial_force"], start_values=parameters)
-        contained = simulate_fmu(str(container), stop_time=STOP, step_size=STEP, output_interval=STEP, input=signal,
-                                 output=["axial_force"],
-                                 start_values={f"{prefix}.{k}": v for k, v in parameters.items()})
+        direct = simulate_fmu(
+            str(fmu),
+            stop_time=STOP,
+            step_size=STEP,
+            output_interval=STEP,
+            input=signal,
+            output=["axial_force"],
+            start_values=parameters,
+        )
+        contained = simulate_fmu(
+            str(container),
+            stop_time=STOP,
+            step_size=STEP,
+            output_interval=STEP,
+            input=signal,
+            output=["axial_force"],
+            start_values={f"{prefix}.{k}": v for k, v in parameters.items()},
+        )
         np.testing.assert_array_equal(contained["time"], direct["time"])
         peak = np.max(np.abs(direct["axial_force"]))
         assert peak > 1.0  # the network does something over this stimulus
         assert np.max(np.abs(contained["axial_force"] - direct["axial_force"])) <= RELATIVE * peak
     gained = direct["axial_force"]
-    plain = simulate_fmu(str(fmu), stop_time=STOP, step_size=STEP, output_interval=STEP, input=signal,
-                         output=["axial_force"])["axial_force"]
+    plain = simulate_fmu(
+        str(fmu), stop_time=STOP, step_size=STEP, output_interval=STEP, input=signal, output=["axial_force"]
+    )["axial_force"]
     assert not np.allclose(gained, plain)  # the parameters reached the FMU and changed its outputs

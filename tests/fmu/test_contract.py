@@ -46,8 +46,12 @@ def random_inputs(n: int, seed: int, inside: bool = True) -> np.ndarray:
 def plain_tanh_graph() -> onnx.ModelProto:
     """Another tool's graph: y[2] = tanh(x[2]), no metadata, no sample period."""
     node = helper.make_node("Tanh", ["x"], ["y"])
-    graph = helper.make_graph([node], "plain", [helper.make_tensor_value_info("x", TensorProto.DOUBLE, [2])],
-                              [helper.make_tensor_value_info("y", TensorProto.DOUBLE, [2])])
+    graph = helper.make_graph(
+        [node],
+        "plain",
+        [helper.make_tensor_value_info("x", TensorProto.DOUBLE, [2])],
+        [helper.make_tensor_value_info("y", TensorProto.DOUBLE, [2])],
+    )
     return helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)], ir_version=9)
 
 
@@ -78,7 +82,8 @@ def built(tmp_path_factory: pytest.TempPathFactory):
         if key not in cache:
             out = folder / f"{graph}-{backend}-fmi{fmi}-{len(cache)}.fmu"
             cache[key] = build_fmu_from_model(
-                GRAPHS[graph](), BuildOptions(out=out, backend=backend, fmi_version=fmi, **options))
+                GRAPHS[graph](), BuildOptions(out=out, backend=backend, fmi_version=fmi, **options)
+            )
         return cache[key]
 
     return build
@@ -118,8 +123,9 @@ def test_at_default_parameters_the_fmu_is_its_graph(combo, built, master, refere
     assert_within_peak(got, expected)
     np.testing.assert_allclose(got, expected, rtol=RTOL, atol=ATOL)
     values = np.random.default_rng(fmi).uniform(-1, 1, (1_000, 3))
-    assert_within_peak(master(built("generic", backend, fmi)).simulate(values, 1e-3),
-                       Reference(generic_graph()).simulate(values, 1e-3))
+    assert_within_peak(
+        master(built("generic", backend, fmi)).simulate(values, 1e-3), Reference(generic_graph()).simulate(values, 1e-3)
+    )
 
 
 @pytest.mark.parametrize(("h_over_t", "cutoff"), [(1.0, 100.0), (2.5, 100.0), (2.5, 0.0)])
@@ -182,8 +188,9 @@ def test_samples_count_from_the_start_time_and_a_gap_in_time_is_refused(combo, b
     h = 2.5 * T
     inputs = random_inputs(301, seed=6)
     m = master(built("delay", backend, fmi, filter_cutoff=100.0))
-    np.testing.assert_allclose(m.simulate(inputs, h, start=start), reference.simulate(inputs, h, cutoff=100.0),
-                               rtol=RTOL, atol=ATOL)
+    np.testing.assert_allclose(
+        m.simulate(inputs, h, start=start), reference.simulate(inputs, h, cutoff=100.0), rtol=RTOL, atol=ATOL
+    )
     if fmi == 3:
         assert m.get_real(["time"])[0] == pytest.approx(start + 300 * h, rel=1e-15)
     assert m.refused(m.do_step, start + 400 * h, h) == REFUSED_STEP[backend]
@@ -304,24 +311,41 @@ def test_start_values_and_variables_are_as_documented(combo, built):
     md = read_model_description(str(built("delay", backend, fmi)))
     variables = {v.name: v for v in md.modelVariables}
     assert [v.name for v in md.modelVariables if v.causality == "input"] == ["velocity", "displacement"]
-    assert all(float(variables[n].start) == 0.0 and variables[n].variability == "continuous"
-               for n in ("velocity", "displacement"))
+    assert all(
+        float(variables[n].start) == 0.0 and variables[n].variability == "continuous"
+        for n in ("velocity", "displacement")
+    )
     assert [(v.name, v.initial, v.variability) for v in md.modelVariables if v.causality == "output"] == [
-        ("force", "calculated", "discrete"), ("torque", "calculated", "discrete"),
-        ("extrapolating", "calculated", "discrete")]
+        ("force", "calculated", "discrete"),
+        ("torque", "calculated", "discrete"),
+        ("extrapolating", "calculated", "discrete"),
+    ]
     assert variables["extrapolating"].type == "Boolean"
     assert float(variables["filter_cutoff"].start) == 0.0 and variables["filter_cutoff"].unit == "Hz"
     assert float(variables["output_gain"].start) == 1.0
-    assert all(variables[n].causality == "parameter" and variables[n].variability == "fixed"
-               for n in ("filter_cutoff", "output_gain"))
+    assert all(
+        variables[n].causality == "parameter" and variables[n].variability == "fixed"
+        for n in ("filter_cutoff", "output_gain")
+    )
     assert ("time" in variables) == (fmi == 3)
     if fmi == 3:
         assert variables["time"].valueReference == max(v.valueReference for v in md.modelVariables)
     assert float(md.defaultExperiment.stepSize) == T
 
     def table(description) -> list[tuple]:  # noqa: ANN001 (an fmpy ModelDescription)
-        return [(v.name, v.valueReference, v.causality, v.variability, v.initial, v.unit, v.type,
-                 None if v.start is None else float(v.start)) for v in description.modelVariables]
+        return [
+            (
+                v.name,
+                v.valueReference,
+                v.causality,
+                v.variability,
+                v.initial,
+                v.unit,
+                v.type,
+                None if v.start is None else float(v.start),
+            )
+            for v in description.modelVariables
+        ]
 
     assert table(md) == table(read_model_description(str(built("delay", "native", fmi))))
 
@@ -331,8 +355,9 @@ def test_build_option_sets_the_filter_start_value(combo, built, master, referenc
     fmu = built("delay", backend, fmi, filter_cutoff=100.0)
     assert float({v.name: v.start for v in read_model_description(str(fmu)).modelVariables}["filter_cutoff"]) == 100
     inputs = random_inputs(500, seed=3)
-    np.testing.assert_allclose(master(fmu).simulate(inputs, T), reference.simulate(inputs, T, cutoff=100.0),
-                               rtol=RTOL, atol=ATOL)
+    np.testing.assert_allclose(
+        master(fmu).simulate(inputs, T), reference.simulate(inputs, T, cutoff=100.0), rtol=RTOL, atol=ATOL
+    )
     with pytest.raises(FmuBuildError, match="filter cut-off"):
         BuildOptions(filter_cutoff=-1.0)
 
@@ -355,8 +380,7 @@ def test_outputs_read_in_initialization_mode_preview_sample_0(combo, built, mast
         m.do_step(t, 2.5 * T)
         t += 2.5 * T
         rows.append(m.outputs_now())
-    np.testing.assert_allclose(np.array(rows), reference.simulate(inputs, 2.5 * T, cutoff=100.0), rtol=RTOL,
-                               atol=ATOL)
+    np.testing.assert_allclose(np.array(rows), reference.simulate(inputs, 2.5 * T, cutoff=100.0), rtol=RTOL, atol=ATOL)
     np.testing.assert_array_equal(preview[0], rows[0])
     np.testing.assert_array_equal(preview[2], rows[0])
 
@@ -365,8 +389,9 @@ def test_outputs_read_in_initialization_mode_preview_sample_0(combo, built, mast
 VELOCITY_EXCURSIONS = [0.0, 0.5, 1.5, 2.0, 1.8, 0.2, 0.1, -3.0, 0.0]  # two excursions: samples 2-4 and 7
 
 
-def test_the_initialization_mode_preview_follows_parameters_and_flags_the_envelope_without_a_warning(combo, built,
-                                                                                                   master, reference):
+def test_the_initialization_mode_preview_follows_parameters_and_flags_the_envelope_without_a_warning(
+    combo, built, master, reference
+):
     backend, fmi = combo
     m = master(built("delay", backend, fmi))
     m.enter_initialization(0.0)
@@ -400,19 +425,28 @@ def test_extrapolating_flag_and_one_warning_per_excursion(combo, built, master, 
     assert all("velocity" in message and "envelope" in message for _, message in warnings)
     assert "1.5 m/s" in warnings[0][1] and {"native": "-3 m/s", "pythonfmu": "-3.0 m/s"}[backend] in warnings[1][1]
     # the value is still computed
-    np.testing.assert_allclose(m.outputs_now(), reference.simulate(inputs, T, cutoff=100.0)[-1], rtol=RTOL,
-                               atol=ATOL)
+    np.testing.assert_allclose(m.outputs_now(), reference.simulate(inputs, T, cutoff=100.0)[-1], rtol=RTOL, atol=ATOL)
 
 
-@pytest.mark.parametrize("combo", [
-    pytest.param(c, id=i, marks=pytest.mark.xfail(
-        c == ("pythonfmu", 2), strict=True,
-        reason="pythonfmu 0.7.0 (FMI 2): its C wrapper drops every message while debug logging is off, errors "
-               "included (PyLogger::log forwards only `if (debugLogging_)`, set from fmi2Instantiate's loggingOn), "
-               "and the slave cannot reach the logger another way; FMI 2.0.2 section 2.1.3 expects the logger to "
-               "have shown an fmi2Error's message, qualifying only fmi2Discard's with loggingOn = fmi2True (the "
-               "refusal itself still happens)"))
-    for c, i in zip(COMBOS, COMBO_IDS)])
+@pytest.mark.parametrize(
+    "combo",
+    [
+        pytest.param(
+            c,
+            id=i,
+            marks=pytest.mark.xfail(
+                c == ("pythonfmu", 2),
+                strict=True,
+                reason="pythonfmu 0.7.0 (FMI 2): its C wrapper drops every message while debug logging is off, errors "
+                "included (PyLogger::log forwards only `if (debugLogging_)`, set from fmi2Instantiate's loggingOn), "
+                "and the slave cannot reach the logger another way; FMI 2.0.2 section 2.1.3 expects the logger to "
+                "have shown an fmi2Error's message, qualifying only fmi2Discard's with loggingOn = fmi2True (the "
+                "refusal itself still happens)",
+            ),
+        )
+        for c, i in zip(COMBOS, COMBO_IDS)
+    ],
+)
 def test_with_logging_off_errors_are_reported_and_warnings_are_not(combo, built, master):
     backend, fmi = combo
     quiet = master(built("delay", backend, fmi), logging_on=False)
@@ -444,8 +478,7 @@ def test_logging_only_the_error_category_reports_errors_and_no_warnings(combo, b
 
 
 @pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
-def test_non_finite_input_is_refused_with_an_error_status_and_a_logged_message(combo, built, master, reference,
-                                                                               bad):
+def test_non_finite_input_is_refused_with_an_error_status_and_a_logged_message(combo, built, master, reference, bad):
     """The refused value never reaches the graph and the instance stays usable. Native: the set call returns Error;
     pythonfmu: the set call logs the error and the next doStep returns Discard until a valid value is set."""
     backend, fmi = combo
@@ -488,13 +521,23 @@ def test_a_step_before_initialisation_and_a_step_at_the_wrong_time_are_refused(c
     m.do_step(T, T)
 
 
-@pytest.mark.parametrize("combo", [
-    pytest.param(c, id=i, marks=pytest.mark.xfail(
-        c[0] == "pythonfmu", strict=True,
-        reason="pythonfmu: setting a fixed parameter after initialisation logs the error and keeps the value, but "
-               "the set call returns OK: pythonfmu 0.7.0 and pythonfmu3 0.3.4 ignore what a Python setter returns "
-               "and turn any exception it raises into Fatal, so no set call can return Error"))
-    for c, i in zip(COMBOS, COMBO_IDS)])
+@pytest.mark.parametrize(
+    "combo",
+    [
+        pytest.param(
+            c,
+            id=i,
+            marks=pytest.mark.xfail(
+                c[0] == "pythonfmu",
+                strict=True,
+                reason="pythonfmu: setting a fixed parameter after initialisation logs the error and keeps the value, "
+                "but the set call returns OK: pythonfmu 0.7.0 and pythonfmu3 0.3.4 ignore what a Python setter returns "
+                "and turn any exception it raises into Fatal, so no set call can return Error",
+            ),
+        )
+        for c, i in zip(COMBOS, COMBO_IDS)
+    ],
+)
 def test_setting_a_fixed_parameter_after_initialisation_returns_an_error_status(combo, built, master, reference):
     backend, fmi = combo
     m = master(built("delay", backend, fmi))
@@ -504,8 +547,9 @@ def test_setting_a_fixed_parameter_after_initialisation_returns_an_error_status(
     assert errors and "'filter_cutoff' is fixed" in errors[-1]
     assert list(m.get_real(["output_gain", "filter_cutoff"])) == [2.0, 0.0]  # kept
     m.do_step(0.0, T)
-    np.testing.assert_allclose(m.outputs_now(), reference.simulate(np.array([[0.3, 0.0]] * 2), T, gain=2.0)[-1],
-                               rtol=RTOL, atol=ATOL)
+    np.testing.assert_allclose(
+        m.outputs_now(), reference.simulate(np.array([[0.3, 0.0]] * 2), T, gain=2.0)[-1], rtol=RTOL, atol=ATOL
+    )
     assert status == ERROR
 
 
@@ -519,13 +563,17 @@ def test_a_step_of_too_many_samples_is_refused_at_once_naming_the_limit(combo, b
     started = time.perf_counter()
     assert m.refused(m.do_step, 0.0, h) == REFUSED_STEP[backend]
     assert time.perf_counter() - started < 1.0
-    named = ("t must be finite and h >= 0" if backend == "native" and math.isinf(h)
-             else f"more than the {limit} one step may evaluate")
+    named = (
+        "t must be finite and h >= 0"
+        if backend == "native" and math.isinf(h)
+        else f"more than the {limit} one step may evaluate"
+    )
     assert any(named in message for message in m.logged(ERROR)), m.messages
     m.set_real(m.inputs, [0.2, 0.0])
     m.do_step(0.0, T)  # nothing changed
-    np.testing.assert_allclose(m.outputs_now(), reference.simulate(np.array([[0.2, 0.0]] * 2), T)[-1], rtol=RTOL,
-                               atol=ATOL)
+    np.testing.assert_allclose(
+        m.outputs_now(), reference.simulate(np.array([[0.2, 0.0]] * 2), T)[-1], rtol=RTOL, atol=ATOL
+    )
 
 
 # ----- graphs of other tools, names, the factory's front half --------------------------------------------------------
@@ -554,9 +602,11 @@ def test_default_output_and_generic_description_of_a_plain_graph(combo, master, 
     assert md.coSimulation.modelIdentifier == "plain" and md.defaultExperiment.stepSize is None
     ports = [("x[0]", 0), ("x[1]", 1), ("y[0]", 2), ("y[1]", 3)]
     assert [(v.name, v.valueReference) for v in md.modelVariables][:5] == (
-        ports + [("extrapolating", 4)] if fmi == 2 else [("time", 7)] + ports)
+        ports + [("extrapolating", 4)] if fmi == 2 else [("time", 7)] + ports
+    )
     assert [(v.name, v.valueReference) for v in md.modelVariables if v.name == "filter_cutoff"] == [
-        ("filter_cutoff", 5)]
+        ("filter_cutoff", 5)
+    ]
     m = master(fmu)
     m.enter_initialization(0.0)
     m.set_real(["filter_cutoff"], [5.0])  # [Hz]; without a sample period the filter runs at the step size

@@ -27,8 +27,11 @@ SEED = 1
 
 
 def _compile(args: list[str]) -> subprocess.CompletedProcess:
-    return subprocess.run(["gcc", "-std=c99", "-g", "-O1", "-Wall", "-Wextra", "-Werror", *SANITIZE, *args],
-                          capture_output=True, text=True)
+    return subprocess.run(
+        ["gcc", "-std=c99", "-g", "-O1", "-Wall", "-Wextra", "-Werror", *SANITIZE, *args],
+        capture_output=True,
+        text=True,
+    )
 
 
 @pytest.fixture(scope="module")
@@ -42,8 +45,9 @@ def fuzz_driver(tmp_path_factory: pytest.TempPathFactory) -> Path:
     if _compile(["-o", str(folder / "probe"), str(probe)]).returncode != 0:
         pytest.skip("gcc cannot link ASan+UBSan programs here")
     driver = folder / "fuzz_driver"
-    built = _compile([f"-I{fmi_headers_dir()}", "-o", str(driver), str(Path(__file__).with_name("fuzz_driver.c")),
-                      "-ldl", "-lm"])
+    built = _compile(
+        [f"-I{fmi_headers_dir()}", "-o", str(driver), str(Path(__file__).with_name("fuzz_driver.c")), "-ldl", "-lm"]
+    )
     assert built.returncode == 0, built.stderr
     return driver
 
@@ -85,10 +89,24 @@ def _layout(fmu: Path) -> tuple[str, int, int, int]:
 def _fuzz(driver: Path, fmi: int, fmu: Path, folder: Path, seed: int, seconds: float, sequences: int) -> str:
     library = _sanitized_library(fmu, folder)
     guid, n_in, n_out, n_reals = _layout(fmu)
-    result = subprocess.run([str(driver), str(fmi), str(library), guid, str(n_in), str(n_out), str(n_reals), str(seed),
-                             str(seconds), str(sequences)], capture_output=True, text=True, timeout=seconds + 120,
-                            env={"ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1",
-                                 "PATH": "/usr/bin:/bin"})
+    result = subprocess.run(
+        [
+            str(driver),
+            str(fmi),
+            str(library),
+            guid,
+            str(n_in),
+            str(n_out),
+            str(n_reals),
+            str(seed),
+            str(seconds),
+            str(sequences),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=seconds + 120,
+        env={"ASAN_OPTIONS": "detect_leaks=1", "UBSAN_OPTIONS": "print_stacktrace=1", "PATH": "/usr/bin:/bin"},
+    )
     assert result.returncode == 0, result.stderr[-6000:]
     assert "runtime error" not in result.stderr and "0 invariant failures" in result.stdout, result.stdout
     return result.stdout

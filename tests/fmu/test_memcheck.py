@@ -29,8 +29,26 @@ def _counts(path: Path):
 
 def _driver(fmi: int, target: Path, extra: list[str]) -> Path:
     source = Path(__file__).with_name(f"fmi{fmi}_driver.c")
-    subprocess.run(["gcc", "-std=c99", "-g", "-Wall", "-Wextra", "-Werror", *extra, f"-I{fmi_headers_dir()}", "-o",
-                    str(target), str(source), "-ldl", "-lm"], check=True, capture_output=True, text=True)
+    subprocess.run(
+        [
+            "gcc",
+            "-std=c99",
+            "-g",
+            "-Wall",
+            "-Wextra",
+            "-Werror",
+            *extra,
+            f"-I{fmi_headers_dir()}",
+            "-o",
+            str(target),
+            str(source),
+            "-ldl",
+            "-lm",
+        ],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
     return target
 
 
@@ -43,9 +61,22 @@ def test_cycle_is_clean_under_valgrind(delay_fmus, tmp_path, fmi):
         binary.write_bytes(archive.read(f"binaries/{BINARY_FOLDER[fmi]}/{md.coSimulation.modelIdentifier}.so"))
     driver = _driver(fmi, tmp_path / "driver", [])
     result = subprocess.run(
-        ["valgrind", "--error-exitcode=99", "--leak-check=full", "--errors-for-leak-kinds=definite,indirect,possible",
-         "--show-leak-kinds=definite,indirect,possible", str(driver), str(binary), md.guid, str(n_in), str(n_out)],
-        capture_output=True, text=True, timeout=300)
+        [
+            "valgrind",
+            "--error-exitcode=99",
+            "--leak-check=full",
+            "--errors-for-leak-kinds=definite,indirect,possible",
+            "--show-leak-kinds=definite,indirect,possible",
+            str(driver),
+            str(binary),
+            md.guid,
+            str(n_in),
+            str(n_out),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert result.returncode == 0, result.stderr[-4000:]
     assert "0 unexpected statuses" in result.stderr
     assert "ERROR SUMMARY: 0 errors" in result.stderr
@@ -62,12 +93,34 @@ def test_shipped_sources_build_from_build_description_and_run_clean_under_asan_u
     files = [sources / f.get("name") for f in build.iter("SourceFile")]
     sanitize = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
     library = tmp_path / "asan.so"
-    compiled = subprocess.run(["gcc", "-std=c99", "-g", "-Wall", "-Wextra", "-Werror", "-fPIC", "-shared", *sanitize,
-                               f"-I{sources}", "-o", str(library), *map(str, files), "-lm"],
-                              capture_output=True, text=True)
+    compiled = subprocess.run(
+        [
+            "gcc",
+            "-std=c99",
+            "-g",
+            "-Wall",
+            "-Wextra",
+            "-Werror",
+            "-fPIC",
+            "-shared",
+            *sanitize,
+            f"-I{sources}",
+            "-o",
+            str(library),
+            *map(str, files),
+            "-lm",
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert compiled.returncode == 0, compiled.stderr
     driver = _driver(fmi, tmp_path / "driver", sanitize)
-    result = subprocess.run([str(driver), str(library), md.guid, str(n_in), str(n_out)], capture_output=True,
-                            text=True, timeout=300, env={"ASAN_OPTIONS": "detect_leaks=1", "PATH": "/usr/bin:/bin"})
+    result = subprocess.run(
+        [str(driver), str(library), md.guid, str(n_in), str(n_out)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={"ASAN_OPTIONS": "detect_leaks=1", "PATH": "/usr/bin:/bin"},
+    )
     assert result.returncode == 0, result.stderr[-4000:]
     assert "0 unexpected statuses" in result.stderr and "runtime error" not in result.stderr

@@ -59,8 +59,12 @@ def test_a_state_saved_after_terminating_a_failed_initialisation_deserialises(de
 
 def test_unsupported_op_fails_the_build_naming_op_node_and_fallback(tmp_path):
     node = helper.make_node("Einsum", ["x", "x"], ["y"], name="odd_node", equation="i,i->i")
-    graph = helper.make_graph([node], "g", [helper.make_tensor_value_info("x", onnx.TensorProto.DOUBLE, [2])],
-                              [helper.make_tensor_value_info("y", onnx.TensorProto.DOUBLE, [2])])
+    graph = helper.make_graph(
+        [node],
+        "g",
+        [helper.make_tensor_value_info("x", onnx.TensorProto.DOUBLE, [2])],
+        [helper.make_tensor_value_info("y", onnx.TensorProto.DOUBLE, [2])],
+    )
     onnx_path = tmp_path / "einsum.onnx"
     onnx.save(helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)], ir_version=8), str(onnx_path))
     out = tmp_path / "out" / "einsum.fmu"
@@ -84,8 +88,9 @@ def test_only_fmi_functions_are_exported(delay_fmus, tmp_path):
             binary = next(n for n in archive.namelist() if n.startswith("binaries/") and n.endswith(".so"))
             target = tmp_path / f"fmu{fmi}.so"
             target.write_bytes(archive.read(binary))
-        listing = subprocess.run(["nm", "-D", "--defined-only", str(target)], capture_output=True, text=True,
-                                 check=True).stdout
+        listing = subprocess.run(
+            ["nm", "-D", "--defined-only", str(target)], capture_output=True, text=True, check=True
+        ).stdout
         symbols = [line.split()[-1] for line in listing.splitlines() if line.split()[1] in "TDBR"]
         assert symbols and all(s.startswith(f"fmi{fmi}") for s in symbols), symbols
         assert binary.startswith("binaries/linux64/" if fmi == 2 else "binaries/x86_64-linux/")
@@ -95,10 +100,16 @@ def test_sources_and_build_description_are_shipped(delay_fmus):
     with zipfile.ZipFile(delay_fmus[2]) as archive:
         names = set(archive.namelist())
         build = archive.read("sources/buildDescription.xml").decode()
-    for name in ("sources/nn_fmu.c", "sources/nn_fmu.h", "sources/config.h", "sources/graph.c", "sources/graph.h",
-                 "sources/fmi2Functions.c", "sources/fmi2Functions.h", "sources/buildDescription.xml"):
+    for name in (
+        "sources/nn_fmu.c",
+        "sources/nn_fmu.h",
+        "sources/config.h",
+        "sources/graph.c",
+        "sources/graph.h",
+        "sources/fmi2Functions.c",
+        "sources/fmi2Functions.h",
+        "sources/buildDescription.xml",
+    ):
         assert name in names
     assert 'modelIdentifier="damper"' in build and 'name="graph.c"' in build
     assert not any("onnx" in n or n.endswith(".py") for n in names)
-
-

@@ -32,8 +32,9 @@ def damper_fmus(tmp_path_factory: pytest.TempPathFactory) -> dict[int, Path]:
     """A linear damper F = 1000 N.s/m * v sampled every 1 ms, FMI 2 and 3 (no envelope: any finite input is used)."""
     folder = tmp_path_factory.mktemp("limits")
     onnx.save(linear_damper_graph(1000.0, sample_period=T), folder / "damper.onnx")
-    return {v: build_fmu(folder / "damper.onnx", BuildOptions(out=folder / f"damper{v}.fmu", fmi_version=v))
-            for v in (2, 3)}
+    return {
+        v: build_fmu(folder / "damper.onnx", BuildOptions(out=folder / f"damper{v}.fmu", fmi_version=v)) for v in (2, 3)
+    }
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
@@ -87,9 +88,15 @@ def _forged(blob: bytes, value: float, forged: float) -> bytes:
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
-@pytest.mark.parametrize(("field", "forged", "named"), [
-    ("time", 1e300, "time"), ("time", float("nan"), "time"), ("gain", float("nan"), "output_gain"),
-    ("gain", float("inf"), "output_gain")])
+@pytest.mark.parametrize(
+    ("field", "forged", "named"),
+    [
+        ("time", 1e300, "time"),
+        ("time", float("nan"), "time"),
+        ("gain", float("nan"), "output_gain"),
+        ("gain", float("inf"), "output_gain"),
+    ],
+)
 def test_a_forged_serialised_state_is_refused_naming_the_field(damper_fmus, open_fmu, fmi, field, forged, named):
     slave = open_fmu(damper_fmus[fmi])
     slave.initialize([0.5], parameters={"output_gain": 1.2345})
@@ -132,8 +139,9 @@ def test_a_sampled_fmu_refuses_input_derivatives(damper_fmus, open_fmu):
 def test_an_impossible_sample_period_is_refused_at_build(tmp_path, period):
     model = linear_damper_graph(1000.0, sample_period=T)
     text = next(p for p in model.metadata_props if p.key == "nnfmu.component")
-    text.value = text.value.replace('"sample_period": 0.001', f'"sample_period": {period!r}'.replace("'", '"')
-                                    .replace("inf", "1e999"))
+    text.value = text.value.replace(
+        '"sample_period": 0.001', f'"sample_period": {period!r}'.replace("'", '"').replace("inf", "1e999")
+    )
     onnx.save(model, tmp_path / "odd.onnx")
     with pytest.raises(FmuBuildError, match="sample period .* must be a number from 1e-09 to 10000 s"):
         build_fmu(tmp_path / "odd.onnx", BuildOptions(out=tmp_path / "odd.fmu"))

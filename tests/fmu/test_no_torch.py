@@ -37,7 +37,8 @@ assert "torch" not in sys.modules
 def test_build_and_replay_without_torch(tmp_path: Path) -> None:
     onnx_path = tmp_path / "damper.onnx"
     onnx.save(delay_step_graph(), onnx_path)
-    run = subprocess.run([sys.executable, "-c", SCRIPT, str(onnx_path), str(tmp_path / "damper.fmu")],
-                         capture_output=True, text=True)
+    run = subprocess.run(
+        [sys.executable, "-c", SCRIPT, str(onnx_path), str(tmp_path / "damper.fmu")], capture_output=True, text=True
+    )
     assert run.returncode == 0, run.stderr
     assert (tmp_path / "damper.fmu").exists()

@@ -81,18 +81,20 @@ def test_two_different_fmus_with_the_same_name_in_one_process(damper, tmp_path):
         inst.close()
 
 
-@pytest.mark.parametrize(("field", "forged", "named"), [
-    ("inputs", [0.1, 0.2, 0.3], "'inputs' holds 3 values, expected 1"),
-    ("inputs", ["fast"], "'inputs' holds 'fast'"),
-    ("time", "soon", "'time' is 'soon'"),
-    ("sample", -7, "'sample' is -7"),
-    ("parameters", {"output_gain": 1.0}, "'parameters' names"),
-    ("refused", None, "'refused' is missing"),
-    ("bytes", b"garbage", "its bytes are no JSON object"),
-    ("bytes", b"[1, 2]", "its bytes are no JSON object (a JSON list)"),
-])
-def test_a_forged_or_garbage_state_is_refused_naming_the_field_and_the_instance_recovers(damper, field, forged,
-                                                                                       named):
+@pytest.mark.parametrize(
+    ("field", "forged", "named"),
+    [
+        ("inputs", [0.1, 0.2, 0.3], "'inputs' holds 3 values, expected 1"),
+        ("inputs", ["fast"], "'inputs' holds 'fast'"),
+        ("time", "soon", "'time' is 'soon'"),
+        ("sample", -7, "'sample' is -7"),
+        ("parameters", {"output_gain": 1.0}, "'parameters' names"),
+        ("refused", None, "'refused' is missing"),
+        ("bytes", b"garbage", "its bytes are no JSON object"),
+        ("bytes", b"[1, 2]", "its bytes are no JSON object (a JSON list)"),
+    ],
+)
+def test_a_forged_or_garbage_state_is_refused_naming_the_field_and_the_instance_recovers(damper, field, forged, named):
     """pythonfmu makes any exception in these calls fatal (and then corrupts its heap freeing the instance), so the
     state is refused in the FMU: error logged, own state kept, steps refused until a valid state is set."""
     onnx_path, fmu = damper
@@ -128,10 +130,12 @@ def test_a_forged_or_garbage_state_is_refused_naming_the_field_and_the_instance_
 def test_hostile_names_validate_and_give_the_native_variables(tmp_path, fmi_version):
     onnx_path, fmu = build(tmp_path, hostile_graph(), "hostile", fmi_version)
     assert validate_fmu(str(fmu)) == []
-    ours, native = (read_model_description(str(p)) for p in (fmu, native_description(onnx_path, tmp_path / "n",
-                                                                                       fmi_version)))
+    ours, native = (
+        read_model_description(str(p)) for p in (fmu, native_description(onnx_path, tmp_path / "n", fmi_version))
+    )
     assert [(v.name, v.valueReference, v.causality, v.unit, v.description) for v in ours.modelVariables] == [
-        (v.name, v.valueReference, v.causality, v.unit, v.description) for v in native.modelVariables]
+        (v.name, v.valueReference, v.causality, v.unit, v.description) for v in native.modelVariables
+    ]
 
 
 def test_the_fmu_runs_in_a_python_without_nnfmu(damper):
@@ -154,8 +158,7 @@ def test_the_fmu_runs_in_a_python_without_nnfmu(damper):
 def test_the_same_graph_builds_the_same_fmu_bytes(damper, tmp_path):
     onnx_path, fmu = damper
     version = int(read_model_description(str(fmu)).fmiVersion[0])
-    again = build_fmu(onnx_path, BuildOptions(out=tmp_path / "again.fmu", backend="pythonfmu",
-                                                    fmi_version=version))
+    again = build_fmu(onnx_path, BuildOptions(out=tmp_path / "again.fmu", backend="pythonfmu", fmi_version=version))
     assert again.read_bytes() == fmu.read_bytes()
 
 
@@ -224,5 +227,3 @@ def test_name_option_renames_the_component_and_gives_a_c_model_identifier(damper
     assert (md.modelName, md.coSimulation.modelIdentifier) == ("front-left 1", "front_left_1")
     assert zipfile.ZipFile(fmu).getinfo("binaries/linux64/front_left_1.so").file_size > 0
     assert validate_fmu(str(fmu)) == []
-
-

@@ -38,8 +38,20 @@ def test_model_description_validates_and_matches_the_native_backend(damper, tmp_
     assert ours.fmiVersion == "3.0"
 
     def variables(md):
-        return [(v.name, v.valueReference, v.type, v.causality, v.variability, v.initial, v.unit,
-                 None if v.start is None else float(v.start), v.min) for v in md.modelVariables]
+        return [
+            (
+                v.name,
+                v.valueReference,
+                v.type,
+                v.causality,
+                v.variability,
+                v.initial,
+                v.unit,
+                None if v.start is None else float(v.start),
+                v.min,
+            )
+            for v in md.modelVariables
+        ]
 
     assert variables(ours) == variables(native)
     assert [(v.name, v.valueReference) for v in ours.modelVariables][:2] == [("time", VR_TIME), ("velocity", 0)]
@@ -50,8 +62,7 @@ def test_model_description_validates_and_matches_the_native_backend(damper, tmp_
 
     assert structure(ours.outputs) == structure(native.outputs) == [("force", []), ("extrapolating", [])]
     assert structure(ours.initialUnknowns) == structure(native.initialUnknowns)
-    assert structure(ours.initialUnknowns) == [("force", ["velocity", "output_gain"]),
-                                               ("extrapolating", ["velocity"])]
+    assert structure(ours.initialUnknowns) == [("force", ["velocity", "output_gain"]), ("extrapolating", ["velocity"])]
     cs = ours.coSimulation
     assert cs.canGetAndSetFMUstate and cs.canSerializeFMUstate and cs.canHandleVariableCommunicationStepSize
     assert cs.needsExecutionTool and float(ours.defaultExperiment.stepSize) == T

@@ -121,8 +121,10 @@ def test_fmu_with_one_weight_changed_fails_naming_the_output(network, tmp_path):
 
 
 def test_merged_graph_fmu_carries_the_parts_stimuli_and_passes(tmp_path):
-    parts = [onnx.load(export_network(FORCE, tmp_path / "force.onnx", 3)),
-             onnx.load(export_network(TORQUE, tmp_path / "t.onnx", 4))]
+    parts = [
+        onnx.load(export_network(FORCE, tmp_path / "force.onnx", 3)),
+        onnx.load(export_network(TORQUE, tmp_path / "t.onnx", 4)),
+    ]
     merged = merge_step_graphs(parts, "bushing", "force and torque")
     stimulus = ReferenceStimulus.from_onnx(merged)
     assert stimulus is not None and set(stimulus.inputs) == set(FORCE.channels) | set(TORQUE.channels)
@@ -142,31 +144,43 @@ def _other_producer_data(fmu: Path, perturb: float = 0.0) -> dict[str, bytes]:
     held = np.concatenate([x[:1], x[:-1]])  # evaluated at the end of each step with the inputs set before it
     y, z = gain * np.tanh(held @ w), gain * held.sum(axis=1)
     y[17, 1] += perturb
-    stimuli = "\n".join(['"time","x[0]","x[1]","x[2]"', *(",".join(repr(float(v)) for v in (t[k], *x[k]))
-                                                          for k in range(n))])
-    refs = "\n".join(['"time","y[0]","y[1]","z"', *(",".join(repr(float(v)) for v in (t[k], *y[k], z[k]))
-                                                   for k in range(n))])
-    experiments = (f'<?xml version="1.0" encoding="UTF-8"?>\n<Experiments name="acceptance">\n'
-                   f'  <Experiment name="sweep" startTime="0" stopTime="{float(t[-1])!r}" stepSize="{step}" '
-                   'tolerance="1e-12">\n'
-                   '    <Parameters source="params.ssv"/>\n    <Stimuli source="in.csv"/>\n'
-                   '    <References source="ref.csv"/>\n  </Experiment>\n</Experiments>\n')
-    parameters = ('<?xml version="1.0" encoding="UTF-8"?>\n<ssv:ParameterSet version="1.0" name="acceptance" '
-                  'xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues"><ssv:Parameters>'
-                  f'<ssv:Parameter name="output_gain"><ssv:Real value="{gain}"/></ssv:Parameter>'
-                  '<ssv:Parameter name="filter_cutoff"><ssv:Real value="0"/></ssv:Parameter>'
-                  '</ssv:Parameters></ssv:ParameterSet>\n')
-    manifest = ('<?xml version="1.0" encoding="UTF-8"?>\n<fmiReferences '
-                'xmlns:fmi-ls="http://fmi-standard.org/fmi-ls-manifest" '
-                'fmi-ls:fmi-ls-name="org.fmi-standard.fmi-ls-ref" '
-                'fmi-ls:fmi-ls-version="1.0.0-alpha.1" fmi-ls:fmi-ls-description="Layered Standard providing '
-                'information on related files included in an FMU.">\n'
-                '  <Related type="application/x-ma-hs-experiments" source="tests/acceptance.exp" role="experiment"/>\n'
-                '</fmiReferences>\n')
+    stimuli = "\n".join(
+        ['"time","x[0]","x[1]","x[2]"', *(",".join(repr(float(v)) for v in (t[k], *x[k])) for k in range(n))]
+    )
+    refs = "\n".join(
+        ['"time","y[0]","y[1]","z"', *(",".join(repr(float(v)) for v in (t[k], *y[k], z[k])) for k in range(n))]
+    )
+    experiments = (
+        f'<?xml version="1.0" encoding="UTF-8"?>\n<Experiments name="acceptance">\n'
+        f'  <Experiment name="sweep" startTime="0" stopTime="{float(t[-1])!r}" stepSize="{step}" '
+        'tolerance="1e-12">\n'
+        '    <Parameters source="params.ssv"/>\n    <Stimuli source="in.csv"/>\n'
+        '    <References source="ref.csv"/>\n  </Experiment>\n</Experiments>\n'
+    )
+    parameters = (
+        '<?xml version="1.0" encoding="UTF-8"?>\n<ssv:ParameterSet version="1.0" name="acceptance" '
+        'xmlns:ssv="http://ssp-standard.org/SSP1/SystemStructureParameterValues"><ssv:Parameters>'
+        f'<ssv:Parameter name="output_gain"><ssv:Real value="{gain}"/></ssv:Parameter>'
+        '<ssv:Parameter name="filter_cutoff"><ssv:Real value="0"/></ssv:Parameter>'
+        "</ssv:Parameters></ssv:ParameterSet>\n"
+    )
+    manifest = (
+        '<?xml version="1.0" encoding="UTF-8"?>\n<fmiReferences '
+        'xmlns:fmi-ls="http://fmi-standard.org/fmi-ls-manifest" '
+        'fmi-ls:fmi-ls-name="org.fmi-standard.fmi-ls-ref" '
+        'fmi-ls:fmi-ls-version="1.0.0-alpha.1" fmi-ls:fmi-ls-description="Layered Standard providing '
+        'information on related files included in an FMU.">\n'
+        '  <Related type="application/x-ma-hs-experiments" source="tests/acceptance.exp" role="experiment"/>\n'
+        "</fmiReferences>\n"
+    )
     folder = f"{LS_FOLDER}/tests"
-    return {f"{LS_FOLDER}/fmi-ls-manifest.xml": manifest.encode(), f"{folder}/acceptance.exp": experiments.encode(),
-            f"{folder}/params.ssv": parameters.encode(), f"{folder}/in.csv": stimuli.encode(),
-            f"{folder}/ref.csv": refs.encode()}
+    return {
+        f"{LS_FOLDER}/fmi-ls-manifest.xml": manifest.encode(),
+        f"{folder}/acceptance.exp": experiments.encode(),
+        f"{folder}/params.ssv": parameters.encode(),
+        f"{folder}/in.csv": stimuli.encode(),
+        f"{folder}/ref.csv": refs.encode(),
+    }
 
 
 def test_fmu_of_another_producer_with_data_in_the_layout_passes_and_fails_when_off(generic_onnx, tmp_path):
@@ -186,14 +200,18 @@ def test_tampered_reference_file_fails_its_checksum(network, tmp_path):
         text = archive.read(f"{LS_FOLDER}/stimuli.csv").decode()
     tampered = _replace(network["fmi3"], {f"{LS_FOLDER}/stimuli.csv": (text + "\n").encode()}, tmp_path / "t.fmu")
     report = check_fmu(tampered)
-    assert not report.passed and report.checksum_errors == [f"{LS_FOLDER}/stimuli.csv: SHA3-256 checksum does not "
-                                                            "match the manifest"]
+    assert not report.passed and report.checksum_errors == [
+        f"{LS_FOLDER}/stimuli.csv: SHA3-256 checksum does not match the manifest"
+    ]
 
 
-@pytest.mark.parametrize(("member", "data", "message"), [
-    ("resources/zeros.bin", bytes(4 * 1024 * 1024), r"member 'resources/zeros\.bin' inflates \d+-fold"),
-    ("../../escaped.txt", b"x", r"member '\.\./\.\./escaped\.txt' climbs out"),
-])
+@pytest.mark.parametrize(
+    ("member", "data", "message"),
+    [
+        ("resources/zeros.bin", bytes(4 * 1024 * 1024), r"member 'resources/zeros\.bin' inflates \d+-fold"),
+        ("../../escaped.txt", b"x", r"member '\.\./\.\./escaped\.txt' climbs out"),
+    ],
+)
 def test_an_fmu_that_is_a_zip_bomb_or_climbs_out_is_refused_before_reading(network, tmp_path, member, data, message):
     hostile = _replace(network["fmi3"], {member: data}, tmp_path / "hostile.fmu")
     with pytest.raises(CheckError, match=message):

@@ -28,15 +28,19 @@ def test_the_fmu_carries_its_sample_period(tmp_path: Path, fmi_version: int, bac
     for period in (1e-3, None):
         onnx_path = tmp_path / f"damper_{period}.onnx"
         onnx.save(linear_damper_graph(1500.0, sample_period=period), onnx_path)
-        fmu = build_fmu(onnx_path, BuildOptions(out=tmp_path / f"damper_{period}_{fmi_version}.fmu",
-                                                fmi_version=fmi_version, backend=backend))
+        fmu = build_fmu(
+            onnx_path,
+            BuildOptions(out=tmp_path / f"damper_{period}_{fmi_version}.fmu", fmi_version=fmi_version, backend=backend),
+        )
         assert read_sample_period(_description(fmu, tmp_path / f"x_{period}_{fmi_version}")) == period
 
 
 def test_a_malformed_annotation_is_refused_naming_the_file(tmp_path: Path) -> None:
     path = tmp_path / "modelDescription.xml"
     for period, unit in (("0", "s"), ("fast", "s"), ("1e-3", "ms")):
-        path.write_text(f'<fmiModelDescription><VendorAnnotations><Tool name="org.nnfmu"><Sampling period="{period}" '
-                        f'unit="{unit}"/></Tool></VendorAnnotations></fmiModelDescription>')
+        path.write_text(
+            f'<fmiModelDescription><VendorAnnotations><Tool name="org.nnfmu"><Sampling period="{period}" '
+            f'unit="{unit}"/></Tool></VendorAnnotations></fmiModelDescription>'
+        )
         with pytest.raises(SamplingAnnotationError, match=f"Description.xml: sampling annotation period='{period}"):
             read_sample_period(path)

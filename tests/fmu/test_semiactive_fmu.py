@@ -26,17 +26,24 @@ def semiactive(tmp_path_factory) -> dict[str, tuple[Path, object, object]]:
     folder = tmp_path_factory.mktemp("semiactive_fmu")
     out = {}
     for damper_type in ("mr", "cdc"):
-        data, _ = write_rig("damper", folder / f"{damper_type}.csv",
-                            RigOptions(damper_type=damper_type, duration=4.0, excitation="random", seed=4))
+        data, _ = write_rig(
+            "damper",
+            folder / f"{damper_type}.csv",
+            RigOptions(damper_type=damper_type, duration=4.0, excitation="random", seed=4),
+        )
         request = TrainRequest("damper-semiactive", hidden=(3,), restarts=1, max_epochs=3)
         outcome = train_from_file(data, request, folder / f"{damper_type}.onnx")
         out[damper_type] = (folder / f"{damper_type}.onnx", outcome, load_measurement(data))
     return out
 
 
-@pytest.mark.parametrize(("damper_type", "channel", "unit", "fmi"), [
-    ("mr", "voltage", "V", 2), ("cdc", "current", "A", 3),
-])
+@pytest.mark.parametrize(
+    ("damper_type", "channel", "unit", "fmi"),
+    [
+        ("mr", "voltage", "V", 2),
+        ("cdc", "current", "A", 3),
+    ],
+)
 def test_the_command_is_an_fmu_input_with_its_unit_and_fmpy_replays_onnxruntime(
     semiactive, open_fmu, tmp_path, damper_type, channel, unit, fmi
 ):

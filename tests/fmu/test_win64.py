@@ -26,10 +26,18 @@ from nnfmu.fmu.options import BuildOptions
 
 MINGW = shutil.which(compiler.WIN64_COMPILER)
 MINGW_OBJDUMP = shutil.which("x86_64-w64-mingw32-objdump")
-WINE = next((found for found in (shutil.which("wine64"), shutil.which("wine"), "/usr/lib/wine/wine64")
-             if found and os.access(found, os.X_OK)), None)
-needs_mingw = pytest.mark.skipif(MINGW is None, reason=f"{compiler.WIN64_COMPILER} not installed "
-                                 "(Debian: gcc-mingw-w64-x86-64): no win64 binary to test")
+WINE = next(
+    (
+        found
+        for found in (shutil.which("wine64"), shutil.which("wine"), "/usr/lib/wine/wine64")
+        if found and os.access(found, os.X_OK)
+    ),
+    None,
+)
+needs_mingw = pytest.mark.skipif(
+    MINGW is None,
+    reason=f"{compiler.WIN64_COMPILER} not installed (Debian: gcc-mingw-w64-x86-64): no win64 binary to test",
+)
 needs_wine = pytest.mark.skipif(WINE is None, reason="wine not installed (Debian: wine64 wine): cannot run win64 code")
 FOLDERS = {2: ("linux64", "win64"), 3: ("x86_64-linux", "x86_64-windows")}
 # The brief's bound, relative to each output's largest magnitude over the run. msvcrt's tanh and glibc's differ in
@@ -46,8 +54,25 @@ def _counts(path: Path) -> tuple[str, str, int, int]:
 
 def _driver(cc: str, fmi: int, target: Path, extra: list[str]) -> Path:
     source = Path(__file__).with_name(f"fmi{fmi}_driver.c")
-    subprocess.run([cc, "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", *extra, f"-I{fmi_headers_dir()}", "-o",
-                    str(target), str(source), "-lm"], check=True, capture_output=True, text=True)
+    subprocess.run(
+        [
+            cc,
+            "-std=c99",
+            "-O2",
+            "-Wall",
+            "-Wextra",
+            "-Werror",
+            *extra,
+            f"-I{fmi_headers_dir()}",
+            "-o",
+            str(target),
+            str(source),
+            "-lm",
+        ],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
     return target
 
 
@@ -62,8 +87,12 @@ def _outputs(stdout: str) -> list[tuple[str, int, list[float]]]:
 @pytest.fixture(scope="module")
 def wine_env(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
     """A private wine prefix (made on first use, ~20 s), its wineserver shut down after the module."""
-    env = {**os.environ, "WINEPREFIX": str(tmp_path_factory.mktemp("wineprefix") / "prefix"), "WINEDEBUG": "-all",
-           "DISPLAY": ""}
+    env = {
+        **os.environ,
+        "WINEPREFIX": str(tmp_path_factory.mktemp("wineprefix") / "prefix"),
+        "WINEDEBUG": "-all",
+        "DISPLAY": "",
+    }
     yield env
     server = shutil.which("wineserver") or "/usr/lib/wine/wineserver64"
     if os.access(server, os.X_OK):
@@ -81,9 +110,10 @@ def test_default_build_carries_both_binaries_and_the_dll_exports_only_fmi_functi
         (tmp_path / "fmu.dll").write_bytes(archive.read(f"binaries/{windows}/{identifier}.dll"))
     if MINGW_OBJDUMP is None:
         pytest.skip("x86_64-w64-mingw32-objdump not installed: cannot list the DLL's exports")
-    listing = subprocess.run([MINGW_OBJDUMP, "-p", str(tmp_path / "fmu.dll")], capture_output=True, text=True,
-                             check=True).stdout
-    table = listing[listing.index("[Ordinal/Name Pointer] Table"):]
+    listing = subprocess.run(
+        [MINGW_OBJDUMP, "-p", str(tmp_path / "fmu.dll")], capture_output=True, text=True, check=True
+    ).stdout
+    table = listing[listing.index("[Ordinal/Name Pointer] Table") :]
     exported = [line.split("]")[-1].strip() for line in table.splitlines()[1:] if line.strip().startswith("[")]
     assert exported and all(name.startswith(f"fmi{fmi}") for name in exported), exported
     imported = {line.split(":")[1].strip() for line in listing.splitlines() if "DLL Name:" in line}
@@ -102,11 +132,13 @@ def test_win64_binary_under_wine_gives_the_linux64_outputs(delay_fmus, tmp_path,
     args = [token, str(n_in), str(n_out)]
     native = _driver("gcc", fmi, tmp_path / "driver", [])
     _driver(MINGW, fmi, tmp_path / "driver.exe", ["-D__USE_MINGW_ANSI_STDIO=1", "-static"])
-    on_linux = subprocess.run([str(native), str(tmp_path / "fmu.so"), *args], capture_output=True, text=True,
-                              timeout=120)
+    on_linux = subprocess.run(
+        [str(native), str(tmp_path / "fmu.so"), *args], capture_output=True, text=True, timeout=120
+    )
     # The DLL is loaded by its bare name from the program's folder (Windows search order); no path conversion.
-    on_wine = subprocess.run([WINE, "driver.exe", "fmu.dll", *args], cwd=tmp_path, env=wine_env,
-                             capture_output=True, text=True, timeout=300)
+    on_wine = subprocess.run(
+        [WINE, "driver.exe", "fmu.dll", *args], cwd=tmp_path, env=wine_env, capture_output=True, text=True, timeout=300
+    )
     for run in (on_linux, on_wine):
         assert run.returncode == 0, run.stderr[-3000:]
         assert "0 unexpected statuses" in run.stderr
@@ -150,9 +182,11 @@ def test_platforms_choose_the_binaries(delay_onnx, tmp_path):
     only_windows = build_fmu(delay_onnx, BuildOptions(out=tmp_path / "w.fmu", fmi_version=3, platforms=("win64",)))
     only_linux = build_fmu(delay_onnx, BuildOptions(out=tmp_path / "l.fmu", platforms=("linux64",)))
     assert [n for n in zipfile.ZipFile(only_windows).namelist() if n.startswith("binaries/")] == [
-        "binaries/x86_64-windows/damper.dll"]
+        "binaries/x86_64-windows/damper.dll"
+    ]
     assert [n for n in zipfile.ZipFile(only_linux).namelist() if n.startswith("binaries/")] == [
-        "binaries/linux64/damper.so"]
+        "binaries/linux64/damper.so"
+    ]
 
 
 def test_cli_says_in_one_warning_line_that_win64_was_left_out(delay_onnx, tmp_path, monkeypatch):
@@ -166,7 +200,8 @@ def test_cli_says_in_one_warning_line_that_win64_was_left_out(delay_onnx, tmp_pa
     assert result.exit_code == 0, result.output
     warnings = [line for line in result.output.splitlines() if line.startswith("warning:")]
     assert len(warnings) == 1 and "apt-get install gcc-mingw-w64-x86-64" in warnings[0]
-    refused = CliRunner().invoke(app, ["build", str(delay_onnx), "--out", str(tmp_path / "e.fmu"),
-                                       "--platforms", "linux64,win64"])
+    refused = CliRunner().invoke(
+        app, ["build", str(delay_onnx), "--out", str(tmp_path / "e.fmu"), "--platforms", "linux64,win64"]
+    )
     assert refused.exit_code == 2 and "x86_64-w64-mingw32-gcc" in refused.output
     assert not (tmp_path / "e.fmu").exists()

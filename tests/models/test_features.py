@@ -28,8 +28,11 @@ def spec_with_rates_and_memory() -> FeatureSpec:
         taps=(Tap("displacement", (0, 1)),),
         output="force",
         derived=(
-            Highpass("displacement", tau=0.002), Difference("velocity", delay=1), Lowpass("displacement", tau=0.002),
-            Difference("displacement", delay=4), Highpass("velocity", tau=0.05),
+            Highpass("displacement", tau=0.002),
+            Difference("velocity", delay=1),
+            Lowpass("displacement", tau=0.002),
+            Difference("displacement", delay=4),
+            Highpass("velocity", tau=0.05),
         ),
     )
 
@@ -63,14 +66,25 @@ def test_names_channels_and_state_layout():
     spec = spec_with_everything()
     assert spec.channels == ["velocity", "displacement", "temperature", "acceleration"]
     assert spec.feature_names == [
-        "velocity[k]", "velocity[k-1]", "velocity[k-3]", "displacement[k-2]", "temperature[k]",
-        "smooth_sign(velocity, scale=0.05)", "lowpass(velocity, tau=0.004)", "lowpass(acceleration, tau=0.01)",
+        "velocity[k]",
+        "velocity[k-1]",
+        "velocity[k-3]",
+        "displacement[k-2]",
+        "temperature[k]",
+        "smooth_sign(velocity, scale=0.05)",
+        "lowpass(velocity, tau=0.004)",
+        "lowpass(acceleration, tau=0.01)",
     ]
     assert spec.n_features == 8
     layout = spec.state_layout()
     assert [s.name for s in layout] == [
-        "velocity[k-1]", "velocity[k-2]", "velocity[k-3]", "displacement[k-1]", "displacement[k-2]",
-        "lowpass(velocity, tau=0.004)[k-1]", "lowpass(acceleration, tau=0.01)[k-1]",
+        "velocity[k-1]",
+        "velocity[k-2]",
+        "velocity[k-3]",
+        "displacement[k-1]",
+        "displacement[k-2]",
+        "lowpass(velocity, tau=0.004)[k-1]",
+        "lowpass(acceleration, tau=0.01)[k-1]",
     ]
     assert [s.channel for s in layout] == ["velocity"] * 3 + ["displacement"] * 2 + ["velocity", "acceleration"]
     assert all(s.initial == 0.0 for s in layout) and spec.state_size == 7

@@ -44,7 +44,8 @@ def test_input_channels_follow_the_rig_names():
         assert preset.spec.derived[:3] == tuple(Highpass(channels[0], tau=t) for t in MEMORY_TAUS)
         assert preset.spec.taps == (Tap(channels[0]), Tap(channels[1]))
     assert get_preset("bushing-axial-torque").thesis_spec.taps == (
-        Tap("axial_rotation", (0, 1)), Tap("axial_angular_velocity", (0, 1))
+        Tap("axial_rotation", (0, 1)),
+        Tap("axial_angular_velocity", (0, 1)),
     )
     hysteresis = get_preset("damper-hysteresis")
     assert hysteresis.thesis_spec.taps == (Tap("velocity", (0, 1)),) and hysteresis.thesis.hidden == (5,)
@@ -77,8 +78,13 @@ def test_default_bushing_memory_is_not_collinear_with_the_position():
 
 def test_every_preset_is_listed_and_unknown_names_are_refused():
     assert set(PRESETS) == {
-        "damper-spline", "damper-hysteresis", "bushing-axial-force", "bushing-radial-force",
-        "bushing-axial-torque", "bushing-conical-torque", "damper-semiactive",
+        "damper-spline",
+        "damper-hysteresis",
+        "bushing-axial-force",
+        "bushing-radial-force",
+        "bushing-axial-torque",
+        "bushing-conical-torque",
+        "damper-semiactive",
     }
     with pytest.raises(ValueError, match="damper-spline"):
         get_preset("damper")

@@ -25,7 +25,9 @@ def synthetic(n: int = 3000, seed: int = 0) -> Measurement:
 def test_candidates_are_the_direction_kinematics_at_three_delays():
     m = synthetic(100)
     assert [(t.channel, t.delays) for t in candidate_taps(m, "force")] == [
-        ("displacement", (0, 1, 2)), ("velocity", (0, 1, 2)), ("acceleration", (0, 1, 2))
+        ("displacement", (0, 1, 2)),
+        ("velocity", (0, 1, 2)),
+        ("acceleration", (0, 1, 2)),
     ]
     with pytest.raises(ValueError, match="axial_displacement"):
         candidate_taps(m, "axial_force")

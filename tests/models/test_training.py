@@ -175,7 +175,9 @@ def test_trained_model_carries_context():
 def test_gradient_optimisers_reduce_validation_error(optimizer):
     m = lagged_damper(1500)
     result = train_model(
-        m, FeatureSpec((Tap("velocity"),), "force"), Architecture("mlp", (3,)),
+        m,
+        FeatureSpec((Tap("velocity"),), "force"),
+        Architecture("mlp", (3,)),
         TrainSettings(optimizer=optimizer, max_epochs=20, restarts=1),
     )
     assert result.model.settings["optimizer_used"] == optimizer
@@ -206,7 +208,9 @@ def test_workflow_writes_a_verified_onnx_with_channel_ports(tmp_path):
     data = save_measurement(lagged_damper(2000), tmp_path / "dyno.csv")
     progress: list[float] = []
     outcome = train_from_file(
-        data, TrainRequest(preset="damper-spline", restarts=1, max_epochs=20), tmp_path / "model.onnx",
+        data,
+        TrainRequest(preset="damper-spline", restarts=1, max_epochs=20),
+        tmp_path / "model.onnx",
         progress=lambda label, done: progress.append(done),
     )
     assert outcome.path.is_file() and outcome.export.max_relative_error <= 1e-6
@@ -222,7 +226,8 @@ def test_workflow_with_input_selection_exports_the_chosen_channels(tmp_path):
 
     data = save_measurement(lagged_damper(2000), tmp_path / "dyno.csv")
     outcome = train_from_file(
-        data, TrainRequest(preset="damper-hysteresis", select_inputs=True, hidden=(3,), restarts=1, max_epochs=15),
+        data,
+        TrainRequest(preset="damper-hysteresis", select_inputs=True, hidden=(3,), restarts=1, max_epochs=15),
         tmp_path / "selected.onnx",
     )
     assert outcome.selection is not None and len(outcome.selection.ranking) == 9  # x, v, a at delays 0, 1, 2

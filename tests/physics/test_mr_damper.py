@@ -80,8 +80,7 @@ def _reference(params: MRDamperParams, t: np.ndarray, x: np.ndarray, v: np.ndarr
         zdot = -params.gamma * abs(r) * z * abs(z) - params.beta * r * z * z + params.a_bw * r
         return [ydot, zdot]
 
-    solution = solve_ivp(rhs, (t[0], t[-1]), [0.0, 0.0], method="Radau", t_eval=t, rtol=1e-8, atol=1e-11,
-                         max_step=1e-3)
+    solution = solve_ivp(rhs, (t[0], t[-1]), [0.0, 0.0], method="Radau", t_eval=t, rtol=1e-8, atol=1e-11, max_step=1e-3)
     y, z = solution.y
     ydot = (alpha * z + c0 * v + params.k0 * (x - y)) / (c0 + c1)
     return c1 * ydot

@@ -23,8 +23,9 @@ def test_rainflow_matches_hand_count():
 
 def test_rainflow_ignores_points_between_reversals():
     # inserting monotonic intermediate samples (as a denser sampling would) must not change the count
-    dense = np.concatenate([np.linspace(a, b, 7)[:-1] for a, b in zip(ASTM_EXAMPLE[:-1], ASTM_EXAMPLE[1:])]
-                           + [ASTM_EXAMPLE[-1:]])
+    dense = np.concatenate(
+        [np.linspace(a, b, 7)[:-1] for a, b in zip(ASTM_EXAMPLE[:-1], ASTM_EXAMPLE[1:])] + [ASTM_EXAMPLE[-1:]]
+    )
     ranges, counts = rainflow_cycles(dense)
     assert dict(zip(ranges.tolist(), counts.tolist())) == pytest.approx(HAND_COUNT)
 

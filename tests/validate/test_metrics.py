@@ -28,6 +28,7 @@ def measurement(t: np.ndarray, source: str, **channels: np.ndarray) -> Measureme
 
 # --- metric definitions ---------------------------------------------------------------------------------------
 
+
 def test_identical_signals_are_a_perfect_match():
     _, y = load_signal()
     m = channel_metrics(y, y.copy(), slope=5.0)
@@ -87,6 +88,7 @@ def test_error_summary_holds_the_loop_stage_numbers():
 
 # --- PSD ------------------------------------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("frequency", [3.0, 7.25, 21.5])
 def test_psd_of_sine_peaks_at_its_frequency_and_integrates_to_its_variance(frequency):
     t = np.arange(0.0, 60.0, DT)
@@ -109,6 +111,7 @@ def test_psd_stops_at_fmax_and_white_noise_integrates_to_its_variance():
 
 # --- comparing measurements -----------------------------------------------------------------------------------
 
+
 def test_compare_identical_measurements():
     t, y = load_signal()
     [c] = compare(measurement(t, "result.csv", force=y.copy()), measurement(t, "ref.csv", force=y), ["force"])
@@ -120,8 +123,11 @@ def test_compare_identical_measurements():
 def test_missing_channel_names_channel_and_file():
     t, y = load_signal()
     with pytest.raises(ValidationError, match=r"result\.csv: no channel 'axial_force'"):
-        compare(measurement(t, "result.csv", force=y), measurement(t, "ref.csv", force=y, axial_force=y),
-                ["force", "axial_force"])
+        compare(
+            measurement(t, "result.csv", force=y),
+            measurement(t, "ref.csv", force=y, axial_force=y),
+            ["force", "axial_force"],
+        )
 
 
 def test_unit_mismatch_names_channel_and_both_units():
@@ -144,8 +150,9 @@ def test_result_on_other_time_base_is_interpolated_onto_reference_within_overlap
     t_ref = np.arange(0.0, 20.0, DT)
     t_res = np.arange(1.0, 25.0, 0.002)  # faster, starts later, ends later
     f = lambda t: 1000.0 * np.sin(2 * np.pi * 0.7 * t)  # noqa: E731
-    [c] = compare(measurement(t_res, "result.csv", force=f(t_res)), measurement(t_ref, "ref.csv", force=f(t_ref)),
-                  ["force"])
+    [c] = compare(
+        measurement(t_res, "result.csv", force=f(t_res)), measurement(t_ref, "ref.csv", force=f(t_ref)), ["force"]
+    )
     assert c.time[0] == pytest.approx(1.0) and c.time[-1] == pytest.approx(t_ref[-1])
     np.testing.assert_array_equal(c.reference, f(c.time))
     assert c.metrics.nrmse < 1e-4  # only linear-interpolation error of a 0.7 Hz sine sampled at 500 Hz
@@ -154,8 +161,9 @@ def test_result_on_other_time_base_is_interpolated_onto_reference_within_overlap
 def test_disjoint_time_spans_are_refused():
     t = np.arange(0.0, 1.0, DT)
     with pytest.raises(ValidationError, match="share fewer than 2"):
-        compare(measurement(t + 5.0, "result.csv", force=np.sin(t)), measurement(t, "ref.csv", force=np.sin(t)),
-                ["force"])
+        compare(
+            measurement(t + 5.0, "result.csv", force=np.sin(t)), measurement(t, "ref.csv", force=np.sin(t)), ["force"]
+        )
 
 
 def test_window_is_centred_on_the_global_peak_and_clipped_to_the_record():
@@ -195,7 +203,8 @@ def test_slope_setting_reaches_the_damage_ratio():
     t, y = load_signal()
     result = measurement(t, "result.csv", force=1.1 * y, displacement=1.1 * y * 1e-5)
     reference = measurement(t, "ref.csv", force=y, displacement=y * 1e-5)
-    force, displacement = compare(result, reference, ["force", "displacement"],
-                                  ValidationSettings(slopes={"displacement": 3.0}))
+    force, displacement = compare(
+        result, reference, ["force", "displacement"], ValidationSettings(slopes={"displacement": 3.0})
+    )
     assert force.metrics.pseudo_damage_ratio == pytest.approx(1.1**5, rel=1e-9)
     assert displacement.metrics.pseudo_damage_ratio == pytest.approx(1.1**3, rel=1e-9)

@@ -26,10 +26,18 @@ def signals(n: int = 2000) -> tuple[np.ndarray, np.ndarray]:
 
 def comparisons():
     t, y = signals()
-    reference = Measurement(time=t, channels={"axial_force": y, HOSTILE: y, "flat": np.zeros_like(y)},
-                            units={"axial_force": "N", HOSTILE: "N.m", "flat": "m"}, source="ref")
-    result = Measurement(time=t, channels={"axial_force": 1.1 * y, HOSTILE: y + 5.0, "flat": np.zeros_like(y)},
-                         units=dict(reference.units), source="result")
+    reference = Measurement(
+        time=t,
+        channels={"axial_force": y, HOSTILE: y, "flat": np.zeros_like(y)},
+        units={"axial_force": "N", HOSTILE: "N.m", "flat": "m"},
+        source="ref",
+    )
+    result = Measurement(
+        time=t,
+        channels={"axial_force": 1.1 * y, HOSTILE: y + 5.0, "flat": np.zeros_like(y)},
+        units=dict(reference.units),
+        source="result",
+    )
     return compare(result, reference, ["axial_force", HOSTILE, "flat"])
 
 
@@ -53,7 +61,8 @@ def test_report_writes_index_summary_and_pngs(tmp_path):
             assert (out / name).read_bytes().startswith(PNG_MAGIC)
             assert f'src="{name}"' in html
     assert sorted(p.name for p in out.iterdir()) == sorted(
-        [n for c in summary["channels"] for n in c["plots"].values()] + ["index.html", "summary.json"])
+        [n for c in summary["channels"] for n in c["plots"].values()] + ["index.html", "summary.json"]
+    )
 
 
 def test_html_escapes_hostile_names_and_context(tmp_path):
@@ -92,11 +101,11 @@ def write_csv(path, header, columns):
 def test_validate_files_from_csv_converts_units_and_reports(tmp_path):
     t, y = signals()
     x = 1e-3 * np.sin(2 * np.pi * 1.5 * t)
-    write_csv(tmp_path / "ref.csv", "time [s],axial_force [N],axial_displacement [m],flat [m]",
-              [t, y, x, np.zeros_like(y)])
+    write_csv(
+        tmp_path / "ref.csv", "time [s],axial_force [N],axial_displacement [m],flat [m]", [t, y, x, np.zeros_like(y)]
+    )
     # kN -> N and mm -> m on loading
-    write_csv(tmp_path / "result.csv", "time [s],axial_displacement [mm],axial_force [kN]",
-              [t, x * 1e3, 1.1 * y / 1e3])
+    write_csv(tmp_path / "result.csv", "time [s],axial_displacement [mm],axial_force [kN]", [t, x * 1e3, 1.1 * y / 1e3])
     report = validate_files(tmp_path / "result.csv", tmp_path / "ref.csv", None, tmp_path / "out")
     # default channels: those both files recorded, not the velocity/acceleration the loader derived
     force, displacement = report.comparisons

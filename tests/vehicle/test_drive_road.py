@@ -103,8 +103,10 @@ def test_rear_channels_are_the_front_ones_delayed_by_wheelbase_over_speed():
     m = generate_drive(settings)
     delay = round(settings.wheelbase / settings.speed * settings.sample_rate)
     assert delay == 140
-    for front, rear in (("actuator_fl_displacement", "actuator_rl_displacement"),
-                        ("actuator_fr_displacement", "actuator_rr_displacement")):
+    for front, rear in (
+        ("actuator_fl_displacement", "actuator_rl_displacement"),
+        ("actuator_fr_displacement", "actuator_rr_displacement"),
+    ):
         xcorr = signal.correlate(m[rear], m[front], method="fft")
         lags = signal.correlation_lags(len(m[rear]), len(m[front]))
         assert lags[np.argmax(xcorr)] == delay
@@ -154,16 +156,17 @@ def test_events_appear_at_their_time_with_their_size():
     assert delta["actuator_rr_displacement"][round(on_kerb + axle_delay * rate)] == pytest.approx(0.1, abs=1e-12)
     assert np.max(np.abs(delta["actuator_fr_displacement"][: round(19.9 * rate)])) < 1e-12
     # Each event only in its own track.
-    assert np.max(np.abs(delta["actuator_fl_displacement"][round(15 * rate):])) < 1e-12
+    assert np.max(np.abs(delta["actuator_fl_displacement"][round(15 * rate) :])) < 1e-12
     assert np.max(np.abs(delta["actuator_fr_displacement"][: round(15 * rate)])) < 1e-12
 
 
 def test_the_rig_band_limit_keeps_an_event_at_its_time():
     pothole = Pothole(time=10.0, depth=0.05, length=1.0, side="both")
     settings = DriveSettings(events=(pothole,))
-    delta = generate_drive(settings)["actuator_fr_displacement"] - generate_drive(DriveSettings())[
-        "actuator_fr_displacement"
-    ]
+    delta = (
+        generate_drive(settings)["actuator_fr_displacement"]
+        - generate_drive(DriveSettings())["actuator_fr_displacement"]
+    )
     # Zero-phase filtering: the dip stays centred; a 1 m dip at 20 m/s (50 ms) keeps most of its depth below 40 Hz.
     assert np.argmin(delta) == round(10.0 * settings.sample_rate)
     assert -np.min(delta) == pytest.approx(0.05, rel=0.1)

@@ -130,13 +130,16 @@ def test_lca_angle_is_wheel_travel_over_arm_length(car: LinearVehicle, params: V
 def _port_laws(vehicle: LinearVehicle, params: VehicleParameters) -> list[tuple[int, int, int, float, float]]:
     """(force input, displacement output, rate output, stiffness, damping) of the linear reference law of every
     external damper and bushing port of `vehicle`."""
-    rates = {f"damper_{c}": [(0.0, (params.front_damper if c[0] == "f" else params.rear_damper).damping)]
-             for c in CORNERS}
+    rates = {
+        f"damper_{c}": [(0.0, (params.front_damper if c[0] == "f" else params.rear_damper).damping)] for c in CORNERS
+    }
     for corner in ("fl", "fr"):
         for position, b in (("front", params.lca.front_bushing), ("rear", params.lca.rear_bushing)):
             rates[f"bushing_{corner}_{position}"] = [
-                (b.axial_stiffness, b.axial_damping), (b.radial_stiffness, b.radial_damping),
-                (b.torsional_stiffness, b.torsional_damping), (b.conical_stiffness, b.conical_damping),
+                (b.axial_stiffness, b.axial_damping),
+                (b.radial_stiffness, b.radial_damping),
+                (b.torsional_stiffness, b.torsional_damping),
+                (b.conical_stiffness, b.conical_damping),
             ]
     laws = []
     for component, values in rates.items():
@@ -202,8 +205,9 @@ def test_stabilised_bushings_fed_their_linear_law_once_per_step_equal_the_built_
 def test_stabilised_ports_start_at_the_reference_models_equilibrium(
     car: LinearVehicle, linear_params: VehicleParameters
 ) -> None:
-    stabilised = build_full_vehicle(linear_params, {n: "stabilised" if n.startswith("bushing") else v
-                                                    for n, v in ALL_REFERENCE.items()})
+    stabilised = build_full_vehicle(
+        linear_params, {n: "stabilised" if n.startswith("bushing") else v for n, v in ALL_REFERENCE.items()}
+    )
     np.testing.assert_allclose(stabilised.equilibrium(), car.equilibrium(), rtol=1e-9, atol=1e-12)
 
 

@@ -70,16 +70,20 @@ def _road(t: np.ndarray, phase: float) -> tuple[np.ndarray, np.ndarray]:
 def _posts(vehicle: LinearVehicle, duration: float) -> dict[str, np.ndarray]:
     """Displacement and velocity of every actuator post of the vehicle, each post with its own phase."""
     t = np.arange(round(duration / PERIOD) + 1) * PERIOD
-    posts = [n.removesuffix("displacement") for n in vehicle.input_names if n.startswith("actuator")
-             and n.endswith("displacement")]
+    posts = [
+        n.removesuffix("displacement")
+        for n in vehicle.input_names
+        if n.startswith("actuator") and n.endswith("displacement")
+    ]
     inputs = {}
     for i, post in enumerate(posts):
         inputs[f"{post}displacement"], inputs[f"{post}velocity"] = _road(t, 0.7 * i)
     return inputs
 
 
-def _both_paths(vehicle: LinearVehicle, laws: dict, inputs: dict, x0: np.ndarray, paths: PathCount
-                ) -> tuple[dict, dict]:
+def _both_paths(
+    vehicle: LinearVehicle, laws: dict, inputs: dict, x0: np.ndarray, paths: PathCount
+) -> tuple[dict, dict]:
     """The run on the compiled path (checked to be that) and on the generic path."""
     compiled = simulate_monolithic(vehicle, laws, inputs, MonolithicSettings(PERIOD), x0=x0)
     assert paths.generic == 0
@@ -97,8 +101,7 @@ def _assert_equal_to_peak(compiled: dict, generic: dict, tolerance: float = 1e-9
 
 @pytest.mark.parametrize(
     "effects",
-    [("hysteresis", "seal_friction"), ("hysteresis", "seal_friction", "temperature"), ("gas_force", "temperature"),
-     ()],
+    [("hysteresis", "seal_friction"), ("hysteresis", "seal_friction", "temperature"), ("gas_force", "temperature"), ()],
 )
 def test_compiled_quarter_car_equals_the_generic_path(
     params: VehicleParameters, paths: PathCount, effects: tuple[str, ...]
@@ -153,11 +156,13 @@ class _SoftenedLaw(LinearLaw):
 def test_an_unknown_law_type_falls_back_to_the_generic_path(params: VehicleParameters, paths: PathCount) -> None:
     car = build_quarter_car(QuarterCarParameters.from_vehicle(params))
     inputs, x0 = _posts(car, 0.2), car.equilibrium()
-    softened = simulate_monolithic(car, {"damper_force": _SoftenedLaw(0.0, 3000.0)}, inputs,
-                                   MonolithicSettings(PERIOD), x0=x0)
+    softened = simulate_monolithic(
+        car, {"damper_force": _SoftenedLaw(0.0, 3000.0)}, inputs, MonolithicSettings(PERIOD), x0=x0
+    )
     assert paths.generic == 1
-    halved = simulate_monolithic(car, {"damper_force": LinearLaw(0.0, 1500.0)}, inputs, MonolithicSettings(PERIOD),
-                                 x0=x0)
+    halved = simulate_monolithic(
+        car, {"damper_force": LinearLaw(0.0, 1500.0)}, inputs, MonolithicSettings(PERIOD), x0=x0
+    )
     assert paths.generic == 1
     _assert_equal_to_peak(halved, softened)
 
@@ -170,8 +175,9 @@ def test_both_paths_report_divergence_at_the_same_time(params: VehicleParameters
     messages = []
     for compiled in (True, False):
         with pytest.raises(VehicleModelError, match="diverged at t = ") as info:
-            simulate_monolithic(car, laws, _posts(car, 0.2), MonolithicSettings(PERIOD, compiled=compiled),
-                                x0=car.equilibrium())
+            simulate_monolithic(
+                car, laws, _posts(car, 0.2), MonolithicSettings(PERIOD, compiled=compiled), x0=car.equilibrium()
+            )
         messages.append(str(info.value))
     assert messages[0] == messages[1]
 

@@ -166,9 +166,7 @@ def test_a_linear_spline_reproduces_the_linear_damper(params: QuarterCarParamete
     t = np.arange(300) * 2e-3
     inputs = {"actuator_fl_displacement": _road(t), "actuator_fl_velocity": _road_rate(t)}
     settings = SimulationSettings(dt=2e-3, max_substep=2e-5)
-    nonlinear = simulate(
-        build_quarter_car(replace(params, damper=spline), {"damper": "reference"}), inputs, settings
-    )
+    nonlinear = simulate(build_quarter_car(replace(params, damper=spline), {"damper": "reference"}), inputs, settings)
     linear = simulate(build_quarter_car(_linear_damper(params), {"damper": "reference"}), inputs, settings)
     scale = np.max(np.abs(linear["body_acceleration"]))
     assert np.max(np.abs(nonlinear["body_acceleration"] - linear["body_acceleration"])) < 1e-3 * scale
@@ -223,8 +221,9 @@ def test_body_velocity_is_the_rate_of_body_displacement_and_ties_to_the_stroke(p
     t = np.arange(n) * dt
     inputs = {"actuator_fl_displacement": _road(t), "actuator_fl_velocity": _road_rate(t)}
     result = simulate(car, inputs, SimulationSettings(dt=dt, hold="foh"), x0=np.zeros(4))
-    integrated = np.concatenate([[0.0], np.cumsum(0.5 * (result["body_velocity"][1:] + result["body_velocity"][:-1]))
-                                 * dt])
+    integrated = np.concatenate(
+        [[0.0], np.cumsum(0.5 * (result["body_velocity"][1:] + result["body_velocity"][:-1])) * dt]
+    )
     scale = np.ptp(result["body_displacement"])
     assert scale > 1e-3 and np.max(np.abs(integrated - result["body_displacement"])) < 1e-4 * scale
     x = np.random.default_rng(0).standard_normal(4)
@@ -232,7 +231,8 @@ def test_body_velocity_is_the_rate_of_body_displacement_and_ties_to_the_stroke(p
     spindle_rate = x[3]  # states [body, spindle, body rate, spindle rate]
     assert y[car.output_index("body_velocity")] == x[2]
     assert y[car.output_index("damper_velocity")] == pytest.approx(
-        params.damper_motion_ratio * (y[car.output_index("body_velocity")] - spindle_rate), rel=1e-12)
+        params.damper_motion_ratio * (y[car.output_index("body_velocity")] - spindle_rate), rel=1e-12
+    )
 
 
 def test_reference_damper_removes_the_force_input(params: QuarterCarParameters) -> None:

@@ -89,8 +89,9 @@ def test_a_minimal_file_with_a_linear_damper_builds_and_its_ratio_damps_with_its
     mass = np.diag([m_s, m_u])
     stiffness = np.array([[k, -k], [-k, k + k_t]])
     damping = np.array([[c, -c], [-c, c + c_t]])
-    first_order = np.block([[np.zeros((2, 2)), np.eye(2)],
-                            [-np.linalg.solve(mass, stiffness), -np.linalg.solve(mass, damping)]])
+    first_order = np.block(
+        [[np.zeros((2, 2)), np.eye(2)], [-np.linalg.solve(mass, stiffness), -np.linalg.solve(mass, damping)]]
+    )
     want = np.sort_complex(np.linalg.eigvals(first_order))
     np.testing.assert_allclose(np.sort_complex(np.linalg.eigvals(car.A)), want, rtol=1e-10)
     stroke = car.C[car.output_index("damper_displacement")]
@@ -127,32 +128,53 @@ def test_the_step_graph_records_the_corner(tmp_path: Path) -> None:
     [
         (lambda t: t.replace("wheel_rate = 25000.0\n", ""), r"missing key 'quarter_car\.wheel_rate'"),
         (lambda t: t.replace('corner = "fr"\n', ""), r"missing key 'quarter_car\.corner'"),
-        (lambda t: t.replace('corner = "fr"', 'corner = "front"'),
-         r"quarter_car\.corner = 'front'; expected one of fl, fr, rl, rr"),
+        (
+            lambda t: t.replace('corner = "fr"', 'corner = "front"'),
+            r"quarter_car\.corner = 'front'; expected one of fl, fr, rl, rr",
+        ),
         (lambda t: t.replace("wheel_rate = 25000.0", "wheel_rat = 25000.0"), r"missing key 'quarter_car\.wheel_rate'"),
-        (lambda t: t.replace("wheel_rate = 25000.0", "wheel_rate = 25000.0\ncamber = 0.01"),
-         r"unknown key\(s\) quarter_car\.camber"),
-        (lambda t: t.replace("damper_motion_ratio = 0.8", "damper_motion_ratio = -0.8"),
-         r"quarter_car\.damper_motion_ratio = -0\.8 must be > 0"),
-        (lambda t: t.replace("damper_motion_ratio = 0.8", "damper_motion_ratio = 0.8\ndamper_ratio = 1.0"),
-         r"quarter_car\.damper_ratio belongs to a full-vehicle parameter file.*damper_motion_ratio"),
-        (lambda t: t.replace("wheel_rate = 25000.0", "spring_rate = 25000.0"),
-         r"quarter_car\.spring_rate belongs to a full-vehicle parameter file.*wheel_rate"),
-        (lambda t: t.replace("damper_motion_ratio = 0.8", "damper_motion_ratio = 0.8\nstrut_direction = [0, 0, 1]"),
-         r"quarter_car\.strut_direction belongs to a full-vehicle parameter file"),
-        (lambda t: t + "\n[lca]\nmass = 4.5\n",
-         r": lca belongs to a full-vehicle parameter file.*no lower control arm"),
-        (lambda t: t.replace("[quarter_car]", "[body]\nmass = 1300.0\n\n[quarter_car]"),
-         r": body belongs to a full-vehicle parameter file.*quarter_car\.sprung_mass"),
-        (lambda t: t + "velocity = [-1.0, 1.0]\nforce = [-1000.0, 1000.0]\n",
-         r"quarter_car\.damper\.velocity, quarter_car\.damper\.force: a force-velocity table belongs to model = "
-         r"\"spline\"; this damper is \"linear\""),
+        (
+            lambda t: t.replace("wheel_rate = 25000.0", "wheel_rate = 25000.0\ncamber = 0.01"),
+            r"unknown key\(s\) quarter_car\.camber",
+        ),
+        (
+            lambda t: t.replace("damper_motion_ratio = 0.8", "damper_motion_ratio = -0.8"),
+            r"quarter_car\.damper_motion_ratio = -0\.8 must be > 0",
+        ),
+        (
+            lambda t: t.replace("damper_motion_ratio = 0.8", "damper_motion_ratio = 0.8\ndamper_ratio = 1.0"),
+            r"quarter_car\.damper_ratio belongs to a full-vehicle parameter file.*damper_motion_ratio",
+        ),
+        (
+            lambda t: t.replace("wheel_rate = 25000.0", "spring_rate = 25000.0"),
+            r"quarter_car\.spring_rate belongs to a full-vehicle parameter file.*wheel_rate",
+        ),
+        (
+            lambda t: t.replace("damper_motion_ratio = 0.8", "damper_motion_ratio = 0.8\nstrut_direction = [0, 0, 1]"),
+            r"quarter_car\.strut_direction belongs to a full-vehicle parameter file",
+        ),
+        (
+            lambda t: t + "\n[lca]\nmass = 4.5\n",
+            r": lca belongs to a full-vehicle parameter file.*no lower control arm",
+        ),
+        (
+            lambda t: t.replace("[quarter_car]", "[body]\nmass = 1300.0\n\n[quarter_car]"),
+            r": body belongs to a full-vehicle parameter file.*quarter_car\.sprung_mass",
+        ),
+        (
+            lambda t: t + "velocity = [-1.0, 1.0]\nforce = [-1000.0, 1000.0]\n",
+            r"quarter_car\.damper\.velocity, quarter_car\.damper\.force: a force-velocity table belongs to model = "
+            r"\"spline\"; this damper is \"linear\"",
+        ),
         (lambda t: t.replace('model = "linear"', 'model = "spline"'), r"missing key 'quarter_car\.damper\.velocity'"),
-        (lambda t: t.replace('model = "linear"', 'model = "spline"') + "velocity = [1.0, -1.0]\nforce = [1.0, -1.0]\n",
-         r"quarter_car\.damper\.velocity must increase strictly"),
+        (
+            lambda t: (
+                t.replace('model = "linear"', 'model = "spline"') + "velocity = [1.0, -1.0]\nforce = [1.0, -1.0]\n"
+            ),
+            r"quarter_car\.damper\.velocity must increase strictly",
+        ),
         (lambda t: t.replace('name = "test_car"', "name = 3"), r"name = 3 must be a string"),
-        (lambda t: t.replace("[quarter_car.damper]\n", "[quarter_car.dampr]\n"),
-         r"missing key 'quarter_car\.damper'"),
+        (lambda t: t.replace("[quarter_car.damper]\n", "[quarter_car.dampr]\n"), r"missing key 'quarter_car\.damper'"),
     ],
 )
 def test_bad_quarter_car_files_are_refused_naming_file_and_key(

@@ -80,8 +80,9 @@ def _reference(
     return {name: table[:, i] for i, name in enumerate(vehicle.output_names)}
 
 
-def _interpolating_fmu(vehicle: LinearVehicle, period: float, step: float, inputs: dict[str, np.ndarray],
-                       x0: np.ndarray, settle: bool) -> dict[str, np.ndarray]:
+def _interpolating_fmu(
+    vehicle: LinearVehicle, period: float, step: float, inputs: dict[str, np.ndarray], x0: np.ndarray, settle: bool
+) -> dict[str, np.ndarray]:
     """docs/fmu.md's semantics of an FMU that interpolates its inputs, computed with the model's own stepping.
 
     `inputs` row m is set at t_m = m step (row 0 during initialisation); returns the outputs read after
@@ -89,8 +90,10 @@ def _interpolating_fmu(vehicle: LinearVehicle, period: float, step: float, input
     the latest sample's time become that sample's, which is evaluated again. With `settle`, row m + 1 is set right
     after step m and before the outputs are read (a master resolving feedthrough), else before step m + 1."""
     discrete = vehicle.discretise(period, "foh")
-    rows = [vehicle.input_vector({name: values[m] for name, values in inputs.items()})
-            for m in range(len(next(iter(inputs.values()))))]
+    rows = [
+        vehicle.input_vector({name: values[m] for name, values in inputs.items()})
+        for m in range(len(next(iter(inputs.values()))))
+    ]
     knots, states = [rows[0]], [np.asarray(x0, dtype=float)]
 
     def set_inputs(u: np.ndarray, now: float) -> None:
@@ -337,8 +340,12 @@ def test_bad_requests_name_the_value(tmp_path: Path, model: str, settings: Vehic
 
 @pytest.mark.parametrize(
     ("kwargs", "message"),
-    [({"sample_period": 0.0}, "sample period"), ({"components": {"damper": "spline"}}, "choice"),
-     ({"fmi_version": 1}, "FMI version"), ({"initial_state": (0.0, math.nan)}, "initial state")],
+    [
+        ({"sample_period": 0.0}, "sample period"),
+        ({"components": {"damper": "spline"}}, "choice"),
+        ({"fmi_version": 1}, "FMI version"),
+        ({"initial_state": (0.0, math.nan)}, "initial state"),
+    ],
 )
 def test_bad_settings_are_refused(kwargs: dict, message: str) -> None:
     with pytest.raises(VehicleBuildError, match=message):
@@ -366,8 +373,9 @@ def test_input_derivatives_give_the_first_order_hold_without_a_second_set(quarte
         rows = [slave.get_real(vehicle.output_names)]
         for m in range(1, 600):
             slave.set_real(names, [inputs[k][m - 1] for k in names])
-            slave.fmu.setRealInputDerivatives(refs, [1] * len(refs), [(inputs[k][m] - inputs[k][m - 1]) / T
-                                                                      for k in names])
+            slave.fmu.setRealInputDerivatives(
+                refs, [1] * len(refs), [(inputs[k][m] - inputs[k][m - 1]) / T for k in names]
+            )
             slave.do_step((m - 1) * T, T)
             rows.append(slave.get_real(vehicle.output_names))
     table = np.array(rows)
@@ -381,6 +389,7 @@ def test_a_given_initial_state_is_where_the_fmu_starts() -> None:
     vehicle = vehicle_model("quarter-car", VehicleBuildSettings())
     start = tuple(0.001 * (i + 1) for i in range(len(vehicle.states)))
     np.testing.assert_array_equal(
-        _initial_state(vehicle_step_graph("quarter-car", VehicleBuildSettings(initial_state=start))), start)
+        _initial_state(vehicle_step_graph("quarter-car", VehicleBuildSettings(initial_state=start))), start
+    )
     with pytest.raises(VehicleBuildError, match=f"initial state has 2 values; the vehicle has {len(start)} states"):
         vehicle_step_graph("quarter-car", VehicleBuildSettings(initial_state=(0.0, 0.0)))

@@ -38,12 +38,18 @@ def loop(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     base = tmp_path_factory.mktemp("closed_loop")
     vehicle = build_vehicle_fmu("quarter-car", base / "quarter_car.fmu")
     damper = build_graph_fmu(semiactive_damper_graph(), base / "damper.fmu")
-    controllers = {"skyhook": build_skyhook_fmu(SkyhookSettings(command=VOLTAGE), base / "skyhook.fmu"),
-                   "soft": build_fixed_command_fmu(VOLTAGE, VOLTAGE.soft, base / "soft.fmu"),
-                   "hard": build_fixed_command_fmu(VOLTAGE, VOLTAGE.hard, base / "hard.fmu")}
-    paths = {"vehicle": vehicle, "damper": damper,
-             "drive": write_drive(generate_drive(DriveSettings(road_class="C", duration=20.0, fade_in=1.0)),
-                                  base / "drive.csv")}
+    controllers = {
+        "skyhook": build_skyhook_fmu(SkyhookSettings(command=VOLTAGE), base / "skyhook.fmu"),
+        "soft": build_fixed_command_fmu(VOLTAGE, VOLTAGE.soft, base / "soft.fmu"),
+        "hard": build_fixed_command_fmu(VOLTAGE, VOLTAGE.hard, base / "hard.fmu"),
+    }
+    paths = {
+        "vehicle": vehicle,
+        "damper": damper,
+        "drive": write_drive(
+            generate_drive(DriveSettings(road_class="C", duration=20.0, fade_in=1.0)), base / "drive.csv"
+        ),
+    }
     for name, controller in controllers.items():
         (base / name).mkdir()
         paths[name] = write_closed_loop(base / name, vehicle, damper, controller)
@@ -70,8 +76,10 @@ def _rms(x: np.ndarray) -> float:
 def test_skyhook_rides_smoother_than_the_damper_held_soft_or_hard(loop: dict[str, Path]) -> None:
     """Body acceleration RMS on the same drive (fmpy, the master's default one-pass scheme): skyhook 1.19 m/s^2,
     soft 1.32, hard 1.79 when written (an anti-skyhook, c_sky < 0, gave 1.49 on a 30 s drive: worse than soft)."""
-    results = {name: run_cosim(loop[name], loop["drive"], CosimSettings(step=STEP)).measurement
-               for name in ("skyhook", "soft", "hard")}
+    results = {
+        name: run_cosim(loop[name], loop["drive"], CosimSettings(step=STEP)).measurement
+        for name in ("skyhook", "soft", "hard")
+    }
     rms = {name: _rms(m["body_acceleration"]) for name, m in results.items()}
     assert rms["skyhook"] < rms["soft"] < rms["hard"], rms
     command = results["skyhook"]["controller_voltage"]

@@ -23,7 +23,7 @@ from nnfmu.data.measurement import Measurement
 from nnfmu.data.units import to_si
 
 BRFD_LICENCE = (
-    "CC BY-SA 4.0. Cite: Coble, Huggins, Cao, Ricles, Downey, \"Dataset-Friction-Damper-with-Backlash\", 2022 "
+    'CC BY-SA 4.0. Cite: Coble, Huggins, Cao, Ricles, Downey, "Dataset-Friction-Damper-with-Backlash", 2022 '
     "(github.com/ARTS-Laboratory/Dataset-Friction-Damper-with-Backlash, commit "
     "0e09aa9d950760277e31c08cd93fd01f39a5af09). Anything derived from these data and shipped must keep this "
     "attribution and licence."

@@ -27,15 +27,16 @@ class BushingChannel:
 CHANNELS: dict[str, BushingChannel] = {
     "axial": BushingChannel("axial_displacement", "axial_velocity", "axial_force", "m", "m/s", "N"),
     "radial": BushingChannel("radial_displacement", "radial_velocity", "radial_force", "m", "m/s", "N"),
-    "axial_rotation": BushingChannel(
-        "axial_rotation", "axial_angular_velocity", "axial_torque", "rad", "rad/s", "N.m"
-    ),
+    "axial_rotation": BushingChannel("axial_rotation", "axial_angular_velocity", "axial_torque", "rad", "rad/s", "N.m"),
     "conical_rotation": BushingChannel(
         "conical_rotation", "conical_angular_velocity", "conical_torque", "rad", "rad/s", "N.m"
     ),
 }
-UNITS = {name: unit for ch in CHANNELS.values() for name, unit in (
-    (ch.position, ch.position_unit), (ch.rate, ch.rate_unit), (ch.force, ch.force_unit))}
+UNITS = {
+    name: unit
+    for ch in CHANNELS.values()
+    for name, unit in ((ch.position, ch.position_unit), (ch.rate, ch.rate_unit), (ch.force, ch.force_unit))
+}
 
 
 def _default_vehicle_range() -> dict[str, float]:
@@ -46,11 +47,18 @@ def _default_vehicle_range() -> dict[str, float]:
 def _default_sensors() -> dict[str, Sensor]:
     s = Sensor
     return {
-        "axial_displacement": s(0.01, 0.0005), "axial_velocity": s(0.5, 0.001), "axial_force": s(10e3, 0.001),
-        "radial_displacement": s(0.005, 0.0005), "radial_velocity": s(0.25, 0.001), "radial_force": s(25e3, 0.001),
-        "axial_rotation": s(0.5, 0.0005), "axial_angular_velocity": s(10.0, 0.001), "axial_torque": s(250.0, 0.001),
+        "axial_displacement": s(0.01, 0.0005),
+        "axial_velocity": s(0.5, 0.001),
+        "axial_force": s(10e3, 0.001),
+        "radial_displacement": s(0.005, 0.0005),
+        "radial_velocity": s(0.25, 0.001),
+        "radial_force": s(25e3, 0.001),
+        "axial_rotation": s(0.5, 0.0005),
+        "axial_angular_velocity": s(10.0, 0.001),
+        "axial_torque": s(250.0, 0.001),
         # a multi-axis load cell: the conical torque uses a small part of its range, so it is noisy (ORIGIN.md)
-        "conical_rotation": s(0.2, 0.0005), "conical_angular_velocity": s(4.0, 0.001),
+        "conical_rotation": s(0.2, 0.0005),
+        "conical_angular_velocity": s(4.0, 0.001),
         "conical_torque": s(2000.0, 0.001),
     }
 
@@ -100,8 +108,14 @@ class BushingRig:
 
 
 def run_bushing_rig(
-    params: BushingParams, effects: tuple[str, ...], rig: BushingRig, rate: float, n: int, excitation: str,
-    noise: float, seed: int,
+    params: BushingParams,
+    effects: tuple[str, ...],
+    rig: BushingRig,
+    rate: float,
+    n: int,
+    excitation: str,
+    noise: float,
+    seed: int,
 ) -> tuple[np.ndarray, dict[str, np.ndarray], dict]:
     """Time [s], recorded channels (SI) and the truth's description of the excitation of one rig run."""
     motions: dict[str, Motion] = {}
@@ -122,8 +136,9 @@ RUN_NOTES = {
 }
 
 
-def true_signals(params: BushingParams, effects: tuple[str, ...], motions: dict[str, Motion],
-                 rate: float) -> dict[str, np.ndarray]:
+def true_signals(
+    params: BushingParams, effects: tuple[str, ...], motions: dict[str, Motion], rate: float
+) -> dict[str, np.ndarray]:
     """Position, rate and force of every channel (a BushingParams field in `motions`) before the transducers."""
     true: dict[str, np.ndarray] = {}
     for key, motion in motions.items():

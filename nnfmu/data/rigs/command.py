@@ -29,8 +29,9 @@ class CommandSchedule:
     def __post_init__(self) -> None:
         low, high = self.span
         if not (high > low and 0 < self.hold[0] <= self.hold[1] and self.random_band > 0):
-            raise SettingsError(f"a command schedule needs span low < high, 0 < hold min <= max and a positive band; "
-                                f"got {self}")
+            raise SettingsError(
+                f"a command schedule needs span low < high, 0 < hold min <= max and a positive band; got {self}"
+            )
 
     def signal(self, rate: float, n: int, rng: np.random.Generator) -> tuple[np.ndarray, dict]:
         """`n` samples of the command at `rate` [Hz], and its description for the truth file."""
@@ -49,7 +50,7 @@ class CommandSchedule:
             elif kind == "ramp":
                 part = np.linspace(level, target, length + 1)[1:]
             else:
-                noise = sosfilt(band, rng.standard_normal(length + int(rate)))[int(rate):]
+                noise = sosfilt(band, rng.standard_normal(length + int(rate)))[int(rate) :]
                 part = target + 0.25 * (high - low) * noise / max(float(np.std(noise)), 1e-12)
             out[start : start + length] = np.clip(part, low, high)
             level = out[start + length - 1]

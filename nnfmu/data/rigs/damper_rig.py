@@ -72,8 +72,9 @@ class DamperDyno:
         }
         return motion, described
 
-    def motion(self, excitation: str, rate: float, n: int, rng: np.random.Generator,
-               derived: DerivedPart | None = None) -> tuple[Motion, list[dict]]:
+    def motion(
+        self, excitation: str, rate: float, n: int, rng: np.random.Generator, derived: DerivedPart | None = None
+    ) -> tuple[Motion, list[dict]]:
         """The prescribed stroke of `n` samples at `rate` [Hz] for excitation "lab", "random", "sine" or "vehicle"
         (the sine series as in "lab", then `derived`'s stroke for the rest instead of the band-limited random)."""
         duration = n / rate
@@ -99,8 +100,10 @@ class DamperDyno:
             )
         if excitation == "vehicle":
             if derived is None:
-                raise SettingsError("the damper's 'vehicle' excitation needs a stroke derived from a vehicle result "
-                                    "(nnfmu rig damper --drive-from RESULT --element NAME)")
+                raise SettingsError(
+                    "the damper's 'vehicle' excitation needs a stroke derived from a vehicle result "
+                    "(nnfmu rig damper --drive-from RESULT --element NAME)"
+                )
             motion, described = derived(rate, remaining)
         else:
             motion, described = self.random(rate, remaining, rng)
@@ -109,8 +112,15 @@ class DamperDyno:
 
 
 def run_damper_dyno(
-    params: DamperParams, effects: tuple[str, ...], dyno: DamperDyno, rate: float, n: int, excitation: str,
-    noise: float, seed: int, derived: DerivedPart | None = None,
+    params: DamperParams,
+    effects: tuple[str, ...],
+    dyno: DamperDyno,
+    rate: float,
+    n: int,
+    excitation: str,
+    noise: float,
+    seed: int,
+    derived: DerivedPart | None = None,
 ) -> tuple[np.ndarray, dict[str, np.ndarray], dict]:
     """Time [s], recorded channels (SI) and the truth's description of the excitation of one dyno run (`derived`: the
     vehicle-derived stroke of a "vehicle" excitation)."""

@@ -90,8 +90,10 @@ def check_options(kind: str, options: RigOptions) -> None:
     if options.excitation not in EXCITATIONS:
         raise SettingsError(f"unknown excitation {options.excitation!r}; valid excitations: {', '.join(EXCITATIONS)}")
     if options.damper_type != "passive" and options.excitation == VEHICLE_EXCITATION:
-        raise SettingsError(f"the {options.damper_type} damper dyno has no vehicle-derived drive; use the lab, random "
-                            "or sine excitation")
+        raise SettingsError(
+            f"the {options.damper_type} damper dyno has no vehicle-derived drive; use the lab, random "
+            "or sine excitation"
+        )
     if not (math.isfinite(options.sample_rate) and options.sample_rate >= MIN_SAMPLE_RATE):
         raise SettingsError(
             f"sample_rate must be at least {MIN_SAMPLE_RATE:g} Hz (the drives reach 40 Hz), got {options.sample_rate!r}"
@@ -103,8 +105,10 @@ def check_options(kind: str, options: RigOptions) -> None:
         )
     samples = duration * options.sample_rate
     if samples > MAX_SAMPLES:
-        raise SettingsError(f"duration {duration:g} s at {options.sample_rate:g} Hz gives {samples:.4g} samples, more "
-                            f"than the limit of {MAX_SAMPLES} per record; record in shorter parts")
+        raise SettingsError(
+            f"duration {duration:g} s at {options.sample_rate:g} Hz gives {samples:.4g} samples, more "
+            f"than the limit of {MAX_SAMPLES} per record; record in shorter parts"
+        )
     if not (math.isfinite(options.noise) and options.noise >= 0):
         raise SettingsError(f"noise must be a non-negative multiplier of realistic sensor noise, got {options.noise!r}")
     if not isinstance(options.seed, int) or options.seed < 0:

@@ -29,8 +29,15 @@ PARAMS = {"mr": MRDamperParams, "cdc": CDCDamperParams}
 
 
 def run_semiactive_dyno(
-    damper_type: str, params: MRDamperParams | CDCDamperParams, effects: tuple[str, ...], dyno: DamperDyno,
-    rate: float, n: int, excitation: str, noise: float, seed: int,
+    damper_type: str,
+    params: MRDamperParams | CDCDamperParams,
+    effects: tuple[str, ...],
+    dyno: DamperDyno,
+    rate: float,
+    n: int,
+    excitation: str,
+    noise: float,
+    seed: int,
 ) -> tuple[np.ndarray, dict[str, np.ndarray], dict, dict[str, Sensor]]:
     """Time [s], recorded channels (SI), the truth's description of the run and the transducers of one semi-active
     dyno run (`damper_type` "mr" or "cdc")."""
@@ -47,8 +54,12 @@ def run_semiactive_dyno(
         truth = CDCDamperTruth(params, effects)  # type: ignore[arg-type]
         method = "exact first-order lag of the valve opening (current held over each step)"
     force, _ = truth.simulate(1 / fine_rate, motion.x, motion.v, motion.a, fine_command)
-    true = {"displacement": motion.x[::substeps], "velocity": motion.v[::substeps], "force": force[::substeps],
-            channel: command}
+    true = {
+        "displacement": motion.x[::substeps],
+        "velocity": motion.v[::substeps],
+        "force": force[::substeps],
+        channel: command,
+    }
     sensors = {**{k: v for k, v in dyno.sensors.items() if k in true}, channel: COMMAND_SENSORS[channel]}
     channels = record({k: np.array(v) for k, v in true.items()}, sensors, noise, seed)
     described = {
@@ -58,6 +69,6 @@ def run_semiactive_dyno(
         "sign_convention": "displacement: extension from mid-stroke (rebound +); force: tension (rebound +)",
         "recorded_velocity": "true stroke velocity plus velocity-transducer noise",
         "recorded_command": f"the commanded {channel} (before the {'coil' if damper_type == 'mr' else 'valve'}'s lag)"
-                            " plus transducer noise",
+        " plus transducer noise",
     }
     return np.arange(n) / rate, channels, described, sensors

@@ -47,8 +47,10 @@ def simulate_rig(kind: str, options: RigOptions, params: RigParams | None = None
     """
     check_options(kind, options)
     if options.excitation == VEHICLE_EXCITATION:
-        raise SettingsError(f"a vehicle-derived {kind} drive needs the vehicle's result: use simulate_vehicle_rig "
-                            f"(nnfmu rig {kind} --drive-from RESULT --element NAME)")
+        raise SettingsError(
+            f"a vehicle-derived {kind} drive needs the vehicle's result: use simulate_vehicle_rig "
+            f"(nnfmu rig {kind} --drive-from RESULT --element NAME)"
+        )
     effects = resolve_effects(kind, options.effects, options.damper_type)
     duration = resolve_duration(kind, options)
     n = int(round(duration * options.sample_rate))

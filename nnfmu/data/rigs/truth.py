@@ -21,8 +21,14 @@ def truth_path(data_path: Path) -> Path:
 
 
 def build_truth(
-    kind: str, effects: tuple[str, ...], parameters: dict[str, Any], excitation: dict[str, Any],
-    sensors: dict[str, Any], options: RigOptions, duration: float, channels: dict[str, str],
+    kind: str,
+    effects: tuple[str, ...],
+    parameters: dict[str, Any],
+    excitation: dict[str, Any],
+    sensors: dict[str, Any],
+    options: RigOptions,
+    duration: float,
+    channels: dict[str, str],
 ) -> dict[str, Any]:
     """The truth dictionary: kind, effects on, every parameter with units, excitation, sensors, options, seed,
     channel units and nnfmu version. A semi-active damper's type is named beside the kind (a passive run's truth
@@ -47,4 +53,3 @@ def build_truth(
 def truth_text(truth: dict[str, Any]) -> str:
     """The truth as the JSON text of its file."""
     return json.dumps(truth, indent=2, allow_nan=False) + "\n"
-

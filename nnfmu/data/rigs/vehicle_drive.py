@@ -64,8 +64,9 @@ class DriveDesign:
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.margin) and self.margin >= 1.0):
-            raise SettingsError("margin must be a number >= 1 (the drive's peaks over the simulated ones), "
-                                f"got {self.margin!r}")
+            raise SettingsError(
+                f"margin must be a number >= 1 (the drive's peaks over the simulated ones), got {self.margin!r}"
+            )
         low, high = self.band
         if not (math.isfinite(low) and math.isfinite(high) and 0 <= low < high):
             raise SettingsError(f"band must be (low, high) [Hz] with 0 <= low < high, got {self.band!r}")
@@ -91,8 +92,13 @@ class SampledSpectrum:
         return np.where(inside, np.interp(f, self.frequency, self.density), 0.0)
 
     def describe(self) -> dict:
-        return {"type": "smoothed Welch PSD of the simulated deflection", "f_low_Hz": self.f_low,
-                "f_high_Hz": self.f_high, "welch_segment_s": WELCH_SECONDS, "smoothing_octaves": SMOOTHING_OCTAVES}
+        return {
+            "type": "smoothed Welch PSD of the simulated deflection",
+            "f_low_Hz": self.f_low,
+            "f_high_Hz": self.f_high,
+            "welch_segment_s": WELCH_SECONDS,
+            "smoothing_octaves": SMOOTHING_OCTAVES,
+        }
 
 
 def deflection_psd(x: np.ndarray, rate: float) -> tuple[np.ndarray, np.ndarray]:
@@ -146,12 +152,18 @@ class ChannelDesign:
     rms_over_simulated: float
 
     def to_dict(self) -> dict:
-        return {"channel": self.key, "unit": self.unit,
-                "simulated": {element: asdict(e) for element, e in self.simulated.items()},
-                "simulated_variance_outside_band": self.share_outside_band,
-                "start": self.start, "working_point": self.working_point, "target_low": self.target_low,
-                "target_high": self.target_high,
-                "designed": asdict(self.designed), "designed_rms_over_simulated_rms": self.rms_over_simulated}
+        return {
+            "channel": self.key,
+            "unit": self.unit,
+            "simulated": {element: asdict(e) for element, e in self.simulated.items()},
+            "simulated_variance_outside_band": self.share_outside_band,
+            "start": self.start,
+            "working_point": self.working_point,
+            "target_low": self.target_low,
+            "target_high": self.target_high,
+            "designed": asdict(self.designed),
+            "designed_rms_over_simulated_rms": self.rms_over_simulated,
+        }
 
 
 @dataclass(frozen=True)
@@ -171,14 +183,16 @@ class VehicleDrive:
             "elements": list(self.elements),
             "design": asdict(self.design) | {"band": list(self.design.band)},
             "start": "settled at the simulated initial deflection (the car's static position), then faded to the "
-                     "working point" if self.design.settled
-                     else "at rest (zero deflection), faded to the working point",
+            "working point"
+            if self.design.settled
+            else "at rest (zero deflection), faded to the working point",
             "peak_control": "random part scaled about the working point (the simulated mean) so that its excursions "
-                            "above and below reach at least margin x the simulated ones; the side that needs more "
-                            "sets the scale",
+            "above and below reach at least margin x the simulated ones; the side that needs more "
+            "sets the scale",
             "combination": "all channels driven at once, each with its own random phases (independent): every "
-                           "network sees its own channel only, so each gets the whole record"
-                           if len(self.channels) > 1 else "one channel",
+            "network sees its own channel only, so each gets the whole record"
+            if len(self.channels) > 1
+            else "one channel",
             "channels": {key: c.to_dict() for key, c in self.channels.items()},
         }
 
@@ -188,12 +202,16 @@ def deflection(source: Measurement, element: str, key: str) -> np.ndarray:
     channel = CHANNELS[key]
     name = f"{element}_{channel.position}"
     if name not in source:
-        raise DataError(f"{source.source}: no channel {name!r} for the {key} deflection of {element} (bushing "
-                        f"channels there: {', '.join(n for n in source.names if n.startswith('bushing_')) or 'none'})")
+        raise DataError(
+            f"{source.source}: no channel {name!r} for the {key} deflection of {element} (bushing "
+            f"channels there: {', '.join(n for n in source.names if n.startswith('bushing_')) or 'none'})"
+        )
     unit = source.units.get(name)
     if unit != channel.position_unit:
-        raise DataError(f"{source.source}: channel {name!r} is in {unit!r}; a {key} deflection needs a unit that "
-                        f"converts to {channel.position_unit!r}")
+        raise DataError(
+            f"{source.source}: channel {name!r} is in {unit!r}; a {key} deflection needs a unit that "
+            f"converts to {channel.position_unit!r}"
+        )
     return np.asarray(source[name], dtype=float)
 
 
@@ -201,23 +219,42 @@ def damper_stroke(source: Measurement, element: str) -> np.ndarray:
     """The simulated stroke [m] of damper `element` (its `<element>_displacement` channel), checked for its unit."""
     name = f"{element}_displacement"
     if name not in source:
-        raise DataError(f"{source.source}: no channel {name!r} for the stroke of {element} (damper channels there: "
-                        f"{', '.join(n for n in source.names if n.startswith('damper_')) or 'none'})")
+        raise DataError(
+            f"{source.source}: no channel {name!r} for the stroke of {element} (damper channels there: "
+            f"{', '.join(n for n in source.names if n.startswith('damper_')) or 'none'})"
+        )
     if source.units.get(name) != "m":
-        raise DataError(f"{source.source}: channel {name!r} is in {source.units.get(name)!r}; a damper stroke needs "
-                        "a unit that converts to 'm'")
+        raise DataError(
+            f"{source.source}: channel {name!r} is in {source.units.get(name)!r}; a damper stroke needs "
+            "a unit that converts to 'm'"
+        )
     return np.asarray(source[name], dtype=float)
 
 
-def _channel(source: Measurement, elements: Sequence[str], key: str, rate: float, n: int, rng: np.random.Generator,
-             design: DriveDesign) -> tuple[Motion, ChannelDesign]:
+def _channel(
+    source: Measurement,
+    elements: Sequence[str],
+    key: str,
+    rate: float,
+    n: int,
+    rng: np.random.Generator,
+    design: DriveDesign,
+) -> tuple[Motion, ChannelDesign]:
     """Design the drive of bushing channel `key` from the simulated deflections of `elements`."""
     simulated = {element: deflection(source, element, key) for element in elements}
     return derive_channel(source, simulated, key, CHANNELS[key].position_unit, rate, n, rng, design)
 
 
-def derive_channel(source: Measurement, simulated: dict[str, np.ndarray], key: str, unit: str, rate: float, n: int,
-                   rng: np.random.Generator, design: DriveDesign) -> tuple[Motion, ChannelDesign]:
+def derive_channel(
+    source: Measurement,
+    simulated: dict[str, np.ndarray],
+    key: str,
+    unit: str,
+    rate: float,
+    n: int,
+    rng: np.random.Generator,
+    design: DriveDesign,
+) -> tuple[Motion, ChannelDesign]:
     """Design one rig channel's drive (`n` samples at `rate` [Hz], in `unit`) from the simulated positions of one or
     more elements (element -> samples of `source`)."""
     elements = list(simulated)
@@ -229,8 +266,10 @@ def derive_channel(source: Measurement, simulated: dict[str, np.ndarray], key: s
     total = float(np.trapezoid(density, f))
     inside = (f >= low) & (f <= high)
     if total <= 0 or not np.any(density[inside] > 0):
-        raise DataError(f"{source.source}: the {key} deflection of {', '.join(elements)} does not move inside the "
-                        f"rig band {low:g}-{high:g} Hz; there is nothing to derive a drive from")
+        raise DataError(
+            f"{source.source}: the {key} deflection of {', '.join(elements)} does not move inside the "
+            f"rig band {low:g}-{high:g} Hz; there is nothing to derive a drive from"
+        )
     band_share = float(np.trapezoid(np.where(inside, density, 0.0), f)) / total
     spectrum = SampledSpectrum(f, density, low, high)
     unit_motion = random_motion(spectrum, rate, n, rng, min(design.fade, n / rate / 4))
@@ -238,9 +277,11 @@ def derive_channel(source: Measurement, simulated: dict[str, np.ndarray], key: s
     target_high = max(s.mean + design.margin * (s.max - s.mean) for s in stats.values())
     target_low = min(s.mean + design.margin * (s.min - s.mean) for s in stats.values())
     rate_peak = max(float(np.max(np.abs(np.gradient(x, source.sample_period)))) for x in simulated.values())
-    scale = max((target_high - centre) / float(np.max(unit_motion.x)),
-                (centre - target_low) / -float(np.min(unit_motion.x)),
-                design.margin * rate_peak / float(np.max(np.abs(unit_motion.v))))
+    scale = max(
+        (target_high - centre) / float(np.max(unit_motion.x)),
+        (centre - target_low) / -float(np.min(unit_motion.x)),
+        design.margin * rate_peak / float(np.max(np.abs(unit_motion.v))),
+    )
     start = float(simulated[elements[0]][0]) if design.settled else 0.0
     shift = preload(centre - start, rate, n, min(design.fade, n / rate / 4))
     working_point = Motion(start + shift.x, shift.v, shift.a)
@@ -249,13 +290,22 @@ def derive_channel(source: Measurement, simulated: dict[str, np.ndarray], key: s
     designed = Extremes.of(motion.x)
     simulated_rms = max(s.rms for s in stats.values())
     return motion, ChannelDesign(
-        key=key, unit=unit, simulated=stats, share_outside_band=1.0 - band_share,
-        start=start, working_point=centre, target_low=target_low, target_high=target_high, designed=designed,
-        rms_over_simulated=designed.rms / simulated_rms if simulated_rms > 0 else float("inf"))
+        key=key,
+        unit=unit,
+        simulated=stats,
+        share_outside_band=1.0 - band_share,
+        start=start,
+        working_point=centre,
+        target_low=target_low,
+        target_high=target_high,
+        designed=designed,
+        rms_over_simulated=designed.rms / simulated_rms if simulated_rms > 0 else float("inf"),
+    )
 
 
-def design_vehicle_drive(source: Measurement, elements: Sequence[str], rate: float, n: int, seed: int,
-                         design: DriveDesign = DriveDesign()) -> VehicleDrive:
+def design_vehicle_drive(
+    source: Measurement, elements: Sequence[str], rate: float, n: int, seed: int, design: DriveDesign = DriveDesign()
+) -> VehicleDrive:
     """Rig motions of all four bushing channels (`n` samples at `rate` [Hz]) derived from the deflections of the
     bushing `elements` (e.g. ['bushing_fl_front']) in the simulation result `source`; `seed` picks the phases.
 
@@ -272,8 +322,9 @@ def design_vehicle_drive(source: Measurement, elements: Sequence[str], rate: flo
     return VehicleDrive(motions, channels, source.source, elements, design)
 
 
-def design_damper_drive(source: Measurement, elements: Sequence[str], rate: float, n: int, seed: int,
-                        design: DriveDesign) -> VehicleDrive:
+def design_damper_drive(
+    source: Measurement, elements: Sequence[str], rate: float, n: int, seed: int, design: DriveDesign
+) -> VehicleDrive:
     """The damper dyno's stroke (`n` samples at `rate` [Hz]) derived from the strokes of the damper `elements` (e.g.
     ['damper_fl', 'damper_rl']) in the simulation result `source`; it starts at rest (it follows the dyno's sine
     series) and fades to the simulated working point. DataError names a missing, misunited or still stroke."""
@@ -281,10 +332,13 @@ def design_damper_drive(source: Measurement, elements: Sequence[str], rate: floa
     if not elements:
         raise SettingsError("name at least one damper element (e.g. damper_fl) to derive the drive from")
     if design.band[1] >= rate / 2:
-        raise SettingsError(f"band {design.band[0]:g}-{design.band[1]:g} Hz reaches the Nyquist frequency of "
-                            f"{rate:g} Hz sampling; sample faster or narrow the band")
+        raise SettingsError(
+            f"band {design.band[0]:g}-{design.band[1]:g} Hz reaches the Nyquist frequency of "
+            f"{rate:g} Hz sampling; sample faster or narrow the band"
+        )
     simulated = {element: damper_stroke(source, element) for element in elements}
     rng = np.random.default_rng(np.random.SeedSequence([seed, 3]))
-    motion, channel = derive_channel(source, simulated, "displacement", "m", rate, n, rng,
-                                     replace(design, settled=False))
+    motion, channel = derive_channel(
+        source, simulated, "displacement", "m", rate, n, rng, replace(design, settled=False)
+    )
     return VehicleDrive({"displacement": motion}, {"displacement": channel}, source.source, elements, design)

@@ -29,8 +29,13 @@ from nnfmu.physics.damper import DamperParams
 from nnfmu.physics.parameters import describe
 
 
-def simulate_vehicle_damper_dyno(source: Measurement, elements: Sequence[str], options: RigOptions = RigOptions(),
-                                 design: DriveDesign = DriveDesign(), params: DamperParams | None = None) -> RigRun:
+def simulate_vehicle_damper_dyno(
+    source: Measurement,
+    elements: Sequence[str],
+    options: RigOptions = RigOptions(),
+    design: DriveDesign = DriveDesign(),
+    params: DamperParams | None = None,
+) -> RigRun:
     """The damper dyno on the lab sine series, then a stroke derived from the damper `elements` of the vehicle result
     `source`; `options` give length (default 70 s), rate, seed, noise and effects (its excitation is set to
     'vehicle'). Raises DataError naming the file and channel for a missing, misunited or still stroke."""
@@ -47,25 +52,35 @@ def simulate_vehicle_damper_dyno(source: Measurement, elements: Sequence[str], o
         drive = design_damper_drive(source, elements, rate, samples, options.seed, design)
         designed.append(drive)
         motion = drive.motions["displacement"]
-        return motion, {"type": "vehicle-derived stroke", "peak_velocity_m/s": float(np.max(np.abs(motion.v))),
-                        "peak_displacement_m": float(np.max(np.abs(motion.x))),
-                        "rms_velocity_m/s": float(np.sqrt(np.mean(motion.v ** 2)))}
+        return motion, {
+            "type": "vehicle-derived stroke",
+            "peak_velocity_m/s": float(np.max(np.abs(motion.v))),
+            "peak_displacement_m": float(np.max(np.abs(motion.x))),
+            "rms_velocity_m/s": float(np.sqrt(np.mean(motion.v**2))),
+        }
 
-    time, channels, excitation = run_damper_dyno(params, effects, dyno, options.sample_rate, n, VEHICLE_EXCITATION,
-                                                 options.noise, options.seed, derived)
+    time, channels, excitation = run_damper_dyno(
+        params, effects, dyno, options.sample_rate, n, VEHICLE_EXCITATION, options.noise, options.seed, derived
+    )
     excitation["drive"] = designed[0].describe()
-    measurement = Measurement(time=time, channels=channels, units={k: UNITS[k] for k in channels},
-                              source=f"nnfmu rig damper driven from {', '.join(elements)} in {source.source} "
-                                     f"(seed {options.seed})")
+    measurement = Measurement(
+        time=time,
+        channels=channels,
+        units={k: UNITS[k] for k in channels},
+        source=f"nnfmu rig damper driven from {', '.join(elements)} in {source.source} (seed {options.seed})",
+    )
     recorded = {name: dyno.sensors[name].describe() for name in channels}
-    truth = build_truth("damper", effects, describe(params), excitation, recorded, options, duration,
-                        measurement.units)
+    truth = build_truth("damper", effects, describe(params), excitation, recorded, options, duration, measurement.units)
     return RigRun(measurement, json.loads(json.dumps(truth, allow_nan=False)))
 
 
-def write_vehicle_damper_dyno(source: str | os.PathLike[str], elements: Sequence[str], out: str | os.PathLike[str],
-                              options: RigOptions = RigOptions(), design: DriveDesign = DriveDesign()
-                              ) -> tuple[Path, Path]:
+def write_vehicle_damper_dyno(
+    source: str | os.PathLike[str],
+    elements: Sequence[str],
+    out: str | os.PathLike[str],
+    options: RigOptions = RigOptions(),
+    design: DriveDesign = DriveDesign(),
+) -> tuple[Path, Path]:
     """Load the vehicle result file `source`, simulate the dyno on a stroke derived from `elements`, and write the
     data (CSV or MDF4 by the suffix of `out`) and `<out without suffix>.truth.json`; returns both paths."""
     return write_run(simulate_vehicle_damper_dyno(load_measurement(source), elements, options, design), Path(out))

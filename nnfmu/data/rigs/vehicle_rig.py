@@ -28,17 +28,25 @@ from nnfmu.data.rigs.vehicle_drive import DriveDesign, design_vehicle_drive
 from nnfmu.physics.bushing import BushingParams
 
 
-def transducers_for(true: dict[str, np.ndarray], design: DriveDesign,
-                    rig: BushingRig = BushingRig()) -> dict[str, Sensor]:
+def transducers_for(
+    true: dict[str, np.ndarray], design: DriveDesign, rig: BushingRig = BushingRig()
+) -> dict[str, Sensor]:
     """The transducer of every recorded channel: the rig's default, or (`design.fit_sensors`) sized for its peak."""
     if not design.fit_sensors:
         return {name: rig.sensors[name] for name in true}
-    return {name: rig.sensors[name].sized_for(float(np.max(np.abs(values))), design.headroom)
-            for name, values in true.items()}
+    return {
+        name: rig.sensors[name].sized_for(float(np.max(np.abs(values))), design.headroom)
+        for name, values in true.items()
+    }
 
 
-def simulate_vehicle_rig(source: Measurement, elements: Sequence[str], options: RigOptions = RigOptions(),
-                         design: DriveDesign = DriveDesign(), params: BushingParams | None = None) -> RigRun:
+def simulate_vehicle_rig(
+    source: Measurement,
+    elements: Sequence[str],
+    options: RigOptions = RigOptions(),
+    design: DriveDesign = DriveDesign(),
+    params: BushingParams | None = None,
+) -> RigRun:
     """The bushing rig driven by a drive derived from the deflections of `elements` in the vehicle result `source`
     (`design_vehicle_drive`); `options` give length (default 60 s), rate, seed, noise and effects (its excitation is
     set to 'vehicle'). Raises DataError naming the file and channel for a missing, misunited or still deflection."""
@@ -53,24 +61,38 @@ def simulate_vehicle_rig(source: Measurement, elements: Sequence[str], options: 
     true = true_signals(params, effects, drive.motions, rate)
     sensors = transducers_for(true, design)
     channels = record(true, sensors, options.noise, options.seed)
-    measurement = Measurement(time=np.arange(n) / rate, channels=channels, units={k: UNITS[k] for k in channels},
-                              source=f"nnfmu rig bushing driven from {', '.join(drive.elements)} in {source.source} "
-                                     f"(seed {options.seed})")
+    measurement = Measurement(
+        time=np.arange(n) / rate,
+        channels=channels,
+        units={k: UNITS[k] for k in channels},
+        source=f"nnfmu rig bushing driven from {', '.join(drive.elements)} in {source.source} (seed {options.seed})",
+    )
     defaults = BushingRig().sensors
-    recorded = {name: sensors[name].describe() | {
-        "rig_default_full_scale": defaults[name].full_scale,
-        "test_peak": float(np.max(np.abs(true[name]))),
-        "chosen": "sized for the test (1-2-5 series, headroom "
-                  f"{design.headroom:g})" if design.fit_sensors else "the rig's default transducer"}
-        for name in channels}
+    recorded = {
+        name: sensors[name].describe()
+        | {
+            "rig_default_full_scale": defaults[name].full_scale,
+            "test_peak": float(np.max(np.abs(true[name]))),
+            "chosen": f"sized for the test (1-2-5 series, headroom {design.headroom:g})"
+            if design.fit_sensors
+            else "the rig's default transducer",
+        }
+        for name in channels
+    }
     excitation = {"drives": drive.describe(), **RUN_NOTES}
-    truth = build_truth("bushing", effects, describe_params(params), excitation, recorded, options, duration,
-                        measurement.units)
+    truth = build_truth(
+        "bushing", effects, describe_params(params), excitation, recorded, options, duration, measurement.units
+    )
     return RigRun(measurement, json.loads(json.dumps(truth, allow_nan=False)))
 
 
-def write_vehicle_rig(source: str | os.PathLike[str], elements: Sequence[str], out: str | os.PathLike[str],
-                      options: RigOptions = RigOptions(), design: DriveDesign = DriveDesign()) -> tuple[Path, Path]:
+def write_vehicle_rig(
+    source: str | os.PathLike[str],
+    elements: Sequence[str],
+    out: str | os.PathLike[str],
+    options: RigOptions = RigOptions(),
+    design: DriveDesign = DriveDesign(),
+) -> tuple[Path, Path]:
     """Load the vehicle result file `source`, simulate the rig on a drive derived from `elements`, and write the data
     (CSV or MDF4 by the suffix of `out`) and `<out without suffix>.truth.json`; returns both paths."""
     return write_run(simulate_vehicle_rig(load_measurement(source), elements, options, design), Path(out))

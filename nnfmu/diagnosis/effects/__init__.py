@@ -33,8 +33,15 @@ def _registry(*effects: Effect) -> dict[str, Effect]:
 
 
 EFFECTS: dict[str, Effect] = _registry(
-    SealFriction(), GasForce(), Hysteresis(), Backlash(), Inertia(), Temperature(), FrequencyDependence(),
-    AmplitudeDependence(), SensorOffset(),
+    SealFriction(),
+    GasForce(),
+    Hysteresis(),
+    Backlash(),
+    Inertia(),
+    Temperature(),
+    FrequencyDependence(),
+    AmplitudeDependence(),
+    SensorOffset(),
 )
 
 
@@ -48,8 +55,9 @@ def select_effects(names: tuple[str, ...] | None) -> list[Effect]:
     return [EFFECTS[name] for name in names]
 
 
-def effects_for(measurement: Measurement, model_inputs: Sequence[str], output: str,
-                names: tuple[str, ...] | None) -> list[Effect]:
+def effects_for(
+    measurement: Measurement, model_inputs: Sequence[str], output: str, names: tuple[str, ...] | None
+) -> list[Effect]:
     """The effects one diagnosis ranks: the library's and the record's `input:` candidates (`channel_effects`);
     None: all of them, library first; else those named, in the order asked (DiagnosisError for an unknown name)."""
     candidates = {e.name: e for e in channel_effects(measurement, tuple(model_inputs), output)}
@@ -58,18 +66,30 @@ def effects_for(measurement: Measurement, model_inputs: Sequence[str], output: s
     known = {**EFFECTS, **candidates}
     unknown = [name for name in names if name not in known]
     if unknown:
-        raise DiagnosisError(f"unknown effect(s) {', '.join(map(repr, unknown))}; the library has {', '.join(EFFECTS)}"
-                             f" and {measurement.source} the channel candidates {', '.join(candidates) or '(none)'}")
+        raise DiagnosisError(
+            f"unknown effect(s) {', '.join(map(repr, unknown))}; the library has {', '.join(EFFECTS)}"
+            f" and {measurement.source} the channel candidates {', '.join(candidates) or '(none)'}"
+        )
     return [known[name] for name in names]
 
 
 def find_effect(name: str) -> Effect:
     """The effect named `name`: the library's, or the channel candidate `input:<channel>` (DiagnosisError else)."""
     if name.startswith(PREFIX) and len(name) > len(PREFIX):
-        return ChannelInput(name[len(PREFIX):])
+        return ChannelInput(name[len(PREFIX) :])
     (effect,) = select_effects((name,))
     return effect
 
 
-__all__ = ["EFFECTS", "ChannelInput", "Effect", "Extension", "NoExtension", "Regressors", "channel_effects",
-           "effects_for", "find_effect", "select_effects"]
+__all__ = [
+    "EFFECTS",
+    "ChannelInput",
+    "Effect",
+    "Extension",
+    "NoExtension",
+    "Regressors",
+    "channel_effects",
+    "effects_for",
+    "find_effect",
+    "select_effects",
+]

@@ -42,17 +42,25 @@ class Backlash(Effect):
         )
         return Regressors(names, np.column_stack(columns), (), note + derived_note(signals, "displacement"))
 
-    def extension(self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray,
-                  settings: DiagnosisSettings) -> Extension | NoExtension:
+    def extension(
+        self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray, settings: DiagnosisSettings
+    ) -> Extension | NoExtension:
         """stop(displacement, radius) states: the position inside a gap closed after each reversal fraction of the
         fit part's mean travel between reversals (a play operator's state each)."""
         velocity, displacement = channel(spec, "velocity"), channel(spec, "displacement")
         if missing := need(self.name, displacement, measurement):
             return missing
         dt = measurement.sample_period
-        rate = (measurement[velocity][fit_rows] if velocity in measurement
-                else np.gradient(measurement[displacement][fit_rows], dt))
+        rate = (
+            measurement[velocity][fit_rows]
+            if velocity in measurement
+            else np.gradient(measurement[displacement][fit_rows], dt)
+        )
         radii = backlash_radii(rate, dt, settings.reversal_fractions)
         stops = tuple(Stop(displacement, radius=float(f"{r:.3g}")) for r in radii)
-        return extended(self.name, spec, with_derived(spec, stops),
-                        ", ".join(d.name for d in stops) + ": position inside the backlash gap (play-operator states)")
+        return extended(
+            self.name,
+            spec,
+            with_derived(spec, stops),
+            ", ".join(d.name for d in stops) + ": position inside the backlash gap (play-operator states)",
+        )

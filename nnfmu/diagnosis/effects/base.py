@@ -71,8 +71,9 @@ class Effect(ABC):
         """The candidate regressors the diagnosis ranks against the residual."""
 
     @abstractmethod
-    def extension(self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray,
-                  settings: DiagnosisSettings) -> Extension | NoExtension:
+    def extension(
+        self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray, settings: DiagnosisSettings
+    ) -> Extension | NoExtension:
         """The extension of `spec` for this effect, or why there is none. `fit_rows` (indices of `measurement`):
         the samples a scale may be taken from (the network will be fitted on them)."""
 
@@ -90,8 +91,11 @@ def need(effect: str, name: str, measurement: Measurement) -> NoExtension | None
     """None when `measurement` has the channel `name`, else why `effect` cannot be added without it."""
     if name in measurement:
         return None
-    return NoExtension(effect, f"{effect} needs the measured channel {name!r} as a model input; the data have "
-                               f"{', '.join(measurement.names)}", (name,))
+    return NoExtension(
+        effect,
+        f"{effect} needs the measured channel {name!r} as a model input; the data have {', '.join(measurement.names)}",
+        (name,),
+    )
 
 
 def with_delays(spec: FeatureSpec, name: str, delays: tuple[int, ...]) -> FeatureSpec:
@@ -117,6 +121,9 @@ def extended(effect: str, old: FeatureSpec, new: FeatureSpec, note: str) -> Exte
     """The extension from `old` to `new`, or NoExtension when `new` adds no feature `old` lacks."""
     added = tuple(name for name in new.feature_names if name not in old.feature_names)
     if not added:
-        return NoExtension(effect, f"the model already has the features for {effect} ({note}); a larger network or "
-                                   f"more data may be needed instead")
+        return NoExtension(
+            effect,
+            f"the model already has the features for {effect} ({note}); a larger network or "
+            f"more data may be needed instead",
+        )
     return Extension(effect, new, added, note)

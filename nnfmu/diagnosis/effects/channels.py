@@ -32,10 +32,21 @@ from nnfmu.models.features import FeatureSpec, Lowpass
 
 PREFIX = "input:"
 # Base quantities some physical family covers: the motion, loads and temperature (see the module docstring).
-COVERED = frozenset({
-    "displacement", "velocity", "acceleration", "rotation", "angle", "angular_velocity", "angular_acceleration",
-    "force", "torque", "temperature", "time",
-})
+COVERED = frozenset(
+    {
+        "displacement",
+        "velocity",
+        "acceleration",
+        "rotation",
+        "angle",
+        "angular_velocity",
+        "angular_acceleration",
+        "force",
+        "torque",
+        "temperature",
+        "time",
+    }
+)
 
 
 class ChannelInput(Effect):
@@ -60,22 +71,29 @@ class ChannelInput(Effect):
         states = [x, *(low_pass(x, tau, dt) for tau in settings.channel_taus)]
         centred = [s - np.mean(s) for s in states]
         labels = [self.channel, *(f"lowpass({self.channel}, {tau:g} s)" for tau in settings.channel_taus)]
-        names = (*(f"{label} - its mean" for label in labels),
-                 *(f"({label} - its mean) * predicted {signals.output}" for label in labels))
+        names = (
+            *(f"{label} - its mean" for label in labels),
+            *(f"({label} - its mean) * predicted {signals.output}" for label in labels),
+        )
         matrix = np.column_stack([*centred, *(c * signals.predicted for c in centred)])
         return Regressors(names, matrix, (), f"measured channel {self.channel!r} not used by the model" + CENTRED)
 
-    def extension(self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray,
-                  settings: DiagnosisSettings) -> Extension | NoExtension:
+    def extension(
+        self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray, settings: DiagnosisSettings
+    ) -> Extension | NoExtension:
         """The channel as a model input at delay 0 and lowpass(channel, tau) states at each of `channel_taus`."""
         if missing := need(self.name, self.channel, measurement):
             return missing
         states = tuple(Lowpass(self.channel, tau=tau) for tau in settings.channel_taus)
         unit = measurement.units.get(self.channel, "")
         taus = ", ".join(f"{tau:g}" for tau in settings.channel_taus)
-        return extended(self.name, spec, with_derived(with_delays(spec, self.channel, (0,)), states),
-                        f"the measured channel {self.channel} [{unit}] as a model input at delay 0, with its "
-                        f"first-order low-passes at tau = {taus} s as derived states (the lag through which it acts)")
+        return extended(
+            self.name,
+            spec,
+            with_derived(with_delays(spec, self.channel, (0,)), states),
+            f"the measured channel {self.channel} [{unit}] as a model input at delay 0, with its "
+            f"first-order low-passes at tau = {taus} s as derived states (the lag through which it acts)",
+        )
 
 
 def is_candidate(channel: str, model_inputs: tuple[str, ...], output: str) -> bool:

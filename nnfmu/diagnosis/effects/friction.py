@@ -42,12 +42,14 @@ class SealFriction(Effect):
         scales = [fraction * (rms(v) or 1.0) for fraction in settings.friction_scales]
         columns = [np.tanh(v / scale) for scale in scales]
         names = tuple(f"tanh(velocity / {scale:.3g} m/s)" for scale in scales)
-        note = ("smoothed sign of velocity (Coulomb friction) at velocity scales "
-                + ", ".join(f"{x:.3g}" for x in scales))
+        note = "smoothed sign of velocity (Coulomb friction) at velocity scales " + ", ".join(
+            f"{x:.3g}" for x in scales
+        )
         return Regressors(names, np.column_stack(columns), (), note + " m/s" + derived_note(signals, "velocity"))
 
-    def extension(self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray,
-                  settings: DiagnosisSettings) -> Extension | NoExtension:
+    def extension(
+        self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray, settings: DiagnosisSettings
+    ) -> Extension | NoExtension:
         """smooth_sign(velocity, scale): tanh at the middle friction scale × the fit part's rms velocity."""
         velocity = channel(spec, "velocity")
         if missing := need(self.name, velocity, measurement):

@@ -32,13 +32,16 @@ class GasForce(Effect):
     def regressors(self, signals: EffectSignals, settings: DiagnosisSettings) -> Regressors:
         x = signals["displacement"]
         matrix = np.column_stack([np.ones_like(x), x])
-        note = ("preload (constant) and spring rate (displacement); the constant alone cannot be told from a sensor "
-                "offset")
+        note = (
+            "preload (constant) and spring rate (displacement); the constant alone cannot be told from a sensor offset"
+        )
         return Regressors(("1 (preload)", "displacement [m]"), matrix, (), note + derived_note(signals, "displacement"))
 
-    def extension(self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray,
-                  settings: DiagnosisSettings) -> Extension | NoExtension:
+    def extension(
+        self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray, settings: DiagnosisSettings
+    ) -> Extension | NoExtension:
         """The displacement at delay 0 (preload and gas rate)."""
         displacement = channel(spec, "displacement")
         return need(self.name, displacement, measurement) or extended(
-            self.name, spec, with_delays(spec, displacement, (0,)), f"{displacement} at delay 0")
+            self.name, spec, with_delays(spec, displacement, (0,)), f"{displacement} at delay 0"
+        )

@@ -55,13 +55,15 @@ class Hysteresis(Effect):
         )
         return Regressors(tuple(names), np.column_stack(columns), (), note + derived_note(s, "velocity"))
 
-    def extension(self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray,
-                  settings: DiagnosisSettings) -> Extension | NoExtension:
+    def extension(
+        self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray, settings: DiagnosisSettings
+    ) -> Extension | NoExtension:
         """lowpass(velocity, tau) states at the shortest and longest memory time (compliance lag, Maxwell-like
         memory)."""
         velocity = channel(spec, "velocity")
         if missing := need(self.name, velocity, measurement):
             return missing
         states = tuple(Lowpass(velocity, tau=tau) for tau in added_taus(settings))
-        return extended(self.name, spec, with_derived(spec, states),
-                        ", ".join(d.name for d in states) + ": memory states")
+        return extended(
+            self.name, spec, with_derived(spec, states), ", ".join(d.name for d in states) + ": memory states"
+        )

@@ -33,8 +33,9 @@ class Inertia(Effect):
         note = "mass times acceleration" + derived_note(signals, "acceleration")
         return Regressors(("acceleration [m/s^2]",), a[:, None], (), note)
 
-    def extension(self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray,
-                  settings: DiagnosisSettings) -> Extension | NoExtension:
+    def extension(
+        self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray, settings: DiagnosisSettings
+    ) -> Extension | NoExtension:
         """The acceleration at delay 0 when measured, else the velocity at delay 1 (with delay 0: a finite
         difference)."""
         velocity, acceleration = channel(spec, "velocity"), channel(spec, "acceleration")
@@ -42,6 +43,9 @@ class Inertia(Effect):
             return extended(self.name, spec, with_delays(spec, acceleration, (0,)), f"{acceleration} at delay 0")
         if missing := need(self.name, velocity, measurement):
             return missing
-        return extended(self.name, spec, with_delays(spec, velocity, (0, 1)),
-                        f"{velocity} at delays 0 and 1 (acceleration as a finite difference; "
-                        f"no {acceleration} measured)")
+        return extended(
+            self.name,
+            spec,
+            with_delays(spec, velocity, (0, 1)),
+            f"{velocity} at delays 0 and 1 (acceleration as a finite difference; no {acceleration} measured)",
+        )

@@ -26,9 +26,13 @@ class SensorOffset(Effect):
         names = ("1 (offset)", "time / record length (drift)")
         return Regressors(names, matrix, (), "constant offset and linear drift")
 
-    def extension(self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray,
-                  settings: DiagnosisSettings) -> Extension | NoExtension:
+    def extension(
+        self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray, settings: DiagnosisSettings
+    ) -> Extension | NoExtension:
         """Always NoExtension: the fix is to correct the measurement."""
-        return NoExtension(self.name, "a load-cell offset or slow drift belongs to the measurement, not to the "
-                                      "component; correct the measurement (the network's bias already holds a "
-                                      "constant offset)")
+        return NoExtension(
+            self.name,
+            "a load-cell offset or slow drift belongs to the measurement, not to the "
+            "component; correct the measurement (the network's bias already holds a "
+            "constant offset)",
+        )

@@ -50,8 +50,9 @@ class Temperature(Effect):
         )
         return Regressors(names, np.column_stack([energy, energy * s.predicted]), (TEMPERATURE,), note + CENTRED)
 
-    def extension(self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray,
-                  settings: DiagnosisSettings) -> Extension | NoExtension:
+    def extension(
+        self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray, settings: DiagnosisSettings
+    ) -> Extension | NoExtension:
         """The measured temperature channel, else lowpass_square(velocity, `thermal_tau`): a running mean square of
         velocity, the damper's dissipated power c·v² through the thermal lag of oil and tube."""
         if TEMPERATURE in measurement:
@@ -60,6 +61,10 @@ class Temperature(Effect):
         if missing := need(self.name, velocity, measurement):
             return missing
         state = LowpassSquare(velocity, tau=settings.thermal_tau)
-        return extended(self.name, spec, with_derived(spec, (state,)),
-                        f"{state.name}: running mean square of velocity (dissipated power c·v² through the thermal "
-                        f"lag) in place of the unmeasured temperature")
+        return extended(
+            self.name,
+            spec,
+            with_derived(spec, (state,)),
+            f"{state.name}: running mean square of velocity (dissipated power c·v² through the thermal "
+            f"lag) in place of the unmeasured temperature",
+        )

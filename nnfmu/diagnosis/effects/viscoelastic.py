@@ -38,15 +38,20 @@ class FrequencyDependence(Effect):
         note = "viscoelastic internal states (Maxwell elements) at time constants " + ", ".join(f"{t:g}" for t in taus)
         return Regressors(names, np.column_stack(columns), (), note + " s" + derived_note(signals, "displacement"))
 
-    def extension(self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray,
-                  settings: DiagnosisSettings) -> Extension | NoExtension:
+    def extension(
+        self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray, settings: DiagnosisSettings
+    ) -> Extension | NoExtension:
         """lowpass(displacement, tau) states at `frequency_taus`."""
         displacement = channel(spec, "displacement")
         if missing := need(self.name, displacement, measurement):
             return missing
         states = tuple(Lowpass(displacement, tau=tau) for tau in settings.frequency_taus)
-        return extended(self.name, spec, with_derived(spec, states),
-                        ", ".join(d.name for d in states) + ": viscoelastic internal states")
+        return extended(
+            self.name,
+            spec,
+            with_derived(spec, states),
+            ", ".join(d.name for d in states) + ": viscoelastic internal states",
+        )
 
 
 class AmplitudeDependence(Effect):
@@ -65,13 +70,16 @@ class AmplitudeDependence(Effect):
         spread = low_pass((x - mean) ** 2, window, dt, float(np.var(first)))
         amplitude = np.sqrt(2 * np.maximum(spread, 0.0))
         amplitude -= np.mean(amplitude)
-        names = (f"(running amplitude - its mean) * predicted {signals.output}",
-                 "(running amplitude - its mean) * displacement")
+        names = (
+            f"(running amplitude - its mean) * predicted {signals.output}",
+            "(running amplitude - its mean) * displacement",
+        )
         note = f"running displacement amplitude (√2·rms over {window:g} s) scaling the force and the stiffness"
         return Regressors(names, np.column_stack([amplitude * signals.predicted, amplitude * x]), (), note + CENTRED)
 
-    def extension(self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray,
-                  settings: DiagnosisSettings) -> Extension | NoExtension:
+    def extension(
+        self, spec: FeatureSpec, measurement: Measurement, fit_rows: np.ndarray, settings: DiagnosisSettings
+    ) -> Extension | NoExtension:
         """lowpass_square(displacement, `amplitude_tau`): the running amplitude²."""
         displacement = channel(spec, "displacement")
         if missing := need(self.name, displacement, measurement):

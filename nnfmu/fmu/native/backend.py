@@ -68,8 +68,9 @@ def write_native(plan: BuildPlan, tree: Path) -> None:
     (sources / "config.h").write_text(config, encoding="utf-8")
     (sources / "graph.h").write_text(generated.header, encoding="utf-8")
     (sources / "graph.c").write_text(generated.source, encoding="utf-8")
-    (sources / "buildDescription.xml").write_text(render_build_description(identifier, source_files(fmi)),
-                                                  encoding="utf-8")
+    (sources / "buildDescription.xml").write_text(
+        render_build_description(identifier, source_files(fmi)), encoding="utf-8"
+    )
     (tree / "modelDescription.xml").write_text(render_model_description(view), encoding="utf-8")
     for platform in platforms:
         binary = tree / "binaries" / platform.folder(fmi) / f"{identifier}{platform.suffix}"

@@ -107,8 +107,10 @@ def select_targets(platforms: tuple[str, ...] | None) -> tuple[list[Target], str
     cross = win64_compiler()
     if platforms is None:
         if cross is None:
-            return [host], (f"no win64 binary: the cross compiler {WIN64_COMPILER} is not installed "
-                            f"({WIN64_INSTALL_HINT}); the FMU has {host.name} binaries and sources only")
+            return [host], (
+                f"no win64 binary: the cross compiler {WIN64_COMPILER} is not installed "
+                f"({WIN64_INSTALL_HINT}); the FMU has {host.name} binaries and sources only"
+            )
         return [host, win64_target(cross)], None
     targets: list[Target] = []
     for name in dict.fromkeys(platforms):
@@ -116,8 +118,10 @@ def select_targets(platforms: tuple[str, ...] | None) -> tuple[list[Target], str
             targets.append(host)
         elif name == WIN64:
             if cross is None:
-                raise CompilerError(f"--platforms {WIN64}: the cross compiler {WIN64_COMPILER} was not found on PATH "
-                                    f"({WIN64_INSTALL_HINT})")
+                raise CompilerError(
+                    f"--platforms {WIN64}: the cross compiler {WIN64_COMPILER} was not found on PATH "
+                    f"({WIN64_INSTALL_HINT})"
+                )
             targets.append(win64_target(cross))
         else:
             raise CompilerError(f"unknown platform {name!r}; this machine builds {', '.join(known_platforms())}")
@@ -129,14 +133,22 @@ def select_targets(platforms: tuple[str, ...] | None) -> tuple[list[Target], str
 def compile_shared_library(target: Target, sources: list[Path], include_dir: Path, output: Path) -> list[str]:
     """Compile `sources` into `target`'s shared library `output`; return the command line used. Raises CompilerError."""
     output.parent.mkdir(parents=True, exist_ok=True)
-    command = [*target.compiler, *target.flags, f"-I{include_dir}", "-o", str(output),
-               *(str(s) for s in sources), *LIBRARIES]
+    command = [
+        *target.compiler,
+        *target.flags,
+        f"-I{include_dir}",
+        "-o",
+        str(output),
+        *(str(s) for s in sources),
+        *LIBRARIES,
+    ]
     try:
         result = subprocess.run(command, capture_output=True, text=True, timeout=COMPILE_TIMEOUT_S, check=False)
     except (OSError, subprocess.TimeoutExpired) as err:
         raise CompilerError(f"cannot run the {target.name} C compiler {command[0]!r}: {err}") from err
     if result.returncode != 0 or not output.is_file():
         log = (result.stderr or result.stdout).strip()
-        raise CompilerError(f"the {target.name} C compiler failed (exit {result.returncode}) on {' '.join(command)}:"
-                            f"\n{log[-4000:]}")
+        raise CompilerError(
+            f"the {target.name} C compiler failed (exit {result.returncode}) on {' '.join(command)}:\n{log[-4000:]}"
+        )
     return command

@@ -37,7 +37,8 @@ class GraphLayout:
         if len(input_names) != len(input_sizes) or len(output_names) != len(output_sizes):
             raise FmuBuildError(
                 f"the C generator reports {len(input_sizes)} inputs and {len(output_sizes)} outputs, the graph has "
-                f"{len(input_names)} and {len(output_names)}")
+                f"{len(input_names)} and {len(output_names)}"
+            )
         return cls(_offsets(input_names, input_sizes), _offsets(output_names, output_sizes))
 
     def element(self, side: str, tensor: str, index: int, what: str) -> int:
@@ -75,8 +76,14 @@ class PortMap:
 def port_map(component: Component, layout: GraphLayout) -> PortMap:
     """Map ports and states to flat graph indices; fail if a graph input element would be left unfed."""
     inputs = [layout.element("input", p.tensor, p.index, f"input port {p.name!r}") for p in component.inputs]
-    starts = [layout.element("input", component.interval_starts[p.tensor], p.index, f"start of input port {p.name!r}")
-              for p in component.inputs] if component.interpolates_inputs else []
+    starts = (
+        [
+            layout.element("input", component.interval_starts[p.tensor], p.index, f"start of input port {p.name!r}")
+            for p in component.inputs
+        ]
+        if component.interpolates_inputs
+        else []
+    )
     outputs = [layout.element("output", p.tensor, p.index, f"output port {p.name!r}") for p in component.outputs]
     state_in, state_out, initial = [], [], []
     for state in component.states:
@@ -87,8 +94,10 @@ def port_map(component: Component, layout: GraphLayout) -> PortMap:
         for side, tensor in (("input", state.input), ("output", state.output)):
             size = (layout.inputs if side == "input" else layout.outputs)[tensor][1]
             if size != state.size:
-                raise FmuBuildError(f"state {state.input!r}: {len(state.initial)} initial values but {side} tensor "
-                                    f"{tensor!r} has {size} elements")
+                raise FmuBuildError(
+                    f"state {state.input!r}: {len(state.initial)} initial values but {side} tensor "
+                    f"{tensor!r} has {size} elements"
+                )
     fed = set(inputs) | set(starts) | set(state_in)
     if len(fed) != len(inputs) + len(starts) + len(state_in):
         raise FmuBuildError("two ports or states feed the same graph input element")
@@ -113,8 +122,9 @@ def _c_list(items: list[str], empty: str) -> str:
     return ", ".join(items) if items else empty
 
 
-def render_config(component: Component, variables: FmuVariables, ports: PortMap, identity: FmuIdentity,
-                  source: str) -> str:
+def render_config(
+    component: Component, variables: FmuVariables, ports: PortMap, identity: FmuIdentity, source: str
+) -> str:
     """config.h text for `component`; `source` (the ONNX file name) appears in a comment only."""
     inputs = [component.inputs[v.port_index] for v in variables.inputs]
     lows = [c_double(p.min if p.min is not None else -math.inf) for p in inputs]
@@ -158,8 +168,12 @@ def render_config(component: Component, variables: FmuVariables, ports: PortMap,
         "state_initial": _c_list([c_double(x) for x in ports.state_initial], "0.0"),
     }
     _check_consecutive(variables)
-    environment = jinja2.Environment(loader=jinja2.FileSystemLoader(str(templates_dir())), autoescape=False,
-                                     undefined=jinja2.StrictUndefined, keep_trailing_newline=True)
+    environment = jinja2.Environment(
+        loader=jinja2.FileSystemLoader(str(templates_dir())),
+        autoescape=False,
+        undefined=jinja2.StrictUndefined,
+        keep_trailing_newline=True,
+    )
     return environment.get_template("config.h.j2").render(c=values)
 
 

@@ -30,8 +30,9 @@ from nnfmu.fmu.pythonfmu.model_description_fix import DescriptionFix, fix_model_
 from nnfmu.fmu.pythonfmu.runtimes import Runtime, runtime
 from nnfmu.fmu.variables import FmuVariables
 
-RUNTIME_NOTE = ("pythonfmu backend: runs in the importing tool's Python 3 process, "
-                "which needs numpy and onnxruntime installed")
+RUNTIME_NOTE = (
+    "pythonfmu backend: runs in the importing tool's Python 3 process, which needs numpy and onnxruntime installed"
+)
 ORT_ERRORS = (Fail, InvalidArgument, InvalidGraph, OrtNotImplemented)
 
 
@@ -45,7 +46,8 @@ def write_pythonfmu(plan: BuildPlan, tree: Path) -> None:
         raise PythonFmuBuildError(
             f"{plan.source}: {component.name!r} interpolates its inputs between samples (a vehicle), which the "
             "pythonfmu runtimes cannot offer (no input derivatives, no evaluation of the latest sample when inputs "
-            "are set after a step); build it with the native backend")
+            "are set after a step); build it with the native backend"
+        )
     model = onnx.ModelProto()
     model.CopyFrom(plan.model)
     component.attach_to(model)  # the slave reads its ports from here, also for graphs from other tools
@@ -60,8 +62,9 @@ def _guid(module: str) -> str:
     return "{" + str(uuid.UUID(hashlib.sha256(module.encode("utf-8")).hexdigest()[:32])) + "}"
 
 
-def _write_resources(resources: Path, model: onnx.ModelProto, variables: FmuVariables, run: Runtime,
-                     fmi_version: int) -> str:
+def _write_resources(
+    resources: Path, model: onnx.ModelProto, variables: FmuVariables, run: Runtime, fmi_version: int
+) -> str:
     """Write the graph, the variable table, the slave and its core under a unique module name, and the runtime
     package; return the module name."""
     resources.mkdir(parents=True)

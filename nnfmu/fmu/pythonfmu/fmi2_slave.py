@@ -29,20 +29,34 @@ class NnfmuSlave(_core.SlaveBridge, Fmi2Slave):
     def _scalar(self, var: dict[str, Any], description: str | None) -> Any:
         """The pythonfmu variable of one table entry."""
         if var["causality"] == "input":
-            return Real(var["name"], causality=Fmi2Causality.input, variability=Fmi2Variability.continuous,
-                        description=description)
+            return Real(
+                var["name"],
+                causality=Fmi2Causality.input,
+                variability=Fmi2Variability.continuous,
+                description=description,
+            )
         if var["causality"] == "parameter":
-            return Real(var["name"], causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed,
-                        description=description)
+            return Real(
+                var["name"],
+                causality=Fmi2Causality.parameter,
+                variability=Fmi2Variability.fixed,
+                description=description,
+            )
         kind = Real if var["type"] == "Real" else Boolean
-        return kind(var["name"], causality=Fmi2Causality.output, variability=Fmi2Variability.discrete,
-                    initial=Fmi2Initial.calculated, description=description)
+        return kind(
+            var["name"],
+            causality=Fmi2Causality.output,
+            variability=Fmi2Variability.discrete,
+            initial=Fmi2Initial.calculated,
+            description=description,
+        )
 
     def _report(self, message: str, severity: str) -> None:
         self.log(message, _STATUS[severity])
 
-    def setup_experiment(self, start_time: float = 0.0, stop_time: float | None = None,
-                         tolerance: float | None = None) -> None:
+    def setup_experiment(
+        self, start_time: float = 0.0, stop_time: float | None = None, tolerance: float | None = None
+    ) -> None:
         self._core.start(start_time)
 
     def do_step(self, current_time: float, step_size: float) -> bool:

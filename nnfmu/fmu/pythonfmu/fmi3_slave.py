@@ -37,17 +37,35 @@ class NnfmuSlave3(_core.SlaveBridge, Fmi3Slave):
     def _scalar(self, var: dict[str, Any], description: str | None) -> Any:
         """The pythonfmu3 variable of one table entry."""
         if var["causality"] == "input":
-            return Float64(var["name"], causality=Fmi3Causality.input, variability=Fmi3Variability.continuous,
-                           description=description)
+            return Float64(
+                var["name"],
+                causality=Fmi3Causality.input,
+                variability=Fmi3Variability.continuous,
+                description=description,
+            )
         if var["causality"] == "parameter":
-            return Float64(var["name"], causality=Fmi3Causality.parameter, variability=Fmi3Variability.fixed,
-                           initial=Fmi3Initial.exact, description=description)
+            return Float64(
+                var["name"],
+                causality=Fmi3Causality.parameter,
+                variability=Fmi3Variability.fixed,
+                initial=Fmi3Initial.exact,
+                description=description,
+            )
         if var["causality"] == "independent":
-            return Float64(var["name"], causality=Fmi3Causality.independent,
-                           variability=Fmi3Variability.continuous, description=description)
+            return Float64(
+                var["name"],
+                causality=Fmi3Causality.independent,
+                variability=Fmi3Variability.continuous,
+                description=description,
+            )
         kind = Float64 if var["type"] == "Real" else Boolean
-        return kind(var["name"], causality=Fmi3Causality.output, variability=Fmi3Variability.discrete,
-                    initial=Fmi3Initial.calculated, description=description)
+        return kind(
+            var["name"],
+            causality=Fmi3Causality.output,
+            variability=Fmi3Variability.discrete,
+            initial=Fmi3Initial.calculated,
+            description=description,
+        )
 
     def _report(self, message: str, severity: str) -> None:
         """Errors always reach the master's logger; warnings only while logging is on (as in the native FMUs)."""

@@ -21,10 +21,26 @@ from nnfmu.fmu.variables import FmuVariable
 
 # the order of the elements of fmiModelDescription, per FMI version
 _ORDER = {
-    2: ("CoSimulation", "UnitDefinitions", "TypeDefinitions", "LogCategories", "DefaultExperiment",
-        "VendorAnnotations", "ModelVariables", "ModelStructure"),
-    3: ("CoSimulation", "UnitDefinitions", "TypeDefinitions", "LogCategories", "DefaultExperiment",
-        "ModelVariables", "ModelStructure", "Annotations"),
+    2: (
+        "CoSimulation",
+        "UnitDefinitions",
+        "TypeDefinitions",
+        "LogCategories",
+        "DefaultExperiment",
+        "VendorAnnotations",
+        "ModelVariables",
+        "ModelStructure",
+    ),
+    3: (
+        "CoSimulation",
+        "UnitDefinitions",
+        "TypeDefinitions",
+        "LogCategories",
+        "DefaultExperiment",
+        "ModelVariables",
+        "ModelStructure",
+        "Annotations",
+    ),
 }
 _FMI3_TYPES = {"Real": "Float64", "Boolean": "Boolean"}
 

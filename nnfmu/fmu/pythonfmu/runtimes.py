@@ -36,17 +36,38 @@ def runtime(fmi_version: int) -> Runtime:
 
         from nnfmu.fmu.pythonfmu import fmi2_slave
 
-        return Runtime(pythonfmu, "PythonFMU", Path(fmi2_slave.__file__), fmi2_slave.NnfmuSlave, {
-            "needsExecutionTool": True, "canHandleVariableCommunicationStepSize": True,
-            "canInterpolateInputs": False, "canBeInstantiatedOnlyOncePerProcess": False,
-            "canGetAndSetFMUstate": True, "canSerializeFMUstate": True})
+        return Runtime(
+            pythonfmu,
+            "PythonFMU",
+            Path(fmi2_slave.__file__),
+            fmi2_slave.NnfmuSlave,
+            {
+                "needsExecutionTool": True,
+                "canHandleVariableCommunicationStepSize": True,
+                "canInterpolateInputs": False,
+                "canBeInstantiatedOnlyOncePerProcess": False,
+                "canGetAndSetFMUstate": True,
+                "canSerializeFMUstate": True,
+            },
+        )
     try:
         import pythonfmu3
     except ImportError as err:
-        raise PythonFmuBuildError(f"the pythonfmu backend needs the package pythonfmu3 for FMI 3.0 "
-                                  f"(pip install {PYTHONFMU3_PIN}): {err}") from err
+        raise PythonFmuBuildError(
+            f"the pythonfmu backend needs the package pythonfmu3 for FMI 3.0 (pip install {PYTHONFMU3_PIN}): {err}"
+        ) from err
     from nnfmu.fmu.pythonfmu import fmi3_slave
 
-    return Runtime(pythonfmu3, "PythonFMU3", Path(fmi3_slave.__file__), fmi3_slave.NnfmuSlave3, {
-        "needsExecutionTool": True, "canHandleVariableCommunicationStepSize": True,
-        "canBeInstantiatedOnlyOncePerProcess": False, "canGetAndSetFMUState": True, "canSerializeFMUState": True})
+    return Runtime(
+        pythonfmu3,
+        "PythonFMU3",
+        Path(fmi3_slave.__file__),
+        fmi3_slave.NnfmuSlave3,
+        {
+            "needsExecutionTool": True,
+            "canHandleVariableCommunicationStepSize": True,
+            "canBeInstantiatedOnlyOncePerProcess": False,
+            "canGetAndSetFMUState": True,
+            "canSerializeFMUState": True,
+        },
+    )

@@ -28,8 +28,19 @@ REACHED = 1e-6  # a sample time within REACHED * period of the step end counts a
 MAX_SAMPLES_PER_STEP = 100_000
 STATE_KEY = "FMU state"  # the entry of the refused values a refused FMU state makes
 UNREADABLE = "unreadable"  # the one field of what `from_bytes` returns for bytes that are no JSON object
-STATE_FIELDS = ("inputs", "raw", "outputs", "parameters", "graph_state", "outside", "refused", "extrapolating",
-                "t_start", "time", "sample")
+STATE_FIELDS = (
+    "inputs",
+    "raw",
+    "outputs",
+    "parameters",
+    "graph_state",
+    "outside",
+    "refused",
+    "extrapolating",
+    "t_start",
+    "time",
+    "sample",
+)
 _ORT_DTYPES = {"tensor(double)": np.float64, "tensor(float)": np.float32}  # graph input types the slave feeds
 
 LOG_CATEGORIES = {  # the FMI log categories of the messages reported here, for the slaves' model descriptions
@@ -121,13 +132,17 @@ class SampledComponent:
             for port in ports:
                 shape = shapes.get(port["tensor"])
                 if shape is None or not 0 <= port["index"] < math.prod(shape):
-                    raise ValueError(f"{kind} port {port['name']!r} names element {port['index']} of tensor "
-                                     f"{port['tensor']!r}, which the graph's {kind}s {sorted(shapes)} do not hold")
+                    raise ValueError(
+                        f"{kind} port {port['name']!r} names element {port['index']} of tensor "
+                        f"{port['tensor']!r}, which the graph's {kind}s {sorted(shapes)} do not hold"
+                    )
         for state in self._states:
             for name, shapes in ((state["input"], inputs), (state["output"], outputs)):
                 if name not in shapes or math.prod(shapes[name]) != len(state["initial"]):
-                    raise ValueError(f"state tensor {name!r} of {len(state['initial'])} elements is not in the "
-                                     f"graph (tensors: {sorted(shapes)})")
+                    raise ValueError(
+                        f"state tensor {name!r} of {len(state['initial'])} elements is not in the "
+                        f"graph (tensors: {sorted(shapes)})"
+                    )
         for tensor in self._session.get_inputs():
             if tensor.type not in _ORT_DTYPES:
                 raise ValueError(f"graph input {tensor.name!r} is {tensor.type}; only float and double are supported")
@@ -159,15 +174,21 @@ class SampledComponent:
             return
         name = var["name"]
         if var["causality"] == "parameter" and self._sample >= 0:
-            self._report(f"{function}: parameter {name!r} is fixed: it can only be set before initialisation ends; "
-                         f"it keeps {self._parameters[name]!r}", "error")
+            self._report(
+                f"{function}: parameter {name!r} is fixed: it can only be set before initialisation ends; "
+                f"it keeps {self._parameters[name]!r}",
+                "error",
+            )
             return
         value = float(value)
         if not math.isfinite(value) or (name == "filter_cutoff" and value < 0.0):
             self._refused[name] = f"{name!r} was set to {value!r}"
-            self._report(f"{function}: refused {value!r} for {name!r} (value reference {vr}) at t = {self._time!r} s; "
-                         f"it keeps {self.read(vr, var_type, function)!r} and doStep is refused until a valid value "
-                         f"is set", "error")
+            self._report(
+                f"{function}: refused {value!r} for {name!r} (value reference {vr}) at t = {self._time!r} s; "
+                f"it keeps {self.read(vr, var_type, function)!r} and doStep is refused until a valid value "
+                f"is set",
+                "error",
+            )
             return
         self._refused.pop(name, None)
         self._preview = None
@@ -194,8 +215,11 @@ class SampledComponent:
         """Evaluate every sample t_k with current_time < t_k <= current_time + step_size; False refuses the step.
         Without a start time (FMI 3), the first step's communication point is the start time."""
         if self._sample < 0:
-            self._report(f"doStep at t = {current_time!r} s refused: the FMU is not initialised (call "
-                         "exitInitializationMode first)", "error")
+            self._report(
+                f"doStep at t = {current_time!r} s refused: the FMU is not initialised (call "
+                "exitInitializationMode first)",
+                "error",
+            )
             return False
         if self._refused:
             self._report(f"doStep at t = {current_time!r} s refused: {'; '.join(self._refused.values())}", "error")
@@ -204,8 +228,11 @@ class SampledComponent:
             self.start(current_time)
         scale = max(self._period or 0.0, step_size, abs(current_time), 1e-300)
         if not step_size > 0.0 or not abs(current_time - self._time) <= REACHED * scale:
-            self._report(f"doStep({current_time!r}, {step_size!r}): expected a positive step from the last "
-                         f"communication point {self._time!r} s", "error")
+            self._report(
+                f"doStep({current_time!r}, {step_size!r}): expected a positive step from the last "
+                f"communication point {self._time!r} s",
+                "error",
+            )
             return False
         end = current_time + step_size
         if self._period is None:
@@ -214,9 +241,12 @@ class SampledComponent:
             t_start = self._t_start if self._t_start is not None else 0.0
             due = (end - t_start) / self._period + REACHED - self._sample
             if not due <= MAX_SAMPLES_PER_STEP:  # also for an infinite or NaN count
-                self._report(f"doStep({current_time!r}, {step_size!r}) refused: it spans {due:.4g} samples of "
-                             f"{self._period!r} s, more than the {MAX_SAMPLES_PER_STEP} one step may evaluate; take "
-                             "shorter steps", "error")
+                self._report(
+                    f"doStep({current_time!r}, {step_size!r}) refused: it spans {due:.4g} samples of "
+                    f"{self._period!r} s, more than the {MAX_SAMPLES_PER_STEP} one step may evaluate; take "
+                    "shorter steps",
+                    "error",
+                )
                 return False
             while t_start + (self._sample + 1) * self._period <= end + REACHED * self._period:
                 self._evaluate(self._period, t_start + (self._sample + 1) * self._period)
@@ -242,8 +272,9 @@ class SampledComponent:
         if self._preview is None:
             _, raw = self._run_graph()
             gain = self._parameters["output_gain"]
-            outside = any(not lo <= value <= hi
-                          for (lo, hi), value in zip(map(_envelope, self._in_ports), self._inputs))
+            outside = any(
+                not lo <= value <= hi for (lo, hi), value in zip(map(_envelope, self._in_ports), self._inputs)
+            )
             self._preview = ([gain * u for u in raw], outside)
         return self._preview
 
@@ -271,9 +302,11 @@ class SampledComponent:
             outside = not lo <= value <= hi
             if outside and not self._outside[i]:
                 unit = port.get("unit", "")
-                self._report(f"input {port['name']!r} = {value!r} {unit} left the training envelope [{lo!r}, {hi!r}] "
-                             f"{unit} at sample {self._sample} (t = {t_sample!r} s); outputs are extrapolated",
-                             "warning")
+                self._report(
+                    f"input {port['name']!r} = {value!r} {unit} left the training envelope [{lo!r}, {hi!r}] "
+                    f"{unit} at sample {self._sample} (t = {t_sample!r} s); outputs are extrapolated",
+                    "warning",
+                )
             self._outside[i] = outside
         self._extrapolating = any(self._outside)
 
@@ -281,10 +314,17 @@ class SampledComponent:
     def save(self) -> dict[str, Any]:
         """A JSON-serialisable copy of everything that evolves: inputs, parameters, graph and filter state, clock."""
         return {
-            "inputs": list(self._inputs), "raw": list(self._raw), "outputs": list(self._outputs),
-            "parameters": dict(self._parameters), "graph_state": {k: list(v) for k, v in self._graph_state.items()},
-            "outside": list(self._outside), "refused": dict(self._refused), "extrapolating": self._extrapolating,
-            "t_start": self._t_start, "time": self._time, "sample": self._sample,
+            "inputs": list(self._inputs),
+            "raw": list(self._raw),
+            "outputs": list(self._outputs),
+            "parameters": dict(self._parameters),
+            "graph_state": {k: list(v) for k, v in self._graph_state.items()},
+            "outside": list(self._outside),
+            "refused": dict(self._refused),
+            "extrapolating": self._extrapolating,
+            "t_start": self._t_start,
+            "time": self._time,
+            "sample": self._sample,
         }
 
     def restore(self, state: dict[str, Any]) -> None:
@@ -314,6 +354,7 @@ class SampledComponent:
 
     def _check_state(self, state: Any) -> None:
         """ValueError naming the first field of a deserialised state that does not fit this FMU."""
+
         def refuse(reason: str) -> None:
             raise ValueError(f"FMU state refused: {reason}")
 
@@ -324,22 +365,31 @@ class SampledComponent:
         for key in STATE_FIELDS:
             if key not in state:
                 refuse(f"{key!r} is missing")
-        sizes = {"inputs": len(self._in_ports), "raw": len(self._out_ports), "outputs": len(self._out_ports),
-                 "outside": len(self._in_ports)}
+        sizes = {
+            "inputs": len(self._in_ports),
+            "raw": len(self._out_ports),
+            "outputs": len(self._out_ports),
+            "outside": len(self._in_ports),
+        }
         for key, size in sizes.items():
             values = state[key]
             if not isinstance(values, list) or len(values) != size:
-                refuse(f"{key!r} holds {len(values) if isinstance(values, list) else repr(values)} values, "
-                       f"expected {size}")
+                refuse(
+                    f"{key!r} holds {len(values) if isinstance(values, list) else repr(values)} values, expected {size}"
+                )
             for value in values:
                 if not (isinstance(value, bool) if key == "outside" else _finite(value)):
                     refuse(f"{key!r} holds {value!r}")
-        for key, expected in (("parameters", {k: 1 for k in self._parameters}),
-                              ("graph_state", {k: len(v) for k, v in self._graph_state.items()})):
+        for key, expected in (
+            ("parameters", {k: 1 for k in self._parameters}),
+            ("graph_state", {k: len(v) for k, v in self._graph_state.items()}),
+        ):
             given = state[key]
             if not isinstance(given, dict) or set(given) != set(expected):
-                refuse(f"{key!r} names {sorted(given) if isinstance(given, dict) else repr(given)}, expected "
-                       f"{sorted(expected)}")
+                refuse(
+                    f"{key!r} names {sorted(given) if isinstance(given, dict) else repr(given)}, expected "
+                    f"{sorted(expected)}"
+                )
             for name, value in given.items():
                 values = value if key == "graph_state" else [value]
                 if not isinstance(values, list) or len(values) != expected[name] or not all(map(_finite, values)):
@@ -394,8 +444,10 @@ class SlaveBridge:
         scalar = self._scalar(var, var["description"] or None)
         self.register_variable(scalar, nested=False)
         if scalar.value_reference != var["value_reference"]:
-            raise ValueError(f"{var['name']!r}: {self.runtime_name} gave value reference {scalar.value_reference}, "
-                             f"the variable table says {var['value_reference']}")
+            raise ValueError(
+                f"{var['name']!r}: {self.runtime_name} gave value reference {scalar.value_reference}, "
+                f"the variable table says {var['value_reference']}"
+            )
 
     def exit_initialization_mode(self) -> None:
         self._core.initialise()

@@ -73,9 +73,7 @@ class KerbStrike:
 
     def check(self) -> None:
         """Raise DriveError naming the event and the first bad value."""
-        _check_common(
-            self, {"height": self.height, "ramp_length": self.ramp_length, "length": self.length}
-        )
+        _check_common(self, {"height": self.height, "ramp_length": self.ramp_length, "length": self.length})
         if self.length < self.ramp_length:
             raise DriveError(
                 f"kerb strike at {self.time:g} s: length {self.length:g} m is shorter than its ramp "

@@ -83,10 +83,14 @@ class DriveSettings:
             raise DriveError(f"unknown track coherence {self.coherence!r}; models are {', '.join(COHERENCE_MODELS)}")
         self._check_band()
         self._check_filter()
-        if not (isinstance(self.fade_in, numbers.Real) and math.isfinite(self.fade_in)
-                and 0 <= self.fade_in <= self.duration):
-            raise DriveError(f"fade_in must be a time between 0 and the duration {self.duration:g} s, got "
-                             f"{self.fade_in!r}")
+        if not (
+            isinstance(self.fade_in, numbers.Real)
+            and math.isfinite(self.fade_in)
+            and 0 <= self.fade_in <= self.duration
+        ):
+            raise DriveError(
+                f"fade_in must be a time between 0 and the duration {self.duration:g} s, got {self.fade_in!r}"
+            )
         if not isinstance(self.seed, numbers.Integral) or self.seed < 0:
             raise DriveError(f"seed must be a non-negative integer, got {self.seed!r}")
         for event in self.events:

@@ -50,10 +50,21 @@ def _damper(truth: DamperTruth) -> tuple[list[int], list[float]]:
     p = truth.params
     names, effects = truth.state_names, truth.effects
     flags = ["valve_force" in names, "temperature" in names, "gas_force" in effects, "seal_friction" in effects]
-    values = _valve_side(p.rebound) + _valve_side(p.jounce) + [
-        p.series_stiffness, p.gas_preload, p.gas_rate, p.seal_friction, p.friction_velocity,
-        p.heat_capacity, p.heat_conductance, p.fade, p.ambient_temperature,
-    ]
+    values = (
+        _valve_side(p.rebound)
+        + _valve_side(p.jounce)
+        + [
+            p.series_stiffness,
+            p.gas_preload,
+            p.gas_rate,
+            p.seal_friction,
+            p.friction_velocity,
+            p.heat_capacity,
+            p.heat_conductance,
+            p.fade,
+            p.ambient_temperature,
+        ]
+    )
     return [int(f) for f in flags], values
 
 

@@ -174,8 +174,10 @@ def rest_state(vehicle: LinearVehicle, laws: Mapping[str, ComponentLaw], start: 
     residual = float(np.max(np.abs(vehicle.derivative(solved.x, inputs(solved.x))), initial=0.0))
     scale = max(1.0, float(np.max(np.abs(vehicle.derivative(np.zeros_like(start), np.zeros(len(vehicle.inputs)))))))
     if not solved.success or residual > 1e-9 * scale:
-        raise VehicleModelError(f"{vehicle.name}: no static rest state on the component laws from the linear "
-                                f"equilibrium ({solved.message}; largest residual {residual:.3g})")
+        raise VehicleModelError(
+            f"{vehicle.name}: no static rest state on the component laws from the linear "
+            f"equilibrium ({solved.message}; largest residual {residual:.3g})"
+        )
     return solved.x
 
 
@@ -186,19 +188,36 @@ def _outputs(vehicle: LinearVehicle, states: np.ndarray, u: np.ndarray) -> np.nd
     return states @ vehicle.C.T + u @ vehicle.D.T + g @ vehicle.Dyn.T + vehicle.e
 
 
-def _solve_compiled(vehicle: LinearVehicle, table: LawTable, wiring: _Wiring, x: np.ndarray, u_samples: np.ndarray,
-                    substeps: int, h: float) -> Solved:
+def _solve_compiled(
+    vehicle: LinearVehicle,
+    table: LawTable,
+    wiring: _Wiring,
+    x: np.ndarray,
+    u_samples: np.ndarray,
+    substeps: int,
+    h: float,
+) -> Solved:
     """The RK4 loop in the compiled kernel; only the output rows the laws read are evaluated at each stage."""
     from nnfmu.vehicle.dynamics import rk4_kernel  # numba takes about a second to load; only solving needs it
 
     rows = np.concatenate([wiring.disp_rows, wiring.rate_rows])
     splines = spline_table(vehicle.feedback_laws)
     matrices = (vehicle.A, vehicle.B, vehicle.Bn, vehicle.Cn, vehicle.Dn, vehicle.C[rows], vehicle.D[rows])
-    arrays = (*(_csr(m) for m in matrices), np.ascontiguousarray(vehicle.f, dtype=float),
-              wiring.force_columns.astype(np.int64))
+    arrays = (
+        *(_csr(m) for m in matrices),
+        np.ascontiguousarray(vehicle.f, dtype=float),
+        wiring.force_columns.astype(np.int64),
+    )
     z0 = np.concatenate([x, table.initial_state])
-    return rk4_kernel.solve(arrays, (splines.start, splines.velocity, splines.force), (table.layout, table.values),
-                            z0, np.ascontiguousarray(u_samples, dtype=float), substeps, h)
+    return rk4_kernel.solve(
+        arrays,
+        (splines.start, splines.velocity, splines.force),
+        (table.layout, table.values),
+        z0,
+        np.ascontiguousarray(u_samples, dtype=float),
+        substeps,
+        h,
+    )
 
 
 def _csr(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -208,14 +227,23 @@ def _csr(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return sparse.indptr.astype(np.int64), sparse.indices.astype(np.int64), sparse.data.astype(float)
 
 
-def _solve_generic(vehicle: LinearVehicle, law_list: list[ComponentLaw], wiring: _Wiring, x: np.ndarray,
-                   u_samples: np.ndarray, substeps: int, h: float) -> Solved:
+def _solve_generic(
+    vehicle: LinearVehicle,
+    law_list: list[ComponentLaw],
+    wiring: _Wiring,
+    x: np.ndarray,
+    u_samples: np.ndarray,
+    substeps: int,
+    h: float,
+) -> Solved:
     """The RK4 loop in numpy, calling each law (or bank of bushing laws) at every stage."""
     groups = _groups(law_list)
     nx = len(vehicle.states)
     offsets = nx + np.concatenate([[0], np.cumsum([group.n_states for group, _ in groups])]).astype(int)
-    spans = [(group, members, wiring.disp_rows[members], wiring.rate_rows[members], a, b)
-             for (group, members), a, b in zip(groups, offsets[:-1], offsets[1:])]
+    spans = [
+        (group, members, wiring.disp_rows[members], wiring.rate_rows[members], a, b)
+        for (group, members), a, b in zip(groups, offsets[:-1], offsets[1:])
+    ]
     z = np.concatenate([x] + [group.initial_state() for group, _ in groups])
 
     def forces(z: np.ndarray, u: np.ndarray) -> np.ndarray:

@@ -289,9 +289,7 @@ def _read_axle(t: _Table) -> AxleParameters:
 
 
 def _read_damper(t: _Table) -> DamperParameters:
-    damper = DamperParameters(
-        t.text("model", DAMPER_MODELS), t.positive("damping"), *read_force_velocity_table(t)
-    )
+    damper = DamperParameters(t.text("model", DAMPER_MODELS), t.positive("damping"), *read_force_velocity_table(t))
     t.finish()
     return damper
 

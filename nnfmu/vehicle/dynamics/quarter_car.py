@@ -54,8 +54,11 @@ def build_quarter_car(params: QuarterCarParameters, components: Mapping[str, str
     asm.add_output(coords[0], "displacement", Deflection(body, asm.post_row()))
     asm.add_output(coords[1], "displacement", Deflection(wheel, asm.post_row()))
     asm.add_output(
-        VehiclePort("body_velocity", "m/s", "absolute vertical velocity of the sprung mass, up positive (a skyhook "
-                    "controller's sensor)"),
+        VehiclePort(
+            "body_velocity",
+            "m/s",
+            "absolute vertical velocity of the sprung mass, up positive (a skyhook controller's sensor)",
+        ),
         "velocity",
         Deflection(body, asm.post_row()),
     )

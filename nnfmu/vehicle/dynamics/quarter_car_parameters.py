@@ -138,8 +138,8 @@ def _read_damper(t: _Table) -> DamperParameters:
         table = [t.dotted(key) for key in ("velocity", "force") if t.has(key)]
         if table:
             raise ParameterError(
-                f"{t.source}: {', '.join(table)}: a force-velocity table belongs to model = \"spline\"; this damper "
-                f"is \"{model}\" ({t.dotted('damping')} only)"
+                f'{t.source}: {", ".join(table)}: a force-velocity table belongs to model = "spline"; this damper '
+                f'is "{model}" ({t.dotted("damping")} only)'
             )
         velocity, force = (), ()
     t.finish()

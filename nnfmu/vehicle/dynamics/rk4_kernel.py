@@ -196,7 +196,7 @@ def _rhs(vehicle, splines, laws, z, u_in, u, y, forces, g_in, g, dz):
     _affine(c_sel, z, d_sel, u, y)
     _affine(cn, z, dn, u, g_in)
     for i in range(g.shape[0]):
-        g[i] = _spline(velocity[start[i]:start[i + 1]], force[start[i]:start[i + 1]], g_in[i])
+        g[i] = _spline(velocity[start[i] : start[i + 1]], force[start[i] : start[i + 1]], g_in[i])
     for r in range(nx):
         dz[r] = _row_dot(a, r, z) + _row_dot(b, r, u) + _row_dot(bn, r, g) + f_const[r]
     _law_derivatives(layout, values, z, nx, y, dz)

@@ -91,8 +91,10 @@ def _spline(graph: GraphBuilder, v: str, terms: dict[str, str], name: str) -> st
 def discrete_step_graph(discrete: DiscreteVehicle) -> onnx.ModelProto:
     """The step graph of `discrete` (first-order hold): each evaluation after the first advances `discrete.dt`."""
     if discrete.hold != "foh":
-        raise VehicleBuildError(f"{discrete.vehicle.name}: hold {discrete.hold!r}; the FMU interpolates its inputs "
-                                "between samples (use 'foh')")
+        raise VehicleBuildError(
+            f"{discrete.vehicle.name}: hold {discrete.hold!r}; the FMU interpolates its inputs "
+            "between samples (use 'foh')"
+        )
     vehicle = discrete.vehicle
     nx, nu, ny = len(vehicle.states), len(vehicle.inputs), len(vehicle.outputs)
     graph = GraphBuilder(reserved=(STATE_IN, FIRST_IN, INPUTS, INPUTS_START, OUTPUTS, STATE_OUT, FIRST_OUT))
@@ -159,13 +161,21 @@ def _interval_inputs(graph: GraphBuilder, vehicle: LinearVehicle) -> tuple[str, 
         return INPUTS_START, INPUTS
     held = graph.constant("held_ports", vehicle.stabilised_inputs.astype(float))
     kept = graph.node("Mul", [INPUTS_START, held], "held_port_values")
-    ramped = graph.node("Mul", [INPUTS, graph.constant("ramped_ports", 1.0 - vehicle.stabilised_inputs)],
-                        "ramped_port_values")
+    ramped = graph.node(
+        "Mul", [INPUTS, graph.constant("ramped_ports", 1.0 - vehicle.stabilised_inputs)], "ramped_port_values"
+    )
     end = graph.node("Add", [ramped, kept], "inputs_at_end")
-    force = _affine(graph, STATE_IN, graph.constant("stabiliser", vehicle.stabiliser),
-                    graph.constant("zero_inputs", np.zeros(len(vehicle.inputs))), "stabiliser_force")
-    return (graph.node("Sub", [INPUTS_START, force], "held_inputs_start"),
-            graph.node("Sub", [end, force], "held_inputs_end"))
+    force = _affine(
+        graph,
+        STATE_IN,
+        graph.constant("stabiliser", vehicle.stabiliser),
+        graph.constant("zero_inputs", np.zeros(len(vehicle.inputs))),
+        "stabiliser_force",
+    )
+    return (
+        graph.node("Sub", [INPUTS_START, force], "held_inputs_start"),
+        graph.node("Sub", [end, force], "held_inputs_end"),
+    )
 
 
 def _along(graph: GraphBuilder, start: str, end: str, fraction: float, name: str) -> str:
@@ -174,10 +184,10 @@ def _along(graph: GraphBuilder, start: str, end: str, fraction: float, name: str
         return start
     if fraction == 1.0:
         return end
-    from_start = graph.node("Mul", [start, graph.constant(f"{name}_start_weight", np.array([1.0 - fraction]))],
-                            f"{name}_from_start")
-    from_end = graph.node("Mul", [end, graph.constant(f"{name}_end_weight", np.array([fraction]))],
-                          f"{name}_from_end")
+    from_start = graph.node(
+        "Mul", [start, graph.constant(f"{name}_start_weight", np.array([1.0 - fraction]))], f"{name}_from_start"
+    )
+    from_end = graph.node("Mul", [end, graph.constant(f"{name}_end_weight", np.array([fraction]))], f"{name}_from_end")
     return graph.node("Add", [from_start, from_end], name)
 
 

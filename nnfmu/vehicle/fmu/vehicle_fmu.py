@@ -73,8 +73,10 @@ def _start(vehicle: LinearVehicle, settings: VehicleBuildSettings) -> tuple[floa
     if settings.initial_state is None:
         return initial_state(vehicle)
     if len(settings.initial_state) != len(vehicle.states):
-        raise VehicleBuildError(f"{vehicle.name}: initial state has {len(settings.initial_state)} values; the "
-                                f"vehicle has {len(vehicle.states)} states")
+        raise VehicleBuildError(
+            f"{vehicle.name}: initial state has {len(settings.initial_state)} values; the "
+            f"vehicle has {len(vehicle.states)} states"
+        )
     return tuple(float(v) for v in settings.initial_state)
 
 
@@ -122,6 +124,7 @@ def build_vehicle_fmu(model: str, out: Path, settings: VehicleBuildSettings | No
     """Build the FMU of `model` ('quarter-car' or 'full-vehicle') at `out`; return its path. Raises FmuBuildError
     (build), VehicleBuildError (settings) or ParameterError (parameter file); no partial `.fmu` is left."""
     settings = settings or VehicleBuildSettings()
-    options = BuildOptions(out=Path(out), backend=settings.backend, fmi_version=settings.fmi_version,
-                           platforms=settings.platforms)
+    options = BuildOptions(
+        out=Path(out), backend=settings.backend, fmi_version=settings.fmi_version, platforms=settings.platforms
+    )
     return build_fmu_from_model(vehicle_step_graph(model, settings), options)

@@ -52,9 +52,15 @@ def _now() -> str:
     return datetime.now(timezone.utc).isoformat(timespec="seconds")
 
 
-def run_campaign(campaign_file: str | Path, out: str | Path, scheduler: str | None = None,
-                 workers: int | None = None, retry_failed: bool = False, reuse_instances: bool = True,
-                 progress: Progress | None = None) -> CampaignRun:
+def run_campaign(
+    campaign_file: str | Path,
+    out: str | Path,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    retry_failed: bool = False,
+    reuse_instances: bool = True,
+    progress: Progress | None = None,
+) -> CampaignRun:
     """Run a campaign into `out`: on the Dask cluster at `scheduler`, else on a LocalCluster of `workers` processes
     (None: one per core), or here one case after another when `workers` is 0. Cases with a part in `out` are skipped
     (failed ones too, unless `retry_failed`). `reuse_instances`: FMU instances are reset between cases instead of
@@ -71,8 +77,7 @@ def run_campaign(campaign_file: str | Path, out: str | Path, scheduler: str | No
     todo = [case for case in cases if case.key not in done]
     given = inputs(campaign, cases)
     started, clock = _now(), time.perf_counter()
-    write_record(out, given, {"started": started, "state": "running", "cases": len(cases), "skipped": len(done)},
-                 None)
+    write_record(out, given, {"started": started, "state": "running", "cases": len(cases), "skipped": len(done)}, None)
     channels = list(campaign.metrics.channels)
 
     def record(case: Case, outcome: CaseOutcome) -> None:
@@ -95,23 +100,50 @@ def run_campaign(campaign_file: str | Path, out: str | Path, scheduler: str | No
             progress.stop()
     table = assemble(out, cases, campaign.metrics.reference)
     table_path = write_table(out, table)
-    failed = len({key for key, status in zip(table.column("case").to_pylist(), table.column("status").to_pylist())
-                  if status == FAILED})
+    failed = len(
+        {
+            key
+            for key, status in zip(table.column("case").to_pylist(), table.column("status").to_pylist())
+            if status == FAILED
+        }
+    )
     wall = time.perf_counter() - clock
-    summary = write_summary(out, table, campaign.metrics.reference, {
-        "name": campaign.name, "description": campaign.description, "cases": len(cases),
-        "events": len(campaign.events), "variants": len(campaign.variants), "ok": len(cases) - failed,
-        "failed": failed, "skipped": len(done), "wall_s": wall, "table": table_path.name,
-        "engine": f"{engine.kind}, {engine.workers} worker(s), {engine.threads} thread(s)"
-                  + (f" at {engine.address}" if engine.address else ""),
-        "slope": f"{campaign.metrics.basquin_slope:g}",
-        "slopes": ", ".join(f"{k}: {v:g}" for k, v in campaign.metrics.slopes.items()),
-        "version": nnfmu.__version__,
-    })
-    run = {"started": started, "finished": _now(), "state": "finished", "wall_s": round(wall, 3),
-           "cases": len(cases), "skipped": len(done), "ran": len(todo), "ok": len(cases) - failed, "failed": failed,
-           "table": {"file": table_path.name, "sha256": file_sha256(table_path), "rows": table.num_rows},
-           "summary": summary.name}
+    summary = write_summary(
+        out,
+        table,
+        campaign.metrics.reference,
+        {
+            "name": campaign.name,
+            "description": campaign.description,
+            "cases": len(cases),
+            "events": len(campaign.events),
+            "variants": len(campaign.variants),
+            "ok": len(cases) - failed,
+            "failed": failed,
+            "skipped": len(done),
+            "wall_s": wall,
+            "table": table_path.name,
+            "engine": f"{engine.kind}, {engine.workers} worker(s), {engine.threads} thread(s)"
+            + (f" at {engine.address}" if engine.address else ""),
+            "slope": f"{campaign.metrics.basquin_slope:g}",
+            "slopes": ", ".join(f"{k}: {v:g}" for k, v in campaign.metrics.slopes.items()),
+            "version": nnfmu.__version__,
+        },
+    )
+    run = {
+        "started": started,
+        "finished": _now(),
+        "state": "finished",
+        "wall_s": round(wall, 3),
+        "cases": len(cases),
+        "skipped": len(done),
+        "ran": len(todo),
+        "ok": len(cases) - failed,
+        "failed": failed,
+        "table": {"file": table_path.name, "sha256": file_sha256(table_path), "rows": table.num_rows},
+        "summary": summary.name,
+    }
     record_path = write_record(out, given, run, engine)
-    return CampaignRun(table_path, summary, record_path, len(cases), len(done), len(cases) - failed, failed, wall,
-                       engine)
+    return CampaignRun(
+        table_path, summary, record_path, len(cases), len(done), len(cases) - failed, failed, wall, engine
+    )

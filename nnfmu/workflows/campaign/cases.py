@@ -35,13 +35,28 @@ class Case:
 
 
 def case_key(event: EventSpec, variant: VariantSpec, resolved_coupling: dict[str, Any], metrics: MetricSpec) -> str:
-    return json_sha256({"format": PART_FORMAT, "event": event.identity(), "variant": variant.identity(),
-                        "coupling": resolved_coupling, "metrics": metrics.identity()})
+    return json_sha256(
+        {
+            "format": PART_FORMAT,
+            "event": event.identity(),
+            "variant": variant.identity(),
+            "coupling": resolved_coupling,
+            "metrics": metrics.identity(),
+        }
+    )
 
 
 def expand_cases(campaign: Campaign) -> list[Case]:
     """Every event x variant, events outer: the cases of one event (one drive) are sent close together."""
     resolved = campaign.resolved_coupling()
-    return [Case(case_key(event, variant, resolved, campaign.metrics), event, variant, dict(campaign.coupling),
-                 campaign.metrics)
-            for event in campaign.events for variant in campaign.variants]
+    return [
+        Case(
+            case_key(event, variant, resolved, campaign.metrics),
+            event,
+            variant,
+            dict(campaign.coupling),
+            campaign.metrics,
+        )
+        for event in campaign.events
+        for variant in campaign.variants
+    ]

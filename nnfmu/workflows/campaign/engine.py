@@ -77,8 +77,9 @@ def machine_workers() -> int:
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
-def run_serial(cases: Sequence[Case], blobs: Mapping[str, bytes | Path], on_outcome: OnOutcome,
-               reuse_instances: bool = True) -> EngineInfo:
+def run_serial(
+    cases: Sequence[Case], blobs: Mapping[str, bytes | Path], on_outcome: OnOutcome, reuse_instances: bool = True
+) -> EngineInfo:
     """Run the cases here, one after another (the reference the distributed runs are checked against)."""
     files = FileBytes(blobs)
     try:
@@ -92,7 +93,7 @@ def run_serial(cases: Sequence[Case], blobs: Mapping[str, bytes | Path], on_outc
 def group_cases(cases: Sequence[Case], threads: int) -> list[list[Case]]:
     """Consecutive cases in groups of equal size: GROUPS_PER_THREAD groups per thread, at most MAX_GROUP cases each."""
     size = max(1, min(MAX_GROUP, math.ceil(len(cases) / (GROUPS_PER_THREAD * max(1, threads)))))
-    return [list(cases[i:i + size]) for i in range(0, len(cases), size)]
+    return [list(cases[i : i + size]) for i in range(0, len(cases), size)]
 
 
 def _installed() -> dict[str, str]:
@@ -109,12 +110,18 @@ def check_workers(client: Any) -> None:
     here = _installed()
     for worker, versions in client.run(_installed).items():
         if versions != here:
-            raise CampaignError(f"Dask worker {worker} has {versions}, this process {here}: workers need the same "
-                                "nnfmu install")
+            raise CampaignError(
+                f"Dask worker {worker} has {versions}, this process {here}: workers need the same nnfmu install"
+            )
 
 
-def run_dask(client: Any, cases: Sequence[Case], blobs: Mapping[str, bytes | Path], on_outcome: OnOutcome,
-             reuse_instances: bool = True) -> None:
+def run_dask(
+    client: Any,
+    cases: Sequence[Case],
+    blobs: Mapping[str, bytes | Path],
+    on_outcome: OnOutcome,
+    reuse_instances: bool = True,
+) -> None:
     """Run the cases on the client's cluster in groups, calling `on_outcome` here for each case as its group finishes
     (groups in finishing order)."""
     from distributed import as_completed
@@ -132,8 +139,15 @@ def run_dask(client: Any, cases: Sequence[Case], blobs: Mapping[str, bytes | Pat
         if group is None:
             return
         keys = dict.fromkeys(key for case in group for key in case.blob_keys)
-        future = client.submit(run_cases, group, {key: files[key] for key in keys}, reuse_instances,
-                               key=f"nnfmu-cases-{group[0].key[:16]}-{run}", pure=False, retries=1)
+        future = client.submit(
+            run_cases,
+            group,
+            {key: files[key] for key in keys},
+            reuse_instances,
+            key=f"nnfmu-cases-{group[0].key[:16]}-{run}",
+            pure=False,
+            retries=1,
+        )
         running[future] = group
         finished.add(future)
 
@@ -143,13 +157,19 @@ def run_dask(client: Any, cases: Sequence[Case], blobs: Mapping[str, bytes | Pat
         group = running.pop(future)
         if future.status == "error":
             error = future.exception()
-            outcomes = [CaseOutcome(case.key, case.event.name, case.variant.name, FAILED,
-                                    f"{type(error).__name__}: {error}", math.nan) for case in group]
+            outcomes = [
+                CaseOutcome(
+                    case.key, case.event.name, case.variant.name, FAILED, f"{type(error).__name__}: {error}", math.nan
+                )
+                for case in group
+            ]
         elif future.status == "finished":
             outcomes = future.result()
         else:
-            raise CampaignError(f"the Dask cluster lost {len(group)} case(s), the first {group[0].event.name} x "
-                                f"{group[0].variant.name} ({future.status}); run the campaign again to resume")
+            raise CampaignError(
+                f"the Dask cluster lost {len(group)} case(s), the first {group[0].event.name} x "
+                f"{group[0].variant.name} ({future.status}); run the campaign again to resume"
+            )
         future.release()
         for case, outcome in zip(group, outcomes):
             on_outcome(case, outcome)
@@ -167,8 +187,13 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator[tuple[An
     try:
         if scheduler is None:
             with dask.config.set(LOCAL_CONFIG):
-                cluster = LocalCluster(n_workers=workers or machine_workers(), threads_per_worker=1,
-                                       processes=True, dashboard_address=None, silence_logs=logging.ERROR)
+                cluster = LocalCluster(
+                    n_workers=workers or machine_workers(),
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=None,
+                    silence_logs=logging.ERROR,
+                )
             client = Client(cluster)
         else:
             try:
@@ -180,13 +205,18 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator[tuple[An
                 try:
                     client.wait_for_workers(1, timeout=WAIT_FOR_WORKERS)
                 except TimeoutError:
-                    raise CampaignError(f"the Dask scheduler at {scheduler} has no workers "
-                                        f"(waited {WAIT_FOR_WORKERS} s)") from None
+                    raise CampaignError(
+                        f"the Dask scheduler at {scheduler} has no workers (waited {WAIT_FOR_WORKERS} s)"
+                    ) from None
             check_workers(client)
             nthreads = client.nthreads()
-            info = EngineInfo("local" if cluster is not None else "scheduler", len(nthreads), sum(nthreads.values()),
-                              client.scheduler.address,
-                              client.run_on_scheduler(lambda dask_scheduler: dask_scheduler.allowed_failures))
+            info = EngineInfo(
+                "local" if cluster is not None else "scheduler",
+                len(nthreads),
+                sum(nthreads.values()),
+                client.scheduler.address,
+                client.run_on_scheduler(lambda dask_scheduler: dask_scheduler.allowed_failures),
+            )
             yield client, info
         finally:
             client.close()

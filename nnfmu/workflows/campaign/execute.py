@@ -109,8 +109,9 @@ def load_drive(event: EventSpec, blobs: Mapping[str, bytes]) -> Measurement:
     if key in _drives:
         _drives.move_to_end(key)
         return _drives[key]
-    drive = read_drive(materialise(event.drive, blobs)) if event.drive else generate_drive(
-        drive_settings(event.generator))
+    drive = (
+        read_drive(materialise(event.drive, blobs)) if event.drive else generate_drive(drive_settings(event.generator))
+    )
     _drives[key] = drive
     while len(_drives) > DRIVES_KEPT:
         _drives.popitem(last=False)
@@ -120,10 +121,20 @@ def load_drive(event: EventSpec, blobs: Mapping[str, bytes]) -> Measurement:
 def build_system(case: Case, blobs: Mapping[str, bytes]) -> SystemStructure:
     """The variant's SystemStructure with every element's FMU at its materialised path."""
     variant = case.variant
-    elements = [Element(e.name, str(materialise(e.fmu, blobs)), tuple(Connector(n, k) for n, k in e.connectors),
-                        dict(e.parameters)) for e in variant.elements]
-    return SystemStructure(variant.system_name, elements, [Connection(*c) for c in variant.connections],
-                           Path("/"), variant.start_time, variant.stop_time)
+    elements = [
+        Element(
+            e.name, str(materialise(e.fmu, blobs)), tuple(Connector(n, k) for n, k in e.connectors), dict(e.parameters)
+        )
+        for e in variant.elements
+    ]
+    return SystemStructure(
+        variant.system_name,
+        elements,
+        [Connection(*c) for c in variant.connections],
+        Path("/"),
+        variant.start_time,
+        variant.stop_time,
+    )
 
 
 def score(result: Measurement, case: Case) -> tuple[ChannelRow, ...]:
@@ -138,11 +149,22 @@ def score(result: Measurement, case: Case) -> tuple[ChannelRow, ...]:
         signal = result[channel]
         bad = ~np.isfinite(signal)
         if bad.any():
-            raise CaseError(f"channel {channel!r} is not finite from t = {result.time[np.argmax(bad)]:.6g} s "
-                            "(the coupling diverged)")
+            raise CaseError(
+                f"channel {channel!r} is not finite from t = {result.time[np.argmax(bad)]:.6g} s "
+                "(the coupling diverged)"
+            )
         slope = slopes.slope_for(channel)
-        rows.append(ChannelRow(channel, result.units.get(channel, "1"), rms(signal), float(np.max(signal)),
-                               float(np.min(signal)), pseudo_damage(signal, slope), slope))
+        rows.append(
+            ChannelRow(
+                channel,
+                result.units.get(channel, "1"),
+                rms(signal),
+                float(np.max(signal)),
+                float(np.min(signal)),
+                pseudo_damage(signal, slope),
+                slope,
+            )
+        )
     return tuple(rows)
 
 
@@ -177,12 +199,18 @@ def run_case(case: Case, blobs: Mapping[str, bytes], reuse_instances: bool = Tru
     try:
         drive = load_drive(case.event, blobs)
         system = build_system(case, blobs)
-        result = cosimulate(system, drive, CosimSettings(**case.coupling), binding=vehicle_binding(system),
-                            pool=instance_pool() if reuse_instances else None)
+        result = cosimulate(
+            system,
+            drive,
+            CosimSettings(**case.coupling),
+            binding=vehicle_binding(system),
+            pool=instance_pool() if reuse_instances else None,
+        )
         rows = score(result.measurement, case)
     except Exception as error:  # the case's own failure: recorded, the campaign goes on
-        return CaseOutcome(case.key, case.event.name, case.variant.name, FAILED, _message(error),
-                           time.perf_counter() - started)
+        return CaseOutcome(
+            case.key, case.event.name, case.variant.name, FAILED, _message(error), time.perf_counter() - started
+        )
     return CaseOutcome(case.key, case.event.name, case.variant.name, OK, "", time.perf_counter() - started, rows)
 
 

@@ -14,9 +14,16 @@ class CaseProgress:
     """Shows `done/total`, the failed count and the rate of the cases run now (skipped ones count as done)."""
 
     def __init__(self, console: Console | None = None) -> None:
-        self._bar = Progress(TextColumn("cases"), BarColumn(), MofNCompleteColumn(),
-                             TextColumn("failed {task.fields[failed]}"), TextColumn("{task.fields[rate]}"),
-                             TimeElapsedColumn(), TimeRemainingColumn(), console=console or Console(stderr=True))
+        self._bar = Progress(
+            TextColumn("cases"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TextColumn("failed {task.fields[failed]}"),
+            TextColumn("{task.fields[rate]}"),
+            TimeElapsedColumn(),
+            TimeRemainingColumn(),
+            console=console or Console(stderr=True),
+        )
         self._task = None
         self._failed = self._ran = 0
         self._started = 0.0

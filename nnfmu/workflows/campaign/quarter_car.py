@@ -41,6 +41,7 @@ def build_quarter_car_system(folder: Path, dampers: Mapping[str, float], step: f
     vehicle = build_vehicle_fmu("quarter-car", folder / "quarter-car.fmu", VehicleBuildSettings(sample_period=step))
     paths = {name: damper_fmu(damping, folder / f"damper-{name}.fmu") for name, damping in dampers.items()}
     first = paths[next(iter(dampers))]
-    structure = connect_by_name("quarter car", ("vehicle", vehicle), {DAMPER_ELEMENT: first}, folder,
-                                {DAMPER_ELEMENT: NO_FILTER})
+    structure = connect_by_name(
+        "quarter car", ("vehicle", vehicle), {DAMPER_ELEMENT: first}, folder, {DAMPER_ELEMENT: NO_FILTER}
+    )
     return {"system": write_ssd(structure, folder / "SystemStructure.ssd"), "vehicle": vehicle} | paths

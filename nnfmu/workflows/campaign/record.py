@@ -33,8 +33,11 @@ def versions() -> dict[str, str]:
 def inputs(campaign: Campaign, cases: list[Case]) -> dict[str, Any]:
     """The campaign as read: file and hash, events, variants, settings, and every case's key."""
     return {
-        "file": str(campaign.path), "sha256": campaign.sha256, "text": campaign.path.read_text(encoding="utf-8"),
-        "name": campaign.name, "description": campaign.description,
+        "file": str(campaign.path),
+        "sha256": campaign.sha256,
+        "text": campaign.path.read_text(encoding="utf-8"),
+        "name": campaign.name,
+        "description": campaign.description,
         "events": [e.identity() for e in campaign.events],
         "variants": [v.identity() for v in campaign.variants],
         "coupling": {"given": dict(campaign.coupling), "resolved": campaign.resolved_coupling()},
@@ -44,11 +47,14 @@ def inputs(campaign: Campaign, cases: list[Case]) -> dict[str, Any]:
     }
 
 
-def write_record(out: Path, campaign_inputs: dict[str, Any], run: dict[str, Any],
-                 engine: EngineInfo | None) -> Path:
+def write_record(out: Path, campaign_inputs: dict[str, Any], run: dict[str, Any], engine: EngineInfo | None) -> Path:
     """Write `out/campaign.json` (inputs, versions, engine, run)."""
     path = out / RECORD
-    record = {"inputs": campaign_inputs, "versions": versions(),
-              "engine": dataclasses.asdict(engine) if engine else None, "run": run}
+    record = {
+        "inputs": campaign_inputs,
+        "versions": versions(),
+        "engine": dataclasses.asdict(engine) if engine else None,
+        "run": run,
+    }
     write_text_atomic(path, json.dumps(record, indent=1, allow_nan=False) + "\n")
     return path

@@ -108,10 +108,22 @@ class VariantSpec:
 
     def identity(self) -> dict[str, Any]:
         """What the variant's cases depend on: the name, every element's FMU hash, connectors, parameters, wiring."""
-        return {"name": self.name, "system": self.system_name, "start_time": self.start_time,
-                "stop_time": self.stop_time, "connections": [list(c) for c in self.connections],
-                "elements": [{"name": e.name, "fmu": e.fmu.identity(), "parameters": dict(e.parameters),
-                              "connectors": [list(c) for c in e.connectors]} for e in self.elements]}
+        return {
+            "name": self.name,
+            "system": self.system_name,
+            "start_time": self.start_time,
+            "stop_time": self.stop_time,
+            "connections": [list(c) for c in self.connections],
+            "elements": [
+                {
+                    "name": e.name,
+                    "fmu": e.fmu.identity(),
+                    "parameters": dict(e.parameters),
+                    "connectors": [list(c) for c in e.connectors],
+                }
+                for e in self.elements
+            ],
+        }
 
 
 @dataclass(frozen=True)
@@ -202,15 +214,17 @@ def _metrics(table: Mapping[str, Any], variants: list[str], where: str) -> Metri
     if len(set(channels)) != len(channels):
         raise CampaignError(f"{where}: 'channels' names a channel twice: {channels!r}")
     slope = _number(table.get("basquin_slope", 5.0), f"{where}: basquin_slope")
-    slopes = {k: _number(v, f"{where}: slopes.{k}") for k, v in _table(table.get("slopes", {}),
-                                                                        f"{where}: slopes").items()}
+    slopes = {
+        k: _number(v, f"{where}: slopes.{k}") for k, v in _table(table.get("slopes", {}), f"{where}: slopes").items()
+    }
     for key, value in {"basquin_slope": slope, **slopes}.items():
         if value <= 0:
             raise CampaignError(f"{where}: Basquin slope {key} = {value!r} must be positive")
     reference = table.get("reference", variants[0] if variants else None)
     if reference not in variants:
-        raise CampaignError(f"{where}: reference variant {reference!r} is not one of the variants "
-                            f"({', '.join(variants)})")
+        raise CampaignError(
+            f"{where}: reference variant {reference!r} is not one of the variants ({', '.join(variants)})"
+        )
     return MetricSpec(tuple(channels), slope, slopes, reference)
 
 
@@ -221,8 +235,9 @@ def _drive_fields(table: Mapping[str, Any], where: str) -> dict[str, Any]:
     for key, value in table.items():
         key = "road_class" if key == "class" else key
         if key not in names:
-            raise CampaignError(f"{where}: unknown drive setting {key!r} (DriveSettings fields: "
-                                f"{', '.join(sorted(names))}, or class)")
+            raise CampaignError(
+                f"{where}: unknown drive setting {key!r} (DriveSettings fields: {', '.join(sorted(names))}, or class)"
+            )
         if key == "band":
             value = tuple(value) if isinstance(value, list) else value
         if key in OFF_WHEN_ZERO and value == 0:
@@ -274,8 +289,9 @@ def _generator(fields: dict[str, Any], events: dict[str, list[dict[str, Any]]], 
     return resolved | events
 
 
-def _events(entries: Any, defaults: Mapping[str, Any], base: Path, blobs: dict[str, bytes | Path],
-            where: str) -> list[EventSpec]:
+def _events(
+    entries: Any, defaults: Mapping[str, Any], base: Path, blobs: dict[str, bytes | Path], where: str
+) -> list[EventSpec]:
     if not isinstance(entries, list) or not entries:
         raise CampaignError(f"{where}: give at least one [[events]] entry")
     shared = _drive_fields(defaults, f"{where}: [drive]")
@@ -291,15 +307,18 @@ def _events(entries: Any, defaults: Mapping[str, Any], base: Path, blobs: dict[s
         if "drive" in entry:
             others = [k for k in entry if k not in ("name", "drive")]
             if others:
-                raise CampaignError(f"{entry_where}: a drive file takes no generator key or repeats "
-                                    f"(found {others[0]!r}; a file gives the same drive every time)")
+                raise CampaignError(
+                    f"{entry_where}: a drive file takes no generator key or repeats "
+                    f"(found {others[0]!r}; a file gives the same drive every time)"
+                )
             path = _existing(base, entry["drive"], f"{entry_where}: drive")
             sha = file_sha256(path)
             blobs[sha] = path
             events.append(EventSpec(name, drive=FileRef(sha, path.name)))
             continue
-        fields = shared | _drive_fields({k: v for k, v in entry.items() if k not in EVENT_ONLY_KEYS or k == "class"},
-                                        entry_where)
+        fields = shared | _drive_fields(
+            {k: v for k, v in entry.items() if k not in EVENT_ONLY_KEYS or k == "class"}, entry_where
+        )
         road = _road_events(entry, entry_where)
         seed = fields.get("seed", 0)
         for r in range(repeats):
@@ -326,28 +345,48 @@ def _variant(entry: Mapping[str, Any], base: Path, blobs: dict[str, bytes | Path
     name = _name(entry, where)
     where = f"{where.rsplit(':', 1)[0]}: variant {name!r}"
     system_path = _existing(base, entry.get("system"), f"{where}: system")
-    swaps = {k: _existing(base, v, f"{where}: fmus.{k}") for k, v in _table(entry.get("fmus", {}),
-                                                                            f"{where}: fmus").items()}
-    parameters = {k: {p: _number(v, f"{where}: parameters.{k}.{p}") for p, v in _table(values,
-                      f"{where}: parameters.{k}").items()}
-                  for k, values in _table(entry.get("parameters", {}), f"{where}: parameters").items()}
+    swaps = {
+        k: _existing(base, v, f"{where}: fmus.{k}") for k, v in _table(entry.get("fmus", {}), f"{where}: fmus").items()
+    }
+    parameters = {
+        k: {
+            p: _number(v, f"{where}: parameters.{k}.{p}") for p, v in _table(values, f"{where}: parameters.{k}").items()
+        }
+        for k, values in _table(entry.get("parameters", {}), f"{where}: parameters").items()
+    }
     try:
         with open_system(system_path) as system:
             known = [e.name for e in system.elements]
             for element in list(swaps) + list(parameters):
                 if element not in known:
-                    raise CampaignError(f"{where}: system {system_path} has no element {element!r} "
-                                        f"(has: {', '.join(known)})")
-            elements = [Element(e.name, str(swaps.get(e.name, system.fmu_path(e).resolve())), e.connectors,
-                                dict(e.parameters) | parameters.get(e.name, {})) for e in system.elements]
-            changed = SystemStructure(system.name, elements, system.connections, Path("/"),
-                                      system.start_time, system.stop_time)
+                    raise CampaignError(
+                        f"{where}: system {system_path} has no element {element!r} (has: {', '.join(known)})"
+                    )
+            elements = [
+                Element(
+                    e.name,
+                    str(swaps.get(e.name, system.fmu_path(e).resolve())),
+                    e.connectors,
+                    dict(e.parameters) | parameters.get(e.name, {}),
+                )
+                for e in system.elements
+            ]
+            changed = SystemStructure(
+                system.name, elements, system.connections, Path("/"), system.start_time, system.stop_time
+            )
             check_against_fmus(changed)
-            plans = tuple(ElementPlan(e.name, _fmu_ref(Path(e.source), blobs),
-                                      tuple((c.name, c.kind) for c in e.connectors), dict(e.parameters))
-                          for e in elements)
-            wiring = tuple((c.start_element, c.start_connector, c.end_element, c.end_connector)
-                           for c in system.connections)
+            plans = tuple(
+                ElementPlan(
+                    e.name,
+                    _fmu_ref(Path(e.source), blobs),
+                    tuple((c.name, c.kind) for c in e.connectors),
+                    dict(e.parameters),
+                )
+                for e in elements
+            )
+            wiring = tuple(
+                (c.start_element, c.start_connector, c.end_element, c.end_connector) for c in system.connections
+            )
             return VariantSpec(name, system.name, plans, wiring, system.start_time, system.stop_time)
     except SspError as error:
         raise CampaignError(f"{where}: {error}") from None
@@ -368,8 +407,10 @@ def read_campaign(path: str | Path) -> Campaign:
     entries = raw.get("variants")
     if not isinstance(entries, list) or not entries:
         raise CampaignError(f"{where}: give at least one [[variants]] entry")
-    variants = [_variant(_table(e, f"{where}: variants[{i}]"), base, blobs, f"{where}: variants[{i}]")
-                for i, e in enumerate(entries)]
+    variants = [
+        _variant(_table(e, f"{where}: variants[{i}]"), base, blobs, f"{where}: variants[{i}]")
+        for i, e in enumerate(entries)
+    ]
     names = [v.name for v in variants]
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
@@ -380,9 +421,13 @@ def read_campaign(path: str | Path) -> Campaign:
     if not isinstance(name, str) or not isinstance(description, str):
         raise CampaignError(f"{where}: 'name' and 'description' must be strings")
     return Campaign(
-        path=path, name=name, description=description, sha256=bytes_sha256(text), events=tuple(events),
-        variants=tuple(variants), coupling=_coupling(_table(raw.get("coupling", {}), f"{where}: [coupling]"),
-                                                     f"{where}: [coupling]"),
+        path=path,
+        name=name,
+        description=description,
+        sha256=bytes_sha256(text),
+        events=tuple(events),
+        variants=tuple(variants),
+        coupling=_coupling(_table(raw.get("coupling", {}), f"{where}: [coupling]"), f"{where}: [coupling]"),
         metrics=_metrics(_table(raw.get("metrics", {}), f"{where}: [metrics]"), names, f"{where}: [metrics]"),
         blobs=blobs,
     )

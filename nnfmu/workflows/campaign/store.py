@@ -22,14 +22,24 @@ from nnfmu.workflows.campaign.execute import FAILED, OK, CaseOutcome
 
 PARTS = "parts"
 TABLE = "results.parquet"
-PART_SCHEMA = pa.schema([
-    ("case", pa.string()), ("event", pa.string()), ("variant", pa.string()), ("channel", pa.string()),
-    ("unit", pa.string()), ("rms", pa.float64()), ("peak", pa.float64()), ("valley", pa.float64()),
-    ("damage", pa.float64()), ("basquin_slope", pa.float64()), ("wall_s", pa.float64()), ("status", pa.string()),
-    ("error", pa.string()),
-])
-TABLE_SCHEMA = PART_SCHEMA.insert(PART_SCHEMA.get_field_index("basquin_slope"),
-                                  pa.field("damage_ratio", pa.float64()))
+PART_SCHEMA = pa.schema(
+    [
+        ("case", pa.string()),
+        ("event", pa.string()),
+        ("variant", pa.string()),
+        ("channel", pa.string()),
+        ("unit", pa.string()),
+        ("rms", pa.float64()),
+        ("peak", pa.float64()),
+        ("valley", pa.float64()),
+        ("damage", pa.float64()),
+        ("basquin_slope", pa.float64()),
+        ("wall_s", pa.float64()),
+        ("status", pa.string()),
+        ("error", pa.string()),
+    ]
+)
+TABLE_SCHEMA = PART_SCHEMA.insert(PART_SCHEMA.get_field_index("basquin_slope"), pa.field("damage_ratio", pa.float64()))
 
 
 def part_path(out: Path, key: str) -> Path:
@@ -40,13 +50,31 @@ def outcome_table(outcome: CaseOutcome, channels: Sequence[str]) -> pa.Table:
     """The rows of one case's part."""
     nan = math.nan
     if outcome.status == OK:
-        rows = [dict(channel=r.channel, unit=r.unit, rms=r.rms, peak=r.peak, valley=r.valley, damage=r.damage,
-                     basquin_slope=r.basquin_slope) for r in outcome.rows]
+        rows = [
+            dict(
+                channel=r.channel,
+                unit=r.unit,
+                rms=r.rms,
+                peak=r.peak,
+                valley=r.valley,
+                damage=r.damage,
+                basquin_slope=r.basquin_slope,
+            )
+            for r in outcome.rows
+        ]
     else:
-        rows = [dict(channel=c, unit="", rms=nan, peak=nan, valley=nan, damage=nan, basquin_slope=nan)
-                for c in channels or [""]]
-    common = dict(case=outcome.key, event=outcome.event, variant=outcome.variant, wall_s=outcome.wall_s,
-                  status=outcome.status, error=outcome.error)
+        rows = [
+            dict(channel=c, unit="", rms=nan, peak=nan, valley=nan, damage=nan, basquin_slope=nan)
+            for c in channels or [""]
+        ]
+    common = dict(
+        case=outcome.key,
+        event=outcome.event,
+        variant=outcome.variant,
+        wall_s=outcome.wall_s,
+        status=outcome.status,
+        error=outcome.error,
+    )
     return pa.Table.from_pylist([common | row for row in rows], schema=PART_SCHEMA)
 
 
@@ -78,10 +106,16 @@ def assemble(out: Path, cases: Sequence[Case], reference: str) -> pa.Table:
     events, variants, channels = (table.column(c).to_pylist() for c in ("event", "variant", "channel"))
     damage = table.column("damage").to_numpy(zero_copy_only=False)
     status = table.column("status").to_pylist()
-    base = {(e, c): d for e, v, c, d, s in zip(events, variants, channels, damage, status)
-            if v == reference and s == OK}
-    ratio = np.array([d / base[(e, c)] if s == OK and base.get((e, c), 0.0) > 0 else math.nan
-                      for e, c, d, s in zip(events, channels, damage, status)], dtype=float)
+    base = {
+        (e, c): d for e, v, c, d, s in zip(events, variants, channels, damage, status) if v == reference and s == OK
+    }
+    ratio = np.array(
+        [
+            d / base[(e, c)] if s == OK and base.get((e, c), 0.0) > 0 else math.nan
+            for e, c, d, s in zip(events, channels, damage, status)
+        ],
+        dtype=float,
+    )
     table = table.add_column(TABLE_SCHEMA.get_field_index("damage_ratio"), "damage_ratio", pa.array(ratio))
     return table.cast(TABLE_SCHEMA)
 

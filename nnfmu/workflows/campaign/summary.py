@@ -60,15 +60,26 @@ def digest(table: pa.Table, reference: str) -> Digest:
     worst: dict[str, list[Worst]] = {}
     for channel, _ in channels:
         for variant in variants:
-            pairs = [(row["damage"], ok[(e, reference, c)]["damage"]) for (e, v, c), row in ok.items()
-                     if v == variant and c == channel and (e, reference, c) in ok]
+            pairs = [
+                (row["damage"], ok[(e, reference, c)]["damage"])
+                for (e, v, c), row in ok.items()
+                if v == variant and c == channel and (e, reference, c) in ok
+            ]
             total = sum(b for _, b in pairs)
             programme[channel][variant] = sum(a for a, _ in pairs) / total if total > 0 else float("nan")
-        cases = [Worst(e, v, row["damage_ratio"]) for (e, v, c), row in ok.items()
-                 if c == channel and v != reference and np.isfinite(row["damage_ratio"])]
+        cases = [
+            Worst(e, v, row["damage_ratio"])
+            for (e, v, c), row in ok.items()
+            if c == channel and v != reference and np.isfinite(row["damage_ratio"])
+        ]
         worst[channel] = sorted(cases, key=lambda w: -w.ratio)[:WORST_COUNT]
-    failures = list({(r["event"], r["variant"]): {"event": r["event"], "variant": r["variant"], "error": r["error"]}
-                     for r in rows if r["status"] == FAILED}.values())
+    failures = list(
+        {
+            (r["event"], r["variant"]): {"event": r["event"], "variant": r["variant"], "error": r["error"]}
+            for r in rows
+            if r["status"] == FAILED
+        }.values()
+    )
     return Digest(channels, variants, reference, dict(programme), worst, failures)
 
 
@@ -132,8 +143,9 @@ def write_summary(out: Path, table: pa.Table, reference: str, context: dict[str,
     d = digest(table, reference)
     plot_programme(d, out / RATIO_PLOT)
     plot_worst(d, out / WORST_PLOT)
-    environment = jinja2.Environment(loader=jinja2.PackageLoader("nnfmu.workflows.campaign", "."),
-                                     autoescape=True, undefined=jinja2.StrictUndefined)
+    environment = jinja2.Environment(
+        loader=jinja2.PackageLoader("nnfmu.workflows.campaign", "."), autoescape=True, undefined=jinja2.StrictUndefined
+    )
     html = environment.get_template(TEMPLATE).render(d=d, ratio_plot=RATIO_PLOT, worst_plot=WORST_PLOT, **context)
     path = out / SUMMARY
     write_text_atomic(path, html)

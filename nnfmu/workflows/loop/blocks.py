@@ -38,10 +38,17 @@ def plan_blocks(n: int, settings: LoopSettings, source: str) -> RecordBlocks:
     ranges: dict[str, list[tuple[int, int]]] = {part: [] for part in PARTS}
     for lo, hi in zip(edges[:-1], edges[1:]):
         length = hi - lo
-        cuts = np.round(lo + length * np.array([
-            settings.fit_fraction - settings.validation_fraction, settings.fit_fraction,
-            1.0 - settings.test_fraction,
-        ])).astype(int)
+        cuts = np.round(
+            lo
+            + length
+            * np.array(
+                [
+                    settings.fit_fraction - settings.validation_fraction,
+                    settings.fit_fraction,
+                    1.0 - settings.test_fraction,
+                ]
+            )
+        ).astype(int)
         for part, a, b in zip(PARTS, (lo, *cuts), (*cuts, hi)):
             ranges[part].append((int(a), int(b)))
     blocks = RecordBlocks({part: tuple(spans) for part, spans in ranges.items()})

@@ -40,8 +40,16 @@ def feature_unit(spec: FeatureSpec, name: str, units: dict[str, str]) -> str:
     return units.get(channel, "")
 
 
-def plot_residual_vs_features(report: LoopReport, m: Measurement, rows: np.ndarray, residual: np.ndarray,
-                              spec: FeatureSpec, names: tuple[str, ...], path: Path, effect: str) -> Path:
+def plot_residual_vs_features(
+    report: LoopReport,
+    m: Measurement,
+    rows: np.ndarray,
+    residual: np.ndarray,
+    spec: FeatureSpec,
+    names: tuple[str, ...],
+    path: Path,
+    effect: str,
+) -> Path:
     """Residual before the effect was added against each feature the effect added (diagnosis part)."""
     values = spec.features({c: m[c] for c in spec.channels}, m.sample_period)
     figure = Figure(figsize=(max(7.0, 4.0 * len(names)), 4.0), dpi=100, layout="constrained")
@@ -59,12 +67,20 @@ def plot_residual_vs_features(report: LoopReport, m: Measurement, rows: np.ndarr
     return path
 
 
-def plot_loops(report: LoopReport, m: Measurement, rows: np.ndarray, before: np.ndarray, after: np.ndarray,
-               x_channel: str, path: Path) -> Path:
+def plot_loops(
+    report: LoopReport,
+    m: Measurement,
+    rows: np.ndarray,
+    before: np.ndarray,
+    after: np.ndarray,
+    x_channel: str,
+    path: Path,
+) -> Path:
     """Output over `x_channel` (velocity or displacement): measured, first model, final model, first test window."""
     window = rows[: int(round(LOOP_WINDOW / m.sample_period))]
-    figure, axes = new_axes(f"{report.output} vs {x_channel}, test part {m.time[window[0]]:.3g} s to "
-                         f"{m.time[window[-1]]:.3g} s")
+    figure, axes = new_axes(
+        f"{report.output} vs {x_channel}, test part {m.time[window[0]]:.3g} s to {m.time[window[-1]]:.3g} s"
+    )
     x = m[x_channel][window]
     axes.plot(x, m[report.output][window], color="black", linewidth=1.0, label="measured")
     axes.plot(x, before[window], color="tab:blue", linewidth=1.0, label="before")
@@ -76,14 +92,22 @@ def plot_loops(report: LoopReport, m: Measurement, rows: np.ndarray, before: np.
     return path
 
 
-def plot_residual_psd(report: LoopReport, m: Measurement, test_ranges: tuple[tuple[int, int], ...],
-                      before: np.ndarray, after: np.ndarray, path: Path) -> Path:
+def plot_residual_psd(
+    report: LoopReport,
+    m: Measurement,
+    test_ranges: tuple[tuple[int, int], ...],
+    before: np.ndarray,
+    after: np.ndarray,
+    path: Path,
+) -> Path:
     """Welch PSD of the residual before and after, averaged over the test blocks."""
     unit = m.units.get(report.output, "")
     figure, axes = new_axes(f"PSD of the {report.output} residual on the test part")
     measured = np.asarray(m[report.output], dtype=float)
-    for predicted, style in ((before, {"color": "tab:blue", "label": "before"}),
-                             (after, {"color": "tab:red", "label": "after"})):
+    for predicted, style in (
+        (before, {"color": "tab:blue", "label": "before"}),
+        (after, {"color": "tab:red", "label": "after"}),
+    ):
         spectra = [welch_psd(measured[a:b] - predicted[a:b], m.sample_period) for a, b in test_ranges]
         size = min(len(s.frequency) for s in spectra)
         density = np.mean([s.density[:size] for s in spectra], axis=0)
@@ -101,8 +125,15 @@ def _number(value: object) -> str:
     return "–" if value is None else str(value)
 
 
-def write_loop_report(folder: Path, report: LoopReport, m: Measurement, rows: dict[str, np.ndarray],
-                      first: np.ndarray, final: np.ndarray, steps: list[tuple[np.ndarray, FeatureSpec]]) -> None:
+def write_loop_report(
+    folder: Path,
+    report: LoopReport,
+    m: Measurement,
+    rows: dict[str, np.ndarray],
+    first: np.ndarray,
+    final: np.ndarray,
+    steps: list[tuple[np.ndarray, FeatureSpec]],
+) -> None:
     """Plots, report.json and report.html into `folder` (the run's staging folder, renamed into place later).
 
     `first`/`final`: the first and the final model's output over the record; `steps`: per iteration, the output of
@@ -111,8 +142,9 @@ def write_loop_report(folder: Path, report: LoopReport, m: Measurement, rows: di
     measured = np.asarray(m[report.output], dtype=float)
     for it, (previous, spec) in zip(report.iterations, steps):
         name = f"residual_vs_{it.effect}.png"
-        plot_residual_vs_features(report, m, rows["diagnosis"], measured - previous, spec, it.features_added,
-                                  folder / name, it.effect)
+        plot_residual_vs_features(
+            report, m, rows["diagnosis"], measured - previous, spec, it.features_added, folder / name, it.effect
+        )
         plots[f"residual vs {it.effect}"] = name
     prefix = report.output[: len(report.output) - len(base_name(report.output) or "")]
     for quantity in ("velocity", "displacement"):

@@ -61,10 +61,12 @@ class Iteration:
             "retrained_from": f"{self.start} start",
             "diagnosis_nrmse_by_start": dict(self.diagnosis_nrmse_by_start),
             "trials": dict(self.trials),
-            "trials_note": ("diagnosis-part NRMSE of the network retrained with each rival explanation; the lowest "
-                            f"won, or the simplest within {TRIAL_TIE:.0%} of it; the winner was also retrained "
-                            f"together with the effect it beat or the next significant one, and both were added when "
-                            f"that came more than {TRIAL_TIE:.0%} lower"),
+            "trials_note": (
+                "diagnosis-part NRMSE of the network retrained with each rival explanation; the lowest "
+                f"won, or the simplest within {TRIAL_TIE:.0%} of it; the winner was also retrained "
+                f"together with the effect it beat or the next significant one, and both were added when "
+                f"that came more than {TRIAL_TIE:.0%} lower"
+            ),
         }
 
 

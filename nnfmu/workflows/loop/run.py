@@ -82,15 +82,24 @@ def _number(x: float | None) -> float | None:
 class _Stage:
     """Builds and replays each iteration's model inside the staging folder."""
 
-    def __init__(self, staging: Path, out_dir: Path, m: Measurement, blocks: RecordBlocks, settings: LoopSettings,
-                 name: str) -> None:
+    def __init__(
+        self, staging: Path, out_dir: Path, m: Measurement, blocks: RecordBlocks, settings: LoopSettings, name: str
+    ) -> None:
         self.staging, self.out_dir, self.m, self.blocks, self.settings, self.name = (
-            staging, out_dir, m, blocks, settings, name)
+            staging,
+            out_dir,
+            m,
+            blocks,
+            settings,
+            name,
+        )
 
     def fmu(self, onnx_path: Path, k: int) -> Path:
         out = self.staging / f"model_{k}.fmu"
-        build_fmu(onnx_path, BuildOptions(out=out, backend=self.settings.backend,
-                                          fmi_version=self.settings.fmi_version, name=self.name))
+        build_fmu(
+            onnx_path,
+            BuildOptions(out=out, backend=self.settings.backend, fmi_version=self.settings.fmi_version, name=self.name),
+        )
         return out
 
     def replay(self, fmu_path: Path, output: str) -> np.ndarray:
@@ -99,8 +108,13 @@ class _Stage:
     def export(self, model: TrainedModel, k: int, effect: str) -> Path:
         path = self.staging / f"model_{k}.onnx"
         a, b = self.blocks.ranges["test"][0]
-        export_onnx(model, path, name=self.name, verify_on={c: self.m[c][a:b] for c in model.spec.channels},
-                    description=f"{model.spec.output} model extended by nnfmu loop with {effect} on {self.m.source}")
+        export_onnx(
+            model,
+            path,
+            name=self.name,
+            verify_on={c: self.m[c][a:b] for c in model.spec.channels},
+            description=f"{model.spec.output} model extended by nnfmu loop with {effect} on {self.m.source}",
+        )
         return path
 
     def final(self, path: Path) -> Path:
@@ -167,18 +181,26 @@ def run_loop(
                 break
             if len(added) >= settings.max_effects:
                 if d.significant:
-                    notes.append(f"stopped at max_effects = {settings.max_effects}; still significant: "
-                                 + ", ".join(e.name for e in d.significant))
+                    notes.append(
+                        f"stopped at max_effects = {settings.max_effects}; still significant: "
+                        + ", ".join(e.name for e in d.significant)
+                    )
                 break
-            beyond = FamilyGains(diagnosis_part, predicted[rows["diagnosis"]], output, model.spec.channels,
-                                 settings.diagnosis).explained
+            beyond = FamilyGains(
+                diagnosis_part, predicted[rows["diagnosis"]], output, model.spec.channels, settings.diagnosis
+            ).explained
             group, partners = trial_group(d, model, m, fit, added, beyond, settings, notes)
             if not group:
-                small = [e.name for e in d.significant
-                         if e.name not in added and (e.additional_explained_variance or 0.0) < settings.min_explained]
+                small = [
+                    e.name
+                    for e in d.significant
+                    if e.name not in added and (e.additional_explained_variance or 0.0) < settings.min_explained
+                ]
                 if small:
-                    notes.append(f"significant but below min_explained = {settings.min_explained:.0%} of the residual "
-                                 f"variance, so not added: {', '.join(small)}")
+                    notes.append(
+                        f"significant but below min_explained = {settings.min_explained:.0%} of the residual "
+                        f"variance, so not added: {', '.join(small)}"
+                    )
                 break
             k = len(iterations) + 1
             pick, group, trials, scores = retrain_rivals(group, partners, model, m, rows, fit, settings)
@@ -189,30 +211,34 @@ def run_loop(
             before = nrmse(predicted, measured, rows["diagnosis"])
             after = nrmse(new_predicted, measured, rows["diagnosis"])
             accepted = after < before
-            iterations.append(Iteration(
-                effects=tuple(ext.effect.split("+")),
-                explained_variance=_number(evidence.additional_explained_variance),
-                explained_variance_alone=_number(evidence.explained_variance),
-                p_value=_number(evidence.p_value),
-                extension=ext.note,
-                reason=reason,
-                features_added=ext.added,
-                error_before=_errors(predicted, measured, rows["test"], slope),
-                error_after=_errors(new_predicted, measured, rows["test"], slope),
-                diagnosis_nrmse_before=before,
-                diagnosis_nrmse_after=after,
-                accepted=accepted,
-                onnx=stage.final(new_onnx),
-                fmu=stage.final(new_fmu),
-                extra_hidden=retrained.extra_hidden,
-                start=retrained.start,
-                diagnosis_nrmse_by_start=retrained.diagnosis_nrmse_by_start,
-                trials={g[0].effect: score for g, score in zip(group, scores)},
-            ))
+            iterations.append(
+                Iteration(
+                    effects=tuple(ext.effect.split("+")),
+                    explained_variance=_number(evidence.additional_explained_variance),
+                    explained_variance_alone=_number(evidence.explained_variance),
+                    p_value=_number(evidence.p_value),
+                    extension=ext.note,
+                    reason=reason,
+                    features_added=ext.added,
+                    error_before=_errors(predicted, measured, rows["test"], slope),
+                    error_after=_errors(new_predicted, measured, rows["test"], slope),
+                    diagnosis_nrmse_before=before,
+                    diagnosis_nrmse_after=after,
+                    accepted=accepted,
+                    onnx=stage.final(new_onnx),
+                    fmu=stage.final(new_fmu),
+                    extra_hidden=retrained.extra_hidden,
+                    start=retrained.start,
+                    diagnosis_nrmse_by_start=retrained.diagnosis_nrmse_by_start,
+                    trials={g[0].effect: score for g, score in zip(group, scores)},
+                )
+            )
             steps.append((predicted, ext.spec))
             if not accepted:
-                notes.append(f"adding {ext.effect} did not lower the error on the diagnosis part (NRMSE {before:.4g} "
-                             f"-> {after:.4g}); it was not kept and the loop stopped")
+                notes.append(
+                    f"adding {ext.effect} did not lower the error on the diagnosis part (NRMSE {before:.4g} "
+                    f"-> {after:.4g}); it was not kept and the loop stopped"
+                )
                 break
             added.extend(ext.effect.split("+"))
             model, predicted, onnx_path, fmu_path = retrained.model, new_predicted, new_onnx, new_fmu

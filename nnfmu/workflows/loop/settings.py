@@ -89,10 +89,12 @@ class LoopSettings:
         except ValueError as error:
             raise LoopError(str(error)) from None
         if not (0 <= self.parsimony < 1 and 0 <= self.min_explained < 1):
-            raise LoopError(f"parsimony and min_explained must lie in [0, 1), got {self.parsimony!r} and "
-                            f"{self.min_explained!r}")
+            raise LoopError(
+                f"parsimony and min_explained must lie in [0, 1), got {self.parsimony!r} and {self.min_explained!r}"
+            )
 
     def retrain_settings(self) -> RetrainSettings:
         """How the loop retrains a model on an extended spec (ValueError for bad values)."""
-        return RetrainSettings(self.max_epochs, self.patience, self.lm_max_samples, self.lm_mu, self.extra_hidden,
-                               self.seed)
+        return RetrainSettings(
+            self.max_epochs, self.patience, self.lm_max_samples, self.lm_mu, self.extra_hidden, self.seed
+        )

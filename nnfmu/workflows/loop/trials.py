@@ -31,8 +31,9 @@ TRIAL_TIE = 0.10
 Candidate = tuple[Extension, EffectEvidence, str]  # an extension to retrain with, its evidence, and why it is tried
 
 
-def extension(effect: str, spec: FeatureSpec, m: Measurement, fit: np.ndarray,
-              settings: LoopSettings) -> Extension | NoExtension:
+def extension(
+    effect: str, spec: FeatureSpec, m: Measurement, fit: np.ndarray, settings: LoopSettings
+) -> Extension | NoExtension:
     """The extension of `spec` for `effect` (the library's or an `input:<channel>` candidate), its parameters from
     the diagnosis settings."""
     return find_effect(effect).extension(spec, m, fit, settings.diagnosis)
@@ -57,24 +58,43 @@ def _candidates(d: Diagnosis, settings: LoopSettings) -> list[tuple[EffectEviden
     top = chosen[0]
     floor = max(settings.min_explained, (1 - settings.parsimony) * (top.explained_variance or 0.0))
     rivals = sorted(
-        (e for e in d.ranking if e.testable and e.name != top.name and (e.explained_variance or 0.0) >= floor
-         and len(e.regressors) < len(top.regressors)),
+        (
+            e
+            for e in d.ranking
+            if e.testable
+            and e.name != top.name
+            and (e.explained_variance or 0.0) >= floor
+            and len(e.regressors) < len(top.regressors)
+        ),
         key=lambda e: (len(e.regressors), -(e.explained_variance or 0.0)),
     )
-    reasons = [(e, f"explains alone {e.explained_variance:.1%} of the residual variance, near the "
-                   f"{top.explained_variance:.1%} of {top.name}, with fewer regressors (the simpler explanation first)")
-               for e in rivals]
+    reasons = [
+        (
+            e,
+            f"explains alone {e.explained_variance:.1%} of the residual variance, near the "
+            f"{top.explained_variance:.1%} of {top.name}, with fewer regressors (the simpler explanation first)",
+        )
+        for e in rivals
+    ]
     return reasons + [(e, SIGNIFICANT) for e in chosen]
 
 
-def trial_group(d: Diagnosis, model: TrainedModel, m: Measurement, fit: np.ndarray, added: list[str],
-                beyond: Callable[[str, tuple[str, ...]], GainTest], settings: LoopSettings,
-                notes: list[str]) -> tuple[list[Candidate], list[Candidate]]:
+def trial_group(
+    d: Diagnosis,
+    model: TrainedModel,
+    m: Measurement,
+    fit: np.ndarray,
+    added: list[str],
+    beyond: Callable[[str, tuple[str, ...]], GainTest],
+    settings: LoopSettings,
+    notes: list[str],
+) -> tuple[list[Candidate], list[Candidate]]:
     """The extensions to try this iteration: every simpler rival the network can take and the first significant
     candidate it can take (each not added yet), with evidence and why; and the partners, to be tried together with
     the winner: the next significant candidate it can take, after its simpler rivals (`_partner_rivals`). Each
     significant one gives way to a simpler family that holds it (`_simpler_cover`). Notes say why significant
     effects could not be added. The group is empty when nothing can be added."""
+
     def extend(effect: str) -> Extension | NoExtension:
         return extension(effect, model.spec, m, fit, settings)
 
@@ -83,8 +103,10 @@ def trial_group(d: Diagnosis, model: TrainedModel, m: Measurement, fit: np.ndarr
     for evidence, reason in _candidates(d, settings):
         if evidence.name in added:
             if evidence.significant:
-                notes.append(f"{evidence.name} is still significant after it was added; the network may need more "
-                             f"capacity or data for it")
+                notes.append(
+                    f"{evidence.name} is still significant after it was added; the network may need more "
+                    f"capacity or data for it"
+                )
             continue
         ext = extend(evidence.name)
         if isinstance(ext, NoExtension):
@@ -125,20 +147,37 @@ def _best_trial(scores: list[float]) -> int:
 
 
 def _stands_for(effect: str, share: float, p_value: float) -> str:
-    return (f"it stands for {effect}, which explains only {share:.1%} of the residual variance beyond it "
-            f"(p = {p_value:.2g})")
+    return (
+        f"it stands for {effect}, which explains only {share:.1%} of the residual variance beyond it "
+        f"(p = {p_value:.2g})"
+    )
 
 
 def _simpler_families(d: Diagnosis, evidence: EffectEvidence, taken: set[str]) -> list[EffectEvidence]:
     """The testable families of the diagnosis with fewer regressors than `evidence`'s, not in `taken`, simplest
     first."""
-    return sorted((e for e in d.ranking if e.testable and e.name not in taken and e.name != evidence.name
-                   and len(e.regressors) < len(evidence.regressors)), key=lambda e: len(e.regressors))
+    return sorted(
+        (
+            e
+            for e in d.ranking
+            if e.testable
+            and e.name not in taken
+            and e.name != evidence.name
+            and len(e.regressors) < len(evidence.regressors)
+        ),
+        key=lambda e: len(e.regressors),
+    )
 
 
-def _simpler_cover(candidate: Candidate, d: Diagnosis, beyond: Callable[[str, tuple[str, ...]], GainTest],
-                   extend: Callable[[str], Extension | NoExtension], given: tuple[str, ...], taken: set[str],
-                   settings: LoopSettings) -> tuple[Candidate, str]:
+def _simpler_cover(
+    candidate: Candidate,
+    d: Diagnosis,
+    beyond: Callable[[str, tuple[str, ...]], GainTest],
+    extend: Callable[[str], Extension | NoExtension],
+    given: tuple[str, ...],
+    taken: set[str],
+    settings: LoopSettings,
+) -> tuple[Candidate, str]:
     """`candidate`, or the simplest family that holds it, with why it stands for it ("" when none does): one with
     fewer regressors beyond which (and beyond `given`) its regressors explain less than `min_explained` of the
     residual left beyond `given` (three low-passed displacements hold the displacement). Retrained, the richer
@@ -158,9 +197,15 @@ def _simpler_cover(candidate: Candidate, d: Diagnosis, beyond: Callable[[str, tu
     return candidate, ""
 
 
-def _partner_rivals(partner: Candidate, d: Diagnosis, beyond: Callable[[str, tuple[str, ...]], GainTest],
-                    extend: Callable[[str], Extension | NoExtension], top: str, taken: set[str],
-                    settings: LoopSettings) -> list[Candidate]:
+def _partner_rivals(
+    partner: Candidate,
+    d: Diagnosis,
+    beyond: Callable[[str, tuple[str, ...]], GainTest],
+    extend: Callable[[str], Extension | NoExtension],
+    top: str,
+    taken: set[str],
+    settings: LoopSettings,
+) -> list[Candidate]:
     """Simpler rivals of the partner, simplest first: families with fewer regressors that explain beyond `top` at
     least `min_explained` and (1 - parsimony) of what the partner explains beyond it. As for the top effect, each is
     retrained with the winner and the simplest within TRIAL_TIE of the best pair wins: after a temperature fade,
@@ -174,28 +219,50 @@ def _partner_rivals(partner: Candidate, d: Diagnosis, beyond: Callable[[str, tup
         explained = beyond(family.name, (top,)).explained
         ext = extend(family.name)
         if explained >= floor and isinstance(ext, Extension):
-            rivals.append((ext, family, f"explains {explained:.1%} of the residual variance beyond {top}, near "
-                                        f"the partner {evidence.name}, with fewer regressors"))
+            rivals.append(
+                (
+                    ext,
+                    family,
+                    f"explains {explained:.1%} of the residual variance beyond {top}, near "
+                    f"the partner {evidence.name}, with fewer regressors",
+                )
+            )
     return rivals
 
 
-def _together(first: Candidate, second: Candidate, evidence: EffectEvidence, why: str, m: Measurement,
-              fit: np.ndarray, settings: LoopSettings) -> Candidate | None:
+def _together(
+    first: Candidate,
+    second: Candidate,
+    evidence: EffectEvidence,
+    why: str,
+    m: Measurement,
+    fit: np.ndarray,
+    settings: LoopSettings,
+) -> Candidate | None:
     """`first`'s extension with `second`'s effect added on top, as one candidate for when both are present; None
     when `first`'s spec already holds what `second` adds."""
     ext = extension(second[0].effect, first[0].spec, m, fit, settings)
     if isinstance(ext, NoExtension):
         return None
-    both = Extension(f"{first[0].effect}+{second[0].effect}", ext.spec, (*first[0].added, *ext.added),
-                     f"{first[0].note}; {ext.note}")
-    reason = (f"{why}; retrained together they predicted the diagnosis part more than {TRIAL_TIE:.0%} better than "
-              f"{first[0].effect} alone, so both are added")
+    both = Extension(
+        f"{first[0].effect}+{second[0].effect}", ext.spec, (*first[0].added, *ext.added), f"{first[0].note}; {ext.note}"
+    )
+    reason = (
+        f"{why}; retrained together they predicted the diagnosis part more than {TRIAL_TIE:.0%} better than "
+        f"{first[0].effect} alone, so both are added"
+    )
     return both, evidence, reason
 
 
-def retrain_rivals(group: list[Candidate], partners: list[Candidate], model: TrainedModel, m: Measurement,
-                   rows: dict[str, np.ndarray], fit: np.ndarray,
-                   settings: LoopSettings) -> tuple[int, list[Candidate], list[Retrained], list[float]]:
+def retrain_rivals(
+    group: list[Candidate],
+    partners: list[Candidate],
+    model: TrainedModel,
+    m: Measurement,
+    rows: dict[str, np.ndarray],
+    fit: np.ndarray,
+    settings: LoopSettings,
+) -> tuple[int, list[Candidate], list[Retrained], list[float]]:
     """Retrain the model with each candidate of `group` (warm-started, and with `settings.fresh_rival` also from a
     random start, the better on the diagnosis part kept) and pick one by its diagnosis-part NRMSE (`_best_trial`).
     Then retrain the winner together with its mate (the significant effect it beat, if a simpler rival won; else
@@ -213,8 +280,19 @@ def retrain_rivals(group: list[Candidate], partners: list[Candidate], model: Tra
         scores = {"warm": _diagnosis_nrmse(trial.model, m, measured, rows["diagnosis"])}
         trials = [trial]
         if settings.fresh_rival:
-            trials.append(retrain(model, ext.spec, m, rows["train"], rows["validation"], training, ext.effect,
-                                  start="fresh", hidden=trial.model.network.hidden.out_features))
+            trials.append(
+                retrain(
+                    model,
+                    ext.spec,
+                    m,
+                    rows["train"],
+                    rows["validation"],
+                    training,
+                    ext.effect,
+                    start="fresh",
+                    hidden=trial.model.network.hidden.out_features,
+                )
+            )
             scores["fresh"] = _diagnosis_nrmse(trials[-1].model, m, measured, rows["diagnosis"])
         kept = min(trials, key=lambda t: scores[t.start])  # the warm start on a tie
         return replace(kept, diagnosis_nrmse_by_start=scores), scores[kept.start]
@@ -225,20 +303,38 @@ def retrain_rivals(group: list[Candidate], partners: list[Candidate], model: Tra
     first = group[pick][0].effect
     if group[-1][2].startswith(SIGNIFICANT) and pick < len(group) - 1:
         top = group[-1]
-        pairs = [_together(group[pick], top, top[1], f"{first} beat {top[0].effect} retrained alone", m, fit,
-                           settings)]
+        pairs = [_together(group[pick], top, top[1], f"{first} beat {top[0].effect} retrained alone", m, fit, settings)]
     else:
         names = {g[1].name for g in group}
-        pairs = [_together(group[pick], p, group[pick][1], f"{p[1].name} is significant beyond {first} too"
-                           if p[2].startswith(SIGNIFICANT) else f"{p[1].name} {p[2]}", m, fit, settings)
-                 for p in partners if p[1].name not in names]
+        pairs = [
+            _together(
+                group[pick],
+                p,
+                group[pick][1],
+                f"{p[1].name} is significant beyond {first} too"
+                if p[2].startswith(SIGNIFICANT)
+                else f"{p[1].name} {p[2]}",
+                m,
+                fit,
+                settings,
+            )
+            for p in partners
+            if p[1].name not in names
+        ]
     pairs = [p for p in pairs if p is not None]
     if len(group) > 1:
         ext, evidence, reason = group[pick]
-        group[pick] = (ext, evidence, reason + (
-            f"; retrained with each rival explanation, it predicted the diagnosis part best or came within "
-            f"{TRIAL_TIE:.0%} of the best with fewer regressors (NRMSE "
-            + ", ".join(f"{g[0].effect} {score:.4g}" for g, score in zip(group, scores)) + ")"))
+        group[pick] = (
+            ext,
+            evidence,
+            reason
+            + (
+                f"; retrained with each rival explanation, it predicted the diagnosis part best or came within "
+                f"{TRIAL_TIE:.0%} of the best with fewer regressors (NRMSE "
+                + ", ".join(f"{g[0].effect} {score:.4g}" for g, score in zip(group, scores))
+                + ")"
+            ),
+        )
     if pairs:
         start = len(group)
         for pair in pairs:

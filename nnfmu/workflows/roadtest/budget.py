@@ -36,11 +36,26 @@ class BudgetRow:
         return {k: (json_float(v) if isinstance(v, float) else v) for k, v in asdict(self).items()}
 
 
-def budget_rows(system: str, model: str, total: list[ChannelComparison], coupling: list[ChannelComparison],
-                network: dict[str, ChannelComparison]) -> list[BudgetRow]:
+def budget_rows(
+    system: str,
+    model: str,
+    total: list[ChannelComparison],
+    coupling: list[ChannelComparison],
+    network: dict[str, ChannelComparison],
+) -> list[BudgetRow]:
     """Rows of `model` in `system` from the network co-simulation's comparisons with the reference (`total`), the
     truth co-simulation's (`coupling`, same channels) and the network's own error per channel (`network`)."""
     by_name = {c.name: c for c in coupling}
-    return [BudgetRow(system=system, channel=c.name, unit=c.unit, model=model, nrmse_total=c.metrics.nrmse,
-                      nrmse_network=network[c.name].metrics.nrmse, nrmse_coupling=by_name[c.name].metrics.nrmse,
-                      damage_ratio=c.metrics.pseudo_damage_ratio) for c in total]
+    return [
+        BudgetRow(
+            system=system,
+            channel=c.name,
+            unit=c.unit,
+            model=model,
+            nrmse_total=c.metrics.nrmse,
+            nrmse_network=network[c.name].metrics.nrmse,
+            nrmse_coupling=by_name[c.name].metrics.nrmse,
+            damage_ratio=c.metrics.pseudo_damage_ratio,
+        )
+        for c in total
+    ]

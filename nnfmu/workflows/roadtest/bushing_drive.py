@@ -76,19 +76,29 @@ class VehicleBushingModels:
     seconds: dict[str, float] = field(default_factory=dict)
 
 
-def train_vehicle_bushings(out: str | Path, road: RoadTestSettings,
-                           settings: BushingDriveSettings = BushingDriveSettings(),
-                           request: Callable[[str], TrainRequest] = lambda preset: TrainRequest(preset=preset),
-                           log: Callable[[str], None] = print) -> VehicleBushingModels:
+def train_vehicle_bushings(
+    out: str | Path,
+    road: RoadTestSettings,
+    settings: BushingDriveSettings = BushingDriveSettings(),
+    request: Callable[[str], TrainRequest] = lambda preset: TrainRequest(preset=preset),
+    log: Callable[[str], None] = print,
+) -> VehicleBushingModels:
     """Source reference (the road test's road class, speed, rate, fade-in and reference step on drive seed
     road.seed + seed_offset) -> vehicle-derived bushing rig record -> the four bushing presets trained on it, each
     with `request(preset)`; everything under `out` (source_drive.csv, source_reference.csv, rig/, models/)."""
     out = Path(out)
     seconds: dict[str, float] = {}
     seed = road.seed + settings.seed_offset
-    drive = generate_drive(DriveSettings(road_class=road.road_class, speed=road.speed, seed=seed,
-                                         duration=settings.duration + 1 / road.sample_rate,
-                                         sample_rate=road.sample_rate, fade_in=road.fade_in))
+    drive = generate_drive(
+        DriveSettings(
+            road_class=road.road_class,
+            speed=road.speed,
+            seed=seed,
+            duration=settings.duration + 1 / road.sample_rate,
+            sample_rate=road.sample_rate,
+            fade_in=road.fade_in,
+        )
+    )
     drive_path = write_drive(drive, out / "source_drive.csv")
     log(f"bushing rig drive: source reference of the {SYSTEM} over {settings.duration:g} s on drive seed {seed}")
     reference = monolithic_reference(SYSTEM, drive, vehicle_components(SYSTEM), road.reference_step)
@@ -96,9 +106,13 @@ def train_vehicle_bushings(out: str | Path, road: RoadTestSettings,
     source = save_measurement(reference.measurement, out / "source_reference.csv")
     started = time.perf_counter()
     elements = bushing_elements(SYSTEM)
-    rig, truth = write_vehicle_rig(source, elements, out / "rig" / "bushing_vehicle.csv",
-                                   RigOptions(seed=settings.rig_seed, duration=settings.rig_duration),
-                                   DriveDesign(margin=settings.margin))
+    rig, truth = write_vehicle_rig(
+        source,
+        elements,
+        out / "rig" / "bushing_vehicle.csv",
+        RigOptions(seed=settings.rig_seed, duration=settings.rig_duration),
+        DriveDesign(margin=settings.margin),
+    )
     seconds["rig"] = time.perf_counter() - started
     log(f"bushing rig drive: record {rig} derived from {', '.join(elements)} (margin {settings.margin:g})")
     models = train_on_record(rig, BUSHING_MODELS, request, out / "models", seconds, log)
@@ -115,8 +129,9 @@ class BushingReplay:
     excursions: list[Excursion]
 
 
-def replay_bushing_networks(models: Mapping[str, Path], reference: Measurement, elements: Sequence[str],
-                            folder: Path) -> BushingReplay:
+def replay_bushing_networks(
+    models: Mapping[str, Path], reference: Measurement, elements: Sequence[str], folder: Path
+) -> BushingReplay:
     """The four bushing networks merged and built as the road test does (`folder`/lca-bushing.onnx/.fmu), replayed
     along each of `elements`' motion in `reference` and compared with the reference's forces and torques of that
     bushing (the truth physics; the road test budget's `nrmse_network`), and every front LCA bushing's motion against
@@ -124,10 +139,19 @@ def replay_bushing_networks(models: Mapping[str, Path], reference: Measurement, 
     merged = bushing_onnx(models, Path(folder) / "lca-bushing.onnx")
     fmu = build_fmu(merged, BuildOptions(out=Path(folder) / "lca-bushing.fmu"))
     outputs = list(_ports(fmu, "output"))
-    comparisons = {element: compare(_open_loop(fmu, reference, element), reference,
-                                    [f"{element}_{name}" for name in outputs], ValidationSettings())
-                   for element in elements}
+    comparisons = {
+        element: compare(
+            _open_loop(fmu, reference, element),
+            reference,
+            [f"{element}_{name}" for name in outputs],
+            ValidationSettings(),
+        )
+        for element in elements
+    }
     ports = Component.from_onnx(onnx.load(merged)).inputs
-    excursions = [excursion("reference", name, port, reference[f"{name}_{port.name}"])
-                  for name in bushing_elements(SYSTEM) for port in ports]
+    excursions = [
+        excursion("reference", name, port, reference[f"{name}_{port.name}"])
+        for name in bushing_elements(SYSTEM)
+        for port in ports
+    ]
     return BushingReplay(comparisons, excursions)

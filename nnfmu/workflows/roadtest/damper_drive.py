@@ -32,18 +32,28 @@ class VehicleDamperModels:
     seconds: dict[str, float] = field(default_factory=dict)
 
 
-def train_vehicle_dampers(source: Path, out: str | Path, request: Callable[[str], TrainRequest],
-                          rig_seed: int = 0, margin: float = 1.2, rig_duration: float | None = None,
-                          log: Callable[[str], None] = print) -> VehicleDamperModels:
+def train_vehicle_dampers(
+    source: Path,
+    out: str | Path,
+    request: Callable[[str], TrainRequest],
+    rig_seed: int = 0,
+    margin: float = 1.2,
+    rig_duration: float | None = None,
+    log: Callable[[str], None] = print,
+) -> VehicleDamperModels:
     """Vehicle result `source` -> vehicle-derived dyno record (margin over the simulated strokes, the dyno's band)
     -> the damper presets trained on it with `request(preset)`; everything under `out` (rig/, models/)."""
     out = Path(out)
     seconds: dict[str, float] = {}
     started = time.perf_counter()
     elements = damper_elements(SYSTEM)
-    rig, truth = write_vehicle_damper_dyno(source, elements, out / "rig" / "damper_vehicle.csv",
-                                           RigOptions(seed=rig_seed, duration=rig_duration),
-                                           DriveDesign(margin=margin, band=RIG_BANDS["damper"]))
+    rig, truth = write_vehicle_damper_dyno(
+        source,
+        elements,
+        out / "rig" / "damper_vehicle.csv",
+        RigOptions(seed=rig_seed, duration=rig_duration),
+        DriveDesign(margin=margin, band=RIG_BANDS["damper"]),
+    )
     seconds["rig"] = time.perf_counter() - started
     log(f"damper dyno drive: record {rig} derived from {', '.join(elements)} (margin {margin:g})")
     models = train_on_record(rig, DAMPER_MODELS, request, out / "models", seconds, log)

@@ -31,8 +31,10 @@ class Excursion:
     @property
     def range_used(self) -> float:
         """Largest |signal| over the envelope's bound on the same side [1]: > 1 means extrapolation."""
-        used = [self.signal_max / self.envelope_max if self.envelope_max > 0 else np.inf,
-                self.signal_min / self.envelope_min if self.envelope_min < 0 else np.inf]
+        used = [
+            self.signal_max / self.envelope_max if self.envelope_max > 0 else np.inf,
+            self.signal_min / self.envelope_min if self.envelope_min < 0 else np.inf,
+        ]
         return float(max(used))
 
     def to_dict(self) -> dict[str, object]:
@@ -46,5 +48,6 @@ def excursion(run: str, element: str, port: Port, signal: np.ndarray) -> Excursi
     lo = -np.inf if port.min is None else port.min
     hi = np.inf if port.max is None else port.max
     outside = float(np.mean((signal < lo) | (signal > hi)))
-    return Excursion(run, element, port.name, port.unit, float(signal.min()), float(signal.max()), float(lo),
-                     float(hi), outside)
+    return Excursion(
+        run, element, port.name, port.unit, float(signal.min()), float(signal.max()), float(lo), float(hi), outside
+    )

@@ -8,8 +8,14 @@ from pathlib import Path
 from nnfmu.workflows.train import TrainRequest, train_from_file
 
 
-def train_on_record(rig: Path, presets: Sequence[str], request: Callable[[str], TrainRequest], folder: Path,
-                    seconds: dict[str, float], log: Callable[[str], None]) -> dict[str, Path]:
+def train_on_record(
+    rig: Path,
+    presets: Sequence[str],
+    request: Callable[[str], TrainRequest],
+    folder: Path,
+    seconds: dict[str, float],
+    log: Callable[[str], None],
+) -> dict[str, Path]:
     """Each preset trained on the record `rig` with `request(preset)` into `folder/<preset>.onnx`; its training time
     [s] goes into `seconds`; returns the ONNX file per preset."""
     models: dict[str, Path] = {}
@@ -17,6 +23,8 @@ def train_on_record(rig: Path, presets: Sequence[str], request: Callable[[str], 
         trained = train_from_file(rig, request(preset), folder / f"{preset}.onnx")
         models[preset] = trained.path
         seconds[preset] = trained.seconds
-        log(f"{preset} on the vehicle-derived record: trained in {trained.seconds:.1f} s, test-split NRMSE "
-            f"{trained.metrics['test'].nrmse:.4f}")
+        log(
+            f"{preset} on the vehicle-derived record: trained in {trained.seconds:.1f} s, test-split NRMSE "
+            f"{trained.metrics['test'].nrmse:.4f}"
+        )
     return models

@@ -22,12 +22,17 @@ def _number(value: float | None) -> str:
     return "n/a" if value is None else f"{value:.4g}"
 
 
-def write_system_report(summary: Mapping[str, Any], context: Mapping[str, str], model_reports: Mapping[str, Path],
-                        path: Path) -> Path:
+def write_system_report(
+    summary: Mapping[str, Any], context: Mapping[str, str], model_reports: Mapping[str, Path], path: Path
+) -> Path:
     """Render `summary` (a `SystemResult.to_dict()`) with `context` lines and links to `model_reports` into `path`."""
     environment = jinja2.Environment(
-        loader=jinja2.FileSystemLoader(Path(__file__).resolve().parent), autoescape=True, trim_blocks=True,
-        lstrip_blocks=True, undefined=jinja2.StrictUndefined)
+        loader=jinja2.FileSystemLoader(Path(__file__).resolve().parent),
+        autoescape=True,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        undefined=jinja2.StrictUndefined,
+    )
     environment.filters["number"] = _number
     links = {model: os.path.relpath(report, path.parent) for model, report in model_reports.items()}
     html = environment.get_template(TEMPLATE).render(summary=summary, context=context, links=links)

@@ -52,13 +52,31 @@ from nnfmu.workflows.roadtest.truth_reference import Reference, monolithic_refer
 from nnfmu.workflows.vehicle_binding import vehicle_binding
 
 COMPARED = {
-    "quarter-car": ("damper_force", "damper_displacement", "damper_velocity", "body_acceleration",
-                    "spindle_acceleration", "spindle_vertical_force"),
-    "full-vehicle": ("damper_fl_force", "damper_fl_displacement", "damper_rl_force", "lca_fl_angle", "body_heave",
-                     "body_pitch", "body_acceleration_fl", "spindle_fl_acceleration", "spindle_fl_vertical_force",
-                     "bushing_fl_front_axial_displacement", "bushing_fl_front_radial_displacement",
-                     "bushing_fl_front_axial_force", "bushing_fl_front_radial_force", "bushing_fl_front_axial_torque",
-                     "bushing_fl_front_conical_torque"),
+    "quarter-car": (
+        "damper_force",
+        "damper_displacement",
+        "damper_velocity",
+        "body_acceleration",
+        "spindle_acceleration",
+        "spindle_vertical_force",
+    ),
+    "full-vehicle": (
+        "damper_fl_force",
+        "damper_fl_displacement",
+        "damper_rl_force",
+        "lca_fl_angle",
+        "body_heave",
+        "body_pitch",
+        "body_acceleration_fl",
+        "spindle_fl_acceleration",
+        "spindle_fl_vertical_force",
+        "bushing_fl_front_axial_displacement",
+        "bushing_fl_front_radial_displacement",
+        "bushing_fl_front_axial_force",
+        "bushing_fl_front_radial_force",
+        "bushing_fl_front_axial_torque",
+        "bushing_fl_front_conical_torque",
+    ),
 }
 TRUTH = "truth physics"  # the co-simulation with the truth laws as FMUs in the networks' place
 Log = Callable[[str], None]
@@ -119,10 +137,16 @@ class SystemResult:
     duration: float
 
     def to_dict(self) -> dict[str, object]:
-        return {"system": self.system, "ssds": {k: str(v) for k, v in self.ssds.items()}, "report": str(self.report),
-                "duration_s": self.duration, "seconds": {k: round(v, 2) for k, v in self.seconds.items()},
-                "thesis_table": [r.to_dict() for r in self.rows], "budget": [r.to_dict() for r in self.budget],
-                "envelope": [e.to_dict() for e in self.excursions]}
+        return {
+            "system": self.system,
+            "ssds": {k: str(v) for k, v in self.ssds.items()},
+            "report": str(self.report),
+            "duration_s": self.duration,
+            "seconds": {k: round(v, 2) for k, v in self.seconds.items()},
+            "thesis_table": [r.to_dict() for r in self.rows],
+            "budget": [r.to_dict() for r in self.budget],
+            "envelope": [e.to_dict() for e in self.excursions],
+        }
 
 
 @dataclass
@@ -149,8 +173,12 @@ def _on_reference(result: Measurement, reference: Measurement, channels: list[st
     """`channels` of `result` interpolated onto the reference's time stamps inside both spans."""
     keep = (reference.time >= result.time[0] - 1e-12) & (reference.time <= result.time[-1] + 1e-12)
     time = reference.time[keep]
-    return Measurement(time=time, channels={c: np.interp(time, result.time, result[c]) for c in channels},
-                       units={c: result.units[c] for c in channels}, source=source)
+    return Measurement(
+        time=time,
+        channels={c: np.interp(time, result.time, result[c]) for c in channels},
+        units={c: result.units[c] for c in channels},
+        source=source,
+    )
 
 
 def _settings(window: tuple[float, float], span: float) -> ValidationSettings:
@@ -170,31 +198,51 @@ def _network_ports(models: Mapping[str, Path], name: str) -> Component:
 
 
 def _excursions(run_name: str, elements: list[str], component: Component, m: Measurement) -> list[Excursion]:
-    return [excursion(run_name, element, port, m[f"{element}_{port.name}"]) for element in elements
-            for port in component.inputs]
+    return [
+        excursion(run_name, element, port, m[f"{element}_{port.name}"])
+        for element in elements
+        for port in component.inputs
+    ]
 
 
 def _ports(fmu: Path, causality: str) -> dict[str, str]:
     """Real variables of `fmu` with `causality`, name -> unit."""
-    return {v.name: v.unit or "" for v in read_model_description(str(fmu)).modelVariables
-            if v.causality == causality and v.type in ("Real", "Float64")}
+    return {
+        v.name: v.unit or ""
+        for v in read_model_description(str(fmu)).modelVariables
+        if v.causality == causality and v.type in ("Real", "Float64")
+    }
 
 
 def _open_loop(fmu: Path, reference: Measurement, element: str) -> Measurement:
     """The FMU of `element` replayed along the reference's motion of that element (its inputs `element_<input>`);
     outputs named `element_<output>`."""
     inputs = _ports(fmu, "input")
-    motion = Measurement(reference.time, {name: reference[f"{element}_{name}"] for name in inputs}, inputs,
-                         source=f"{element} motion in {reference.source}")
+    motion = Measurement(
+        reference.time,
+        {name: reference[f"{element}_{name}"] for name in inputs},
+        inputs,
+        source=f"{element} motion in {reference.source}",
+    )
     replayed = replay_fmu(fmu, motion)
-    return Measurement(replayed.time, {f"{element}_{k}": v for k, v in replayed.channels.items()},
-                       {f"{element}_{k}": u for k, u in replayed.units.items()},
-                       source=f"{fmu.name} replayed on the {element} motion")
+    return Measurement(
+        replayed.time,
+        {f"{element}_{k}": v for k, v in replayed.channels.items()},
+        {f"{element}_{k}": u for k, u in replayed.units.items()},
+        source=f"{fmu.name} replayed on the {element} motion",
+    )
 
 
-def _network_errors(system: str, model: str, fmus: ComponentFmus, ref: Measurement, cosim: Measurement,
-                    truth: Measurement, channels: list[str], validation: ValidationSettings
-                    ) -> dict[str, ChannelComparison]:
+def _network_errors(
+    system: str,
+    model: str,
+    fmus: ComponentFmus,
+    ref: Measurement,
+    cosim: Measurement,
+    truth: Measurement,
+    channels: list[str],
+    validation: ValidationSettings,
+) -> dict[str, ChannelComparison]:
     """Each channel's network error (`budget`): a network's output replayed open loop along the reference motion of
     its element against the reference, else the network co-simulation against the truth co-simulation."""
     networks = {element: fmus.dampers[model] for element in damper_elements(system)}
@@ -210,8 +258,17 @@ def _network_errors(system: str, model: str, fmus: ComponentFmus, ref: Measureme
     return found
 
 
-def _run_system(system: str, run: SystemRun, models: Mapping[str, Path], fmus: ComponentFmus, truth: ComponentFmus,
-                drive: Measurement, settings: RoadTestSettings, out: Path, log: Log) -> SystemResult:
+def _run_system(
+    system: str,
+    run: SystemRun,
+    models: Mapping[str, Path],
+    fmus: ComponentFmus,
+    truth: ComponentFmus,
+    drive: Measurement,
+    settings: RoadTestSettings,
+    out: Path,
+    log: Log,
+) -> SystemResult:
     """One system: FMUs and SSDs, reference, both damper networks and the truth physics co-simulated and compared,
     the error budget, the envelope checks, the report."""
     drive = _stretch(drive, run.duration)
@@ -219,10 +276,17 @@ def _run_system(system: str, run: SystemRun, models: Mapping[str, Path], fmus: C
     bushings = bool(bushing_elements(system))
     parts = {model: (fmus.dampers[model], fmus.bushing) for model in DAMPER_MODELS}
     parts[TRUTH] = (truth.dampers["truth"], truth.bushing)
-    ssds = {model: write_system(system, vehicle, damper, bushing if bushings else None,
-                                out / "systems" / system / model.replace(" ", "-"),
-                                run.filter_cutoff if model != TRUTH else None)
-            for model, (damper, bushing) in parts.items()}
+    ssds = {
+        model: write_system(
+            system,
+            vehicle,
+            damper,
+            bushing if bushings else None,
+            out / "systems" / system / model.replace(" ", "-"),
+            run.filter_cutoff if model != TRUTH else None,
+        )
+        for model, (damper, bushing) in parts.items()
+    }
     seconds: dict[str, float] = {}
     log(f"{system}: monolithic reference over {run.duration:g} s (truth physics, RK4 at {settings.reference_step:g} s)")
     reference: Reference = monolithic_reference(system, drive, vehicle_components(system), settings.reference_step)
@@ -242,22 +306,44 @@ def _run_system(system: str, run: SystemRun, models: Mapping[str, Path], fmus: C
         save_measurement(cosims[model], results_dir / f"{model.replace(' ', '-')}.csv")
         comparisons[model] = compare(cosims[model], ref, channels, validation)
         if model != TRUTH:
-            excursions.extend(_excursions(f"co-simulation with {model}", damper_elements(system),
-                                          _network_ports(models, model), result))
+            excursions.extend(
+                _excursions(
+                    f"co-simulation with {model}", damper_elements(system), _network_ports(models, model), result
+                )
+            )
     rows = [thesis_row(c, model) for model in DAMPER_MODELS for c in comparisons[model]]
     rows.sort(key=lambda row: (channels.index(row.channel), DAMPER_MODELS.index(row.model)))  # side by side
-    budget = [row for model in DAMPER_MODELS for row in budget_rows(
-        system, model, comparisons[model], comparisons[TRUTH],
-        _network_errors(system, model, fmus, ref, cosims[model], cosims[TRUTH], channels, validation))]
+    budget = [
+        row
+        for model in DAMPER_MODELS
+        for row in budget_rows(
+            system,
+            model,
+            comparisons[model],
+            comparisons[TRUTH],
+            _network_errors(system, model, fmus, ref, cosims[model], cosims[TRUTH], channels, validation),
+        )
+    ]
     excursions.extend(_excursions("reference", damper_elements(system), _network_ports(models, DAMPER_MODELS[0]), ref))
     if bushings and fmus.bushing is not None:
-        excursions.extend(_excursions("reference", bushing_elements(system), Component.from_onnx(
-            onnx.load(fmus.bushing.with_suffix(".onnx"))), ref))
+        excursions.extend(
+            _excursions(
+                "reference",
+                bushing_elements(system),
+                Component.from_onnx(onnx.load(fmus.bushing.with_suffix(".onnx"))),
+                ref,
+            )
+        )
     report_dir = out / "report" / system
-    model_reports = {model: write_report(chosen, report_dir / model.replace(" ", "-"),
-                                         f"{system}: {model} vs the monolithic reference",
-                                         {"system": system, "drive": drive.source})
-                     for model, chosen in comparisons.items()}
+    model_reports = {
+        model: write_report(
+            chosen,
+            report_dir / model.replace(" ", "-"),
+            f"{system}: {model} vs the monolithic reference",
+            {"system": system, "drive": drive.source},
+        )
+        for model, chosen in comparisons.items()
+    }
     outcome = SystemResult(system, ssds, report_dir / "index.html", rows, budget, excursions, seconds, run.duration)
     write_system_report(outcome.to_dict(), _context(system, run, settings, drive), model_reports, outcome.report)
     return outcome
@@ -267,24 +353,26 @@ def _context(system: str, run: SystemRun, settings: RoadTestSettings, drive: Mea
     return {
         "system": system,
         "drive": f"{drive.source}, {run.duration:g} s at {settings.sample_rate:g} Hz, faded in from rest over "
-                 f"{settings.fade_in:g} s",
+        f"{settings.fade_in:g} s",
         "co-simulation": f"fmpy master at its defaults (Gauss-Seidel, vehicle first, linear extrapolation, refresh "
-                         f"at every communication point), step {run.step:g} s, iterations {run.iterations}, network "
-                         "output filter "
-                         f"{'the FMU default (off)' if run.filter_cutoff is None else f'{run.filter_cutoff:g} Hz'}"
-                         f"; vehicle FMU exact at {run.step:g} s, inputs interpolated",
+        f"at every communication point), step {run.step:g} s, iterations {run.iterations}, network "
+        "output filter "
+        f"{'the FMU default (off)' if run.filter_cutoff is None else f'{run.filter_cutoff:g} Hz'}"
+        f"; vehicle FMU exact at {run.step:g} s, inputs interpolated",
         "reference": f"monolithic RK4 at {settings.reference_step:g} s, rig truth physics in every network's place",
         "front LCA bushings": "networks in the loop through stabilised ports (the vehicle holds only each network's "
-                              "deviation from the linear bushing over a step)" if system == "full-vehicle"
-                              else "none (quarter car)",
+        "deviation from the linear bushing over a step)"
+        if system == "full-vehicle"
+        else "none (quarter car)",
         "error budget": "total: network FMUs in the co-simulation; network: a network replayed open loop along the "
-                        "reference motion of its element (vehicle channels: network vs truth co-simulation); "
-                        "coupling: truth-physics FMUs in the same co-simulation; all against the reference",
+        "reference motion of its element (vehicle channels: network vs truth co-simulation); "
+        "coupling: truth-physics FMUs in the same co-simulation; all against the reference",
     }
 
 
-def run_road_test(out: str | Path, models: Mapping[str, str | Path], settings: RoadTestSettings = RoadTestSettings(),
-                  log: Log = print) -> RoadTestResult:
+def run_road_test(
+    out: str | Path, models: Mapping[str, str | Path], settings: RoadTestSettings = RoadTestSettings(), log: Log = print
+) -> RoadTestResult:
     """Run the road test of every system in `settings` into `out` (drive.csv, fmu/, systems/, results/, report/,
     road_test.json). `models` maps 'damper-spline', 'damper-hysteresis' and (for the full vehicle) the four
     'bushing-*' presets to ONNX step graphs. Raises RoadTestError for a missing model or bad settings."""
@@ -296,22 +384,39 @@ def run_road_test(out: str | Path, models: Mapping[str, str | Path], settings: R
         raise RoadTestError("no system to run: both quarter_car and full_vehicle are None")
     for system in runs:
         check_models(models, system)
-    drive = generate_drive(DriveSettings(road_class=settings.road_class, speed=settings.speed, seed=settings.seed,
-                                         duration=max(r.duration for r in runs.values()) + 1 / settings.sample_rate,
-                                         sample_rate=settings.sample_rate, fade_in=settings.fade_in))
+    drive = generate_drive(
+        DriveSettings(
+            road_class=settings.road_class,
+            speed=settings.speed,
+            seed=settings.seed,
+            duration=max(r.duration for r in runs.values()) + 1 / settings.sample_rate,
+            sample_rate=settings.sample_rate,
+            fade_in=settings.fade_in,
+        )
+    )
     drive_path = write_drive(drive, out / "drive.csv")
     log(f"drive file {drive_path}: ISO 8608 class {settings.road_class} at {settings.speed:g} m/s")
     fmus = build_component_fmus(models, out / "fmu", "full-vehicle" in runs)
     period = _network_ports(models, DAMPER_MODELS[0]).sample_period
-    truth = build_truth_fmus(out / "fmu", period if period is not None else min(r.step for r in runs.values()),
-                             "full-vehicle" in runs)
+    truth = build_truth_fmus(
+        out / "fmu", period if period is not None else min(r.step for r in runs.values()), "full-vehicle" in runs
+    )
     outcome = RoadTestResult(out=out, drive=drive_path)
     for system, run in runs.items():
         outcome.systems.append(_run_system(system, run, models, fmus, truth, drive, settings, out, log))
     outcome.seconds = time.perf_counter() - started
     outcome.summary = out / "road_test.json"
-    write_text_atomic(outcome.summary, json.dumps(
-        {"drive": str(drive_path), "seconds": round(outcome.seconds, 1),
-         "settings": asdict(settings), "systems": [s.to_dict() for s in outcome.systems]},
-        indent=2, allow_nan=False))
+    write_text_atomic(
+        outcome.summary,
+        json.dumps(
+            {
+                "drive": str(drive_path),
+                "seconds": round(outcome.seconds, 1),
+                "settings": asdict(settings),
+                "systems": [s.to_dict() for s in outcome.systems],
+            },
+            indent=2,
+            allow_nan=False,
+        ),
+    )
     return outcome

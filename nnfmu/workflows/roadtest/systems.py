@@ -69,8 +69,11 @@ def check_models(models: Mapping[str, Path], system: str) -> None:
 def bushing_onnx(models: Mapping[str, Path], out: Path) -> Path:
     """Merge the four bushing channel networks into one step graph at `out` (written atomically)."""
     parts = [onnx.load(Path(models[name])) for name in BUSHING_MODELS]
-    merged = merge_step_graphs(parts, "lca_bushing", "front LCA bushing: axial and radial force, axial and conical "
-                                                     "torque networks in one step graph")
+    merged = merge_step_graphs(
+        parts,
+        "lca_bushing",
+        "front LCA bushing: axial and radial force, axial and conical torque networks in one step graph",
+    )
     with atomic_path(out) as tmp:
         onnx.save(merged, tmp)
     return out
@@ -120,12 +123,23 @@ def build_vehicle(system: str, out: Path, step: float) -> Path:
     """The vehicle FMU of `system` (`vehicle_components`) sampled at the communication `step` [s] (exact: every
     component is a port, so the vehicle is linear), starting where the monolithic reference does (`settled_state`)."""
     components = vehicle_components(system)
-    return build_vehicle_fmu(system, out / f"{system}.fmu", VehicleBuildSettings(
-        components=components, sample_period=step, initial_state=settled_state(system, components)))
+    return build_vehicle_fmu(
+        system,
+        out / f"{system}.fmu",
+        VehicleBuildSettings(
+            components=components, sample_period=step, initial_state=settled_state(system, components)
+        ),
+    )
 
 
-def write_system(system: str, vehicle_fmu: Path, damper_fmu: Path, bushing_fmu: Path | None, folder: Path,
-                 filter_cutoff: float | None = None) -> Path:
+def write_system(
+    system: str,
+    vehicle_fmu: Path,
+    damper_fmu: Path,
+    bushing_fmu: Path | None,
+    folder: Path,
+    filter_cutoff: float | None = None,
+) -> Path:
     """`folder/SystemStructure.ssd` joining the vehicle, its damper networks and (if `bushing_fmu` is given) its
     front LCA bushing FMUs by name; each network FMU's output low-pass set to `filter_cutoff` [Hz] (0: off; None: the
     FMUs' own default, nothing set)."""

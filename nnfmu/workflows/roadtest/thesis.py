@@ -45,6 +45,15 @@ def amplitude_ratio(c: ChannelComparison, frequency: float = AMPLITUDE_FREQUENCY
 def thesis_row(c: ChannelComparison, model: str) -> ThesisRow:
     """The thesis comparison of channel `c` for `model`."""
     m = c.metrics
-    return ThesisRow(channel=c.name, unit=c.unit, model=model, peak_ratio=m.peak_ratio, valley_ratio=m.valley_ratio,
-                     rms_ratio=m.rms_ratio, damage_ratio=m.pseudo_damage_ratio, amplitude_ratio_1hz=amplitude_ratio(c),
-                     mean_shift=m.mean_shift, nrmse=m.nrmse)
+    return ThesisRow(
+        channel=c.name,
+        unit=c.unit,
+        model=model,
+        peak_ratio=m.peak_ratio,
+        valley_ratio=m.valley_ratio,
+        rms_ratio=m.rms_ratio,
+        damage_ratio=m.pseudo_damage_ratio,
+        amplitude_ratio_1hz=amplitude_ratio(c),
+        mean_shift=m.mean_shift,
+        nrmse=m.nrmse,
+    )

@@ -46,8 +46,13 @@ def settled_state(system: str, components: Mapping[str, str] | None = None) -> t
     return tuple(float(v) for v in rest_state(vehicle, truth_laws(forces), np.array(initial_state(vehicle))))
 
 
-def monolithic_reference(system: str, drive: Measurement, components: Mapping[str, str] | None = None,
-                         step: float = 1e-4, compiled: bool = True) -> Reference:
+def monolithic_reference(
+    system: str,
+    drive: Measurement,
+    components: Mapping[str, str] | None = None,
+    step: float = 1e-4,
+    compiled: bool = True,
+) -> Reference:
     """Solve `system` ('quarter-car' or 'full-vehicle') with truth laws on every external component under `drive`
     (`components` as for the vehicle FMU: the same ones built in); RK4 at `step` [s], outputs at the drive's sample
     period, from the state the road test's vehicle FMU starts in (`settled_state`: at rest on the truth physics) with
@@ -56,14 +61,20 @@ def monolithic_reference(system: str, drive: Measurement, components: Mapping[st
     vehicle = vehicle_model(system, VehicleBuildSettings(components=dict(components or {})))
     forces = [p.name for p in vehicle.inputs if not p.name.startswith("actuator")]
     started = time.perf_counter()
-    solved = simulate_monolithic(vehicle, truth_laws(forces), actuator_inputs(vehicle, drive),
-                                 MonolithicSettings(sample_period=drive.sample_period, step=step, compiled=compiled),
-                                 x0=np.array(settled_state(system, components)))
+    solved = simulate_monolithic(
+        vehicle,
+        truth_laws(forces),
+        actuator_inputs(vehicle, drive),
+        MonolithicSettings(sample_period=drive.sample_period, step=step, compiled=compiled),
+        x0=np.array(settled_state(system, components)),
+    )
     seconds = time.perf_counter() - started
     units = {p.name: p.unit for p in vehicle.outputs + vehicle.inputs}
     channels = {name: values for name, values in solved.items() if name != "time"}
     measurement = Measurement(
-        time=drive.time[0] + solved["time"], channels=channels, units={n: units[n] for n in channels},
+        time=drive.time[0] + solved["time"],
+        channels=channels,
+        units={n: units[n] for n in channels},
         source=f"monolithic reference of the {system} (truth physics, RK4 at {step:g} s) on {drive.source}",
     )
     return Reference(measurement, seconds)

@@ -11,20 +11,28 @@ CHANNELS = ("damper_force", "body_acceleration", "damper_displacement")
 METRIC_COLUMNS = ("rms", "peak", "valley", "damage", "damage_ratio")
 
 
-def campaign_text(quarter_car: dict[str, Path], events: int = 3, variants: tuple[str, ...] = ("linear", "firm"),
-                  duration: float = 1.0, extra_events: str = "", coupling: str = "step = 1e-3") -> str:
+def campaign_text(
+    quarter_car: dict[str, Path],
+    events: int = 3,
+    variants: tuple[str, ...] = ("linear", "firm"),
+    duration: float = 1.0,
+    extra_events: str = "",
+    coupling: str = "step = 1e-3",
+) -> str:
     """A campaign of `events` generated class C drives (seeds 0..events-1 via repeats) x damper `variants`."""
     lines = [
         'name = "test campaign"',
         f"[coupling]\n{coupling}",
-        f"[metrics]\nchannels = {list(CHANNELS)!r}\nslopes = {{ displacement = 3.0 }}\nreference = \"{variants[0]}\"",
+        f'[metrics]\nchannels = {list(CHANNELS)!r}\nslopes = {{ displacement = 3.0 }}\nreference = "{variants[0]}"',
         f"[drive]\nduration = {duration}",
         f'[[events]]\nname = "C-20"\nclass = "C"\nspeed = 20.0\nrepeats = {events}',
         extra_events,
     ]
     for name in variants:
-        lines.append(f'[[variants]]\nname = "{name}"\nsystem = "{quarter_car["system"]}"\n'
-                     f'fmus = {{ damper = "{quarter_car[name]}" }}')
+        lines.append(
+            f'[[variants]]\nname = "{name}"\nsystem = "{quarter_car["system"]}"\n'
+            f'fmus = {{ damper = "{quarter_car[name]}" }}'
+        )
     return "\n".join(lines) + "\n"
 
 
@@ -43,5 +51,14 @@ def read_rows(out: Path) -> list[dict]:
 
 def metrics_of(rows: list[dict]) -> list[tuple]:
     """What must not depend on where a case ran: names, unit, status and every score (NaN as None)."""
-    return [(r["event"], r["variant"], r["channel"], r["unit"], r["status"],
-             *(None if r[c] != r[c] else r[c] for c in METRIC_COLUMNS)) for r in rows]  # NaN as None: comparable
+    return [
+        (
+            r["event"],
+            r["variant"],
+            r["channel"],
+            r["unit"],
+            r["status"],
+            *(None if r[c] != r[c] else r[c] for c in METRIC_COLUMNS),
+        )
+        for r in rows
+    ]  # NaN as None: comparable

@@ -46,9 +46,24 @@ def _stop(process: subprocess.Popen) -> None:
 
 
 def _start_worker(address: str, name: str, folder: Path) -> subprocess.Popen:
-    return subprocess.Popen([*WORKER, address, "--name", name, "--nthreads", "1", "--no-nanny",
-                             "--no-dashboard", "--local-directory", str(folder)],
-                            env=_environment(), cwd=folder, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return subprocess.Popen(
+        [
+            *WORKER,
+            address,
+            "--name",
+            name,
+            "--nthreads",
+            "1",
+            "--no-nanny",
+            "--no-dashboard",
+            "--local-directory",
+            str(folder),
+        ],
+        env=_environment(),
+        cwd=folder,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
 
 
 @pytest.fixture(scope="module")
@@ -56,9 +71,24 @@ def cluster(tmp_path_factory: pytest.TempPathFactory):
     """(scheduler address, client) of a scheduler with two single-threaded workers, all subprocesses."""
     folder = tmp_path_factory.mktemp("dask")
     scheduler_file = folder / "scheduler.json"
-    processes = [subprocess.Popen([*SCHEDULER, "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-                                   "--scheduler-file", str(scheduler_file)], env=_environment(), cwd=folder,
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    processes = [
+        subprocess.Popen(
+            [
+                *SCHEDULER,
+                "--host",
+                "127.0.0.1",
+                "--port",
+                "0",
+                "--no-dashboard",
+                "--scheduler-file",
+                str(scheduler_file),
+            ],
+            env=_environment(),
+            cwd=folder,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+    ]
     client = None
     try:
         _wait(lambda: scheduler_file.is_file() and scheduler_file.stat().st_size > 0, START_TIMEOUT, "the scheduler")
@@ -101,8 +131,9 @@ def test_a_killed_workers_cases_finish_on_another(cluster, serial, tmp_path):
         client.wait_for_workers(3, timeout=START_TIMEOUT)
         victim_address = next(a for a, w in client.scheduler_info()["workers"].items() if w["name"] == "victim")
         outcome: dict[str, object] = {}
-        runner = threading.Thread(target=lambda: outcome.update(
-            run=run_campaign(path, tmp_path / "out", scheduler=address)))
+        runner = threading.Thread(
+            target=lambda: outcome.update(run=run_campaign(path, tmp_path / "out", scheduler=address))
+        )
         runner.start()
         held: list[str] = []
 
@@ -130,8 +161,11 @@ def test_a_killed_batch_command_resumes(cluster, serial, tmp_path):
     command = [sys.executable, "-m", "nnfmu.cli", "batch", str(path), "--out", str(out), "--scheduler", address]
     first = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
-        _wait(lambda: len(list((out / "parts").glob("*.parquet"))) >= 3 if (out / "parts").is_dir() else False,
-              RUN_TIMEOUT, "three finished cases")
+        _wait(
+            lambda: len(list((out / "parts").glob("*.parquet"))) >= 3 if (out / "parts").is_dir() else False,
+            RUN_TIMEOUT,
+            "three finished cases",
+        )
         first.send_signal(signal.SIGKILL)
         first.wait(timeout=30)
     finally:

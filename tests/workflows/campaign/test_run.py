@@ -47,12 +47,16 @@ def test_failing_cases_are_recorded_and_the_rest_go_on(quarter_car, tmp_path):
     rows = read_rows(tmp_path / "out")
     failed = {(r["event"], r["variant"]): r["error"] for r in rows if r["status"] == "failed"}
     assert set(failed) == {(e, "unstable") for e in ("C-20#0", "C-20#1", "bad-file")} | {
-        ("bad-file", "linear"), ("bad-file", "firm")}
+        ("bad-file", "linear"),
+        ("bad-file", "firm"),
+    }
     assert failed[("C-20#0", "unstable")].startswith("CosimError: system 'quarter car', step from t = ")
-    assert ("the coupling diverged: damper (damper-unstable.fmu) output force went from"
-            in failed[("C-20#0", "unstable")])
-    assert failed[("bad-file", "linear")] == ("DataError: bad.csv: line 3, column 'actuator_fl_displacement [m]': "
-                                              "'zz' is not a number")
+    assert (
+        "the coupling diverged: damper (damper-unstable.fmu) output force went from" in failed[("C-20#0", "unstable")]
+    )
+    assert failed[("bad-file", "linear")] == (
+        "DataError: bad.csv: line 3, column 'actuator_fl_displacement [m]': 'zz' is not a number"
+    )
     ok = [r for r in rows if r["status"] == "ok"]
     assert len(ok) == 4 * 3 and all(math.isfinite(r["damage"]) and r["error"] == "" for r in ok)
     assert all(math.isnan(r["damage"]) and math.isnan(r["damage_ratio"]) for r in rows if r["status"] == "failed")
@@ -146,8 +150,9 @@ def test_the_batch_command_refuses_a_folder_it_did_not_write(quarter_car, tmp_pa
     foreign = tmp_path / "mine"
     foreign.mkdir()
     (foreign / "summary.html").write_text("someone's page")
-    result = CliRunner().invoke(app, ["batch", str(write_campaign(tmp_path, campaign_text(quarter_car, events=1))),
-                                      "--out", str(foreign)])
+    result = CliRunner().invoke(
+        app, ["batch", str(write_campaign(tmp_path, campaign_text(quarter_car, events=1))), "--out", str(foreign)]
+    )
     assert result.exit_code == 2, result.output
     assert "error:" in result.output and "not empty" in result.output and str(foreign) in result.output
     assert [p.name for p in foreign.iterdir()] == ["summary.html"]

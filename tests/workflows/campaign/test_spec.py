@@ -30,13 +30,16 @@ def test_a_campaign_expands_to_events_times_variants_with_seeds_per_repeat(quart
     assert damper.parameters == {"filter_cutoff": 0.0}  # the base system's value, kept through the swap
 
 
-@pytest.mark.parametrize("section, line, words", [
-    ("coupling", "bogus_setting = 1", ["[coupling]", "bogus_setting"]),
-    ("coupling", 'scheme = "leapfrog"', ["[coupling]", "leapfrog"]),
-    ("metrics", "basquin_slope = -2", ["[metrics]", "basquin_slope"]),
-    ("metrics", "colour = 1", ["[metrics]", "colour"]),
-    ("drive", "wheel_count = 4", ["[drive]", "wheel_count"]),
-])
+@pytest.mark.parametrize(
+    "section, line, words",
+    [
+        ("coupling", "bogus_setting = 1", ["[coupling]", "bogus_setting"]),
+        ("coupling", 'scheme = "leapfrog"', ["[coupling]", "leapfrog"]),
+        ("metrics", "basquin_slope = -2", ["[metrics]", "basquin_slope"]),
+        ("metrics", "colour = 1", ["[metrics]", "colour"]),
+        ("drive", "wheel_count = 4", ["[drive]", "wheel_count"]),
+    ],
+)
 def test_bad_settings_are_refused_naming_the_key(quarter_car, tmp_path, section, line, words):
     text = campaign_text(quarter_car).replace(f"[{section}]\n", f"[{section}]\n{line}\n")
     with pytest.raises(CampaignError) as caught:
@@ -53,14 +56,17 @@ def test_coupling_settings_pass_through_by_field_name(quarter_car, tmp_path):
     assert campaign.resolved_coupling()["iterations"] == 0
 
 
-@pytest.mark.parametrize("extra, words", [
-    ('[[events]]\nname = "x"\nclass = "C"\nwobble = 3', ["event 'x'", "wobble"]),
-    ('[[events]]\nname = "x"\nclass = "Q"', ["event 'x'", "'Q'"]),
-    ('[[events]]\nname = "x"\npotholes = [{ time = 0.5, diameter = 1.0 }]', ["potholes[0]", "diameter"]),
-    ('[[events]]\nname = "x"\npotholes = [{ time = 0.999, depth = 0.05 }]', ["event 'x'", "rear axle"]),
-    ('[[events]]\nname = "x"\ndrive = "missing.csv"', ["event 'x'", "missing.csv", "does not exist"]),
-    ('[[events]]\nname = "C-20#1"\nclass = "C"', ["used twice", "C-20#1"]),
-])
+@pytest.mark.parametrize(
+    "extra, words",
+    [
+        ('[[events]]\nname = "x"\nclass = "C"\nwobble = 3', ["event 'x'", "wobble"]),
+        ('[[events]]\nname = "x"\nclass = "Q"', ["event 'x'", "'Q'"]),
+        ('[[events]]\nname = "x"\npotholes = [{ time = 0.5, diameter = 1.0 }]', ["potholes[0]", "diameter"]),
+        ('[[events]]\nname = "x"\npotholes = [{ time = 0.999, depth = 0.05 }]', ["event 'x'", "rear axle"]),
+        ('[[events]]\nname = "x"\ndrive = "missing.csv"', ["event 'x'", "missing.csv", "does not exist"]),
+        ('[[events]]\nname = "C-20#1"\nclass = "C"', ["used twice", "C-20#1"]),
+    ],
+)
 def test_bad_events_are_refused_naming_the_event_and_key(quarter_car, tmp_path, extra, words):
     with pytest.raises(CampaignError) as caught:
         read_campaign(write_campaign(tmp_path, campaign_text(quarter_car, extra_events=extra)))
@@ -76,17 +82,18 @@ def test_a_drive_file_event_takes_no_repeats(quarter_car, tmp_path):
 
 
 def test_bad_variants_are_refused_naming_the_variant_and_element(quarter_car, tmp_path):
-    text = campaign_text(quarter_car).replace('fmus = { damper', 'fmus = { spring', 1)
+    text = campaign_text(quarter_car).replace("fmus = { damper", "fmus = { spring", 1)
     with pytest.raises(CampaignError, match="variant 'linear'.*no element 'spring'"):
         read_campaign(write_campaign(tmp_path, text))
-    text = campaign_text(quarter_car) + 'parameters = { damper = { no_such_parameter = 1.0 } }\n'
+    text = campaign_text(quarter_car) + "parameters = { damper = { no_such_parameter = 1.0 } }\n"
     with pytest.raises(CampaignError, match="variant 'firm'.*no_such_parameter"):
         read_campaign(write_campaign(tmp_path, text))
     text = campaign_text(quarter_car).replace('reference = "linear"', 'reference = "stiff"')
     with pytest.raises(CampaignError, match="reference variant 'stiff'"):
         read_campaign(write_campaign(tmp_path, text))
-    text = campaign_text(quarter_car).replace(f'fmus = {{ damper = "{quarter_car["firm"]}" }}',
-                                              f'fmus = {{ damper = "{quarter_car["vehicle"]}" }}')
+    text = campaign_text(quarter_car).replace(
+        f'fmus = {{ damper = "{quarter_car["firm"]}" }}', f'fmus = {{ damper = "{quarter_car["vehicle"]}" }}'
+    )
     with pytest.raises(CampaignError, match="variant 'firm'.*damper"):  # the vehicle FMU has no velocity input
         read_campaign(write_campaign(tmp_path, text))
 

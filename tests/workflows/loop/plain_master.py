@@ -21,8 +21,12 @@ def plain_replay(fmu_path: Path, inputs: dict[str, np.ndarray], step: float, out
     names = [v.name for v in description.modelVariables if v.causality == "input"]
     columns = np.column_stack([inputs[name] for name in names])
     folder = extract(str(fmu_path))
-    fmu = FMU2Slave(guid=description.guid, unzipDirectory=folder,
-                    modelIdentifier=description.coSimulation.modelIdentifier, instanceName="plain")
+    fmu = FMU2Slave(
+        guid=description.guid,
+        unzipDirectory=folder,
+        modelIdentifier=description.coSimulation.modelIdentifier,
+        instanceName="plain",
+    )
     try:
         fmu.instantiate()
         fmu.setupExperiment(startTime=0.0)

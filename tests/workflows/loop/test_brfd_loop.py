@@ -28,7 +28,11 @@ VELOCITY_ONLY = FeatureSpec((Tap("velocity"),), "force", (SmoothSign("velocity",
 def test_the_loop_finds_backlash_in_the_measured_damper_and_the_held_out_error_falls(tmp_path):
     m = load_brfd_series(RUNS)  # three 1 Hz runs at 36 lb band tension, 256 Hz, 21 s
     settings = LoopSettings(
-        max_effects=1, segments=2 * len(RUNS), max_epochs=60, extra_hidden=(0, 4), lm_max_samples=3000,
+        max_effects=1,
+        segments=2 * len(RUNS),
+        max_epochs=60,
+        extra_hidden=(0, 4),
+        lm_max_samples=3000,
         diagnosis=DiagnosisSettings(min_samples=512, effects=EFFECTS_RANKED),
     )
     blocks = plan_blocks(len(m), settings, m.source)

@@ -25,19 +25,26 @@ def record(damper_type: str) -> Measurement:
     """A 20 s random-drive record; the passive one (only effects SPEC represents) gets a random 0-5 V voltage in
     steps of 0.1 s that does nothing to the force."""
     effects = None if damper_type == "mr" else VELOCITY_HISTORY
-    m = simulate_rig("damper", RigOptions(duration=20.0, seed=1, damper_type=damper_type, excitation="random",
-                                          noise=0.5, effects=effects)).measurement
+    m = simulate_rig(
+        "damper",
+        RigOptions(duration=20.0, seed=1, damper_type=damper_type, excitation="random", noise=0.5, effects=effects),
+    ).measurement
     if damper_type == "mr":
         return m
     steps = np.random.default_rng(5).uniform(0.0, 5.0, len(m) // 100 + 1)
-    return Measurement(m.time, {**m.channels, "voltage": np.repeat(steps, 100)[: len(m)]},
-                       {**m.units, "voltage": "V"}, f"{m.source} (unrelated voltage)")
+    return Measurement(
+        m.time,
+        {**m.channels, "voltage": np.repeat(steps, 100)[: len(m)]},
+        {**m.units, "voltage": "V"},
+        f"{m.source} (unrelated voltage)",
+    )
 
 
 def first_model(m: Measurement, folder: Path) -> Path:
     """A small velocity-history network fitted on the loop's training blocks only."""
-    model = train_model(training_part(m, SETTINGS), SPEC, Architecture("mlp", (6,)),
-                        TrainSettings(max_epochs=100, restarts=1)).model
+    model = train_model(
+        training_part(m, SETTINGS), SPEC, Architecture("mlp", (6,)), TrainSettings(max_epochs=100, restarts=1)
+    ).model
     path = folder / "first.onnx"
     export_onnx(model, path)
     return path

@@ -29,8 +29,9 @@ SPEC = FeatureSpec((Tap("velocity", (0, 2)),), "force")
 
 @cache
 def rig() -> Measurement:
-    return simulate_rig("damper", RigOptions(duration=6.0, seed=2, excitation="random",
-                                             effects=("inertia", "temperature"))).measurement
+    return simulate_rig(
+        "damper", RigOptions(duration=6.0, seed=2, excitation="random", effects=("inertia", "temperature"))
+    ).measurement
 
 
 @cache
@@ -52,8 +53,12 @@ def test_lowpass_square_step_nodes_equal_numpy_sample_by_sample():
     features, state_next = spec.emit(g, {"velocity": "velocity"}, "state", T)
     g.output(features, "features_out")
     g.output(state_next, "state_next")
-    graph = g.model("f", "test", [("velocity", 1), ("state", spec.state_size)],
-                    [("features_out", spec.n_features), ("state_next", spec.state_size)])
+    graph = g.model(
+        "f",
+        "test",
+        [("velocity", 1), ("state", spec.state_size)],
+        [("features_out", spec.n_features), ("state_next", spec.state_size)],
+    )
     session = ort.InferenceSession(graph.SerializeToString())
     state, rows = np.zeros(spec.state_size), []
     for k in range(len(x)):
@@ -89,9 +94,15 @@ def test_warm_start_keeps_old_scalers_and_lowers_the_validation_error():
     m = rig()
     blocks = plan_blocks(len(m), LoopSettings(diagnosis=LoopSettings().diagnosis), m.source)
     ext = EFFECTS["temperature"].extension(SPEC, m, blocks.rows("train"), DiagnosisSettings())
-    result = warm_start(model, ext.spec, m, blocks.rows("train"), blocks.rows("validation"),
-                        LoopSettings(max_epochs=30, extra_hidden=(0, 2), lm_max_samples=3000).retrain_settings(),
-                        "temperature")
+    result = warm_start(
+        model,
+        ext.spec,
+        m,
+        blocks.rows("train"),
+        blocks.rows("validation"),
+        LoopSettings(max_epochs=30, extra_hidden=(0, 2), lm_max_samples=3000).retrain_settings(),
+        "temperature",
+    )
     new = result.model
     np.testing.assert_array_equal(new.feature_scaler.lo[:2], model.feature_scaler.lo)
     np.testing.assert_array_equal(new.feature_scaler.hi[:2], model.feature_scaler.hi)
@@ -139,8 +150,15 @@ def test_warm_start_tries_more_hidden_units_only_while_they_help(monkeypatch):
     m = rig()
     blocks = plan_blocks(len(m), LoopSettings(), m.source)
     ext = EFFECTS["temperature"].extension(SPEC, m, blocks.rows("train"), DiagnosisSettings())
-    result = warm_start(small_model(), ext.spec, m, blocks.rows("train"), blocks.rows("validation"),
-                        LoopSettings(extra_hidden=(0, 2, 4, 8)).retrain_settings(), "temperature")
+    result = warm_start(
+        small_model(),
+        ext.spec,
+        m,
+        blocks.rows("train"),
+        blocks.rows("validation"),
+        LoopSettings(extra_hidden=(0, 2, 4, 8)).retrain_settings(),
+        "temperature",
+    )
     assert tried == [3, 5, 7] and result.extra_hidden == 2 and result.validation_mse == {0: 0.5, 2: 0.3, 4: 0.4}
     with pytest.raises(LoopError, match="rising order"):
         LoopSettings(extra_hidden=(0, 6, 3))

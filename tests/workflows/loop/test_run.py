@@ -51,10 +51,12 @@ SETTINGS = LoopSettings(max_effects=3, max_epochs=60, extra_hidden=(0, 4), lm_ma
 
 FULL = ("hysteresis", "seal_friction", "inertia")  # every effect a velocity-history network represents
 HISTORY = get_preset("damper-hysteresis").spec  # velocity, its differences over 2 and 8 ms, the friction sign
-NO_SIGN = FeatureSpec(taps=HISTORY.taps, output="force",
-                      derived=tuple(d for d in HISTORY.derived if not isinstance(d, SmoothSign)))
-STATIC = FeatureSpec(taps=HISTORY.taps, output="force",
-                     derived=tuple(d for d in HISTORY.derived if not isinstance(d, Difference)))
+NO_SIGN = FeatureSpec(
+    taps=HISTORY.taps, output="force", derived=tuple(d for d in HISTORY.derived if not isinstance(d, SmoothSign))
+)
+STATIC = FeatureSpec(
+    taps=HISTORY.taps, output="force", derived=tuple(d for d in HISTORY.derived if not isinstance(d, Difference))
+)
 SPECS = {"history": HISTORY, "no_sign": NO_SIGN, "static": STATIC}
 
 
@@ -94,8 +96,9 @@ def truth_nrmse(onnx_path: str | Path, effects: tuple[str, ...]) -> float:
     return float(np.sqrt(np.mean((predicted - m["force"]) ** 2)) / np.sqrt(np.mean(m["force"] ** 2)))
 
 
-def loop(effects: tuple[str, ...], spec: str, models: Path, out: Path, drop: str | None = None,
-         duration: float = DURATION) -> LoopReport:
+def loop(
+    effects: tuple[str, ...], spec: str, models: Path, out: Path, drop: str | None = None, duration: float = DURATION
+) -> LoopReport:
     m = record(effects, duration=duration)
     if drop:
         m = without(m, drop)
@@ -108,8 +111,10 @@ def assert_named_and_improved(report: LoopReport, missing: set[str], at_most: fl
     assert set(report.effects_added) == missing, report.summary
     assert all(it.accepted for it in report.iterations)
     ratio = report.error_after["nrmse"] / report.error_before["nrmse"]
-    print(f"{'+'.join(sorted(missing))}: test NRMSE {report.error_before['nrmse']:.4f} -> "
-          f"{report.error_after['nrmse']:.4f} ({ratio:.2f})")
+    print(
+        f"{'+'.join(sorted(missing))}: test NRMSE {report.error_before['nrmse']:.4f} -> "
+        f"{report.error_after['nrmse']:.4f} ({ratio:.2f})"
+    )
     assert ratio < at_most
     return ratio
 
@@ -117,8 +122,9 @@ def assert_named_and_improved(report: LoopReport, missing: set[str], at_most: fl
 def assert_report_is_what_a_plain_master_gets(document: dict, m: Measurement) -> None:
     """The report's final test-part NRMSE equals that of the final FMU replayed by fmpy alone at its defaults."""
     component = Component.from_onnx(onnx.load(document["onnx"]))
-    predicted = plain_replay(Path(document["fmu"]), {p.name: m[p.name] for p in component.inputs},
-                             m.sample_period, "force")
+    predicted = plain_replay(
+        Path(document["fmu"]), {p.name: m[p.name] for p in component.inputs}, m.sample_period, "force"
+    )
     rows = np.concatenate([np.flatnonzero((m.time >= a) & (m.time <= b)) for a, b in document["blocks"]["test"]])
     error = predicted[rows] - m["force"][rows]
     plain = float(np.sqrt(np.mean(error**2)) / np.sqrt(np.mean(m["force"][rows] ** 2)))
@@ -221,17 +227,26 @@ def test_the_best_rival_wins_unless_a_simpler_one_comes_within_the_tie():
 
 def stand_in_retrained(start: str, error: float, hidden: int) -> Retrained:
     """A retrained model that predicts the record's force plus `error` newtons everywhere."""
-    model = SimpleNamespace(spec=SimpleNamespace(channels=("velocity",), output="force"),
-                            network=SimpleNamespace(hidden=SimpleNamespace(out_features=hidden)),
-                            predict=lambda channels: record(FULL, duration=2.0)["force"] + error)
+    model = SimpleNamespace(
+        spec=SimpleNamespace(channels=("velocity",), output="force"),
+        network=SimpleNamespace(hidden=SimpleNamespace(out_features=hidden)),
+        predict=lambda channels: record(FULL, duration=2.0)["force"] + error,
+    )
     return Retrained(model=model, start=start, extra_hidden=hidden - 3, validation_mse={}, epochs=1)
 
 
-@pytest.mark.parametrize("warm_error, fresh_error, fresh_rival, kept", [
-    (20.0, 10.0, True, "fresh"), (10.0, 20.0, True, "warm"), (10.0, 10.0, True, "warm"), (20.0, 10.0, False, "warm"),
-])
+@pytest.mark.parametrize(
+    "warm_error, fresh_error, fresh_rival, kept",
+    [
+        (20.0, 10.0, True, "fresh"),
+        (10.0, 20.0, True, "warm"),
+        (10.0, 10.0, True, "warm"),
+        (20.0, 10.0, False, "warm"),
+    ],
+)
 def test_the_warm_or_the_fresh_start_that_predicts_the_diagnosis_part_better_is_kept(
-        monkeypatch, warm_error, fresh_error, fresh_rival, kept):
+    monkeypatch, warm_error, fresh_error, fresh_rival, kept
+):
     m = record(FULL, duration=2.0)
     rows = {part: np.arange(i * 400, (i + 1) * 400) for i, part in enumerate(("train", "validation", "diagnosis"))}
     sizes = []
@@ -245,8 +260,9 @@ def test_the_warm_or_the_fresh_start_that_predicts_the_diagnosis_part_better_is_
     monkeypatch.setattr(trials_module, "retrain", retrain)
     group = [candidate("gas_force", STATIC, SIGNIFICANT)]
     model = SimpleNamespace(spec=SimpleNamespace(output="force"))
-    pick, _, trials, scores = retrain_rivals(group, [], model, m, rows, np.arange(800),
-                                             LoopSettings(fresh_rival=fresh_rival))
+    pick, _, trials, scores = retrain_rivals(
+        group, [], model, m, rows, np.arange(800), LoopSettings(fresh_rival=fresh_rival)
+    )
     assert pick == 0 and trials[0].start == kept
     assert sizes == ([7] if fresh_rival else [])  # the fresh start has the warm start's size
     by_start = trials[0].diagnosis_nrmse_by_start
@@ -277,14 +293,16 @@ def test_a_significant_effect_gives_way_to_a_simpler_family_that_holds_it():
                 asked.append(given)
                 return GainTest(0.06 if given[-1] == held_by else 0.4, 0.3, 0.5, 100.0, 3)
             return GainTest(0.3, 1e-9, 5.0, 100.0, 3)  # the simpler family itself explains 30 %: 0.06 * 0.7 < 0.05
+
         return test
 
     def extend(effect: str):
         return extension(effect, HISTORY, m, rows, SETTINGS)
 
     settings = LoopSettings(min_explained=0.05)
-    (ext, evidence, reason), why = _simpler_cover(richer, d, beyond("gas_force"), extend, ("temperature",), set(),
-                                                  settings)
+    (ext, evidence, reason), why = _simpler_cover(
+        richer, d, beyond("gas_force"), extend, ("temperature",), set(), settings
+    )
     assert asked == [("temperature", "sensor_offset"), ("temperature", "gas_force")]  # the simplest first
     assert ext.effect == "gas_force" and evidence.name == "gas_force"
     assert reason.startswith(SIGNIFICANT) and "stands for frequency_dependence" in reason and why in reason
@@ -299,8 +317,14 @@ def test_a_partner_is_offered_with_the_simpler_rivals_that_explain_near_as_much_
     def family(name: str, regressors: int):
         return SimpleNamespace(name=name, testable=True, regressors=("r",) * regressors)
 
-    d = SimpleNamespace(ranking=[family("frequency_dependence", 3), family("gas_force", 2), family("inertia", 1),
-                                 family("sensor_offset", 2)])
+    d = SimpleNamespace(
+        ranking=[
+            family("frequency_dependence", 3),
+            family("gas_force", 2),
+            family("inertia", 1),
+            family("sensor_offset", 2),
+        ]
+    )
     beyond_top = {"frequency_dependence": 0.43, "gas_force": 0.38, "inertia": 0.2, "sensor_offset": 0.01}
 
     def beyond(effect: str, given: tuple[str, ...]) -> GainTest:
@@ -326,8 +350,15 @@ def test_two_present_effects_are_offered_together_with_both_features():
     gas = extension("gas_force", NO_SIGN, m, rows, SETTINGS)
     seal = extension("seal_friction", NO_SIGN, m, rows, SETTINGS)
     evidence = SimpleNamespace(name="seal_friction")
-    both, kept, reason = _together((gas, SimpleNamespace(name="gas_force"), ""), (seal, evidence, SIGNIFICANT),
-                                   evidence, "gas_force beat seal_friction", m, rows, SETTINGS)
+    both, kept, reason = _together(
+        (gas, SimpleNamespace(name="gas_force"), ""),
+        (seal, evidence, SIGNIFICANT),
+        evidence,
+        "gas_force beat seal_friction",
+        m,
+        rows,
+        SETTINGS,
+    )
     assert both.effect == "gas_force+seal_friction" and kept is evidence and reason.startswith("gas_force beat")
     assert set(both.spec.feature_names) == set(gas.spec.feature_names) | set(seal.spec.feature_names)
     assert both.added == (*gas.added, *seal.added)
@@ -358,8 +389,12 @@ def test_a_model_with_only_noise_left_gets_nothing_added(models, tmp_path):
     ("spoil", "message"),
     [
         (lambda m: without(m, "velocity"), r"channel\(s\) 'velocity' needed by .* not in the data"),
-        (lambda m: Measurement(m.time[::2] * 1.0, {k: v[::2] for k, v in m.channels.items()}, dict(m.units),
-                               m.source), r"sample period 0\.002 s .* differs from the 0\.001 s .* resample"),
+        (
+            lambda m: Measurement(
+                m.time[::2] * 1.0, {k: v[::2] for k, v in m.channels.items()}, dict(m.units), m.source
+            ),
+            r"sample period 0\.002 s .* differs from the 0\.001 s .* resample",
+        ),
         (lambda m: m.slice(0, 4000), r"4000 samples are too short .* at least 1000 are needed"),
     ],
     ids=["missing channel", "other sample rate", "too short"],
@@ -386,7 +421,8 @@ def test_a_failed_run_leaves_an_earlier_result_untouched(models, tmp_path):
 def test_a_model_without_nnfmu_metadata_is_refused(tmp_path):
     path = tmp_path / "plain.onnx"
     graph = onnx.helper.make_graph(
-        [onnx.helper.make_node("Identity", ["velocity"], ["force"])], "plain",
+        [onnx.helper.make_node("Identity", ["velocity"], ["force"])],
+        "plain",
         [onnx.helper.make_tensor_value_info("velocity", onnx.TensorProto.DOUBLE, [1])],
         [onnx.helper.make_tensor_value_info("force", onnx.TensorProto.DOUBLE, [1])],
     )

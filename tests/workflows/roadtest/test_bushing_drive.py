@@ -29,8 +29,12 @@ from nnfmu.workflows.train import TrainRequest
 def vehicle_bushings(tmp_path_factory: pytest.TempPathFactory) -> VehicleBushingModels:
     settings = BushingDriveSettings(duration=0.5, rig_duration=6.0, margin=1.3)
     return train_vehicle_bushings(
-        tmp_path_factory.mktemp("vehicle_bushing"), RoadTestSettings(seed=4), settings,
-        lambda preset: TrainRequest(preset=preset, restarts=1, max_epochs=3, hidden=(3,)), log=lambda _: None)
+        tmp_path_factory.mktemp("vehicle_bushing"),
+        RoadTestSettings(seed=4),
+        settings,
+        lambda preset: TrainRequest(preset=preset, restarts=1, max_epochs=3, hidden=(3,)),
+        log=lambda _: None,
+    )
 
 
 def test_source_runs_on_its_own_drive_seed_and_the_record_names_it(vehicle_bushings: VehicleBushingModels) -> None:
@@ -49,7 +53,8 @@ def test_source_runs_on_its_own_drive_seed_and_the_record_names_it(vehicle_bushi
 
 
 def test_every_bushing_network_covers_the_source_deflections_of_all_four_bushings(
-        vehicle_bushings: VehicleBushingModels) -> None:
+    vehicle_bushings: VehicleBushingModels,
+) -> None:
     assert sorted(vehicle_bushings.models) == sorted(BUSHING_MODELS)
     source = load_measurement(vehicle_bushings.source)
     for preset, path in vehicle_bushings.models.items():

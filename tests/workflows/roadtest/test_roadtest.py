@@ -53,9 +53,13 @@ def trained(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     folder = tmp_path_factory.mktemp("networks")
     lab, _ = write_rig("damper", folder / "damper.csv", RigOptions(duration=12.0, excitation="random"))
     rig, _ = write_rig("bushing", folder / "bushing.csv", RigOptions(duration=12.0, excitation="random"))
-    return {p: train_from_file(data, TrainRequest(preset=p, restarts=1, max_epochs=3, hidden=(3,)),
-                               folder / f"{p}.onnx").path
-            for data, presets in ((lab, DAMPER_MODELS), (rig, BUSHING_MODELS)) for p in presets}
+    return {
+        p: train_from_file(
+            data, TrainRequest(preset=p, restarts=1, max_epochs=3, hidden=(3,)), folder / f"{p}.onnx"
+        ).path
+        for data, presets in ((lab, DAMPER_MODELS), (rig, BUSHING_MODELS))
+        for p in presets
+    }
 
 
 @pytest.fixture(scope="module")
@@ -71,8 +75,9 @@ def test_ssds_of_both_systems_open_and_wire_every_network(road: RoadTestResult) 
         with open_system(ssd) as opened:
             elements = {e.name: e for e in opened.elements}
             assert sorted(elements) == sorted(["vehicle", *damper_elements(system), *bushing_elements(system)])
-            driven = {(c.end_element, c.end_connector): (c.start_element, c.start_connector)
-                      for c in opened.connections}
+            driven = {
+                (c.end_element, c.end_connector): (c.start_element, c.start_connector) for c in opened.connections
+            }
             for damper in damper_elements(system):
                 assert driven[("vehicle", f"{damper}_force")] == (damper, "force")
                 assert driven[(damper, "velocity")] == ("vehicle", f"{damper}_velocity")
@@ -91,8 +96,12 @@ def test_linear_damper_cosimulation_approaches_the_monolithic_solution(tmp_path:
     with open_system(ssd) as system:
         result = cosimulate(system, drive, CosimSettings(step=1e-4)).measurement
     model = vehicle_model("quarter-car", VehicleBuildSettings())
-    exact = simulate_monolithic(model, {"damper_force": LinearLaw(0.0, DAMPING)}, actuator_inputs(model, drive),
-                                MonolithicSettings(sample_period=drive.sample_period))
+    exact = simulate_monolithic(
+        model,
+        {"damper_force": LinearLaw(0.0, DAMPING)},
+        actuator_inputs(model, drive),
+        MonolithicSettings(sample_period=drive.sample_period),
+    )
     for channel in ("damper_displacement", "damper_force"):
         cosim = np.interp(exact["time"], result.time, result[channel])
         error = np.sqrt(np.mean((cosim - exact[channel]) ** 2)) / np.sqrt(np.mean(exact[channel] ** 2))
@@ -108,8 +117,11 @@ def test_road_test_writes_reports_and_finite_thesis_metrics(road: RoadTestResult
         models = {row["model"] for row in system["thesis_table"]}
         assert models == set(DAMPER_MODELS)
         # the full vehicle runs 0.3 s, too short for peaks of channels still settling; the quarter car runs 2 s
-        keys = ("peak_ratio", "valley_ratio", "rms_ratio", "damage_ratio", "amplitude_ratio_1hz", "mean_shift",
-                "nrmse") if system["system"] == "quarter-car" else ("rms_ratio", "mean_shift", "nrmse")
+        keys = (
+            ("peak_ratio", "valley_ratio", "rms_ratio", "damage_ratio", "amplitude_ratio_1hz", "mean_shift", "nrmse")
+            if system["system"] == "quarter-car"
+            else ("rms_ratio", "mean_shift", "nrmse")
+        )
         for row in system["thesis_table"]:
             for key in keys:
                 assert row[key] is not None and math.isfinite(row[key]), (system["system"], row["channel"], key)
@@ -117,6 +129,7 @@ def test_road_test_writes_reports_and_finite_thesis_metrics(road: RoadTestResult
             with open_system(ssd):
                 pass
         assert all(e["share_outside"] is not None for e in system["envelope"])
+
 
 def test_the_error_budget_has_every_channel_and_the_coupling_costs_little(road: RoadTestResult) -> None:
     """Budget rows for every compared channel and damper model, all finite; with the truth physics as FMUs, the
@@ -126,7 +139,8 @@ def test_the_error_budget_has_every_channel_and_the_coupling_costs_little(road: 
     for system in written["systems"]:
         channels = COMPARED[system["system"]]
         assert [(r["channel"], r["model"]) for r in system["budget"]] == [
-            (c, m) for m in DAMPER_MODELS for c in channels]
+            (c, m) for m in DAMPER_MODELS for c in channels
+        ]
         for row in system["budget"]:
             for key in ("nrmse_total", "nrmse_network", "nrmse_coupling", "damage_ratio"):
                 assert row[key] is not None and math.isfinite(row[key]), (system["system"], row["channel"], key)
@@ -141,5 +155,4 @@ def test_missing_models_are_named(tmp_path: Path) -> None:
     with pytest.raises(RoadTestError, match="bushing-axial-force"):
         run_road_test(tmp_path, {p: tmp_path / "x.onnx" for p in DAMPER_MODELS}, RoadTestSettings(quarter_car=None))
     with pytest.raises(RoadTestError, match="not found"):
-        run_road_test(tmp_path, {p: tmp_path / "x.onnx" for p in DAMPER_MODELS},
-                      RoadTestSettings(full_vehicle=None))
+        run_road_test(tmp_path, {p: tmp_path / "x.onnx" for p in DAMPER_MODELS}, RoadTestSettings(full_vehicle=None))

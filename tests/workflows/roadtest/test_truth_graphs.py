@@ -50,10 +50,18 @@ def test_the_damper_graph_solves_the_valve_ode(effects: tuple[str, ...]) -> None
     truth = DamperTruth(DamperParams(), effects)
     v = _velocity(1)
     x = np.cumsum(v) * T
-    got = run_step_graph(damper_truth_graph(truth, T), {"velocity": v} | ({"displacement": x} if
-                                                                          "gas_force" in effects else {}))["force"]
-    solved = solve_ivp(lambda t, z: truth.derivatives(t, z, 0.0, float(np.interp(t, TIME, v))), (0.0, TIME[-1]),
-                       truth.initial_state(), t_eval=TIME, rtol=1e-10, atol=1e-8, max_step=1e-4)
+    got = run_step_graph(
+        damper_truth_graph(truth, T), {"velocity": v} | ({"displacement": x} if "gas_force" in effects else {})
+    )["force"]
+    solved = solve_ivp(
+        lambda t, z: truth.derivatives(t, z, 0.0, float(np.interp(t, TIME, v))),
+        (0.0, TIME[-1]),
+        truth.initial_state(),
+        t_eval=TIME,
+        rtol=1e-10,
+        atol=1e-8,
+        max_step=1e-4,
+    )
     want = truth.force(solved.y.T, x, v, np.zeros(N))
     assert np.max(np.abs(got - want)) < 1e-4 * np.max(np.abs(want))
     assert np.ptp(want) > 3000  # both valve sides and blow-off are crossed
@@ -71,8 +79,10 @@ def test_the_bushing_graph_is_the_rigs_exact_recursion() -> None:
 
 def test_the_native_fmus_are_their_graphs(tmp_path: Path) -> None:
     truth = DamperTruth(DamperParams(), ("hysteresis", "seal_friction"))
-    cases = {"damper": (damper_truth_graph(truth, T), {"velocity": _velocity(3)}),
-             "bushing": (bushing_truth_graph(_bushing_truths(), T), _positions(4))}
+    cases = {
+        "damper": (damper_truth_graph(truth, T), {"velocity": _velocity(3)}),
+        "bushing": (bushing_truth_graph(_bushing_truths(), T), _positions(4)),
+    }
     for name, (graph, inputs) in cases.items():
         onnx.save(graph, tmp_path / f"{name}.onnx")
         fmu = build_fmu(tmp_path / f"{name}.onnx", BuildOptions(out=tmp_path / f"{name}.fmu"))

@@ -66,8 +66,9 @@ def _default_opset(model: onnx.ModelProto) -> int:
         if entry.domain in ("", "ai.onnx"):
             newest = onnx.defs.onnx_opset_version()
             if not 1 <= entry.version <= newest:
-                raise UnsupportedGraphError(f"the model imports ONNX operator set {entry.version}; the installed onnx "
-                                            f"knows sets 1 to {newest}")
+                raise UnsupportedGraphError(
+                    f"the model imports ONNX operator set {entry.version}; the installed onnx knows sets 1 to {newest}"
+                )
             return entry.version
     raise UnsupportedGraphError("the model imports no version of the default ONNX operator set")
 
@@ -81,9 +82,12 @@ def _check_single_assignment(graph: onnx.GraphProto) -> None:
             if not name:
                 continue
             if name in writer:
-                raise UnsupportedGraphError(f"tensor {name!r} is written twice (first by {writer[name]}); an ONNX "
-                                            "graph assigns each tensor once", op_type=node.op_type,
-                                            node_name=node.name)
+                raise UnsupportedGraphError(
+                    f"tensor {name!r} is written twice (first by {writer[name]}); an ONNX "
+                    "graph assigns each tensor once",
+                    op_type=node.op_type,
+                    node_name=node.name,
+                )
             writer[name] = f"node {node.name or '(unnamed)'!r} (op {node.op_type})"
 
 

@@ -48,7 +48,7 @@ def quoted(text: str) -> str:
 
 def describe(tensor: Tensor) -> str:
     """`"name" float64[1, 3]` for comments."""
-    return f'{quoted(tensor.name)} {tensor.dtype.name}[{", ".join(map(str, tensor.shape))}]'
+    return f"{quoted(tensor.name)} {tensor.dtype.name}[{', '.join(map(str, tensor.shape))}]"
 
 
 class SourceWriter:
