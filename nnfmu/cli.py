@@ -13,12 +13,26 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Optional
 
+import click
 import typer
+from typer.core import TyperGroup
 
 from nnfmu.errors import NnfmuError, SettingsError
 from nnfmu.out_paths import check_output_file
 
+
+class _Commands(TyperGroup):
+    """The top-level commands; `nnfmu loop vehicle ...` is the command `loop-vehicle` (the component loop takes a
+    measurement file as its first argument, so a file named `vehicle` is given as `./vehicle`)."""
+
+    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
+        if args[:2] == ["loop", "vehicle"]:
+            args = ["loop-vehicle", *args[2:]]
+        return super().parse_args(ctx, args)
+
+
 app = typer.Typer(
+    cls=_Commands,
     no_args_is_help=True,
     add_completion=False,
     help="Neural-network component models from rig data, shipped as FMI co-simulation FMUs.",
@@ -622,6 +636,48 @@ def loop(
     for note in report.notes:
         typer.echo(f"  note: {note}")
     typer.echo(f"ONNX: {report.onnx}\nFMU: {report.fmu}\nreport: {out / 'report.html'}")
+
+
+@app.command("loop-vehicle")
+def loop_vehicle(
+    measured: Path = typer.Argument(
+        ..., help="Lab road-test record (CSV or MDF4): vehicle channels with units, any subset."
+    ),
+    system: Path = typer.Option(..., help="SSP system of the virtual car (SystemStructure.ssd, its folder or .ssp)."),
+    drive: Path = typer.Option(..., help="Drive file the four-poster played (actuator displacements)."),
+    out: Path = typer.Option(..., "--out", "-o", help="Folder for report.json, report.html, the fixed system."),
+    max_effects: int = typer.Option(3, help="Most (component, effect) pairs and sensor offsets to name."),
+    model: Optional[list[str]] = typer.Option(
+        None, help="ELEMENT=ONNX: an element's step graph (default: <fmu stem>.onnx beside its FMU); repeat."
+    ),
+) -> None:
+    """`nnfmu loop vehicle`: which component and which effect explain the lab car's difference from the virtual
+    car; the component fixed, its FMU swapped in, the vehicle error before and after."""
+    from nnfmu.workflows.vehicle_loop import VehicleLoopSettings, run_vehicle_loop
+
+    models = {}
+    for item in model or []:
+        element, sep, path = item.partition("=")
+        if not sep or not element or not path:
+            _fail(SettingsError(f"--model {item!r}: give ELEMENT=PATH.onnx"))
+        models[element] = Path(path)
+    try:
+        with _warnings_as_lines():
+            report = run_vehicle_loop(
+                measured, system, drive, out, VehicleLoopSettings(max_effects=max_effects), models, log=typer.echo
+            )
+    except NnfmuError as error:
+        _fail(error)
+    typer.echo(report.summary)
+    for item in report.iterations:
+        typer.echo(f"  {item['component']}: {item['effect']} (p = {item['p_value']:.3g})")
+    for name, pair in report.channels.items():
+        before, after = pair["before"], pair["after"]
+        typer.echo(
+            f"  {name}: NRMSE {before.nrmse:.4g} -> {after.nrmse:.4g}, mean shift {before.mean_shift:.4g} -> "
+            f"{after.mean_shift:.4g}"
+        )
+    typer.echo(f"system: {report.fixed_system}\nreport: {out / 'report.html'}")
 
 
 @data_app.command("check")

@@ -158,7 +158,9 @@ def rest_state(vehicle: LinearVehicle, laws: Mapping[str, ComponentLaw], start: 
     state) and at rest: where the laws' own static forces hold the car up. A vehicle's `equilibrium` holds it on its
     linear reference elements instead; where a law is stiffer or softer than its element (a rear bushing carrying the
     front bushing's physics), a run started there is not at rest and rings through the first tenths of a second.
-    Solved from `start` (e.g. that linear equilibrium) with scipy's hybrid Powell method."""
+    Solved from `start` (e.g. that linear equilibrium) with scipy's hybrid Powell method, else Newton's method with a
+    central-difference Jacobian (hybrid Powell did not move from the start on a lab car with the gas force of two
+    dampers switched on, residual 19 m/s^2 in roll; Newton's method converged to 1e-11 in three steps)."""
     wiring = _wire(vehicle, laws)
     law_list = list(laws.values())
     relaxed = [law.initial_state() for law in law_list]
@@ -170,15 +172,38 @@ def rest_state(vehicle: LinearVehicle, laws: Mapping[str, ComponentLaw], start: 
         return u
 
     start = np.asarray(start, dtype=float)
-    solved = root(lambda x: vehicle.derivative(x, inputs(x)), start, method="hybr", options={"xtol": 1e-13})
-    residual = float(np.max(np.abs(vehicle.derivative(solved.x, inputs(solved.x))), initial=0.0))
     scale = max(1.0, float(np.max(np.abs(vehicle.derivative(np.zeros_like(start), np.zeros(len(vehicle.inputs)))))))
+
+    def balance(x: np.ndarray) -> np.ndarray:
+        return vehicle.derivative(x, inputs(x))
+
+    solved = root(balance, start, method="hybr", options={"xtol": 1e-13})
+    x, message = solved.x, solved.message
+    residual = float(np.max(np.abs(balance(x)), initial=0.0))
     if not solved.success or residual > 1e-9 * scale:
+        x = _newton(balance, start)
+        residual = float(np.max(np.abs(balance(x)), initial=0.0))
+        message = "Newton's method after: " + message
+    if residual > 1e-9 * scale:
         raise VehicleModelError(
             f"{vehicle.name}: no static rest state on the component laws from the linear "
-            f"equilibrium ({solved.message}; largest residual {residual:.3g})"
+            f"equilibrium ({message}; largest residual {residual:.3g})"
         )
-    return solved.x
+    return x
+
+
+def _newton(function, start: np.ndarray, iterations: int = 20, step: float = 1e-8) -> np.ndarray:
+    """Newton's method on `function` from `start` with a central-difference Jacobian (step [state unit]); the
+    iterate with the smallest residual."""
+    x = best = np.asarray(start, dtype=float)
+    smallest = float(np.max(np.abs(function(x))))
+    for _ in range(iterations):
+        columns = [(function(x + step * e) - function(x - step * e)) / (2 * step) for e in np.eye(len(x))]
+        x = x + np.linalg.lstsq(np.column_stack(columns), -function(x), rcond=None)[0]
+        size = float(np.max(np.abs(function(x))))
+        if size < smallest:
+            best, smallest = x, size
+    return best
 
 
 def _outputs(vehicle: LinearVehicle, states: np.ndarray, u: np.ndarray) -> np.ndarray:

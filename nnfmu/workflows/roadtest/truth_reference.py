@@ -17,6 +17,7 @@ import numpy as np
 from nnfmu.data import Measurement
 from nnfmu.data.derive import derive_rates
 from nnfmu.vehicle.dynamics import LinearVehicle, MonolithicSettings, rest_state, simulate_monolithic, truth_laws
+from nnfmu.vehicle.dynamics.laws import ComponentLaw
 from nnfmu.vehicle.fmu import VehicleBuildSettings, initial_state, vehicle_model
 
 
@@ -35,15 +36,22 @@ def actuator_inputs(vehicle: LinearVehicle, drive: Measurement) -> dict[str, obj
     return {p.name: rates[p.name] for p in vehicle.inputs if p.name.startswith("actuator_")}
 
 
-def settled_state(system: str, components: Mapping[str, str] | None = None) -> tuple[float, ...]:
+def settled_state(
+    system: str, components: Mapping[str, str] | None = None, laws: Mapping[str, ComponentLaw] | None = None
+) -> tuple[float, ...]:
     """The state every road-test run of `system` starts in: the vehicle at rest on its components' truth physics,
     relaxed (`rest_state`, from the linear equilibrium `initial_state`). The vehicle's own equilibrium stands on its
     linear reference elements; the front LCA's rear bushings carry the front bushing's physics (one set of networks
     serves all four), about twice as stiff as their elements, so a run started there rang at the LCA's ~0.7 kHz
-    mode for about 0.1 s with radial bushing rates up to 15x the largest of a vehicle-derived rig drive."""
+    mode for about 0.1 s with radial bushing rates up to 15x the largest of a vehicle-derived rig drive. `laws`
+    (None: the default `truth_laws`) close the force ports instead: a lab car standing on its own physics, solved
+    from the rest state on the default laws."""
     vehicle = vehicle_model(system, VehicleBuildSettings(components=dict(components or {})))
     forces = [p.name for p in vehicle.inputs if not p.name.startswith("actuator")]
-    return tuple(float(v) for v in rest_state(vehicle, truth_laws(forces), np.array(initial_state(vehicle))))
+    state = rest_state(vehicle, truth_laws(forces), np.array(initial_state(vehicle)))
+    if laws is not None:
+        state = rest_state(vehicle, laws, state)
+    return tuple(float(v) for v in state)
 
 
 def monolithic_reference(
@@ -52,21 +60,24 @@ def monolithic_reference(
     components: Mapping[str, str] | None = None,
     step: float = 1e-4,
     compiled: bool = True,
+    laws: Mapping[str, ComponentLaw] | None = None,
 ) -> Reference:
     """Solve `system` ('quarter-car' or 'full-vehicle') with truth laws on every external component under `drive`
     (`components` as for the vehicle FMU: the same ones built in); RK4 at `step` [s], outputs at the drive's sample
     period, from the state the road test's vehicle FMU starts in (`settled_state`: at rest on the truth physics) with
     the components relaxed. `compiled=False`
-    solves on the generic per-law path (`simulate_monolithic`), for cross-checks of the compiled kernel."""
+    solves on the generic per-law path (`simulate_monolithic`), for cross-checks of the compiled kernel. `laws`
+    (None: `truth_laws`) close the force ports instead, the run starting at rest on them (a lab car's own physics)."""
     vehicle = vehicle_model(system, VehicleBuildSettings(components=dict(components or {})))
     forces = [p.name for p in vehicle.inputs if not p.name.startswith("actuator")]
+    chosen = dict(laws) if laws is not None else truth_laws(forces)
     started = time.perf_counter()
     solved = simulate_monolithic(
         vehicle,
-        truth_laws(forces),
+        chosen,
         actuator_inputs(vehicle, drive),
         MonolithicSettings(sample_period=drive.sample_period, step=step, compiled=compiled),
-        x0=np.array(settled_state(system, components)),
+        x0=np.array(settled_state(system, components, chosen)),
     )
     seconds = time.perf_counter() - started
     units = {p.name: p.unit for p in vehicle.outputs + vehicle.inputs}

@@ -1,0 +1,339 @@
+"""`nnfmu loop vehicle`: the lab car on the road test simulator against the virtual car (the SSP system with its
+network FMUs) on the same drive; per channel the residual; which component and which effect explain it
+(`attribution`), or a sensor offset; the component fixed (`fix`), its FMU swapped into a copy of the system, the
+system replayed; the report. Every file goes into a staging folder beside `out_dir`, which replaces `out_dir` only
+when everything succeeded."""
+
+from __future__ import annotations
+
+import os
+import shutil
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from nnfmu.atomic import staging_dir
+from nnfmu.data import DataError, Measurement, load_measurement
+from nnfmu.data.drive_files import read_drive
+from nnfmu.diagnosis import Diagnosis
+from nnfmu.out_paths import check_output_dir, mark_output_dir
+from nnfmu.workflows.loop.run import _replace_dir
+from nnfmu.workflows.vehicle_loop.attribution import (
+    SENSOR_OFFSET,
+    Attribution,
+    Candidate,
+    attribute,
+    damper_candidates,
+    offset_candidate,
+)
+from nnfmu.workflows.vehicle_loop.fix import Fixed, fix_by_terms, fix_in_situ, in_situ_diagnosis, in_situ_record
+from nnfmu.workflows.vehicle_loop.report import write_vehicle_report
+from nnfmu.workflows.vehicle_loop.residuals import ChannelError, channel_errors, on_record, replay_system, settled
+from nnfmu.workflows.vehicle_loop.sensitivity import Sensitivities
+from nnfmu.workflows.vehicle_loop.settings import VehicleLoopError, VehicleLoopSettings
+from nnfmu.workflows.vehicle_loop.system_files import VirtualCar, read_virtual_car, swapped_system
+
+Log = Callable[[str], None]
+BUDGET = (
+    "consistent with the co-simulation error budget: no component effect or sensor offset explains a significant "
+    "share of the residual, which is left to the networks' own error and the coupling"
+)
+
+
+@dataclass
+class VehicleLoopReport:
+    """What the vehicle loop found and did (JSON-ready by `to_dict`)."""
+
+    measured: str
+    system: str
+    fixed_system: Path
+    fmus: dict[str, Path]
+    channels: dict[str, dict[str, ChannelError]]
+    attribution: Attribution
+    fixes: list[Fixed]
+    offsets: dict[str, float]
+    in_situ: dict[str, Diagnosis]
+    coverage: list[str]
+    ignored: list[str]
+    summary: str
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def iterations(self) -> list[dict[str, object]]:
+        """The named (component, effect) pairs and sensor offsets, in the order named."""
+        out = []
+        for e in self.attribution.named:
+            situ = self.in_situ.get(e.candidate.component)
+            words = (
+                f"explains {e.explained:.1%} of the vehicle residual beyond those named before (alone "
+                f"{e.explained_alone:.1%}), out of sample; most in "
+                + ", ".join(f"{c} ({v:.0%})" for c, v in sorted(e.channels.items(), key=lambda kv: -kv[1])[:3])
+            )
+            if situ is not None:
+                words += f"; in situ: {situ.summary}"
+            if e.alike:
+                words += f"; cannot be told apart from {', '.join(e.alike)} by these channels"
+            out.append(
+                {
+                    "component": e.candidate.component,
+                    "effect": e.candidate.effect,
+                    "evidence": words,
+                    "p_value": e.p_value,
+                }
+            )
+        return out
+
+    def to_dict(self) -> dict[str, object]:
+        return {
+            "measured": self.measured,
+            "system_before": self.system,
+            "system": str(self.fixed_system),
+            "fmus": {k: str(v) for k, v in self.fmus.items()},
+            "summary": self.summary,
+            "iterations": self.iterations,
+            "channels": {
+                name: {when: error.to_dict() for when, error in pair.items()} for name, pair in self.channels.items()
+            },
+            "channels_note": (
+                "virtual car vs lab car after the settling time; mean_shift = mean(virtual) - mean(measured) in the "
+                "channel's unit; 'after' compares the fixed system with the record, sensor offsets taken out of "
+                "their channels"
+            ),
+            "sensor_offsets": self.offsets,
+            "fixes": [
+                {"component": f.element, "method": f.method, "fmu": str(f.fmu), "onnx": str(f.onnx)} for f in self.fixes
+            ],
+            "candidates": [e.to_dict() for e in self.attribution.evidence],
+            "significance_threshold": self.attribution.threshold,
+            "untestable": self.attribution.untestable,
+            "in_situ": {k: d.to_dict() for k, d in self.in_situ.items()},
+            "coverage": self.coverage,
+            "ignored_channels": self.ignored,
+            "notes": self.notes,
+        }
+
+
+def _load(data: str | os.PathLike[str] | Measurement, what: str, reader) -> Measurement:
+    if isinstance(data, Measurement):
+        return data
+    try:
+        return reader(data)
+    except DataError as error:
+        raise VehicleLoopError(f"cannot read the {what}: {error}") from None
+
+
+def _coverage(car: VirtualCar, measured: Measurement, channels: list[str]) -> list[str]:
+    """What the measured channels allow and what a missing one costs, per component element."""
+    notes = []
+    for element in car.fmus:
+        kind = car.kind(element)
+        if car.onnx[element] is None:
+            notes.append(f"{element}: no ONNX step graph known (--model), so its effects are not tested")
+        elif kind == "damper":
+            force, stroke = f"{element}_force" in channels, f"{element}_displacement" in channels
+            if force and stroke:
+                notes.append(f"{element}: load cell and LVDT measured: in-situ diagnosis and retraining")
+            else:
+                lacking = [c for c, ok in ((f"{element}_force", force), (f"{element}_displacement", stroke)) if not ok]
+                notes.append(
+                    f"{element}: {', '.join(lacking)} not measured: no in-situ data, so its effects are fitted as "
+                    "physical terms to the vehicle residual"
+                    + ("; a load-cell offset cannot be told from a preload without its force" if not force else "")
+                )
+    if not any(c.endswith("_force") and c.startswith("damper") for c in channels):
+        notes.append(
+            "no damper force measured: a damper's gas force and other spring-like effects at a corner are told "
+            "apart only by their signatures in the motions and accelerations"
+        )
+    return notes
+
+
+def _candidates(car: VirtualCar, channels: list[str]) -> tuple[dict[str, Candidate], dict[str, str]]:
+    found: dict[str, Candidate] = {}
+    untestable: dict[str, str] = {}
+    for element in car.fmus:
+        if car.kind(element) == "damper":
+            for c in damper_candidates(element):
+                if car.onnx[element] is None:
+                    untestable[c.key] = "no ONNX step graph of the element"
+                else:
+                    found[c.key] = c
+    for channel in channels:
+        c = offset_candidate(channel)
+        found[c.key] = c
+    return found, untestable
+
+
+def run_vehicle_loop(
+    measured: str | os.PathLike[str] | Measurement,
+    system: str | os.PathLike[str],
+    drive: str | os.PathLike[str] | Measurement,
+    out_dir: str | os.PathLike[str],
+    settings: VehicleLoopSettings = VehicleLoopSettings(),
+    models: Mapping[str, str | Path] | None = None,
+    log: Log = print,
+) -> VehicleLoopReport:
+    """Close the loop at vehicle level (module docstring); write DIR/report.json, report.html, plots, the fixed
+    system (system/SystemStructure.ssd) and its FMUs. `models` maps elements to their ONNX step graphs (default:
+    `<fmu stem>.onnx` beside each FMU)."""
+    inputs = [Path(p) for p in (measured, system, drive) if not isinstance(p, Measurement)]
+    out_dir = check_output_dir(out_dir, "vehicle-loop", inputs)
+    car = read_virtual_car(system, models)
+    m = _load(measured, "measurement", load_measurement)
+    d = _load(drive, "drive", read_drive)
+    log(f"replaying {car.name} on {d.source}")
+    base = replay_system(car.ssd, d, settings.step)
+    recorded = [c for c in m.names if f"derived:{c}" not in m.notes and not c.startswith("actuator_")]
+    channels = [c for c in recorded if c in base.channels]
+    ignored = [c for c in recorded if c not in channels]
+    if not channels:
+        raise VehicleLoopError(
+            f"{m.source}: no measured channel is an output of the virtual car {car.ssd} (measured: "
+            f"{', '.join(m.names)})"
+        )
+    virtual = on_record(base, m, channels, settings.settle)
+    if len(virtual.time) < 16 * settings.blocks:
+        raise VehicleLoopError(
+            f"{m.source}: {len(virtual.time)} samples after the {settings.settle:g} s settling time are too few "
+            f"(at least {16 * settings.blocks})"
+        )
+    record = settled(m, virtual, channels)
+    scale = np.array([np.std(record[c]) for c in channels])
+    flat = [c for c, s in zip(channels, scale) if not s > 0]
+    if flat:
+        raise VehicleLoopError(f"{m.source}: channel(s) {', '.join(flat)} do not vary; nothing to compare")
+    residual = np.column_stack([(record[c] - virtual[c]) / s for c, s in zip(channels, scale)])
+    candidates, untestable = _candidates(car, channels)
+    out_dir.parent.mkdir(parents=True, exist_ok=True)
+    staging = staging_dir(out_dir.parent, f".{out_dir.name}.staging-")
+    try:
+
+        def replay(ssd: Path) -> Measurement:
+            return on_record(replay_system(ssd, d, settings.step), m, channels, settings.settle)
+
+        sensitivities = Sensitivities(car, staging / "sensitivity", replay, virtual, channels)
+        columns: dict[str, list[np.ndarray]] = {}
+        for key, c in candidates.items():
+            if c.effect == SENSOR_OFFSET:
+                column = np.zeros_like(residual)
+                column[:, channels.index(c.channel)] = 1.0
+                columns[key] = [column]
+            else:
+                log(f"sensitivity of the channels to {c.key}")
+                columns[key] = [s / scale for s in sensitivities.columns(c.component, c.terms)]
+        found = attribute(
+            residual,
+            channels,
+            columns,
+            candidates,
+            settings.blocks,
+            settings.alpha,
+            settings.min_explained,
+            settings.max_effects,
+            untestable,
+        )
+        in_situ = {}
+        for element in car.fmus:
+            own = in_situ_record(m, element) if car.kind(element) == "damper" else None
+            if own is not None and car.onnx[element] is not None:
+                in_situ[element] = in_situ_diagnosis(
+                    own.slice(*_rows(own, settings.settle)), car.fmus[element], car.onnx[element], settings.in_situ
+                )
+        offsets: dict[str, float] = {}
+        fixes: list[Fixed] = []
+        for e in found.named:
+            c = e.candidate
+            if c.effect == SENSOR_OFFSET:
+                offsets[c.channel] = e.coefficients[0] * float(scale[channels.index(c.channel)])
+                continue
+            onnx_path = car.onnx[c.component]
+            own = in_situ_record(m, c.component)
+            log(f"fixing {c.component}: {c.effect}")
+            if own is not None:
+                fixes.append(
+                    fix_in_situ(
+                        c.component,
+                        own.slice(*_rows(own, settings.settle)),
+                        onnx_path,
+                        staging / "components" / c.component,
+                        settings.in_situ,
+                    )
+                )
+            else:
+                fixes.append(fix_by_terms(e, onnx_path, staging / "components"))
+        final, fmus = _fixed_system(car, fixes, staging, out_dir)
+        after_result = on_record(replay_system(final, d, settings.step), m, channels, settings.settle)
+        corrected = Measurement(
+            record.time,
+            {c: record[c] - offsets.get(c, 0.0) for c in channels},
+            dict(record.units),
+            source=record.source,
+        )
+        before = channel_errors(virtual, record, channels)
+        after = channel_errors(after_result, corrected, channels)
+        named = found.named
+        summary = (
+            "named " + ", ".join(f"{e.candidate.effect} on {e.candidate.component}" for e in named)
+            if named
+            else f"nothing added; {BUDGET}"
+        )
+        report = VehicleLoopReport(
+            measured=m.source,
+            system=str(car.ssd),
+            fixed_system=out_dir / final.relative_to(staging),
+            fmus={k: out_dir / v.relative_to(staging) for k, v in fmus.items()},
+            channels={c: {"before": before[c], "after": after[c]} for c in channels},
+            attribution=found,
+            fixes=[_moved(f, staging, out_dir) for f in fixes],
+            offsets=offsets,
+            in_situ=in_situ,
+            coverage=_coverage(car, m, channels),
+            ignored=ignored,
+            summary=summary,
+        )
+        write_vehicle_report(staging, report, record, virtual, after_result, corrected)
+        mark_output_dir(staging, "vehicle-loop")
+        _replace_dir(staging, out_dir)
+    finally:
+        if staging.exists():
+            shutil.rmtree(staging)
+    return report
+
+
+def _rows(m: Measurement, settle: float) -> tuple[int, int]:
+    """(start, stop) of the samples after the settling time."""
+    return int(np.searchsorted(m.time, m.time[0] + settle - 1e-12)), len(m.time)
+
+
+def _moved(fixed: Fixed, staging: Path, out_dir: Path) -> Fixed:
+    """`fixed` with its paths where they lie once the staging folder became `out_dir`."""
+
+    def final(path: Path) -> Path:
+        try:
+            return out_dir / path.relative_to(staging)
+        except ValueError:
+            return path
+
+    return Fixed(fixed.element, final(fixed.fmu), final(fixed.onnx), fixed.method, fixed.loop)
+
+
+def _fixed_system(car: VirtualCar, fixes: list[Fixed], staging: Path, out_dir: Path) -> tuple[Path, dict[str, Path]]:
+    """staging/system/SystemStructure.ssd with every FMU copied beside it (the fixed ones in their elements'
+    places), and element -> FMU path in the staging folder."""
+    folder = staging / "system"
+    (folder / "fmu").mkdir(parents=True, exist_ok=True)
+    chosen = {name: fmu for name, fmu in car.fmus.items()} | {f.element: f.fmu for f in fixes}
+    copies: dict[Path, Path] = {}
+    fmus = {}
+    for element, source in chosen.items():
+        if source not in copies:
+            target = folder / "fmu" / (f"{element}-{source.name}" if source in {f.fmu for f in fixes} else source.name)
+            shutil.copyfile(source, target)
+            copies[source] = target
+        fmus[element] = copies[source]
+    vehicle = folder / "fmu" / car.vehicle_fmu.name
+    shutil.copyfile(car.vehicle_fmu, vehicle)
+    moved = VirtualCar(car.ssd, car.name, car.vehicle, vehicle, dict(fmus), car.onnx, car.parameters)
+    return swapped_system(moved, {}, folder, "fixed by nnfmu loop vehicle"), fmus

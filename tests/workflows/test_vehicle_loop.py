@@ -1,0 +1,101 @@
+"""`nnfmu loop vehicle` on quarter-car lab cars made from the truth physics: a clean car adds nothing, a load-cell
+offset is named as such with no component changed, an undeclared gas force is named on the damper, fixed from the
+in-situ record, and its mean shift and peak error fall by two thirds."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nnfmu.data import Measurement, save_measurement
+from nnfmu.data.drive_files import read_drive, write_drive
+from nnfmu.data.rigs import RigOptions, write_rig
+from nnfmu.fmu.build import build_fmu
+from nnfmu.fmu.options import BuildOptions
+from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.workflows.loop import LoopSettings
+from nnfmu.workflows.roadtest import build_vehicle, write_system
+from nnfmu.workflows.roadtest.lab_car import LabCar, write_lab_car
+from nnfmu.workflows.train import TrainRequest, train_from_file
+from nnfmu.workflows.vehicle_loop import VehicleLoopError, VehicleLoopReport, VehicleLoopSettings, run_vehicle_loop
+
+DURATION = 12.0  # s of lab record
+SETTINGS = VehicleLoopSettings(
+    in_situ=LoopSettings(max_effects=1, max_epochs=60, extra_hidden=(0, 4), lm_max_samples=4000, fresh_rival=False)
+)
+
+
+@pytest.fixture(scope="module")
+def virtual_car(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    """A quarter car with a small damper network trained on a dyno record without gas force, and the drive file."""
+    folder = tmp_path_factory.mktemp("virtual")
+    dyno, _ = write_rig("damper", folder / "dyno.csv", RigOptions(duration=20.0, excitation="random", noise=0.5))
+    onnx = train_from_file(
+        dyno,
+        TrainRequest(preset="damper-hysteresis", restarts=1, max_epochs=150, hidden=(8,), moving_mass=2.0),
+        folder / "fmu" / "damper.onnx",
+    ).path
+    damper = build_fmu(onnx, BuildOptions(out=folder / "fmu" / "damper.fmu", platforms=("linux64",)))
+    vehicle = build_vehicle("quarter-car", folder / "fmu", 1e-3)
+    ssd = write_system("quarter-car", vehicle, damper, None, folder / "system")
+    drive = write_drive(generate_drive(DriveSettings(duration=DURATION + 0.001, seed=5)), folder / "drive.csv")
+    return ssd, drive
+
+
+def loop(car: LabCar, virtual_car: tuple[Path, Path], folder: Path) -> VehicleLoopReport:
+    ssd, drive = virtual_car
+    record = write_lab_car(car, read_drive(drive), folder / "lab.csv")
+    return run_vehicle_loop(record, ssd, drive, folder / "out", SETTINGS, log=lambda _: None)
+
+
+def test_a_clean_lab_car_adds_nothing(virtual_car, tmp_path: Path) -> None:
+    report = loop(LabCar(system="quarter-car"), virtual_car, tmp_path)
+    written = json.loads((tmp_path / "out" / "report.json").read_text())
+    assert written["iterations"] == []
+    assert "consistent with the co-simulation error budget" in written["summary"]
+    assert Path(written["system"]).is_file() and (tmp_path / "out" / "report.html").is_file()
+    assert set(written["fmus"]) == {"damper"}
+    for name, pair in written["channels"].items():
+        assert pair["before"] == pair["after"], name  # nothing changed, nothing moved
+    assert report.fixes == []
+
+
+def test_a_load_cell_offset_is_named_with_no_component_changed(virtual_car, tmp_path: Path) -> None:
+    report = loop(LabCar(system="quarter-car", offsets={"damper_force": 150.0}), virtual_car, tmp_path)
+    assert [(i["component"], i["effect"]) for i in report.iterations] == [("damper_force", "sensor_offset")]
+    assert report.fixes == []
+    assert report.offsets["damper_force"] == pytest.approx(150.0, abs=15.0)
+    channels = report.channels["damper_force"]
+    assert abs(channels["after"].mean_shift) < 0.1 * abs(channels["before"].mean_shift)
+    ssd, _ = virtual_car
+    original = (ssd.parent.parent / "fmu" / "damper.fmu").read_bytes()
+    assert Path(report.fmus["damper"]).read_bytes() == original
+
+
+def test_an_undeclared_gas_force_is_named_on_the_damper_and_fixed(virtual_car, tmp_path: Path) -> None:
+    report = loop(LabCar(system="quarter-car", damper_effects={"damper": ("gas_force",)}), virtual_car, tmp_path)
+    named = [(i["component"], i["effect"]) for i in report.iterations]
+    assert named[0] == ("damper", "gas_force")
+    assert ("damper_force", "sensor_offset") not in named
+    assert report.iterations[0]["p_value"] < 1e-3
+    (fix,) = report.fixes
+    assert "gas_force" in fix.loop.effects_added
+    force = report.channels["damper_force"]
+    assert abs(force["after"].mean_shift) <= abs(force["before"].mean_shift) / 3
+    assert abs(force["after"].peak_ratio - 1) <= abs(force["before"].peak_ratio - 1) / 3
+    stroke = report.channels["damper_displacement"]
+    assert abs(stroke["after"].mean_shift) < abs(stroke["before"].mean_shift) / 3
+    assert Path(report.fmus["damper"]).is_file() and Path(report.fixed_system).is_file()
+
+
+def test_a_record_without_any_channel_of_the_virtual_car_is_refused(virtual_car, tmp_path: Path) -> None:
+    ssd, drive = virtual_car
+    m = read_drive(drive)
+    other = Measurement(m.time, {"wheel_speed": np.ones(len(m.time))}, {"wheel_speed": "m/s"}, "lab")
+    path = save_measurement(other, tmp_path / "other.csv")
+    with pytest.raises(VehicleLoopError, match="no measured channel is an output of the virtual car"):
+        run_vehicle_loop(path, ssd, drive, tmp_path / "out", SETTINGS, log=lambda _: None)
+    assert not (tmp_path / "out").exists()
