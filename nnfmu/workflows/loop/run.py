@@ -11,12 +11,11 @@ from __future__ import annotations
 
 import os
 import shutil
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from nnfmu.atomic import staging_dir
+from nnfmu.atomic import replace_dir, staging_dir
 from nnfmu.component import same_period
 from nnfmu.cosim.replay import replay_fmu
 from nnfmu.data import DataError, Measurement, check_measurement, load_measurement
@@ -120,18 +119,6 @@ class _Stage:
     def final(self, path: Path) -> Path:
         """Where a staged file lies once the staging folder became `out_dir`."""
         return self.out_dir / path.relative_to(self.staging)
-
-
-def _replace_dir(staging: Path, out_dir: Path) -> None:
-    """Put `staging` in place of `out_dir` (an earlier loop result there, checked by `check_output_dir`, is removed
-    only after the new one is in)."""
-    old = None
-    if out_dir.exists():
-        old = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.old-", dir=out_dir.parent))
-        os.replace(out_dir, old / out_dir.name)
-    os.replace(staging, out_dir)
-    if old is not None:
-        shutil.rmtree(old)
 
 
 def run_loop(
@@ -262,7 +249,7 @@ def run_loop(
         )
         write_loop_report(staging, report, m, rows, first_prediction, predicted, steps)
         mark_output_dir(staging, "loop")
-        _replace_dir(staging, out_dir)
+        replace_dir(staging, out_dir)
     finally:
         if staging.exists():
             shutil.rmtree(staging)

@@ -14,12 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
-from nnfmu.atomic import staging_dir
+from nnfmu.atomic import replace_dir, staging_dir
 from nnfmu.data import DataError, Measurement, load_measurement
 from nnfmu.data.drive_files import read_drive
 from nnfmu.diagnosis import Diagnosis
 from nnfmu.out_paths import check_output_dir, mark_output_dir
-from nnfmu.workflows.loop.run import _replace_dir
 from nnfmu.workflows.vehicle_loop.attribution import (
     SENSOR_OFFSET,
     Attribution,
@@ -295,7 +294,7 @@ def run_vehicle_loop(
         )
         write_vehicle_report(staging, report, record, virtual, after_result, corrected)
         mark_output_dir(staging, "vehicle-loop")
-        _replace_dir(staging, out_dir)
+        replace_dir(staging, out_dir)
     finally:
         if staging.exists():
             shutil.rmtree(staging)
