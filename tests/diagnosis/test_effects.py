@@ -44,6 +44,7 @@ def test_the_library_has_the_stable_names():
         "gas_force",
         "hysteresis",
         "backlash",
+        "presliding_friction",
         "inertia",
         "temperature",
         "frequency_dependence",
