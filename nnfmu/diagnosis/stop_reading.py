@@ -14,8 +14,9 @@ index is max over k of (sigma_k - min_{j<k} sigma_j) / sigma_k, over the bins wh
 steepest (a re-engagement, not the noise of a saturated tail): how far the slope had fallen before it rose again,
 as a share of the re-engaging slope. 0 or below: the slope only falls (elastic-plastic); 1: it fell to zero (a flat
 dead zone); above 1: the force even went back inside the gap. At or above DEAD_ZONE the family reads as play.
-Measured: rig dampers with a seal's pre-sliding stiffness -0.19 to 0.15, behind a 0.5 mm mount clearance 5.7-6.1
-(seeds 1-3), the measured BRFD friction damper above 1 (tests/diagnosis/test_stop_reading.py).
+Measured: 20 s random rig records with a seal's pre-sliding stiffness -0.19 to 0.15, behind a 0.5 mm mount clearance
+5.7-6.1 (seeds 1-3, tests/diagnosis/test_stop_reading.py); the shipped slice of the measured BRFD friction damper
+with backlash 2.7 (a velocity-only least-squares model) and 5.4 (the loop test's velocity-only network).
 """
 
 from __future__ import annotations
