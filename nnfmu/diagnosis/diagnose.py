@@ -133,7 +133,7 @@ def diagnose(
     tested = {name: np.asarray(measurement.channels[name], dtype=float) for name in (*inputs, *others)}
     tests = residual_tests(residual, tested, settings)
     recalibrated = cross_fit_errors(residual, base, fold_mask(len(residual), settings.blocks))
-    reading = read_stops(signals, residual, base, settings) if signals.has("displacement") else None
+    reading = read_stops(signals, recalibrated, settings) if signals.has("displacement") else None
     if reading is not None:
         families = keep_reading(families, reading)
     ranking = effect_evidence(rank_effects(signals, families, base, settings), settings.alpha)

@@ -27,7 +27,6 @@ import numpy as np
 
 from nnfmu.diagnosis.effects import Effect, StopFamily
 from nnfmu.diagnosis.effects.shared import mean_stroke, reversal_travel
-from nnfmu.diagnosis.ranking import cross_fit_errors, fold_mask
 from nnfmu.diagnosis.settings import DiagnosisSettings
 from nnfmu.diagnosis.signals import EffectSignals
 
@@ -62,11 +61,10 @@ class StopReading:
 
 
 def travel_levels(
-    signals: EffectSignals, residual: np.ndarray, base: np.ndarray, settings: DiagnosisSettings
+    signals: EffectSignals, errors: np.ndarray, settings: DiagnosisSettings
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(bin centres [m], mean direction-signed residual beyond `base` per bin, NaN below MIN_BIN samples) over the
-    travel since the last reversal."""
-    errors = cross_fit_errors(residual, base, fold_mask(len(residual), settings.blocks))
+    """(bin centres [m], mean direction-signed `errors` per bin, NaN below MIN_BIN samples) over the travel since the
+    last reversal."""
     direction, travel = reversal_travel(signals["velocity"], signals.sample_period)
     stroke = mean_stroke(signals["velocity"], signals.sample_period) or 1.0
     width = 0.5 * min(settings.reversal_fractions) * stroke
@@ -98,12 +96,11 @@ def dead_zone_index(travel: np.ndarray, level: np.ndarray) -> float | None:
     return float(max(values, default=0.0))
 
 
-def read_stops(
-    signals: EffectSignals, residual: np.ndarray, base: np.ndarray, settings: DiagnosisSettings
-) -> StopReading:
-    """Read the residual's shape after reversals as play (`backlash`) or pre-sliding seal friction
-    (`presliding_friction`); too few reversals to tell keep the name `backlash`."""
-    travel, level = travel_levels(signals, residual, base, settings)
+def read_stops(signals: EffectSignals, errors: np.ndarray, settings: DiagnosisSettings) -> StopReading:
+    """Read the shape after reversals of `errors` (the residual's held-out errors beyond the recalibration) as play
+    (`backlash`) or pre-sliding seal friction (`presliding_friction`); too few reversals to tell keep the name
+    `backlash`."""
+    travel, level = travel_levels(signals, errors, settings)
     index = dead_zone_index(travel, level)
     names = {"dead_zone": "backlash", "elastic_plastic": "presliding_friction"}
     if index is None:
