@@ -87,6 +87,7 @@ def _summary(
         "test_error_before": report.error_before,
         "test_error_after": report.error_after,
         "first_diagnosis": report.diagnoses[0].summary,
+        "stop_reading": reading.to_dict() if (reading := report.diagnoses[0].stop_reading) else None,
         "final_diagnosis": report.diagnoses[-1].summary,
         "consistent_with_noise": report.consistent_with_noise,
         "notes": report.notes,

@@ -4,11 +4,12 @@ variance each effect explains out of sample, and a verdict in words."""
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 
 from nnfmu.data import DataError, Measurement, check_measurement
-from nnfmu.diagnosis.effects import effects_for, find_effect
+from nnfmu.diagnosis.effects import EFFECTS, StopFamily, effects_for, find_effect
 from nnfmu.diagnosis.errors import DiagnosisError
 from nnfmu.diagnosis.evidence import Diagnosis, EffectEvidence, effect_evidence
 from nnfmu.diagnosis.ranking import (
@@ -23,6 +24,9 @@ from nnfmu.diagnosis.ranking import (
 from nnfmu.diagnosis.residual_tests import ResidualTest, residual_tests
 from nnfmu.diagnosis.settings import DiagnosisSettings
 from nnfmu.diagnosis.signals import EffectSignals, build_signals
+from nnfmu.diagnosis.stop_reading import keep_reading, read_stops
+
+STOPS = {name for name, effect in EFFECTS.items() if isinstance(effect, StopFamily)}
 
 
 def _check_input(
@@ -129,7 +133,12 @@ def diagnose(
     tested = {name: np.asarray(measurement.channels[name], dtype=float) for name in (*inputs, *others)}
     tests = residual_tests(residual, tested, settings)
     recalibrated = cross_fit_errors(residual, base, fold_mask(len(residual), settings.blocks))
+    reading = read_stops(signals, recalibrated, settings) if signals.has("displacement") else None
+    if reading is not None:
+        families = keep_reading(families, reading)
     ranking = effect_evidence(rank_effects(signals, families, base, settings), settings.alpha)
+    if reading is not None:  # the stop family's evidence says which physics its shape shows, and why
+        ranking = [replace(e, evidence=f"{e.evidence}; {reading.text}") if e.name in STOPS else e for e in ranking]
     tests_pass = all(t.p_value >= settings.alpha / len(tests) for t in tests)
     consistent = tests_pass and not any(e.significant for e in ranking)
     return Diagnosis(
@@ -146,6 +155,7 @@ def diagnose(
         unknown_to_model=signals.unknown_to_model,
         missing_measurements=tuple(_missing_measurements(ranking, consistent, tests)),
         summary=_summary(ranking, consistent, tests),
+        stop_reading=reading,
     )
 
 

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 from nnfmu.diagnosis.ranking import GainTest, RankedFamily, family_threshold
 from nnfmu.diagnosis.residual_tests import ResidualTest
+from nnfmu.diagnosis.stop_reading import StopReading
 
 
 def _finite(x: float | None) -> float | None:
@@ -103,7 +104,9 @@ class Diagnosis:
 
     `residual_rms` in the output's SI unit; `recalibration_explained`: fraction of the residual variance that a
     re-tuned gain and a linear term in the model's inputs explain out of sample (the base every effect must beat);
-    each effect's explained variances are fractions of what remains after that recalibration.
+    each effect's explained variances are fractions of what remains after that recalibration. `stop_reading`: the
+    shape of the residual after reversals, which names the stop-operator family (play or pre-sliding seal friction;
+    None without a displacement).
     """
 
     source: str
@@ -119,6 +122,7 @@ class Diagnosis:
     unknown_to_model: tuple[str, ...]
     missing_measurements: tuple[str, ...]
     summary: str
+    stop_reading: StopReading | None = None
 
     @property
     def significant(self) -> list[EffectEvidence]:
@@ -151,4 +155,5 @@ class Diagnosis:
             "missing_measurements": list(self.missing_measurements),
             "tests": [t.to_dict() for t in self.tests],
             "ranking": [e.to_dict() for e in self.ranking],
+            "stop_reading": self.stop_reading.to_dict() if self.stop_reading is not None else None,
         }

@@ -28,8 +28,9 @@ class DiagnosisSettings:
     `friction_scales` (seal_friction): velocity scales of the smoothed sign as fractions of the rms velocity; the
     diagnosis tries each, the extension adds the middle one (of the sorted scales). `memory_times` [s]
     (hysteresis): the diagnosis delays the model's force by each; the extension adds low-pass states of velocity at
-    the shortest and the longest. `reversal_fractions` (hysteresis, backlash): travel lengths after a motion
-    reversal as fractions of the mean travel between reversals; both halves use each. `frequency_taus` [s]
+    the shortest and the longest. `reversal_fractions` (hysteresis, backlash, presliding_friction): travel
+    lengths after a motion reversal as fractions of the mean travel between reversals; both halves use each (the
+    stop reading also bins the travel after reversals by half the smallest, up to the largest). `frequency_taus` [s]
     (frequency_dependence): low-pass time constants of the viscoelastic states; both halves use each.
     `amplitude_tau` [s] (amplitude_dependence): averaging time of the running amplitude. `thermal_tau` [s]
     (temperature, extension only): thermal time constant of the running mean square of velocity that stands in for

@@ -86,6 +86,9 @@ class DamperParams:
     gas_rate: float = param(1000.0, "N/m", "rise of the gas force per m of compression (0.5-2 N/mm)")
     seal_friction: float = param(50.0, "N", "Coulomb level of rod seal and guide friction (30-80 N, Dixon)")
     friction_velocity: float = param(0.002, "m/s", "velocity scale of the tanh-smoothed Coulomb friction")
+    presliding_stiffness: float = param(
+        2.5e5, "N/m", "seal stiffness before break-away ('presliding'): the seal's lip deflects 0.2 mm at 50 N"
+    )
     heat_capacity: float = param(1000.0, "J/K", "oil (~0.3 L) and steel tube (~1.5 kg) heat capacity")
     heat_conductance: float = param(2.0, "W/K", "convective loss to ambient, h*A (~40 W/m^2K * 0.05 m^2)")
     fade: float = param(0.004, "1/K", "relative fall of damping per K of oil heating (0.2-0.5 %/K, Dixon)")
@@ -98,7 +101,9 @@ class DamperTruth:
     """The damper's force from its state and the prescribed motion; usable inside any ODE integrator.
 
     States (only those of the switched-on effects, in this order): `valve_force` [N] (hysteresis: the force carried
-    by the series stiffness k_s, F' = k_s (v - v_valve(F/s))), `temperature` [K] (C T' = F·v_valve - hA (T - T_amb)).
+    by the series stiffness k_s, F' = k_s (v - v_valve(F/s))), `temperature` [K] (C T' = F·v_valve - hA (T - T_amb)),
+    `seal_force` [N] (presliding: the seal friction as a Jenkins element, a spring k_p in series with a Coulomb slider
+    F_c: S' = k_p v while |S| < F_c or the motion unloads it, else 0; it replaces the tanh-smoothed Coulomb friction).
     s(T) = exp(-fade (T - T_amb)) scales the valve characteristic.
     """
 
@@ -109,10 +114,16 @@ class DamperTruth:
         unknown = [e for e in self.effects if e not in DAMPER_EFFECTS]
         if unknown:
             raise SettingsError(f"unknown damper effect(s) {unknown}; valid: {', '.join(DAMPER_EFFECTS)}")
+        if "presliding" in self.effects and "seal_friction" not in self.effects:
+            raise SettingsError(
+                "the damper effect 'presliding' is a property of the seal: switch on 'seal_friction' too"
+            )
+        if "presliding" in self.effects and not self.params.presliding_stiffness > 0:
+            raise SettingsError(f"presliding_stiffness must be > 0 N/m, got {self.params.presliding_stiffness!r}")
 
     @property
     def state_names(self) -> tuple[str, ...]:
-        names = {"hysteresis": "valve_force", "temperature": "temperature"}
+        names = {"hysteresis": "valve_force", "temperature": "temperature", "presliding": "seal_force"}
         return tuple(names[e] for e in DAMPER_EFFECTS if e in names and e in self.effects)
 
     @property
@@ -152,6 +163,13 @@ class DamperTruth:
         """Seal friction [N] opposing the motion (tension positive): smoothed Coulomb F_c tanh(v/v_s)."""
         return self.params.seal_friction * np.tanh(np.asarray(v) / self.params.friction_velocity)
 
+    def seal_force_rate(self, seal_force: float, v: float) -> float:
+        """d(seal_force)/dt [N/s] of the Jenkins element at velocity v [m/s]: the pre-sliding stiffness times v,
+        0 while it slides (at the break-away force and loaded further)."""
+        p = self.params
+        sliding = abs(seal_force) >= p.seal_friction and seal_force * v > 0
+        return 0.0 if sliding else p.presliding_stiffness * v
+
     def _unpack(self, state: np.ndarray) -> tuple[float | None, float]:
         names = self.state_names
         valve = float(state[names.index("valve_force")]) if "valve_force" in names else None
@@ -172,6 +190,8 @@ class DamperTruth:
             power = scale * float(self.characteristic(v)) * v
         if "temperature" in self.effects:
             out.append((power - p.heat_conductance * (temp - p.ambient_temperature)) / p.heat_capacity)
+        if "presliding" in self.effects:
+            out.append(self.seal_force_rate(float(state[self.state_names.index("seal_force")]), v))
         return np.array(out)
 
     def force(self, state, x, v, a):
@@ -188,7 +208,9 @@ class DamperTruth:
             total = self.damping_scale(temp) * self.characteristic(v)
         if "gas_force" in self.effects:
             total = total - self.gas_force(x)
-        if "seal_friction" in self.effects:
+        if "presliding" in self.effects:
+            total = total + state[..., names.index("seal_force")]
+        elif "seal_friction" in self.effects:
             total = total + self.friction_force(v)
         if "inertia" in self.effects:
             total = total + self.params.moving_mass * np.asarray(a)
@@ -198,7 +220,8 @@ class DamperTruth:
         """Force [N] and states (shape (n, n_states)) along a prescribed motion sampled every `dt` [s].
 
         The valve force follows the trapezoidal rule (A-stable, 2nd order) solved by Newton's method with the exact
-        inverse characteristic; the temperature, far slower, follows explicit Euler. Keep dt <= 0.5 ms.
+        inverse characteristic; the temperature, far slower, follows explicit Euler; the seal's Jenkins element is
+        exact for the displacement's steps (its force moves by k_p·Δx, clipped to ±F_c). Keep dt <= 0.5 ms.
         """
         states = np.empty((len(x), self.n_states))
         if self.n_states == 0:
@@ -206,6 +229,8 @@ class DamperTruth:
         p = self.params
         has_valve = "valve_force" in self.state_names
         has_temp = "temperature" in self.effects
+        has_seal = "presliding" in self.effects
+        seal = 0.0
         state = self.initial_state()
         states[0] = state
         valve, temp = self._unpack(state)
@@ -234,5 +259,7 @@ class DamperTruth:
                 power = scale * nominal_power[i - 1]
             if has_temp:
                 temp += dt * (power - p.heat_conductance * (temp - p.ambient_temperature)) / p.heat_capacity
-            states[i] = [s for s, on in ((valve, has_valve), (temp, has_temp)) if on]
+            if has_seal:
+                seal = min(max(seal + p.presliding_stiffness * (x[i] - x[i - 1]), -p.seal_friction), p.seal_friction)
+            states[i] = [s for s, on in ((valve, has_valve), (temp, has_temp), (seal, has_seal)) if on]
         return self.force(states, x, v, a), states

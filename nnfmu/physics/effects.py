@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-DAMPER_EFFECTS = ("hysteresis", "gas_force", "seal_friction", "temperature", "inertia")
+# "presliding" (off by default) turns the seal friction into a Jenkins element: the seal sticks with a pre-sliding
+# stiffness up to its break-away force, then slides.
+DAMPER_EFFECTS = ("hysteresis", "gas_force", "seal_friction", "temperature", "inertia", "presliding")
 BUSHING_EFFECTS = ("viscoelastic", "friction")
 MR_DAMPER_EFFECTS = ("command_lag", "gas_force", "inertia")
 CDC_DAMPER_EFFECTS = ("valve_lag", "gas_force", "seal_friction", "inertia")

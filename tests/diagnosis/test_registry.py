@@ -50,6 +50,7 @@ CASES = [
     ("gas_force", "rig"),
     ("hysteresis", "rig"),
     ("backlash", "rig"),
+    ("presliding_friction", "rig"),
     ("inertia", "rig"),
     ("inertia", "with_acceleration"),
     ("temperature", "rig"),
@@ -104,7 +105,7 @@ def run_feature_nodes(spec: FeatureSpec, channels: dict[str, np.ndarray], dt: fl
 
 
 def test_the_registry_is_keyed_by_each_effects_own_name_and_every_effect_has_both_halves():
-    assert len(EFFECTS) == 9
+    assert len(EFFECTS) == 10
     for name, effect in EFFECTS.items():
         assert isinstance(effect, Effect) and effect.name == name
         assert effect.description and isinstance(effect.requires, tuple)
@@ -123,8 +124,8 @@ def test_every_effect_parameter_has_one_owner_and_every_owner_reads_a_real_setti
     claimed = [p for effect in (*EFFECTS.values(), find_effect(CHANNEL)) for p in effect.parameters]
     assert set(claimed) <= names
     assert set(claimed) == names - set(TEST_FIELDS)  # no setting of an effect without an effect reading it
-    # reversal_fractions is the one parameter two effects share: the travel after a reversal, for the build-up
-    # (hysteresis) and for the gap (backlash)
+    # reversal_fractions is the one parameter several effects share: the travel after a reversal, for the build-up
+    # (hysteresis), the gap (backlash) and the seal's pre-sliding travel (presliding_friction)
     shared = {p for p in claimed if claimed.count(p) > 1}
     assert shared == {"reversal_fractions"}
 

@@ -16,7 +16,9 @@ from nnfmu.diagnosis.effects.friction import SealFriction
 from nnfmu.diagnosis.effects.gas_spring import GasForce
 from nnfmu.diagnosis.effects.hysteresis import Hysteresis
 from nnfmu.diagnosis.effects.inertia import Inertia
+from nnfmu.diagnosis.effects.presliding import PreslidingFriction
 from nnfmu.diagnosis.effects.sensor import SensorOffset
+from nnfmu.diagnosis.effects.stop_family import StopFamily
 from nnfmu.diagnosis.effects.temperature import Temperature
 from nnfmu.diagnosis.effects.viscoelastic import AmplitudeDependence, FrequencyDependence
 from nnfmu.diagnosis.errors import DiagnosisError
@@ -37,6 +39,7 @@ EFFECTS: dict[str, Effect] = _registry(
     GasForce(),
     Hysteresis(),
     Backlash(),
+    PreslidingFriction(),
     Inertia(),
     Temperature(),
     FrequencyDependence(),
@@ -88,6 +91,7 @@ __all__ = [
     "Extension",
     "NoExtension",
     "Regressors",
+    "StopFamily",
     "channel_effects",
     "effects_for",
     "find_effect",

@@ -46,6 +46,8 @@ def test_the_loop_finds_backlash_in_the_measured_damper_and_the_held_out_error_f
     first = report.diagnoses[0]
     assert not first.consistent_with_noise
     assert first.ranking[0].name == "backlash" and first.ranking[0].significant
+    # the stop family reads as play, not as a seal's pre-sliding stiffness: a dead zone after each reversal
+    assert first.stop_reading.effect == "backlash" and first.stop_reading.index > 1.0
     assert report.effects_added == ["backlash"]
     assert all(name.startswith("stop(displacement") for name in report.iterations[0].features_added)
     assert report.error_after["nrmse"] < 0.7 * report.error_before["nrmse"]
