@@ -345,11 +345,70 @@ def test_bad_requests_name_the_value(tmp_path: Path, model: str, settings: Vehic
         ({"components": {"damper": "spline"}}, "choice"),
         ({"fmi_version": 1}, "FMI version"),
         ({"initial_state": (0.0, math.nan)}, "initial state"),
+        ({"stabilisers": {"damper_force": (1.0, -2.0)}}, "stabiliser"),
+        ({"stabilisers": {"damper_force": (math.inf, 2.0)}}, "stabiliser"),
+        ({"stabilisers": {"damper_force": (0.0, 0.0)}}, "stabiliser"),
+        ({"stabilisers": {"damper_force": (1.0,)}}, "stabiliser"),
     ],
 )
 def test_bad_settings_are_refused(kwargs: dict, message: str) -> None:
     with pytest.raises(VehicleBuildError, match=message):
         VehicleBuildSettings(**kwargs)
+
+
+@pytest.mark.parametrize(
+    ("model", "components", "port", "deflection", "rate"),
+    [
+        (
+            "full-vehicle",
+            {"bushing_fl_front": "stabilised"},
+            "bushing_fl_front_radial_force",
+            "bushing_fl_front_radial_displacement",
+            "bushing_fl_front_radial_velocity",
+        ),
+        (
+            "full-vehicle",
+            {"bushing_fr_rear": "stabilised"},
+            "bushing_fr_rear_conical_torque",
+            "bushing_fr_rear_conical_rotation",
+            "bushing_fr_rear_conical_angular_velocity",
+        ),
+        (
+            "full-vehicle",
+            {"damper_rl": "stabilised"},
+            "damper_rl_force",
+            "damper_rl_displacement",
+            "damper_rl_velocity",
+        ),
+        ("quarter-car", {"damper": "stabilised"}, "damper_force", "damper_displacement", "damper_velocity"),
+    ],
+)
+def test_a_given_stabiliser_replaces_only_its_ports_element(
+    model: str, components: dict, port: str, deflection: str, rate: str
+) -> None:
+    """The stabiliser row of the named port is k times its deflection plus c times its rate; every other row is
+    the parameter file's."""
+    plain = vehicle_model(model, VehicleBuildSettings(components=components))
+    given = vehicle_model(model, VehicleBuildSettings(components=components, stabilisers={port: (7.5e6, 3.0e3)}))
+    i = plain.input_index(port)
+    position, velocity = plain.C[plain.output_index(deflection)], plain.C[plain.output_index(rate)]
+    np.testing.assert_allclose(given.stabiliser[i], 7.5e6 * position + 3.0e3 * velocity, rtol=1e-12, atol=1e-9)
+    others = np.arange(len(plain.inputs)) != i
+    np.testing.assert_array_equal(given.stabiliser[others], plain.stabiliser[others])
+    assert np.any(plain.stabiliser[i] != given.stabiliser[i])
+
+
+@pytest.mark.parametrize(
+    ("components", "port"),
+    [
+        ({}, "bushing_fl_front_radial_force"),  # external, not stabilised
+        ({"bushing_fl_front": "reference"}, "bushing_fl_front_radial_force"),  # built in: no port
+        ({"bushing_fl_front": "stabilised"}, "bushing_fl_front_shear_force"),  # no such port
+    ],
+)
+def test_a_stabiliser_for_no_stabilised_port_is_refused_naming_it(components: dict, port: str) -> None:
+    with pytest.raises(VehicleBuildError, match=port):
+        vehicle_model("full-vehicle", VehicleBuildSettings(components=components, stabilisers={port: (1.0, 1.0)}))
 
 
 def test_input_derivatives_give_the_first_order_hold_without_a_second_set(quarter_car_fmus: dict[str, Path]) -> None:

@@ -69,10 +69,16 @@ def _coordinates() -> list[VehiclePort]:
     return coords
 
 
-def build_full_vehicle(params: VehicleParameters, components: Mapping[str, str] | None = None) -> LinearVehicle:
+def build_full_vehicle(
+    params: VehicleParameters,
+    components: Mapping[str, str] | None = None,
+    stabilisers: Mapping[str, LinearSpring] | None = None,
+) -> LinearVehicle:
     """Full vehicle; `components` maps e.g. 'damper_fl' or 'bushing_fl_front' to 'external' (default), 'reference'
-    or 'stabilised' (external, stabilised by the reference element: the linear damping or bushing)."""
+    or 'stabilised' (external, stabilised by the reference element: the linear damping or bushing); `stabilisers`
+    replaces a stabilised force port's reference element, by input port name ('bushing_fl_front_radial_force')."""
     choice = resolve_components("full vehicle", COMPONENTS, components)
+    stabilisers = dict(stabilisers or {})
     coords = _coordinates()
     asm = Assembly(coords, posts=list(CORNERS), gravity=params.gravity)
     index = {c.name: i for i, c in enumerate(coords)}
@@ -92,7 +98,7 @@ def build_full_vehicle(params: VehicleParameters, components: Mapping[str, str] 
         axle = params.front if front else params.rear
         damper = params.front_damper if front else params.rear_damper
         if front:
-            lca = _add_lca(asm, params, corner, side, body, rows, choice)
+            lca = _add_lca(asm, params, corner, side, body, rows, choice, stabilisers)
             wheel = lca.point(mirror_point(params.lca.ball_joint, side))
             extra_mass = params.lca.mass
         else:
@@ -100,7 +106,19 @@ def build_full_vehicle(params: VehicleParameters, components: Mapping[str, str] 
             extra_mass = 0.0
         asm.add_point_mass(axle.unsprung_mass, wheel if front else wheel[2])
         sprung_load = corner_sprung_mass(params, "front" if front else "rear") * params.gravity
-        _add_corner(asm, corner, side, axle, damper, choice[f"damper_{corner}"], body, wheel, sprung_load, extra_mass)
+        _add_corner(
+            asm,
+            corner,
+            side,
+            axle,
+            damper,
+            choice[f"damper_{corner}"],
+            body,
+            wheel,
+            sprung_load,
+            extra_mass,
+            stabilisers,
+        )
         x_axle = b.cog_to_front_axle if front else -b.cog_to_rear_axle
         track = b.track_front if front else b.track_rear
         corner_point = body.point(np.array([x_axle, side * track / 2.0, 0.0]))
@@ -139,6 +157,7 @@ def _add_corner(
     wheel: np.ndarray,
     sprung_load: float,
     extra_mass: float,
+    stabilisers: Mapping[str, LinearSpring],
 ) -> None:
     """Spring, damper (port or reference), tyre and the corner's spindle outputs."""
     s = mirror_point(axle.strut_unit, side)
@@ -151,8 +170,9 @@ def _add_corner(
     elif choice == REFERENCE:
         asm.add_feedback(f"damper_{corner}", stroke, SplineDamper(damper.velocity, damper.force))
     else:
-        stabiliser = LinearSpring(0.0, damper.damping) if choice == STABILISED else None
-        asm.add_force_input(damper_input(corner), stroke, stabiliser)
+        port = damper_input(corner)
+        stabiliser = stabilisers.get(port.name, LinearSpring(0.0, damper.damping)) if choice == STABILISED else None
+        asm.add_force_input(port, stroke, stabiliser)
     for port, kind in zip(damper_outputs(corner), ("displacement", "velocity")):
         asm.add_output(port, kind, stroke)
     tyre = Deflection(-wheel[2], asm.post_row(corner))
@@ -190,6 +210,7 @@ def _add_lca(
     body: RigidMotion,
     rows: dict[str, np.ndarray],
     choice: Mapping[str, str],
+    stabilisers: Mapping[str, LinearSpring],
 ) -> RigidMotion:
     """The LCA of a front corner: mass, inertia, both bushings (ports or reference) and its angle output."""
     p = params.lca
@@ -203,7 +224,7 @@ def _add_lca(
     asm.add_inertia(np.diag(p.inertia), lca.rotation)
     for position, bushing in zip(BUSHINGS, (p.front_bushing, p.rear_bushing)):
         name = f"bushing_{corner}_{position}"
-        _add_bushing(asm, name, bushing, side, body, lca, choice[name])
+        _add_bushing(asm, name, bushing, side, body, lca, choice[name], stabilisers)
     pivot = mirror_rotation(unit(np.subtract(p.front_bushing.position, p.rear_bushing.position)), side)
     angle = Deflection(pivot @ (lca.rotation - body.rotation), asm.post_row())
     asm.add_output(
@@ -218,7 +239,14 @@ def _add_lca(
 
 
 def _add_bushing(
-    asm: Assembly, name: str, p: BushingParameters, side: float, body: RigidMotion, lca: RigidMotion, choice: str
+    asm: Assembly,
+    name: str,
+    p: BushingParameters,
+    side: float,
+    body: RigidMotion,
+    lca: RigidMotion,
+    choice: str,
+    stabilisers: Mapping[str, LinearSpring],
 ) -> None:
     """One bushing: the four ported directions (ports or linear reference) and the two unported ones (reference)."""
     frame = BushingFrame.of(p.axis, p.radial, side)
@@ -236,7 +264,7 @@ def _add_bushing(
         if choice == REFERENCE:
             asm.add_spring(deflection, spring)
         else:
-            asm.add_force_input(port, deflection, spring if choice == STABILISED else None)
+            asm.add_force_input(port, deflection, stabilisers.get(port.name, spring) if choice == STABILISED else None)
     asm.add_spring(Deflection(frame.lateral @ moved, none), LinearSpring(p.radial_stiffness, p.radial_damping))
     asm.add_spring(Deflection(frame.rot_lateral @ turned, none), LinearSpring(p.conical_stiffness, p.conical_damping))
     out = bushing_outputs(name)

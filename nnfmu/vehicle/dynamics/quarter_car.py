@@ -23,9 +23,15 @@ from nnfmu.vehicle.dynamics.quarter_car_parameters import QuarterCarParameters
 COMPONENTS = ["damper"]
 
 
-def build_quarter_car(params: QuarterCarParameters, components: Mapping[str, str] | None = None) -> LinearVehicle:
-    """Quarter car of `params`; `components={'damper': 'reference'}` closes the damper loop with the built-in damper."""
+def build_quarter_car(
+    params: QuarterCarParameters,
+    components: Mapping[str, str] | None = None,
+    stabilisers: Mapping[str, LinearSpring] | None = None,
+) -> LinearVehicle:
+    """Quarter car of `params`; `components={'damper': 'reference'}` closes the damper loop with the built-in damper;
+    `stabilisers={'damper_force': ...}` replaces a stabilised damper port's reference element."""
     choice = resolve_components("quarter car", COMPONENTS, components)
+    stabilisers = dict(stabilisers or {})
     damper = params.damper
     sprung, g = params.sprung_mass, params.gravity
     coords = [
@@ -47,8 +53,10 @@ def build_quarter_car(params: QuarterCarParameters, components: Mapping[str, str
     elif choice["damper"] == REFERENCE:
         asm.add_feedback("damper", stroke, SplineDamper(damper.velocity, damper.force))
     else:
-        stabiliser = LinearSpring(0.0, damper.damping) if choice["damper"] == STABILISED else None
-        asm.add_force_input(damper_input(""), stroke, stabiliser)
+        port = damper_input("")
+        reference = LinearSpring(0.0, damper.damping)
+        stabiliser = stabilisers.get(port.name, reference) if choice["damper"] == STABILISED else None
+        asm.add_force_input(port, stroke, stabiliser)
     for port, kind in zip(damper_outputs(""), ("displacement", "velocity")):
         asm.add_output(port, kind, stroke)
     asm.add_output(coords[0], "displacement", Deflection(body, asm.post_row()))

@@ -27,9 +27,12 @@ class VehicleBuildSettings:
     over a step applied, for stiff components) or 'reference' (built-in element), `sample_period` [s] of the FMU's
     samples, FMI version, backend and the native backend's `platforms` (None: this machine's plus win64 when its
     cross compiler is installed). `corner` (fl, fr, rl, rr) is the quarter car's: None takes a quarter-car file's
-    own corner, or fl of a full-vehicle file. `initial_state` [q, q'] the FMU starts in (None: the static equilibrium
-    on the linear reference elements, `initial_state`; a road test gives the rest state on the components it
-    connects, `nnfmu.vehicle.dynamics.rest_state`).
+    own corner, or fl of a full-vehicle file. `stabilisers` replaces a stabilised force port's reference element
+    (input port name -> (stiffness, damping): N/m and N.s/m, or N.m/rad and N.m.s/rad); the element the vehicle
+    keeps over a step should match the component's stiffness over a step, or the deviation it holds carries the
+    difference. `initial_state` [q, q'] the FMU starts in (None: the static equilibrium on the linear reference
+    elements, `initial_state`; a road test gives the rest state on the components it connects,
+    `nnfmu.vehicle.dynamics.rest_state`).
     A stabilised port holds its reference from the start of each *sample*: sample at the communication step, or
     the stabilisation is renewed at every sample inside a step and mostly lost."""
 
@@ -41,6 +44,7 @@ class VehicleBuildSettings:
     backend: Backend = "native"
     platforms: tuple[str, ...] | None = None
     initial_state: tuple[float, ...] | None = None
+    stabilisers: dict[str, tuple[float, float]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.sample_period) and self.sample_period > 0.0):
@@ -53,6 +57,17 @@ class VehicleBuildSettings:
             raise VehicleBuildError(f"corner {self.corner!r}; choose one of {', '.join(CORNERS)}")
         if self.initial_state is not None and not all(math.isfinite(v) for v in self.initial_state):
             raise VehicleBuildError(f"initial state {self.initial_state!r} must hold finite numbers")
+        bad_elements = {
+            name: value
+            for name, value in self.stabilisers.items()
+            if len(value) != 2
+            or not all(math.isfinite(v) and v >= 0.0 for v in value)
+            or not any(v > 0.0 for v in value)
+        }
+        if bad_elements:
+            raise VehicleBuildError(
+                f"stabiliser(s) {bad_elements}: each needs (stiffness, damping), finite, >= 0 and not both 0"
+            )
         bad = {name: choice for name, choice in self.components.items() if choice not in CHOICES}
         if bad:
             raise VehicleBuildError(f"component choice(s) {bad}; expected one of {', '.join(CHOICES)}")

@@ -28,6 +28,7 @@ from nnfmu.vehicle.dynamics import (
     VehicleModelError,
     VehicleParameters,
 )
+from nnfmu.vehicle.dynamics.builtin_elements import LinearSpring
 from nnfmu.vehicle.dynamics.full_vehicle import build_full_vehicle
 from nnfmu.vehicle.dynamics.linear import DiscreteVehicle
 from nnfmu.vehicle.dynamics.ports import CORNERS
@@ -51,11 +52,21 @@ def vehicle_model(model: str, settings: VehicleBuildSettings) -> LinearVehicle:
     if model not in MODELS:
         raise VehicleBuildError(f"unknown vehicle model {model!r}; choose one of {', '.join(MODELS)}")
     path = settings.params_path or DEFAULT_FILE
+    stabilisers = {name: LinearSpring(*value) for name, value in settings.stabilisers.items()}
     if model == "quarter-car":
-        return build_quarter_car(QuarterCarParameters.load(path, settings.corner), settings.components)
-    if settings.corner is not None:
+        vehicle = build_quarter_car(QuarterCarParameters.load(path, settings.corner), settings.components, stabilisers)
+    elif settings.corner is not None:
         raise VehicleBuildError(f"corner {settings.corner!r}: only a quarter car stands on one corner")
-    return build_full_vehicle(VehicleParameters.load(path), settings.components)
+    else:
+        vehicle = build_full_vehicle(VehicleParameters.load(path), settings.components, stabilisers)
+    stabilised = {p.name for p, held in zip(vehicle.inputs, vehicle.stabilised_inputs) if held}
+    unused = sorted(set(stabilisers) - stabilised)
+    if unused:
+        raise VehicleBuildError(
+            f"{vehicle.name}: stabiliser(s) for {', '.join(unused)}, which are not stabilised force ports "
+            f"(stabilised: {', '.join(sorted(stabilised)) or 'none'}; choose 'stabilised' for their component)"
+        )
+    return vehicle
 
 
 def initial_state(vehicle: LinearVehicle) -> tuple[float, ...]:
@@ -101,6 +112,7 @@ def vehicle_component(discrete: DiscreteVehicle, model: str, settings: VehicleBu
             "model": model,
             "parameters": str(settings.params_path or DEFAULT_FILE),
             "components": settings.components,
+            "stabilisers": {name: list(value) for name, value in settings.stabilisers.items()},
             "corners": [c for c in CORNERS if f"actuator_{c}_displacement" in vehicle.input_names],
             "external_force_inputs": external,
             "reference_dampers": vehicle.feedback_names,

@@ -34,6 +34,7 @@ from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.workflows.roadtest.budget import BudgetRow, budget_rows
 from nnfmu.workflows.roadtest.envelope import Excursion, excursion
 from nnfmu.workflows.roadtest.report import write_system_report
+from nnfmu.workflows.roadtest.stabilisers import bushing_stabilisers
 from nnfmu.workflows.roadtest.systems import (
     DAMPER_MODELS,
     ComponentFmus,
@@ -272,8 +273,13 @@ def _run_system(
     """One system: FMUs and SSDs, reference, both damper networks and the truth physics co-simulated and compared,
     the error budget, the envelope checks, the report."""
     drive = _stretch(drive, run.duration)
-    vehicle = build_vehicle(system, out / "fmu", run.step)
     bushings = bool(bushing_elements(system))
+    stabilisers = (
+        bushing_stabilisers(onnx.load(fmus.bushing.with_suffix(".onnx")), bushing_elements(system))
+        if bushings and fmus.bushing is not None
+        else {}
+    )
+    vehicle = build_vehicle(system, out / "fmu", run.step, stabilisers)
     parts = {model: (fmus.dampers[model], fmus.bushing) for model in DAMPER_MODELS}
     parts[TRUTH] = (truth.dampers["truth"], truth.bushing)
     ssds = {
@@ -361,7 +367,8 @@ def _context(system: str, run: SystemRun, settings: RoadTestSettings, drive: Mea
         f"; vehicle FMU exact at {run.step:g} s, inputs interpolated",
         "reference": f"monolithic RK4 at {settings.reference_step:g} s, rig truth physics in every network's place",
         "front LCA bushings": "networks in the loop through stabilised ports (the vehicle holds only each network's "
-        "deviation from the linear bushing over a step)"
+        "deviation from a linear bushing over a step, that bushing fitted to the networks' stiffness and damping "
+        "over a sample along their reference stimulus)"
         if system == "full-vehicle"
         else "none (quarter car)",
         "error budget": "total: network FMUs in the co-simulation; network: a network replayed open loop along the "

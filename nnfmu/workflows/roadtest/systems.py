@@ -7,8 +7,9 @@ into one step graph (`nnfmu.export.merge`), so one FMU per bushing carries all f
 Every element is a native FMU. The vehicle's dampers are external force ports; its LCA bushings are stabilised
 ports (`nnfmu.vehicle.dynamics.linear`): a 4.5 kg arm on bushings of several kN/mm has modes near 240 Hz, which a force
 held for the networks' 1 ms cannot carry (every plain exchange diverges within milliseconds), so the vehicle keeps the
-parameter file's linear bushing over each step and applies the network force plus the linear bushing's change since
-the step start. The vehicle FMU samples at the communication step, so each step starts at a sample.
+linear bushing over each step and applies the network force plus the linear bushing's change since the step start;
+that bushing is fitted to the networks' own stiffness and damping over a sample (`stabilisers`) rather than taken
+from the parameter file. The vehicle FMU samples at the communication step, so each step starts at a sample.
 """
 
 from __future__ import annotations
@@ -119,15 +120,21 @@ def vehicle_components(system: str) -> dict[str, str]:
     return {name: STABILISED for name in bushing_elements(system)}
 
 
-def build_vehicle(system: str, out: Path, step: float) -> Path:
+def build_vehicle(
+    system: str, out: Path, step: float, stabilisers: Mapping[str, tuple[float, float]] | None = None
+) -> Path:
     """The vehicle FMU of `system` (`vehicle_components`) sampled at the communication `step` [s] (exact: every
-    component is a port, so the vehicle is linear), starting where the monolithic reference does (`settled_state`)."""
+    component is a port, so the vehicle is linear), starting where the monolithic reference does (`settled_state`);
+    `stabilisers` replace the parameter file's elements of stabilised ports (`stabilisers.bushing_stabilisers`)."""
     components = vehicle_components(system)
     return build_vehicle_fmu(
         system,
         out / f"{system}.fmu",
         VehicleBuildSettings(
-            components=components, sample_period=step, initial_state=settled_state(system, components)
+            components=components,
+            sample_period=step,
+            initial_state=settled_state(system, components),
+            stabilisers=dict(stabilisers or {}),
         ),
     )
 

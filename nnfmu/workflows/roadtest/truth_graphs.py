@@ -10,7 +10,11 @@ and the sampling (the error budget's `nrmse_coupling`), because both integrate t
   speed of relu(-F), each the larger root of its quadratic;
 - bushing channel (`BushingChannelTruth`: progressive spring, Maxwell branches, Jenkins elements): exact for a
   deflection linear between samples, as the bushing rig records it: Maxwell branches as first-order recursions,
-  Jenkins elements as play operators, clip(y, -s, s) = y - relu(y - s) + relu(-y - s).
+  Jenkins elements as play operators, clip(y, -s, s) = y - relu(y - s) + relu(-y - s). The first sample finds the
+  bushing relaxed where it stands (`BushingChannelTruth.simulate`, and the monolithic reference's rest state), not
+  moved there from zero deflection: a car starts on deflected bushings, and a step from zero loaded the Jenkins
+  elements that never slip again on a road (the co-simulation's front radial bushing force stood 1.2 N off the
+  reference for the whole drive, its deflection 30 %).
 
 Ports are named like the networks' (`velocity`, `displacement`, `force`; `axial_displacement`, ..., `conical_torque`),
 so `nnfmu.cosim.ssp.connect_by_name` wires them to the vehicle as it wires the networks.
@@ -27,6 +31,7 @@ from nnfmu.errors import NnfmuError
 from nnfmu.export.graph import GraphBuilder
 from nnfmu.physics.damper import ValveSide
 
+STARTED, STARTED_NEXT = "started", "started_next"  # bushing truth: 0 at the first sample, 1 afterwards
 DAMPER_SUBSTEPS = 10  # RK4 steps per sample: 0.1 ms at 1 kHz, the monolithic reference's step
 
 
@@ -252,7 +257,8 @@ def _clip(graph: GraphBuilder, y: str, limit: str, name: str) -> str:
 def bushing_truth_graph(truths: dict[str, BushingChannelTruth], sample_period: float) -> onnx.ModelProto:
     """Step graph of a bushing's channels (`truths` keyed like `BUSHING_CHANNELS`: 'axial', 'radial',
     'axial_rotation', 'conical_rotation'): each channel's position input, force or torque output, and a state of
-    [position before, Maxwell branch forces, Jenkins element forces]."""
+    [position before, Maxwell branch forces, Jenkins element forces], and one `started` flag (0 at the first sample,
+    which takes no position change, then 1)."""
     unknown = sorted(set(truths) - set(BUSHING_CHANNELS))
     if unknown:
         raise TruthGraphError(
@@ -262,9 +268,11 @@ def bushing_truth_graph(truths: dict[str, BushingChannelTruth], sample_period: f
         name
         for key in truths
         for name in (BUSHING_CHANNELS[key].position, BUSHING_CHANNELS[key].force, f"{key}_state", f"{key}_state_next")
-    ]
+    ] + [STARTED, STARTED_NEXT]
     graph = GraphBuilder(reserved=reserved)
-    inputs, outputs, ports_in, ports_out, states = [], [], [], [], []
+    graph.output(graph.node("Identity", [graph.constant("after_start", np.ones(1))], "started_after"), STARTED_NEXT)
+    inputs, outputs, ports_in, ports_out, states = [(STARTED, 1)], [(STARTED_NEXT, 1)], [], [], []
+    states.append(StatePort(STARTED, STARTED_NEXT, (0.0,), "0 before the first sample, then 1"))
     for key, truth in truths.items():
         channel = BUSHING_CHANNELS[key]
         stiffness, relaxation = truth.maxwell
@@ -274,7 +282,11 @@ def bushing_truth_graph(truths: dict[str, BushingChannelTruth], sample_period: f
         state, state_next = f"{key}_state", f"{key}_state_next"
         edges = [graph.constant(f"{key}_edge{i}", np.array([i], dtype=np.int64)) for i in (0, 1, 1 + nm, size)]
         before = graph.node("Slice", [state, edges[0], edges[1]], f"{key}_position_before")
-        step = graph.node("Sub", [channel.position, before], f"{key}_position_change")
+        step = graph.node(
+            "Mul",
+            [graph.node("Sub", [channel.position, before], f"{key}_position_moved"), STARTED],
+            f"{key}_position_change",
+        )
         x = channel.position
         cube = graph.node("Mul", [graph.node("Mul", [x, x], f"{key}_squared"), x], f"{key}_cubed")
         total = graph.node(

@@ -77,6 +77,20 @@ def test_the_bushing_graph_is_the_rigs_exact_recursion() -> None:
         assert np.max(np.abs(got[channel.force] - want)) <= 1e-9 * np.max(np.abs(want)), key
 
 
+def test_the_bushing_graph_starts_relaxed_where_it_stands() -> None:
+    """A car starts on deflected bushings: the first sample takes no position change (as the rig's recursion and the
+    monolithic reference's rest state), so a run from a deflection is a run from zero shifted by the elastic law."""
+    truths = _bushing_truths()
+    start = {"axial": 1e-4, "radial": -5e-6, "axial_rotation": 2e-3, "conical_rotation": -1e-3}
+    positions = {BUSHING_CHANNELS[k].position: x + start[k] for k, x in zip(BUSHING_CHANNELS, _positions(5).values())}
+    got = run_step_graph(bushing_truth_graph(truths, T), positions)
+    for key, truth in truths.items():
+        channel = BUSHING_CHANNELS[key]
+        want, _ = truth.simulate(T, positions[channel.position])
+        assert abs(got[channel.force][0] - truth.elastic_force(start[key])) <= 1e-12 * abs(want[0]), key
+        assert np.max(np.abs(got[channel.force] - want)) <= 1e-9 * np.max(np.abs(want)), key
+
+
 def test_the_native_fmus_are_their_graphs(tmp_path: Path) -> None:
     truth = DamperTruth(DamperParams(), ("hysteresis", "seal_friction"))
     cases = {
