@@ -122,11 +122,11 @@ def load_brfd_series(paths: Sequence[str | os.PathLike[str]], min_samples: int =
             raise DataError(
                 f"{run.source}: sample period {run.sample_period:g} s differs from the {period:g} s of {runs[0].source}"
             )
-    n = sum(len(run) for run in runs)
     starts = np.cumsum([0] + [len(run) for run in runs])
     rows = "; ".join(f"{Path(run.source).name}: rows {a}-{b - 1}" for run, a, b in zip(runs, starts[:-1], starts[1:]))
-    return Measurement(
-        time=np.arange(n) * period,
+    return Measurement.uniform(
+        0.0,
+        period,
         channels={name: np.concatenate([run[name] for run in runs]) for name in runs[0].names},
         units=dict(runs[0].units),
         source=" + ".join(run.source for run in runs),
