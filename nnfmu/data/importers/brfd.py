@@ -64,11 +64,10 @@ def _table(path: Path, rows: object) -> np.ndarray:
     return table
 
 
-def _check_period(path: Path, content: dict, time: np.ndarray) -> None:
+def _check_period(path: Path, content: dict, period: float) -> None:
     declared = content.get("dt")
-    if declared is None or len(time) < 2:
+    if declared is None:
         return
-    period = float(time[-1] - time[0]) / (len(time) - 1)
     if not np.isclose(period, float(declared), rtol=1e-3):
         raise DataError(f"{path}: time column steps by {period:g} s on average, but 'dt' says {declared!r} s")
 
@@ -102,7 +101,7 @@ def load_brfd(path: str | os.PathLike[str], min_samples: int = 16) -> Measuremen
         },
     )
     check_measurement(measurement, min_samples=min_samples)
-    _check_period(path, content, time)
+    _check_period(path, content, measurement.sample_period)
     return measurement
 
 
