@@ -114,8 +114,9 @@ def run_libcosim(
                 raise CosimError(f"{path}: libcosim recorded no initial value of {element}.{output}")
             rows[0, j] = values[0]
         del execution
-    measurement = Measurement(
-        time=np.arange(n_steps + 1) * h,
+    measurement = Measurement.uniform(
+        0.0,
+        h,
         channels={name: rows[:, j] for j, (_, _, name, _) in enumerate(channels)},
         units={name: unit for _, _, name, unit in channels},
         source=f"libcosim co-simulation of {system.name} (h = {h_ns} ns) on {drive.source}",

@@ -568,8 +568,9 @@ def cosimulate(
         healthy = True
     finally:
         parts.close(healthy)
-    measurement = Measurement(
-        time=t0 + np.arange(n_steps + 1) * h,
+    measurement = Measurement.uniform(
+        t0,
+        h,
         channels={name: rows[:, i] for i, (name, _) in enumerate(channels)},
         units={name: unit for name, unit in channels},
         source=f"co-simulation of {system.name} ({settings.scheme}, h = {h:g} s) on {drive.source}",

@@ -1,4 +1,5 @@
-"""Checks that a `Measurement` is usable: SI units, enough finite samples, a uniform time axis, required channels."""
+"""Checks that a `Measurement` is usable: SI units, enough samples, finite values, required channels (the
+measurement checks its own time axis when it is made)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,6 @@ import numpy as np
 
 from nnfmu.data.errors import DataError
 from nnfmu.data.measurement import Measurement
-from nnfmu.data.timebase import Resolution, check_uniform
 from nnfmu.data.units import SI_UNITS, channel_quantity, kept_unit
 
 MIN_TEMPERATURE = 150.0  # K; rig temperatures lie far above (-123 degC), a value below is degC or degF labelled K
@@ -19,34 +19,32 @@ def check_measurement(
     required: Sequence[str] = (),
     min_samples: int = 16,
     source: str | None = None,
-    time_resolution: Resolution | None = None,
 ) -> None:
     """Raise DataError naming `source` (default `m.source`) and the channel/sample at fault, else return None.
 
     In order: shapes and SI units of every channel, the `required` channels, at least `min_samples` samples,
-    finite values, a strictly increasing time axis that lies on a uniform base within tolerance (sampling jitter,
-    and the stamps' `time_resolution` in s where a file stored them rounded; see `timebase`), and temperatures of
-    at least MIN_TEMPERATURE.
+    finite values, and temperatures of at least MIN_TEMPERATURE. The time axis was checked when `m` was made.
     """
     where = source if source is not None else m.source
     _check_layout(m, where)
     _check_required(m, required, where)
-    if len(m.time) < min_samples:
-        raise DataError(f"{where}: {len(m.time)} samples, at least {min_samples} needed")
+    check_sample_count(len(m), min_samples, where)
     _check_finite(m, where)
-    check_uniform(m.time, where, time_resolution)
     _check_temperatures(m, where)
 
 
+def check_sample_count(n: int, min_samples: int, where: str) -> None:
+    """Raise DataError naming `where` unless a record of `n` samples has at least `min_samples`."""
+    if n < min_samples:
+        raise DataError(f"{where}: {n} samples, at least {min_samples} needed")
+
+
 def _check_layout(m: Measurement, where: str) -> None:
-    time = np.asarray(m.time)
-    if time.ndim != 1:
-        raise DataError(f"{where}: time must have shape (n,), has shape {time.shape}")
     if "time" in m.channels:
         raise DataError(f"{where}: 'time' is the time axis and cannot also be a channel")
     for name, values in m.channels.items():
-        if np.shape(values) != time.shape:
-            raise DataError(f"{where}: channel {name!r} has shape {np.shape(values)}, the time axis {time.shape}")
+        if np.shape(values) != m.time.shape:
+            raise DataError(f"{where}: channel {name!r} has shape {np.shape(values)}, the time axis {m.time.shape}")
         unit = m.units.get(name)
         if unit is None:
             raise DataError(f"{where}: channel {name!r} has no unit")
@@ -82,9 +80,6 @@ def _first_bad(values: np.ndarray) -> int | None:
 
 
 def _check_finite(m: Measurement, where: str) -> None:
-    row = _first_bad(np.asarray(m.time, dtype=float))
-    if row is not None:
-        raise DataError(f"{where}: time is {_g(m.time[row])} at sample {row}")
     for name, values in m.channels.items():
         values = np.asarray(values, dtype=float)
         row = _first_bad(values)

@@ -157,9 +157,9 @@ def _read_rpc(path: Path) -> Measurement:
         if name in values:
             raise DataError(f"{path}: channel {name!r} appears more than once")
         values[name], units[name] = to_si(np.asarray(channel.data, dtype=np.float64), unit, name, source)
-    samples = len(next(iter(values.values())))
-    measurement = Measurement(
-        time=np.arange(samples) * float(params["DELTA_T"]),
+    measurement = Measurement.uniform(
+        0.0,
+        float(params["DELTA_T"]),
         channels=values,
         units=units,
         source=source,

@@ -8,7 +8,7 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 from nnfmu.data.channel_map import rename_channels
-from nnfmu.data.checks import check_measurement
+from nnfmu.data.checks import check_measurement, check_sample_count
 from nnfmu.data.csv_io import read_csv
 from nnfmu.data.derive import derive_rates
 from nnfmu.data.errors import DataError
@@ -16,17 +16,19 @@ from nnfmu.data.mdf_io import read_mdf
 from nnfmu.data.measurement import Measurement
 from nnfmu.data.mts_io import is_mts_export, read_mts
 from nnfmu.data.raw import RawTable
-from nnfmu.data.timebase import Resolution, uniform_time
+from nnfmu.data.timebase import uniform_stamps
 from nnfmu.data.units import SI_UNITS, to_si
 
 READERS: dict[str, Callable[[Path], RawTable]] = {".csv": read_csv, ".mf4": read_mdf, ".mdf": read_mdf}
 MTS_SUFFIXES = (".dat", ".txt")  # read only as MTS 793 exports; a `.csv` starting `MTS793|` is one too
 
 
-def to_measurement(raw: RawTable, source: str) -> tuple[Measurement, Resolution | None]:
-    """Convert every channel of a file's table to SI (see `units.to_si`) as a `Measurement` from `source`, with the
-    resolution of its time stamps in s."""
+def to_measurement(raw: RawTable, source: str, min_samples: int = 16) -> Measurement:
+    """Convert every channel of a file's table to SI (see `units.to_si`) as a `Measurement` from `source` with at
+    least `min_samples` samples, its stamps replaced by their least-squares uniform base where they stray within
+    their resolution or the sampling jitter (said in `notes["time"]`; see `timebase`)."""
     time, _ = to_si(raw.time, raw.time_unit, "time", source)
+    check_sample_count(len(time), min_samples, source)
     resolution = None
     if raw.time_resolution is not None:
         scale = float(to_si([1.0], raw.time_unit, "time", source)[0][0])
@@ -39,8 +41,10 @@ def to_measurement(raw: RawTable, source: str) -> tuple[Measurement, Resolution 
     kept = [f"{name} [{units[name]}]" for name in channels if units[name] not in SI_UNITS]
     if kept:
         notes["units"] = f"kept as declared (quantities nnfmu does not convert): {', '.join(kept)}"
-    measurement = Measurement(time=time, channels=channels, units=units, source=source, notes=notes)
-    return measurement, resolution
+    time, note = uniform_stamps(time, source, resolution)
+    if note is not None:
+        notes["time"] = note
+    return Measurement(time=time, channels=channels, units=units, source=source, notes=notes)
 
 
 def read_table(path: Path, channel_map: Mapping[str, str] | None = None) -> RawTable:
@@ -84,9 +88,9 @@ def load_measurement(
     samples) raises DataError naming the file.
     """
     path = Path(path)
-    measurement, resolution = to_measurement(read_table(path, channel_map), str(path))
-    check_measurement(measurement, min_samples=min_samples, time_resolution=resolution)
-    measurement = derive_rates(uniform_time(measurement, resolution))
+    measurement = to_measurement(read_table(path, channel_map), str(path), min_samples)
+    check_measurement(measurement, min_samples=min_samples)
+    measurement = derive_rates(measurement)
     _check_mapped(measurement, required)
     check_measurement(measurement, required=required, min_samples=min_samples)
     return measurement

@@ -12,7 +12,7 @@ tolerance, the largest of
 - float64 noise: FLOAT_NOISE units of float64 epsilon of the largest stamp.
 Rounding to nearest is assumed; a controller that truncates is covered as far as the sampling jitter reaches.
 
-A record whose stamps all lie within float64 noise of the line keeps them as stored. Otherwise `uniform_time` replaces
+A record whose stamps all lie within float64 noise of the line keeps them as stored. Otherwise `uniform_stamps` replaces
 them by the fitted base and notes in one line how far they strayed and which tolerance covered it. A stamp beyond its
 tolerance is refused, naming the sample: the first step that differs from the median step by more than its two
 stamps' tolerances (a gap or a jump), else the stamp farthest off the line (a clock whose rate drifts, or a stamp
@@ -22,12 +22,11 @@ out of line).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from nnfmu.data.errors import DataError
-from nnfmu.data.measurement import Measurement
 
 TIME_JITTER = 1e-3  # sampling jitter accepted at every stamp, relative to the period
 FLOAT_NOISE = 64.0  # float64 rounding accepted at every stamp, in units of epsilon times the largest |stamp|
@@ -163,11 +162,16 @@ def _tolerance_text(fit: UniformFit, row: int, resolution: Resolution | None) ->
 
 
 def check_uniform(time: np.ndarray, where: str, resolution: Resolution | None = None) -> UniformFit | None:
-    """Raise DataError naming `where` and the sample unless `time` [s] increases and is uniform within tolerance.
+    """Raise DataError naming `where` and the sample unless `time` [s] is finite, increases and is uniform within
+    tolerance.
 
-    Returns the fit (None for fewer than two stamps). `time` must be finite.
+    Returns the fit (None for fewer than two stamps).
     """
     time = np.asarray(time, dtype=float)
+    not_finite = np.flatnonzero(~np.isfinite(time))
+    if not_finite.size:
+        row = int(not_finite[0])
+        raise DataError(f"{where}: time is {_g(time[row])} at sample {row}")
     if time.size < 2:
         return None
     steps = np.diff(time)
@@ -213,12 +217,12 @@ def _note(fit: UniformFit, resolution: Resolution | None) -> str:
     )
 
 
-def uniform_time(m: Measurement, resolution: Resolution | None = None) -> Measurement:
-    """`m` on its fitted uniform time base, with `notes["time"]` saying so; `m` itself when its stamps are exact.
+def uniform_stamps(time: np.ndarray, where: str, resolution: Resolution | None = None) -> tuple[np.ndarray, str | None]:
+    """`time` [s] itself and None when its stamps are exact, else its fitted uniform base and a one-line note saying so.
 
-    Raises DataError (see `check_uniform`) when the stamps are not uniform within tolerance.
+    Raises DataError naming `where` (see `check_uniform`) when the stamps are not uniform within tolerance.
     """
-    fit = check_uniform(m.time, m.source, resolution)
+    fit = check_uniform(time, where, resolution)
     if fit is None or fit.exact:
-        return m
-    return replace(m, time=fit.times(), notes={**m.notes, "time": _note(fit, resolution)})
+        return time, None
+    return fit.times(), _note(fit, resolution)

@@ -19,7 +19,8 @@ class EffectSignals:
     `channels`: the measured and derived channels of the output's direction, shape (n,) each, SI units;
     `derived`: which of them were derived (and how, from `Measurement.notes`); `measured`: the output channel;
     `predicted`: the model's output; `time` [s]; `unknown_to_model`: base names present but not model inputs;
-    `raw`: every measured channel by its full name (what an `input:<channel>` candidate reads).
+    `raw`: every measured channel by its full name (what an `input:<channel>` candidate reads); `sample_period` [s]:
+    the measurement's.
     """
 
     time: np.ndarray
@@ -30,10 +31,7 @@ class EffectSignals:
     output: str
     unknown_to_model: tuple[str, ...]
     raw: dict[str, np.ndarray]
-
-    @property
-    def sample_period(self) -> float:
-        return float(self.time[-1] - self.time[0]) / (len(self.time) - 1)
+    sample_period: float
 
     def has(self, base: str) -> bool:
         return base in self.channels
@@ -75,4 +73,5 @@ def build_signals(m: Measurement, predicted: np.ndarray, output: str, model_inpu
         output=output,
         unknown_to_model=unknown,
         raw={name: np.asarray(values, dtype=float) for name, values in m.channels.items()},
+        sample_period=m.sample_period,
     )

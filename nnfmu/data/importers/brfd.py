@@ -64,11 +64,10 @@ def _table(path: Path, rows: object) -> np.ndarray:
     return table
 
 
-def _check_period(path: Path, content: dict, time: np.ndarray) -> None:
+def _check_period(path: Path, content: dict, period: float) -> None:
     declared = content.get("dt")
-    if declared is None or len(time) < 2:
+    if declared is None:
         return
-    period = float(time[-1] - time[0]) / (len(time) - 1)
     if not np.isclose(period, float(declared), rtol=1e-3):
         raise DataError(f"{path}: time column steps by {period:g} s on average, but 'dt' says {declared!r} s")
 
@@ -102,7 +101,7 @@ def load_brfd(path: str | os.PathLike[str], min_samples: int = 16) -> Measuremen
         },
     )
     check_measurement(measurement, min_samples=min_samples)
-    _check_period(path, content, time)
+    _check_period(path, content, measurement.sample_period)
     return measurement
 
 
@@ -122,11 +121,11 @@ def load_brfd_series(paths: Sequence[str | os.PathLike[str]], min_samples: int =
             raise DataError(
                 f"{run.source}: sample period {run.sample_period:g} s differs from the {period:g} s of {runs[0].source}"
             )
-    n = sum(len(run) for run in runs)
     starts = np.cumsum([0] + [len(run) for run in runs])
     rows = "; ".join(f"{Path(run.source).name}: rows {a}-{b - 1}" for run, a, b in zip(runs, starts[:-1], starts[1:]))
-    return Measurement(
-        time=np.arange(n) * period,
+    return Measurement.uniform(
+        0.0,
+        period,
         channels={name: np.concatenate([run[name] for run in runs]) for name in runs[0].names},
         units=dict(runs[0].units),
         source=" + ".join(run.source for run in runs),
