@@ -155,27 +155,15 @@ def damper_truth_graph(truth: DamperTruth, sample_period: float, substeps: int =
         )
         half, full = graph.constant(f"{tag}_half_h", np.array([h / 2])), graph.constant(f"{tag}_h", np.array([h]))
         k1 = _valve_rate(graph, truth, valve, v0, f"{tag}_k1")
-        k2 = _valve_rate(
-            graph,
-            truth,
-            graph.node("Add", [valve, graph.node("Mul", [k1, half], f"{tag}_d1")], f"{tag}_f2"),
-            vm,
-            f"{tag}_k2",
-        )
-        k3 = _valve_rate(
-            graph,
-            truth,
-            graph.node("Add", [valve, graph.node("Mul", [k2, half], f"{tag}_d2")], f"{tag}_f3"),
-            vm,
-            f"{tag}_k3",
-        )
-        k4 = _valve_rate(
-            graph,
-            truth,
-            graph.node("Add", [valve, graph.node("Mul", [k3, full], f"{tag}_d3")], f"{tag}_f4"),
-            v1,
-            f"{tag}_k4",
-        )
+
+        def stage(k_prev: str, step: str, v: str, i: int) -> str:
+            """RK4 stage i: the valve rate at valve + step * k_prev (node names as before)."""
+            valve_i = graph.node("Add", [valve, graph.node("Mul", [k_prev, step], f"{tag}_d{i - 1}")], f"{tag}_f{i}")
+            return _valve_rate(graph, truth, valve_i, v, f"{tag}_k{i}")
+
+        k2 = stage(k1, half, vm, 2)
+        k3 = stage(k2, half, vm, 3)
+        k4 = stage(k3, full, v1, 4)
         inner = graph.node(
             "Add",
             [
