@@ -48,3 +48,9 @@ def test_quick_demo_runs_every_stage(tmp_path: Path) -> None:
     for fmu in [Path(m.fmu) for m in summary.models] + [summary.loop.fmu]:
         report = check_fmu(fmu)
         assert report.passed and report.experiments, (fmu, report.checksum_errors, report.experiments)
+    # it ends with the thesis's residual one level up: a lab car with gas force the dyno record never showed
+    vehicle = written["vehicle_loop"]
+    assert Path(vehicle["report"]).is_file() and Path(vehicle["lab_car"]).is_file()
+    assert [(i["component"], i["effect"]) for i in vehicle["iterations"]] == [("damper", "gas_force")]
+    force = summary.vehicle_loop.channels["damper_force"]
+    assert abs(force["after"].mean_shift) < abs(force["before"].mean_shift) / 3
