@@ -165,7 +165,12 @@ def _coverage(car: VirtualCar, channels: list[str], retrainable: Mapping[str, bo
                 notes.append(
                     f"{element}: {', '.join(lacking)} not measured: no in-situ data, so its effects are fitted as "
                     "physical terms to the vehicle residual"
-                    + ("; a load-cell offset cannot be told from a preload without its force" if not force else "")
+                    + (
+                        "; without its load cell a gas preload shows only as a shift of its corner's attitude, which "
+                        "a zero offset of that corner's LCA angle or LVDT also gives"
+                        if not force
+                        else ""
+                    )
                 )
         elif kind == "bushing":
             corner = element.split("_")[1] if element.count("_") >= 2 else ""
