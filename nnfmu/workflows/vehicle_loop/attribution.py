@@ -2,7 +2,8 @@
 channel at once.
 
 Candidates: each component element's effect as parameterised physical terms on its network's output (a damper's
-`gas_force`: a preload and a rate times its displacement; a bushing's `stiffness`: a rate times each deflection),
+`gas_force`: a preload and a rate times its displacement; a bushing's `stiffness`: a rate times each deflection or
+rotation on its own force or torque),
 and a `sensor_offset` per measured channel (a constant in that channel alone). A component effect moves several
 channels consistently; its sensitivity is measured in the co-simulation: the network FMU with one term added at a
 known coefficient, swapped into the system and replayed, gives the change of every channel per unit coefficient
@@ -24,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats
 
+from nnfmu.data.rigs import BUSHING_CHANNELS
 from nnfmu.diagnosis.correlation import newey_west_variance
 from nnfmu.diagnosis.ranking import cross_fit_errors, extend_base, fold_mask
 from nnfmu.export.terms import OutputTerm
@@ -36,12 +38,22 @@ ALIKE = 0.9  # a rival explaining at least this share of what the named candidat
 @dataclass(frozen=True)
 class Candidate:
     """A (component, effect) with the basis terms it adds to the component's network (each at the coefficient its
-    sensitivity is measured with), or a sensor offset on `channel` (no terms)."""
+    sensitivity is measured with), or a sensor offset on `channel` (no terms). With `joint_step` the terms are one
+    basis together (their coefficients the effect at unit amplitude), its sensitivity measured at `joint_step` times
+    them: one fitted amplitude scales them all."""
 
     component: str
     effect: str
     terms: tuple[OutputTerm, ...] = ()
     channel: str | None = None
+    joint_step: float | None = None
+
+    def fitted_terms(self, coefficients: tuple[float, ...]) -> tuple[OutputTerm, ...]:
+        """The terms at the fitted `coefficients` (one amplitude for joint terms, else one per term)."""
+        if self.joint_step is not None:
+            (amplitude,) = coefficients
+            return tuple(OutputTerm(t.output, t.channel, amplitude * t.coefficient, t.unit) for t in self.terms)
+        return tuple(OutputTerm(t.output, t.channel, c, t.unit) for t, c in zip(self.terms, coefficients))
 
     @property
     def key(self) -> str:
@@ -58,6 +70,19 @@ def damper_candidates(element: str) -> list[Candidate]:
             (OutputTerm("force", None, -100.0, "N"), OutputTerm("force", "displacement", 2000.0, "m")),
         )
     ]
+
+
+def bushing_candidates(element: str, stiffness: Mapping[str, float], step: float) -> list[Candidate]:
+    """A bushing's candidate effects: `stiffness` (aged rubber stiffens every channel alike), the element's own
+    stiffness per channel (`stiffness`: force or torque output -> N/m or N.m/rad) times that channel's deflection or
+    rotation on its own output, all channels one basis whose fitted amplitude is the fraction of stiffness added;
+    its sensitivity measured at `step` (a fraction) of it."""
+    terms = tuple(
+        OutputTerm(ch.force, ch.position, stiffness[ch.force], ch.position_unit)
+        for ch in BUSHING_CHANNELS.values()
+        if ch.force in stiffness
+    )
+    return [Candidate(element, "stiffness", terms, joint_step=step)] if terms else []
 
 
 def offset_candidate(channel: str) -> Candidate:
@@ -90,7 +115,11 @@ class Evidence:
             "p_value": self.p_value,
             "effective_samples": self.effective_samples,
             "coefficients": list(self.coefficients),
-            "terms": [{"output": t.output, "channel": t.channel, "unit": t.unit} for t in self.candidate.terms],
+            "terms": [
+                {"output": t.output, "channel": t.channel, "unit": t.unit}
+                | ({"rate_per_unit_amplitude": t.coefficient} if self.candidate.joint_step is not None else {})
+                for t in self.candidate.terms
+            ],
             "channels_explained": self.channels,
             "named": self.named,
             "cannot_tell_apart_from": list(self.alike),

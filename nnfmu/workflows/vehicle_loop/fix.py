@@ -13,8 +13,7 @@ from nnfmu.cosim.replay import replay_fmu
 from nnfmu.data import Measurement
 from nnfmu.data.derive import derivative
 from nnfmu.diagnosis import Diagnosis, diagnose
-from nnfmu.export import read_step_graph
-from nnfmu.export.terms import OutputTerm
+from nnfmu.export import ExportError, read_step_graph
 from nnfmu.workflows.loop import LoopReport, LoopSettings, run_loop
 from nnfmu.workflows.vehicle_loop.attribution import Evidence
 from nnfmu.workflows.vehicle_loop.sensitivity import term_fmu
@@ -33,6 +32,16 @@ def in_situ_record(measured: Measurement, element: str) -> Measurement | None:
         {"displacement": "m", "velocity": "m/s", "force": "N"},
         source=f"{element} in-situ ({force}, {displacement}) in {measured.source}",
     )
+
+
+def trained_network(onnx_path: Path) -> bool:
+    """Whether `onnx_path` is a network nnfmu trained (its feature spec readable), which the component loop can
+    diagnose and retrain; a hand-built step graph (the truth physics, a merged bushing) is not."""
+    try:
+        read_step_graph(onnx_path)
+    except ExportError:
+        return False
+    return True
 
 
 def in_situ_diagnosis(record: Measurement, fmu: Path, onnx_path: Path, settings: LoopSettings) -> Diagnosis:
@@ -64,10 +73,10 @@ def fix_in_situ(element: str, record: Measurement, onnx_path: Path, folder: Path
 
 def fix_by_terms(evidence: Evidence, onnx_path: Path, folder: Path) -> Fixed:
     """The element's network with the effect's terms at the coefficients fitted to the vehicle residual."""
-    terms = tuple(
-        OutputTerm(t.output, t.channel, c, t.unit) for t, c in zip(evidence.candidate.terms, evidence.coefficients)
-    )
+    terms = evidence.candidate.fitted_terms(evidence.coefficients)
     element = evidence.candidate.component
     fmu = term_fmu(onnx_path, terms, folder / f"{element}-{evidence.candidate.effect}", "vehicle loop fix")
-    listed = ", ".join(f"{c:.4g} x {t.channel or '1'} on {t.output}" for t, c in zip(terms, evidence.coefficients))
+    listed = ", ".join(f"{t.coefficient:.4g} x {t.channel or '1'} on {t.output}" for t in terms)
+    if evidence.candidate.joint_step is not None:
+        listed = f"{evidence.coefficients[0]:+.1%} of its own stiffness: {listed}"
     return Fixed(element, fmu, fmu.with_suffix(".onnx"), f"physical terms fitted to the vehicle residual: {listed}")

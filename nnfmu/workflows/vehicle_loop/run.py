@@ -23,14 +23,23 @@ from nnfmu.workflows.vehicle_loop.attribution import (
     SENSOR_OFFSET,
     Attribution,
     Candidate,
+    Evidence,
     attribute,
+    bushing_candidates,
     damper_candidates,
     offset_candidate,
 )
-from nnfmu.workflows.vehicle_loop.fix import Fixed, fix_by_terms, fix_in_situ, in_situ_diagnosis, in_situ_record
+from nnfmu.workflows.vehicle_loop.fix import (
+    Fixed,
+    fix_by_terms,
+    fix_in_situ,
+    in_situ_diagnosis,
+    in_situ_record,
+    trained_network,
+)
 from nnfmu.workflows.vehicle_loop.report import write_vehicle_report
 from nnfmu.workflows.vehicle_loop.residuals import ChannelError, channel_errors, on_record, replay_system, settled
-from nnfmu.workflows.vehicle_loop.sensitivity import Sensitivities
+from nnfmu.workflows.vehicle_loop.sensitivity import PERTURBATION, Sensitivities, network_stiffness
 from nnfmu.workflows.vehicle_loop.settings import VehicleLoopError, VehicleLoopSettings
 from nnfmu.workflows.vehicle_loop.system_files import VirtualCar, read_virtual_car, swapped_system
 
@@ -123,24 +132,72 @@ def _load(data: str | os.PathLike[str] | Measurement, what: str, reader) -> Meas
         raise VehicleLoopError(f"cannot read the {what}: {error}") from None
 
 
-def _coverage(car: VirtualCar, measured: Measurement, channels: list[str]) -> list[str]:
+def _corner_channels(corner: str) -> tuple[str, ...]:
+    """The lab channels at one corner that a component there moves first."""
+    return (
+        f"lca_{corner}_angle",
+        f"damper_{corner}_displacement",
+        f"damper_{corner}_force",
+        f"spindle_{corner}_acceleration",
+        f"body_acceleration_{corner}",
+    )
+
+
+def _coverage(car: VirtualCar, channels: list[str], retrainable: Mapping[str, bool]) -> list[str]:
     """What the measured channels allow and what a missing one costs, per component element."""
     notes = []
+    arms: dict[str, list[str]] = {}
     for element in car.fmus:
         kind = car.kind(element)
         if car.onnx[element] is None:
             notes.append(f"{element}: no ONNX step graph known (--model), so its effects are not tested")
         elif kind == "damper":
             force, stroke = f"{element}_force" in channels, f"{element}_displacement" in channels
-            if force and stroke:
+            if force and stroke and retrainable[element]:
                 notes.append(f"{element}: load cell and LVDT measured: in-situ diagnosis and retraining")
+            elif force and stroke:
+                notes.append(
+                    f"{element}: load cell and LVDT measured, but its step graph is no network nnfmu trained: no "
+                    "in-situ diagnosis; its effects are fitted as physical terms to the vehicle residual"
+                )
             else:
                 lacking = [c for c, ok in ((f"{element}_force", force), (f"{element}_displacement", stroke)) if not ok]
                 notes.append(
                     f"{element}: {', '.join(lacking)} not measured: no in-situ data, so its effects are fitted as "
                     "physical terms to the vehicle residual"
-                    + ("; a load-cell offset cannot be told from a preload without its force" if not force else "")
+                    + (
+                        "; without its load cell a gas preload shows only as a shift of its corner's attitude, which "
+                        "a zero offset of that corner's LCA angle or LVDT also gives"
+                        if not force
+                        else ""
+                    )
                 )
+        elif kind == "bushing":
+            corner = element.split("_")[1] if element.count("_") >= 2 else ""
+            arms.setdefault(corner, []).append(element)
+            seen = [c for c in _corner_channels(corner) if c in channels]
+            notes.append(
+                f"{element}: no lab channel measures its deflection or force, so its stiffness is fitted as physical "
+                "terms to the vehicle residual, "
+                + (
+                    f"seen at its corner through {', '.join(seen)}"
+                    if seen
+                    else f"and no channel at its corner ({', '.join(_corner_channels(corner))}) is measured: it "
+                    "shows only through the other corners, if at all"
+                )
+                + (
+                    ""
+                    if f"lca_{corner}_angle" in channels
+                    else f"; without lca_{corner}_angle its arm's rotation "
+                    "is read only from the damper stroke and the accelerations"
+                )
+            )
+    for corner, elements in arms.items():
+        if len(elements) > 1:
+            notes.append(
+                f"{' and '.join(elements)} hold the same arm: only how the arm's motion splits between their "
+                "deflections tells their stiffnesses apart"
+            )
     if not any(c.endswith("_force") and c.startswith("damper") for c in channels):
         notes.append(
             "no damper force measured: a damper's gas force and other spring-like effects at a corner are told "
@@ -149,16 +206,28 @@ def _coverage(car: VirtualCar, measured: Measurement, channels: list[str]) -> li
     return notes
 
 
-def _candidates(car: VirtualCar, channels: list[str]) -> tuple[dict[str, Candidate], dict[str, str]]:
+def _candidates(
+    car: VirtualCar, channels: list[str], replay: Measurement
+) -> tuple[dict[str, Candidate], dict[str, str]]:
+    """Every component element's candidate effects (a bushing's rates scaled to its network's own stiffness along
+    the virtual car's `replay`), a sensor offset per measured channel; and the candidates that cannot be tested."""
     found: dict[str, Candidate] = {}
     untestable: dict[str, str] = {}
     for element in car.fmus:
-        if car.kind(element) == "damper":
-            for c in damper_candidates(element):
-                if car.onnx[element] is None:
-                    untestable[c.key] = "no ONNX step graph of the element"
-                else:
-                    found[c.key] = c
+        kind = car.kind(element)
+        if kind == "damper":
+            made = damper_candidates(element)
+        elif kind == "bushing":
+            made = bushing_candidates(element, network_stiffness(replay, element), PERTURBATION)
+            if not made:
+                untestable[f"{element}:stiffness"] = "no deflection and force of the element in the replay to scale by"
+        else:
+            made = []
+        for c in made:
+            if car.onnx[element] is None:
+                untestable[c.key] = "no ONNX step graph of the element"
+            else:
+                found[c.key] = c
     for channel in channels:
         c = offset_candidate(channel)
         found[c.key] = c
@@ -204,7 +273,8 @@ def run_vehicle_loop(
     if flat:
         raise VehicleLoopError(f"{m.source}: channel(s) {', '.join(flat)} do not vary; nothing to compare")
     residual = np.column_stack([(record[c] - virtual[c]) / s for c, s in zip(channels, scale)])
-    candidates, untestable = _candidates(car, channels)
+    candidates, untestable = _candidates(car, channels, base)
+    retrainable = {e: path is not None and trained_network(path) for e, path in car.onnx.items()}
     out_dir.parent.mkdir(parents=True, exist_ok=True)
     staging = staging_dir(out_dir.parent, f".{out_dir.name}.staging-")
     try:
@@ -221,7 +291,7 @@ def run_vehicle_loop(
                 columns[key] = [column]
             else:
                 log(f"sensitivity of the channels to {c.key}")
-                columns[key] = [s / scale for s in sensitivities.columns(c.component, c.terms)]
+                columns[key] = [s / scale for s in sensitivities.columns(c.component, c.terms, c.joint_step)]
         found = attribute(
             residual,
             channels,
@@ -236,7 +306,7 @@ def run_vehicle_loop(
         in_situ = {}
         for element in car.fmus:
             own = in_situ_record(m, element) if car.kind(element) == "damper" else None
-            if own is not None and car.onnx[element] is not None:
+            if own is not None and retrainable[element]:
                 in_situ[element] = in_situ_diagnosis(
                     own.slice(*_rows(own, settings.settle)), car.fmus[element], car.onnx[element], settings.in_situ
                 )
@@ -248,7 +318,7 @@ def run_vehicle_loop(
                 offsets[c.channel] = e.coefficients[0] * float(scale[channels.index(c.channel)])
                 continue
             onnx_path = car.onnx[c.component]
-            own = in_situ_record(m, c.component)
+            own = in_situ_record(m, c.component) if retrainable[c.component] else None
             log(f"fixing {c.component}: {c.effect}")
             if own is not None:
                 fixes.append(
@@ -273,11 +343,7 @@ def run_vehicle_loop(
         before = channel_errors(virtual, record, channels)
         after = channel_errors(after_result, corrected, channels)
         named = found.named
-        summary = (
-            "named " + ", ".join(f"{e.candidate.effect} on {e.candidate.component}" for e in named)
-            if named
-            else f"nothing added; {BUDGET}"
-        )
+        summary = "named " + ", ".join(map(_named_words, named)) if named else f"nothing added; {BUDGET}"
         report = VehicleLoopReport(
             measured=m.source,
             system=str(car.ssd),
@@ -288,7 +354,7 @@ def run_vehicle_loop(
             fixes=[_moved(f, staging, out_dir) for f in fixes],
             offsets=offsets,
             in_situ=in_situ,
-            coverage=_coverage(car, m, channels),
+            coverage=_coverage(car, channels, retrainable),
             ignored=ignored,
             summary=summary,
         )
@@ -299,6 +365,14 @@ def run_vehicle_loop(
         if staging.exists():
             shutil.rmtree(staging)
     return report
+
+
+def _named_words(e: Evidence) -> str:
+    """'effect on component', with the candidates these channels cannot tell from it."""
+    words = f"{e.candidate.effect} on {e.candidate.component}"
+    if e.alike:
+        words += f" (these channels cannot tell it apart from {' or '.join(k.replace(':', ' ') for k in e.alike)})"
+    return words
 
 
 def _rows(m: Measurement, settle: float) -> tuple[int, int]:

@@ -12,12 +12,34 @@ import onnx
 
 from nnfmu.atomic import atomic_path
 from nnfmu.data import Measurement
+from nnfmu.data.rigs import BUSHING_CHANNELS
 from nnfmu.export.terms import OutputTerm, add_output_terms
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.workflows.vehicle_loop.system_files import VirtualCar, swapped_system
 
 Replay = Callable[[Path], Measurement]  # an SSD -> its channels on the record's time stamps
+PERTURBATION = 0.1  # a bushing's stiffness sensitivity is measured 10 % stiffer than its network: small enough for
+# first order, large enough to stand out of the co-simulation's numerical noise (`bushing_candidates`' step)
+
+
+def network_stiffness(replay: Measurement, element: str) -> dict[str, float]:
+    """The bushing element's own stiffness per channel (force or torque output -> N/m or N.m/rad): the least-squares
+    fit F = k x + c v + F0 of its network's output on its deflection (or rotation) and rate along the virtual car's
+    replay `replay`; channels the replay lacks or whose fitted k is not positive are left out."""
+    rates = {}
+    for ch in BUSHING_CHANNELS.values():
+        names = [f"{element}_{n}" for n in (ch.position, ch.rate, ch.force)]
+        if not all(n in replay for n in names):
+            continue
+        x, v, force = (np.asarray(replay[n], dtype=float) for n in names)
+        design = np.column_stack([x, v, np.ones_like(x)])
+        if not np.all(np.isfinite(design)) or np.linalg.matrix_rank(design) < 3:
+            continue
+        stiffness = float(np.linalg.lstsq(design, force, rcond=None)[0][0])
+        if np.isfinite(stiffness) and stiffness > 0:
+            rates[ch.force] = stiffness
+    return rates
 
 
 def term_fmu(source: Path, terms: tuple[OutputTerm, ...], out: Path, label: str) -> Path:
@@ -29,28 +51,31 @@ def term_fmu(source: Path, terms: tuple[OutputTerm, ...], out: Path, label: str)
 
 
 class Sensitivities:
-    """Builds each (step graph, term) FMU once and replays each (element, term) swap once, in `folder`."""
+    """Builds each (step graph, terms) FMU once and replays each (element, terms) swap once, in `folder`."""
 
     def __init__(self, car: VirtualCar, folder: Path, replay: Replay, base: Measurement, channels: list[str]) -> None:
         self.car, self.folder, self.replay, self.base, self.channels = car, folder, replay, base, channels
-        self._fmus: dict[tuple[Path, OutputTerm], Path] = {}
+        self._fmus: dict[tuple[Path, tuple[OutputTerm, ...]], Path] = {}
 
-    def _fmu(self, source: Path, term: OutputTerm) -> Path:
-        key = (source, term)
+    def _fmu(self, source: Path, terms: tuple[OutputTerm, ...]) -> Path:
+        key = (source, terms)
         if key not in self._fmus:
             name = f"{source.stem}-term{len(self._fmus)}"
-            self._fmus[key] = term_fmu(source, (term,), self.folder / "fmu" / name, "sensitivity")
+            self._fmus[key] = term_fmu(source, terms, self.folder / "fmu" / name, "sensitivity")
         return self._fmus[key]
 
-    def columns(self, element: str, terms: tuple[OutputTerm, ...]) -> list[np.ndarray]:
-        """Per term, the (n, C) change of the channels per unit coefficient with it added to `element`."""
+    def _change(self, element: str, terms: tuple[OutputTerm, ...], label: str, per: float) -> np.ndarray:
+        """The (n, C) change of the channels with `terms` added to `element`, divided by `per`."""
         source = self.car.onnx[element]
         assert source is not None
-        found = []
-        for i, term in enumerate(terms):
-            ssd = swapped_system(
-                self.car, {element: self._fmu(source, term)}, self.folder / f"{element}-term{i}", "sensitivity"
-            )
-            moved = self.replay(ssd)
-            found.append(np.column_stack([(moved[c] - self.base[c]) / term.coefficient for c in self.channels]))
-        return found
+        ssd = swapped_system(self.car, {element: self._fmu(source, terms)}, self.folder / f"{element}-{label}", label)
+        moved = self.replay(ssd)
+        return np.column_stack([(moved[c] - self.base[c]) / per for c in self.channels])
+
+    def columns(self, element: str, terms: tuple[OutputTerm, ...], joint_step: float | None = None) -> list[np.ndarray]:
+        """Per term, the (n, C) change of the channels per unit coefficient with it added to `element`; with
+        `joint_step`, one column: all terms added at `joint_step` times their coefficients, per unit amplitude."""
+        if joint_step is not None:
+            scaled = tuple(OutputTerm(t.output, t.channel, joint_step * t.coefficient, t.unit) for t in terms)
+            return [self._change(element, scaled, "joint", joint_step)]
+        return [self._change(element, (t,), f"term{i}", t.coefficient) for i, t in enumerate(terms)]
