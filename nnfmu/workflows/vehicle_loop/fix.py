@@ -65,9 +65,7 @@ class Fixed:
 def fix_in_situ(element: str, record: Measurement, onnx_path: Path, folder: Path, settings: LoopSettings) -> Fixed:
     """The component loop on the element's in-situ record, into `folder`."""
     report = run_loop(record, onnx_path, "force", folder, settings)
-    method = (
-        f"component loop on the in-situ record: added {', '.join(report.effects_added) or 'nothing'}; {report.summary}"
-    )
+    method = f"component loop on the in-situ record: {report.summary}"
     return Fixed(element, report.fmu, report.onnx, method, report)
 
 
