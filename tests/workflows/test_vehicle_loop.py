@@ -18,7 +18,7 @@ from nnfmu.fmu.options import BuildOptions
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.workflows.loop import LoopSettings
 from nnfmu.workflows.roadtest import build_vehicle, write_system
-from nnfmu.workflows.roadtest.lab_car import LabCar, write_lab_car
+from nnfmu.workflows.roadtest.lab_car import LabCar, lab_car_record, write_lab_car
 from nnfmu.workflows.train import TrainRequest, train_from_file
 from nnfmu.workflows.vehicle_loop import VehicleLoopError, VehicleLoopReport, VehicleLoopSettings, run_vehicle_loop
 
@@ -45,9 +45,12 @@ def virtual_car(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
     return ssd, drive
 
 
-def loop(car: LabCar, virtual_car: tuple[Path, Path], folder: Path) -> VehicleLoopReport:
+def loop(car: LabCar, virtual_car: tuple[Path, Path], folder: Path, name: str = "lab.csv") -> VehicleLoopReport:
     ssd, drive = virtual_car
-    record = write_lab_car(car, read_drive(drive), folder / "lab.csv")
+    if name.endswith(".rsp"):  # an RPC III response file, as a road-test simulator's controller records it
+        record = write_drive(lab_car_record(car, read_drive(drive)), folder / name, "float32")
+    else:
+        record = write_lab_car(car, read_drive(drive), folder / name)
     return run_vehicle_loop(record, ssd, drive, folder / "out", SETTINGS, log=lambda _: None)
 
 
@@ -64,7 +67,7 @@ def test_a_clean_lab_car_adds_nothing(virtual_car, tmp_path: Path) -> None:
 
 
 def test_a_load_cell_offset_is_named_with_no_component_changed(virtual_car, tmp_path: Path) -> None:
-    report = loop(LabCar(system="quarter-car", offsets={"damper_force": 150.0}), virtual_car, tmp_path)
+    report = loop(LabCar(system="quarter-car", offsets={"damper_force": 150.0}), virtual_car, tmp_path, "lab.rsp")
     assert [(i["component"], i["effect"]) for i in report.iterations] == [("damper_force", "sensor_offset")]
     assert report.fixes == []
     assert report.offsets["damper_force"] == pytest.approx(150.0, abs=15.0)

@@ -16,7 +16,7 @@ import numpy as np
 
 from nnfmu.atomic import replace_dir, staging_dir
 from nnfmu.data import DataError, Measurement, load_measurement
-from nnfmu.data.drive_files import read_drive
+from nnfmu.data.drive_files import RPC_SUFFIXES, read_drive
 from nnfmu.diagnosis import Diagnosis
 from nnfmu.out_paths import check_output_dir, mark_output_dir
 from nnfmu.workflows.vehicle_loop.attribution import (
@@ -143,6 +143,12 @@ def _corner_channels(corner: str) -> tuple[str, ...]:
     )
 
 
+def _read_record(path: str | os.PathLike[str]) -> Measurement:
+    """A lab record: an RPC III time history (what a road-test simulator's controller writes) or any file
+    `load_measurement` reads (CSV, MDF, MTS 793 export)."""
+    return read_drive(path) if Path(path).suffix.lower() in RPC_SUFFIXES else load_measurement(path)
+
+
 def _coverage(car: VirtualCar, channels: list[str], retrainable: Mapping[str, bool]) -> list[str]:
     """What the measured channels allow and what a missing one costs, per component element."""
     notes = []
@@ -249,7 +255,7 @@ def run_vehicle_loop(
     inputs = [Path(p) for p in (measured, system, drive) if not isinstance(p, Measurement)]
     out_dir = check_output_dir(out_dir, "vehicle-loop", inputs)
     car = read_virtual_car(system, models)
-    m = _load(measured, "measurement", load_measurement)
+    m = _load(measured, "measurement", _read_record)
     d = _load(drive, "drive", read_drive)
     log(f"replaying {car.name} on {d.source}")
     base = replay_system(car.ssd, d, settings.step)
