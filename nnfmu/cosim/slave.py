@@ -63,34 +63,39 @@ class FmuSlave:
         self.messages: Messages = []
         self._key = 0
         self._unzip_dir = tempfile.mkdtemp(prefix="nnfmu-fmu-")
-        directory = extract(str(self.path), unzipdir=self._unzip_dir)
-        self.sample_period = read_sample_period(Path(directory) / "modelDescription.xml")
-        kwargs = dict(
-            guid=self.description.guid,
-            unzipDirectory=directory,
-            instanceName=instance_name,
-            modelIdentifier=self.description.coSimulation.modelIdentifier,
-        )
-        if self.fmi_version == 2:
-            from fmpy.fmi2 import FMU2Slave, defaultCallbacks, fmi2CallbackFunctions
-            from fmpy.logging import addLoggerProxy
+        try:
+            directory = extract(str(self.path), unzipdir=self._unzip_dir)
+            self.sample_period = read_sample_period(Path(directory) / "modelDescription.xml")
+            kwargs = dict(
+                guid=self.description.guid,
+                unzipDirectory=directory,
+                instanceName=instance_name,
+                modelIdentifier=self.description.coSimulation.modelIdentifier,
+            )
+            if self.fmi_version == 2:
+                from fmpy.fmi2 import FMU2Slave, defaultCallbacks, fmi2CallbackFunctions
+                from fmpy.logging import addLoggerProxy
 
-            self.fmu = FMU2Slave(**kwargs)
-            self._key = next(_FMI2_KEYS)
-            _FMI2_SINKS[self._key] = self.messages
-            callbacks = fmi2CallbackFunctions()
-            callbacks.logger = _fmi2_logger()
-            callbacks.allocateMemory = defaultCallbacks.allocateMemory
-            callbacks.freeMemory = defaultCallbacks.freeMemory
-            callbacks.componentEnvironment = c_void_p(self._key)
-            addLoggerProxy(byref(callbacks))
-            self._callbacks = callbacks  # the FMU keeps a pointer to them: alive as long as the instance
-            self.fmu.instantiate(callbacks=callbacks, loggingOn=logging_on)
-        else:
-            from fmpy.fmi3 import FMU3Slave
+                self.fmu = FMU2Slave(**kwargs)
+                self._key = next(_FMI2_KEYS)
+                _FMI2_SINKS[self._key] = self.messages
+                callbacks = fmi2CallbackFunctions()
+                callbacks.logger = _fmi2_logger()
+                callbacks.allocateMemory = defaultCallbacks.allocateMemory
+                callbacks.freeMemory = defaultCallbacks.freeMemory
+                callbacks.componentEnvironment = c_void_p(self._key)
+                addLoggerProxy(byref(callbacks))
+                self._callbacks = callbacks  # the FMU keeps a pointer to them: alive as long as the instance
+                self.fmu.instantiate(callbacks=callbacks, loggingOn=logging_on)
+            else:
+                from fmpy.fmi3 import FMU3Slave
 
-            self.fmu = FMU3Slave(**kwargs)
-            self.fmu.instantiate(loggingOn=logging_on, logMessage=self._log3)
+                self.fmu = FMU3Slave(**kwargs)
+                self.fmu.instantiate(loggingOn=logging_on, logMessage=self._log3)
+        except BaseException:
+            _FMI2_SINKS.pop(self._key, None)
+            shutil.rmtree(self._unzip_dir, ignore_errors=True)  # a failed start leaves no extracted FMU behind
+            raise
         self._open = True
 
     def _log3(self, env, status, category, message) -> None:  # noqa: ANN001 (ctypes callback)

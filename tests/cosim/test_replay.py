@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import tempfile
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -9,6 +11,7 @@ import pytest
 import torch
 
 from nnfmu.cosim.replay import ReplayError, ReplaySettings, replay_fmu
+from nnfmu.cosim.slave import FmuSlave
 from nnfmu.data.measurement import Measurement
 from nnfmu.export import export_onnx, run_step_graph
 from nnfmu.fmu.build import build_fmu
@@ -84,3 +87,22 @@ def test_replay_refuses_missing_channel_and_other_sample_rate(damper_fmu: tuple[
         replay_fmu(fmu_path, data)
     with pytest.raises(ReplayError, match="sample period"):
         replay_fmu(fmu_path, _measurement(100, 5, dt=2e-3))
+
+
+def test_an_fmu_that_cannot_start_leaves_no_extracted_files(
+    damper_fmu: tuple[Path, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    broken = tmp_path / "no-binaries.fmu"  # a valid description whose shared library is missing
+    with zipfile.ZipFile(damper_fmu[1]) as source, zipfile.ZipFile(broken, "w") as target:
+        for item in source.infolist():
+            if not item.filename.startswith("binaries/"):
+                target.writestr(item, source.read(item))
+    scratch = tmp_path / "scratch"
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
+    with pytest.raises(Exception):
+        FmuSlave(broken)
+    assert list(scratch.iterdir()) == []
+    with FmuSlave(damper_fmu[1]):  # the same start with its binaries extracts into the scratch folder
+        assert len(list(scratch.iterdir())) == 1
+    assert list(scratch.iterdir()) == []
