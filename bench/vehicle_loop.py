@@ -66,7 +66,7 @@ def checks(car: str, report: VehicleLoopReport) -> dict[str, bool]:
     """The outcomes `car` must give (module docstring), each by name."""
     named = {(e.candidate.component, e.candidate.effect) for e in report.attribution.named}
     components = {c for c, effect in named if effect != "sensor_offset"}
-    if car in ("gas",):
+    if car == "gas":
         out = {"gas_force named on damper_fr and damper_rr only": named == {(d, "gas_force") for d in GAS}}
         for d in GAS:
             before, after = report.channels[f"{d}_force"]["before"], report.channels[f"{d}_force"]["after"]
