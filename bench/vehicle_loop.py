@@ -35,6 +35,7 @@ from pathlib import Path
 
 from nnfmu.data.drive_files import write_drive
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.workflows.roadtest import system_folder
 from nnfmu.workflows.roadtest.lab_car import LAB_CHANNELS, LabCar, write_lab_car
 from nnfmu.workflows.vehicle_loop import VehicleLoopReport, run_vehicle_loop
 
@@ -117,7 +118,7 @@ def main() -> None:
     unknown = [c for c in cars if c not in CARS]
     if unknown:
         parser.error(f"unknown lab car(s) {unknown}; choose from {', '.join(CARS)}")
-    ssd = args.road_test / "systems" / SYSTEM / "damper-hysteresis" / "SystemStructure.ssd"
+    ssd = system_folder(args.road_test, SYSTEM, "damper-hysteresis") / "SystemStructure.ssd"
     if not ssd.is_file():
         parser.error(f"{ssd} not found: ROAD_TEST_DIR must be a road test's output with the full vehicle")
     cases = []

@@ -45,6 +45,7 @@ from nnfmu.workflows.loop.blocks import training_part
 from nnfmu.workflows.loop.settings import LoopSettings
 from nnfmu.workflows.roadtest import (
     BushingDriveSettings,
+    RoadTestResult,
     RoadTestSettings,
     SystemRun,
     VehicleBushingModels,
@@ -219,15 +220,17 @@ def close_the_loop(out: Path, settings: DemoSettings, log: Callable[[str], None]
     return report
 
 
-def thesis_residual(road: Path, out: Path, settings: DemoSettings, log: Callable[[str], None]) -> VehicleLoopReport:
+def thesis_residual(
+    road: RoadTestResult, out: Path, settings: DemoSettings, log: Callable[[str], None]
+) -> VehicleLoopReport:
     """The lab car of `settings` driven on a drive seed the networks never saw, recorded like a lab export, and
-    `nnfmu loop vehicle` on it with the road test's hysteresis-network system (`road`: the road test's folder)."""
+    `nnfmu loop vehicle` on it with the road test's hysteresis-network system."""
     car = settings.lab_car
     drive = generate_drive(DriveSettings(duration=settings.lab_duration_s + 0.001, seed=settings.seed + 3))
     drive_path = write_drive(drive, out / "lab_drive.csv")
     record = write_lab_car(car, drive, out / "lab_car.csv")
     log(f"vehicle loop: lab car {record} ({car.system}; what differs is in {record.name}.truth.json, unread)")
-    ssd = road / "systems" / car.system / "damper-hysteresis" / "SystemStructure.ssd"
+    ssd = road.ssd(car.system, "damper-hysteresis")
     report = run_vehicle_loop(record, ssd, drive_path, out / "loop", settings.vehicle_loop, log=log)
     for name, pair in report.channels.items():
         if name.endswith("_force"):
@@ -348,7 +351,7 @@ def run_demo(
     for system, path in road.reports().items():
         log(f"road test {system}: report {path}")
     loop = close_the_loop(out, settings, log)
-    vehicle_loop = thesis_residual(out / "road_test", out / "vehicle_loop", settings, log)
+    vehicle_loop = thesis_residual(road, out / "vehicle_loop", settings, log)
     summary = DemoSummary(
         out=out,
         report=report,

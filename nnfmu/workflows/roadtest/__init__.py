@@ -3,7 +3,14 @@
 from nnfmu.workflows.roadtest.bushing_drive import BushingDriveSettings, VehicleBushingModels, train_vehicle_bushings
 from nnfmu.workflows.roadtest.damper_drive import VehicleDamperModels, train_vehicle_dampers
 from nnfmu.workflows.roadtest.envelope import Excursion, excursion
-from nnfmu.workflows.roadtest.runs import RoadTestResult, RoadTestSettings, SystemResult, SystemRun, run_road_test
+from nnfmu.workflows.roadtest.runs import (
+    RoadTestResult,
+    RoadTestSettings,
+    SystemResult,
+    SystemRun,
+    run_road_test,
+    system_folder,
+)
 from nnfmu.workflows.roadtest.systems import (
     BUSHING_MODELS,
     DAMPER_MODELS,
@@ -42,6 +49,7 @@ __all__ = [
     "excursion",
     "monolithic_reference",
     "run_road_test",
+    "system_folder",
     "thesis_row",
     "train_vehicle_bushings",
     "train_vehicle_dampers",

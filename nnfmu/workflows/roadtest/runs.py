@@ -163,6 +163,18 @@ class RoadTestResult:
     def reports(self) -> dict[str, Path]:
         return {s.system: s.report for s in self.systems}
 
+    def ssd(self, system: str, model: str) -> Path:
+        """The SSP system file of `system` co-simulated with damper `model`; RoadTestError if it was not run."""
+        found = {(s.system, m): path for s in self.systems for m, path in s.ssds.items()}
+        if (system, model) not in found:
+            raise RoadTestError(f"the road test in {self.out} has no {system} with {model} (has: {sorted(found)})")
+        return found[system, model]
+
+
+def system_folder(out: Path, system: str, model: str) -> Path:
+    """The folder `run_road_test` (into `out`) writes the SSP system of `system` with damper `model` into."""
+    return out / "systems" / system / model.replace(" ", "-")
+
 
 def _stretch(drive: Measurement, duration: float) -> Measurement:
     """The first `duration` seconds of the drive (every sample with t <= duration)."""
@@ -288,7 +300,7 @@ def _run_system(
             vehicle,
             damper,
             bushing if bushings else None,
-            out / "systems" / system / model.replace(" ", "-"),
+            system_folder(out, system, model),
             run.filter_cutoff if model != TRUTH else None,
         )
         for model, (damper, bushing) in parts.items()
