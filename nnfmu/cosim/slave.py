@@ -12,6 +12,7 @@ from __future__ import annotations
 import itertools
 import shutil
 import tempfile
+import weakref
 from ctypes import byref, c_void_p
 from pathlib import Path
 from typing import Sequence
@@ -41,11 +42,18 @@ def _fmi2_logger() -> object:
     return _FMI2_LOGGER
 
 
+def _remove_extracted(folder: str, sinks: dict[int, Messages], key: int) -> None:
+    """Forget an instance's FMI 2 message sink and delete its extracted FMU (a finalizer: holds no instance)."""
+    sinks.pop(key, None)
+    shutil.rmtree(folder, ignore_errors=True)
+
+
 class FmuSlave:
     """An instantiated co-simulation FMU: set inputs and parameters by name, step, read outputs by name.
 
-    The FMU is extracted to a private temporary folder that `close()` removes; `messages` collects what the FMU
-    logged as (status, category, message).
+    The FMU is extracted to a private temporary folder that `close()` removes (or, for an instance its caller never
+    closed, garbage collection or the interpreter's exit); `messages` collects what the FMU logged as (status,
+    category, message).
     """
 
     def __init__(self, path: str | Path, instance_name: str = "instance", logging_on: bool = False) -> None:
@@ -61,8 +69,9 @@ class FmuSlave:
         self.fmi_version = 3 if self.description.fmiVersion.startswith("3") else 2
         self.variables = {v.name: v for v in self.description.modelVariables}
         self.messages: Messages = []
-        self._key = 0
+        self._key = next(_FMI2_KEYS)  # routes an FMI 2 instance's log messages to `messages`
         self._unzip_dir = tempfile.mkdtemp(prefix="nnfmu-fmu-")
+        self._cleanup = weakref.finalize(self, _remove_extracted, self._unzip_dir, _FMI2_SINKS, self._key)
         try:
             directory = extract(str(self.path), unzipdir=self._unzip_dir)
             self.sample_period = read_sample_period(Path(directory) / "modelDescription.xml")
@@ -77,7 +86,6 @@ class FmuSlave:
                 from fmpy.logging import addLoggerProxy
 
                 self.fmu = FMU2Slave(**kwargs)
-                self._key = next(_FMI2_KEYS)
                 _FMI2_SINKS[self._key] = self.messages
                 callbacks = fmi2CallbackFunctions()
                 callbacks.logger = _fmi2_logger()
@@ -93,8 +101,7 @@ class FmuSlave:
                 self.fmu = FMU3Slave(**kwargs)
                 self.fmu.instantiate(loggingOn=logging_on, logMessage=self._log3)
         except BaseException:
-            _FMI2_SINKS.pop(self._key, None)
-            shutil.rmtree(self._unzip_dir, ignore_errors=True)  # a failed start leaves no extracted FMU behind
+            self._cleanup()  # a failed start leaves no extracted FMU behind
             raise
         self._open = True
 
@@ -180,8 +187,7 @@ class FmuSlave:
             pass  # an instance that failed earlier may refuse to terminate; it is freed all the same
         finally:
             self.fmu.freeInstance()
-            _FMI2_SINKS.pop(self._key, None)
-            shutil.rmtree(self._unzip_dir, ignore_errors=True)
+            self._cleanup()
 
     def __enter__(self) -> "FmuSlave":
         return self

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 import tempfile
 import zipfile
 from pathlib import Path
@@ -10,6 +11,7 @@ import numpy as np
 import pytest
 import torch
 
+from nnfmu.cosim import slave as slave_module
 from nnfmu.cosim.replay import ReplayError, ReplaySettings, replay_fmu
 from nnfmu.cosim.slave import FmuSlave
 from nnfmu.data.measurement import Measurement
@@ -106,3 +108,18 @@ def test_an_fmu_that_cannot_start_leaves_no_extracted_files(
     with FmuSlave(damper_fmu[1]):  # the same start with its binaries extracts into the scratch folder
         assert len(list(scratch.iterdir())) == 1
     assert list(scratch.iterdir()) == []
+
+
+def test_a_slave_its_caller_never_closes_leaves_no_extracted_files(
+    damper_fmu: tuple[Path, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    scratch = tmp_path / "scratch"
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
+    slave = FmuSlave(damper_fmu[1])
+    key = slave._key
+    assert len(list(scratch.iterdir())) == 1 and key in slave_module._FMI2_SINKS
+    del slave
+    gc.collect()
+    assert list(scratch.iterdir()) == []
+    assert key not in slave_module._FMI2_SINKS
