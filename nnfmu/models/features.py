@@ -3,7 +3,9 @@
 A `FeatureSpec` is the single definition of a model's inputs. It computes the feature matrix for training
 (`features`, numpy) and emits the same computation as ONNX nodes for the step graph (`emit`), side by side, so the
 exported graph reproduces training exactly: sample by sample from the initial state (a component at rest, every
-delayed value and filter state 0).
+delayed value and filter state 0), or, with `relaxed_start`, from the state the first sample's inputs would have
+held forever (every delayed value, filter and play operator at that input: a bushing in a car starts deflected
+under the car's weight, its rubber relaxed and its friction anchored there, not moved there from zero).
 
 Adding a derived feature is a checklist: a frozen dataclass subclass of `Derived` (numpy `compute` and ONNX `emit`),
 an entry in `DERIVED_KINDS`, and a test in tests/models/test_features.py comparing it with the step graph.
@@ -36,12 +38,18 @@ class NodeSink(Protocol):
 
 @dataclass(frozen=True)
 class StateSlot:
-    """One element of the step graph's state vector: what it holds, the channel whose unit it has, its value at rest."""
+    """One element of the step graph's state vector: what it holds, the channel whose unit it has, its value at rest,
+    and the power of its channel's first value it holds at a relaxed start (1: the value, 2: its square; 0: none, it
+    keeps `initial`)."""
 
     name: str
     channel: str
     initial: float = 0.0
     description: str = ""
+    power: int = 1
+
+
+STARTED = "started"  # the relaxed-start flag's state slot: 0 before the first sample, 1 after
 
 
 def _check_channel_name(channel: object, what: str) -> str:
@@ -196,6 +204,7 @@ class LowpassSquare(Derived):
                 name=f"{self.name}[k-1]",
                 channel=self.channel,
                 description=f"previous output of {self.name}, in the square of {self.channel}'s unit",
+                power=2,
             ),
         )
 
@@ -377,8 +386,11 @@ class FeatureSpec:
     taps: tuple[Tap, ...]
     output: str
     derived: tuple[Derived, ...] = ()
+    relaxed_start: bool = False
 
     def __post_init__(self) -> None:
+        if not isinstance(self.relaxed_start, bool):
+            raise SettingsError(f"relaxed_start must be true or false, got {self.relaxed_start!r}")
         object.__setattr__(self, "taps", tuple(self.taps))
         object.__setattr__(self, "derived", tuple(self.derived))
         _check_channel_name(self.output, "output")
@@ -415,8 +427,9 @@ class FeatureSpec:
     def n_features(self) -> int:
         return len(self.feature_names)
 
-    def state_layout(self) -> list[StateSlot]:
-        """What the feature part of the state vector holds, in order, with its value at rest."""
+    def feature_slots(self) -> list[StateSlot]:
+        """What the delay lines and derived features keep from one sample to the next, in order, with their value at
+        rest."""
         slots = [
             StateSlot(name=t.feature_name(j), channel=t.channel, description=f"{t.channel} delayed by {j} samples")
             for t in self.taps
@@ -425,6 +438,34 @@ class FeatureSpec:
         for d in self.derived:
             slots.extend(d.state_slots())
         return slots
+
+    def state_layout(self) -> list[StateSlot]:
+        """What the feature part of the state vector holds, in order, with its value at rest: the feature slots, then
+        (relaxed start, if there are any) the `STARTED` flag."""
+        slots = self.feature_slots()
+        if self.relaxed_start and slots:
+            slots.append(
+                StateSlot(
+                    name=STARTED,
+                    channel="",
+                    description="0 before the first sample, then 1: the first sample sets every other slot to its "
+                    "channel's value (relaxed start)",
+                    power=0,
+                )
+            )
+        return slots
+
+    def initial_state(self, first: dict[str, float] | None) -> np.ndarray:
+        """The feature state before sample 0: at rest, or with `relaxed_start` each slot at its power of its
+        channel's first value (`first`: channel -> value at sample 0; None: no sample) and the flag set, as the step
+        graph makes it."""
+        slots = self.state_layout()
+        if not self.relaxed_start or first is None:
+            return np.array([s.initial for s in slots], dtype=np.float64)
+        return np.array(
+            [1.0 if s.name == STARTED else float(first[s.channel]) ** s.power if s.power else s.initial for s in slots],
+            dtype=np.float64,
+        )
 
     @property
     def state_size(self) -> int:
@@ -445,10 +486,11 @@ class FeatureSpec:
         return arrays, next(iter(lengths.values()))
 
     def features(self, channels: dict[str, np.ndarray], sample_period: float) -> np.ndarray:
-        """Feature matrix (n, n_features) of the step graph run sample by sample from rest over `channels`."""
+        """Feature matrix (n, n_features) of the step graph run sample by sample over `channels` from rest (or
+        relaxed at their first values, `relaxed_start`)."""
         sample_period = _check_positive(sample_period, "sample period")
         arrays, n = self._check_channels(channels)
-        initial = np.array([s.initial for s in self.state_layout()], dtype=np.float64)
+        initial = self.initial_state({c: x[0] for c, x in arrays.items()} if n else None)
         columns: list[np.ndarray] = []
         offset = 0
         for tap in self.taps:
@@ -469,15 +511,20 @@ class FeatureSpec:
         """Nodes of one sample: input tensors [1] per channel, state [state_size] or None
         -> (features [n_features], state_next [state_size] or None)."""
         sample_period = _check_positive(sample_period, "sample period")
+        slots = self.feature_slots()
+        relaxing = self.relaxed_start and bool(slots)
+        if relaxing:
+            assert state is not None, "spec has state slots"
+            state = self._relaxed(g, inputs, state, slots)
         # Pool every available value in one vector, then pick features and next state from it with Gather.
         parts = [inputs[c] for c in self.channels]
         position = {c: i for i, c in enumerate(self.channels)}
         size = len(parts)
         state_base = size
-        if self.state_size:
+        if slots:
             assert state is not None, "spec has state slots"
             parts.append(state)
-            size += self.state_size
+            size += len(slots)
         feature_index: list[int] = []
         next_index: list[int] = []
         offset = 0
@@ -509,14 +556,44 @@ class FeatureSpec:
         if not next_index:
             return features, None
         next_indices = g.constant("state_next_index", np.array(next_index, dtype=np.int64))
-        return features, g.node("Gather", [pool, next_indices], "feature_state_next", axis=0)
+        state_next = g.node("Gather", [pool, next_indices], "feature_state_next", axis=0)
+        if relaxing:
+            state_next = g.node(
+                "Concat", [state_next, g.constant("started_after", np.ones(1))], "feature_state_next_started", axis=0
+            )
+        return features, state_next
+
+    @staticmethod
+    def _relaxed(g: NodeSink, inputs: dict[str, str], state: str, slots: list[StateSlot]) -> str:
+        """The feature slots a sample works from with a relaxed start: state * started + relaxed * (1 - started),
+        `relaxed` each slot's power of its channel's current input; exactly the held slots once started is 1."""
+        n = len(slots)
+        bounds = [g.constant(f"relaxed_bound{i}", np.array([i], dtype=np.int64)) for i in (0, n, n + 1)]
+        held = g.node("Slice", [state, bounds[0], bounds[1]], "relaxed_held")
+        started = g.node("Slice", [state, bounds[1], bounds[2]], "relaxed_started")
+        values = []
+        for slot in slots:
+            x = inputs[slot.channel]
+            if slot.power == 1:
+                values.append(x)
+            elif slot.power == 2:
+                values.append(g.node("Mul", [x, x], "relaxed_square"))
+            else:
+                raise ValueError(f"state slot {slot.name!r}: no relaxed value of power {slot.power}")
+        relaxed = g.node("Concat", values, "relaxed_values", axis=0) if len(values) > 1 else values[0]
+        waiting = g.node("Sub", [g.constant("relaxed_one", np.ones(1)), started], "relaxed_waiting")
+        return g.node(
+            "Add",
+            [g.node("Mul", [held, started], "relaxed_kept"), g.node("Mul", [relaxed, waiting], "relaxed_set")],
+            "relaxed_state",
+        )
 
     def to_dict(self) -> dict[str, Any]:
         return {
             "taps": [{"channel": t.channel, "delays": list(t.delays)} for t in self.taps],
             "output": self.output,
             "derived": [d.to_dict() for d in self.derived],
-        }
+        } | ({"relaxed_start": True} if self.relaxed_start else {})
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> "FeatureSpec":
@@ -525,4 +602,8 @@ class FeatureSpec:
             output = d["output"]
         except (KeyError, TypeError) as exc:
             raise ValueError(f"feature spec dict is malformed: {exc!r} in {d!r}") from exc
-        return cls(taps=taps, output=output, derived=tuple(derived_from_dict(x) for x in d.get("derived", [])))
+        relaxed = d.get("relaxed_start", False)
+        if not isinstance(relaxed, bool):
+            raise ValueError(f"feature spec: relaxed_start is {relaxed!r}, expected true or false")
+        derived = tuple(derived_from_dict(x) for x in d.get("derived", []))
+        return cls(taps=taps, output=output, derived=derived, relaxed_start=relaxed)

@@ -3,13 +3,25 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import onnxruntime as ort
 import pytest
 
 from nnfmu.export.graph import GraphBuilder
-from nnfmu.models.features import Difference, FeatureSpec, Highpass, Lowpass, SmoothSign, Tap, derived_from_dict
+from nnfmu.models.features import (
+    STARTED,
+    Difference,
+    FeatureSpec,
+    Highpass,
+    Lowpass,
+    LowpassSquare,
+    SmoothSign,
+    Stop,
+    Tap,
+    derived_from_dict,
+)
 
 T = 0.001
 
@@ -35,6 +47,29 @@ def spec_with_rates_and_memory() -> FeatureSpec:
             Highpass("velocity", tau=0.05),
         ),
     )
+
+
+def spec_with_friction_relaxed() -> FeatureSpec:
+    """Every kind of state slot, started relaxed at the first input: delay line, low-pass (of the square too),
+    high-pass, difference and stop operators narrower and wider than the motion."""
+    return FeatureSpec(
+        taps=(Tap("displacement", (0, 2)), Tap("velocity")),
+        output="force",
+        derived=(
+            Highpass("displacement", tau=0.01),
+            Stop("displacement", radius=0.05),
+            Stop("displacement", radius=5.0),
+            LowpassSquare("velocity", tau=0.02),
+            Difference("velocity", delay=3),
+            Lowpass("displacement", tau=0.004),
+        ),
+        relaxed_start=True,
+    )
+
+
+def relaxed(make):
+    """The spec `make` builds, started relaxed at its first input."""
+    return lambda: replace(make(), relaxed_start=True)
 
 
 def run_feature_nodes(spec: FeatureSpec, channels: dict[str, np.ndarray]) -> np.ndarray:
@@ -130,16 +165,68 @@ def test_difference_is_the_change_over_its_delay_from_rest():
 
 
 @pytest.mark.parametrize(
-    "make", [spec_with_everything, spec_with_rates_and_memory, lambda: FeatureSpec((Tap("velocity"),), "force")]
+    "make",
+    [
+        spec_with_everything,
+        spec_with_rates_and_memory,
+        lambda: FeatureSpec((Tap("velocity"),), "force"),
+        spec_with_friction_relaxed,
+        relaxed(spec_with_everything),
+        relaxed(spec_with_rates_and_memory),
+    ],
 )
 def test_features_equal_emitted_step_nodes(make):
+    """numpy features (a relaxed spec: started at its first values) equal the graph run sample by sample from the
+    initial state its layout gives (a relaxed spec's graph relaxes itself at the first sample)."""
     spec = make()
     rng = np.random.default_rng(1)
-    channels = {c: rng.normal(size=60) for c in spec.channels}
-    np.testing.assert_allclose(run_feature_nodes(spec, channels), spec.features(channels, T), rtol=1e-13, atol=1e-15)
+    channels = {c: 3.0 + rng.normal(size=60) for c in spec.channels}  # far from rest at the first sample
+    ulps = 8 * np.finfo(float).eps * 3.0  # a difference of a few rounding steps of the inputs (a high-pass of ~3 + x)
+    np.testing.assert_allclose(run_feature_nodes(spec, channels), spec.features(channels, T), rtol=1e-13, atol=ulps)
 
 
-@pytest.mark.parametrize("make", [spec_with_everything, spec_with_rates_and_memory])
+def test_relaxed_start_holds_every_memory_at_a_constant_deflected_input():
+    """Held at its first value, a relaxed spec's step graph keeps every memory feature exactly at rest: high-pass,
+    difference and stop 0, low-pass and delay line the value, the low-passed square its square (numpy's filters within
+    rounding); from rest they would all move."""
+    spec = spec_with_friction_relaxed()
+    channels = {"displacement": np.full(40, 0.7), "velocity": np.full(40, -0.3)}
+    graph = run_feature_nodes(spec, channels)
+    np.testing.assert_allclose(spec.features(channels, T), graph, rtol=0, atol=4 * np.finfo(float).eps)
+    features = dict(zip(spec.feature_names, graph.T))
+    for name, column in features.items():
+        if name.startswith(("highpass", "stop", "difference")):
+            np.testing.assert_array_equal(column, 0.0, err_msg=name)
+    np.testing.assert_array_equal(features["displacement[k-2]"], 0.7)
+    np.testing.assert_array_equal(features["lowpass(displacement, tau=0.004)"], 0.7)
+    np.testing.assert_array_equal(features["lowpass_square(velocity, tau=0.02)"], (-0.3) ** 2)
+    at_rest = dict(zip(spec.feature_names, replace(spec, relaxed_start=False).features(channels, T).T))
+    assert at_rest["highpass(displacement, tau=0.01)"][0] == pytest.approx(0.7 * 0.9, rel=0.02)
+    assert at_rest["stop(displacement, radius=0.05)"][0] == pytest.approx(0.05)
+
+
+def test_relaxed_start_at_rest_inputs_reproduces_the_rest_spec_bit_for_bit():
+    """Started at zero inputs, the relaxed graph sets its slots to the rest values, and from then on multiplies the
+    held state by exactly 1: the same features, bit for bit, as the spec without the option."""
+    spec = spec_with_friction_relaxed()
+    rng = np.random.default_rng(2)
+    channels = {c: np.concatenate([[0.0], rng.normal(size=50)]) for c in spec.channels}
+    np.testing.assert_array_equal(
+        run_feature_nodes(spec, channels), run_feature_nodes(replace(spec, relaxed_start=False), channels)
+    )
+
+
+def test_relaxed_start_adds_one_flag_slot_and_only_when_there_is_state():
+    spec = spec_with_friction_relaxed()
+    layout = spec.state_layout()
+    assert layout[-1].name == STARTED and layout[-1].initial == 0.0
+    assert layout[:-1] == replace(spec, relaxed_start=False).state_layout()
+    stateless = FeatureSpec((Tap("velocity"),), "force", (SmoothSign("velocity"),), relaxed_start=True)
+    assert stateless.state_size == 0
+    assert "relaxed_start" not in spec_with_everything().to_dict()  # the rest spec's metadata is as before
+
+
+@pytest.mark.parametrize("make", [spec_with_everything, spec_with_rates_and_memory, spec_with_friction_relaxed])
 def test_dict_round_trip_through_json(make):
     spec = make()
     again = FeatureSpec.from_dict(json.loads(json.dumps(spec.to_dict())))
@@ -166,6 +253,11 @@ def test_dict_round_trip_through_json(make):
         (lambda: SmoothSign("velocity", scale=float("nan")), "nan"),
         (lambda: derived_from_dict({"kind": "energy", "channel": "velocity"}), "'energy'"),
         (lambda: derived_from_dict({"kind": "lowpass", "channel": "velocity", "cutoff": 3}), "cutoff"),
+        (lambda: FeatureSpec((Tap("velocity"),), "force", relaxed_start=1), "relaxed_start must be true or false"),
+        (
+            lambda: FeatureSpec.from_dict({"taps": [{"channel": "v"}], "output": "f", "relaxed_start": "yes"}),
+            "relaxed_start is 'yes'",
+        ),
     ],
 )
 def test_invalid_specs_raise_value_error_naming_the_value(build, fragment):

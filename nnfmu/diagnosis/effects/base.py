@@ -12,7 +12,7 @@ from the component's inputs; channel names carry the output's direction prefix (
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import ClassVar
 
 import numpy as np
@@ -107,14 +107,14 @@ def with_delays(spec: FeatureSpec, name: str, delays: tuple[int, ...]) -> Featur
             break
     else:
         taps.append(Tap(name, tuple(delays)))
-    return FeatureSpec(taps=tuple(taps), output=spec.output, derived=spec.derived)
+    return replace(spec, taps=tuple(taps))
 
 
 def with_derived(spec: FeatureSpec, derived: tuple[Derived, ...]) -> FeatureSpec:
     """`spec` with the derived features it does not have yet appended."""
     known = {d.name for d in spec.derived}
     fresh = tuple(d for d in derived if d.name not in known)
-    return FeatureSpec(taps=spec.taps, output=spec.output, derived=spec.derived + fresh)
+    return replace(spec, derived=spec.derived + fresh)
 
 
 def extended(effect: str, old: FeatureSpec, new: FeatureSpec, note: str) -> Extension | NoExtension:
