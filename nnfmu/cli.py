@@ -224,6 +224,10 @@ def train(
         0.0,
         help="Dyno mass [kg] between load cell and actuator (rod, piston, fixture): subtracted from the force as m·a before training, as a dyno's mass compensation does; 0: none.",
     ),
+    input_cutoff: Optional[float] = typer.Option(
+        None,
+        help="Low-pass [Hz] of the input channels, zero phase, before the features (transducer noise above the rig's band); 0: none; default: the preset's (bushings 100 Hz, dampers none).",
+    ),
 ) -> None:
     """Train a component network on rig data and export it as a verified ONNX step graph."""
     from rich.console import Console
@@ -249,6 +253,7 @@ def train(
         name=name,
         channel_map=tuple(_channel_map(channel_map).items()),
         moving_mass=moving_mass,
+        input_cutoff=input_cutoff,
     )
     console = Console(markup=False)  # feature and channel names carry brackets: velocity[k]
     try:

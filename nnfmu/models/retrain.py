@@ -17,6 +17,7 @@ import numpy as np
 import torch
 
 from nnfmu.data import Measurement
+from nnfmu.data.denoise import lowpass_channels
 from nnfmu.errors import SettingsError
 from nnfmu.models.features import FeatureSpec
 from nnfmu.models.lm import LMSettings, fit_lm
@@ -147,8 +148,10 @@ def _problem(
     validation: np.ndarray,
     settings: RetrainSettings,
 ) -> _Problem:
-    """`spec`'s features over the whole record, scaled as `_extended_scaler` says, with the rows LM may use."""
-    features = spec.features({c: m[c] for c in spec.channels}, old.sample_period)
+    """`spec`'s features over the whole record (its inputs low-passed as the first fit's were), scaled as
+    `_extended_scaler` says, with the rows LM may use."""
+    inputs = lowpass_channels(m, spec.channels, old.settings.get("input_cutoff"))
+    features = spec.features({c: inputs[c] for c in spec.channels}, old.sample_period)
     target = np.asarray(m[spec.output], dtype=float)
     scaler = _extended_scaler(old, spec, features, train)
     index_train, index_validation = (

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import torch
 
+from nnfmu.data.denoise import lowpass_channels
 from nnfmu.data.errors import DataError
 from nnfmu.data.measurement import Measurement
 from nnfmu.errors import SettingsError
@@ -119,6 +120,7 @@ def select_inputs(
             return None
         return lambda label, done: progress(f"input selection: {label}", (index + done) / steps)
 
+    measurement = lowpass_channels(measurement, full.channels, settings.training.input_cutoff)
     data = prepare_data(measurement, full, settings.training.splits)
     network, _, _, _ = fit_best(data, architecture, settings.training, stage(0))
     ranking = permutation_ranking(network, data, full.feature_names, settings.training.seed)

@@ -11,6 +11,7 @@ from typing import Literal
 import numpy as np
 import torch
 
+from nnfmu.data.denoise import lowpass_channels
 from nnfmu.data.errors import DataError
 from nnfmu.data.measurement import Measurement
 from nnfmu.errors import SettingsError
@@ -63,7 +64,8 @@ class TrainSettings:
     smallest size whose validation MSE is within (1 + tolerance) of the best; lm_max_samples: LM fits on at most this
     many training samples (evenly strided); learning_rate/batch_size: Adam (batch_size samples per MLP step);
     chunk_length/burn_in/sequences_per_batch: GRU training sequences, the samples at their start left out of the loss
-    while the hidden state settles, and sequences per Adam step.
+    while the hidden state settles, and sequences per Adam step; input_cutoff [Hz]: the input channels low-passed
+    with zero phase before the features (`nnfmu.data.denoise`; None: as recorded).
     """
 
     optimizer: Optimizer = "auto"
@@ -79,6 +81,7 @@ class TrainSettings:
     chunk_length: int = 500
     burn_in: int = 100
     sequences_per_batch: int = 32
+    input_cutoff: float | None = None
 
     def __post_init__(self) -> None:
         if self.optimizer not in ("auto", "lm", "adam", "lbfgs"):
@@ -98,6 +101,8 @@ class TrainSettings:
             raise SettingsError(f"burn_in must be in [0, chunk_length={self.chunk_length}), got {self.burn_in}")
         if not (self.hidden_tolerance >= 0 and self.learning_rate > 0):
             raise SettingsError("hidden_tolerance must be >= 0 and learning_rate > 0")
+        if self.input_cutoff is not None and not self.input_cutoff > 0:
+            raise SettingsError(f"input_cutoff must be a positive frequency [Hz] or None, got {self.input_cutoff!r}")
 
     def as_dict(self) -> dict[str, object]:
         d = asdict(self)
@@ -381,8 +386,9 @@ def train_model(
     settings: TrainSettings = TrainSettings(),
     progress: Progress | None = None,
 ) -> TrainResult:
-    """Train a network predicting `spec.output` from `spec`'s features of `measurement`; metrics on every split."""
-    data = prepare_data(measurement, spec, settings.splits)
+    """Train a network predicting `spec.output` from `spec`'s features of `measurement` (its inputs low-passed at
+    `settings.input_cutoff`); metrics on every split."""
+    data = prepare_data(lowpass_channels(measurement, spec.channels, settings.input_cutoff), spec, settings.splits)
     network, history, trials, hidden = fit_best(data, architecture, settings, progress)
     metrics = evaluate(network, data)
     train_part = data.splits.index("train")

@@ -29,7 +29,8 @@ class TrainRequest:
     select_inputs: choose the inputs by sensitivity analysis (overrides the preset's and `inputs`); optimizer: auto, lm,
     adam or lbfgs; channel_map: (file channel, nnfmu name) pairs passed to `load_measurement`; moving_mass [kg]: the
     dyno's mass between load cell and actuator, subtracted from the force as m·a before training (`nnfmu.data.inertia`;
-    0: none).
+    0: none); input_cutoff [Hz]: the inputs' zero-phase low-pass before the features (`TrainSettings.input_cutoff`;
+    0: none; None: the preset's).
     """
 
     preset: str
@@ -47,6 +48,7 @@ class TrainRequest:
     name: str = ""
     channel_map: tuple[tuple[str, str], ...] = ()
     moving_mass: float = 0.0
+    input_cutoff: float | None = None
 
 
 @dataclass
@@ -82,6 +84,8 @@ def resolve(request: TrainRequest) -> tuple[Preset, Architecture, TrainSettings]
         overrides["max_epochs"] = request.max_epochs
     if request.optimizer is not None:
         overrides["optimizer"] = request.optimizer
+    if request.input_cutoff is not None:
+        overrides["input_cutoff"] = request.input_cutoff or None
     return preset, architecture, replace(preset.settings, **overrides)
 
 

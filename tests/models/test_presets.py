@@ -6,8 +6,10 @@ import numpy as np
 import pytest
 
 from nnfmu.data.rigs import RigOptions, simulate_rig
+from nnfmu.errors import SettingsError
 from nnfmu.models.features import FeatureSpec, Highpass, Lowpass, Tap
 from nnfmu.models.presets import MEMORY_TAUS, PRESETS, custom_spec, get_preset
+from nnfmu.models.train import TrainSettings
 from nnfmu.workflows.train import TrainRequest, resolve
 
 
@@ -112,3 +114,17 @@ def test_request_overrides_network_and_settings():
     assert gru.kind == "gru" and gru.hidden
     with pytest.raises(ValueError, match="optimizer"):
         resolve(TrainRequest("damper-spline", optimizer="sgd"))
+
+
+def test_bushing_presets_train_on_low_passed_inputs_and_a_request_can_change_it():
+    assert {
+        name: p.settings.input_cutoff for name, p in PRESETS.items() if name.startswith("bushing")
+    } == dict.fromkeys(
+        ("bushing-axial-force", "bushing-radial-force", "bushing-axial-torque", "bushing-conical-torque"), 100.0
+    )
+    assert all(p.settings.input_cutoff is None for name, p in PRESETS.items() if name.startswith("damper"))
+    assert resolve(TrainRequest(preset="bushing-axial-torque"))[2].input_cutoff == 100.0
+    assert resolve(TrainRequest(preset="bushing-axial-torque", input_cutoff=0.0))[2].input_cutoff is None
+    assert resolve(TrainRequest(preset="damper-hysteresis", input_cutoff=80.0))[2].input_cutoff == 80.0
+    with pytest.raises(SettingsError, match="input_cutoff must be a positive frequency"):
+        TrainSettings(input_cutoff=-5.0)
