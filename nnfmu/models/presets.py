@@ -79,7 +79,7 @@ BUSHING_RELAXED_START = True
 # signals. Road test (50 s), the axial-torque network trained on the vehicle-derived record with its rotation's
 # 0.25 mrad rms transducer noise, alone in the loop: its stiffness 1.5 N.m/rad (0.26 %) too high along the car's
 # motion and, through the arm's moment balance, the front radial bushing's deflection pseudo-damage ratio 1.045;
-# trained on the low-passed inputs 0.6 N.m/rad and 1.015 (the truth laws in the same coupling: 1.013).
+# trained on the low-passed inputs 0.6 N.m/rad and 1.022 (the truth laws in the same coupling: 1.013).
 BUSHING_TRAINING = TrainSettings(input_cutoff=100.0)
 # A semi-active preset's placeholder input channel, bound to the record's command channel by `bind_command`: the coil
 # voltage of an MR damper or the valve current of a CDC damper, as `nnfmu rig damper --type mr|cdc` records them.
