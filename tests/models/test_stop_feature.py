@@ -54,14 +54,11 @@ def test_stop_equals_its_emitted_step_nodes():
     np.testing.assert_allclose(run_feature_nodes(spec, channels), spec.features(channels, T), rtol=1e-13, atol=1e-15)
 
 
-def test_training_on_low_passed_inputs_removes_the_noise_bias_of_a_stop_feature():
+def noisy_friction_record(n: int = 12000, r: float = 0.002):
     """An elastic-plastic element (k·x plus a friction element of radius r) recorded with transducer noise of r/4:
-    the stop feature of the noisy position moves with the noise, so a network trained on it is off on the clean
-    motion a simulation feeds it; trained on the inputs low-passed above the motion's band it is not."""
+    (spec, record with the noisy position, clean position, force)."""
     from nnfmu.data.measurement import Measurement
-    from nnfmu.models.train import Architecture, TrainSettings, train_model
 
-    n, r = 12000, 0.002
     t = np.arange(n) * T
     rng = np.random.default_rng(7)
     x = sum(
@@ -71,10 +68,46 @@ def test_training_on_low_passed_inputs_removes_the_noise_bias_of_a_stop_feature(
     force = 1000.0 * x + 20.0 / r * spec.features({"displacement": x}, T)[:, 1]
     noisy = x + r / 4 * rng.standard_normal(n)
     m = Measurement(t, {"displacement": noisy, "force": force}, {"displacement": "m", "force": "N"}, source="rig")
+    return spec, m, x, force
+
+
+def clean_error(model, x: np.ndarray, force: np.ndarray) -> float:
+    return float(np.sqrt(np.mean((model.predict({"displacement": x}) - force) ** 2)) / np.std(force))
+
+
+def test_training_on_low_passed_inputs_removes_the_noise_bias_of_a_stop_feature():
+    """The stop feature of the noisy position moves with the noise, so a network trained on it is off on the clean
+    motion a simulation feeds it; trained on the inputs low-passed above the motion's band it is not."""
+    from nnfmu.models.train import Architecture, TrainSettings, train_model
+
+    spec, m, x, force = noisy_friction_record()
     errors = {}
     for cutoff in (None, 60.0):
         settings = TrainSettings(max_epochs=60, restarts=1, input_cutoff=cutoff)
         model = train_model(m, spec, Architecture("mlp", (3,)), settings).model
         assert model.settings["input_cutoff"] == cutoff
-        errors[cutoff] = np.sqrt(np.mean((model.predict({"displacement": x}) - force) ** 2)) / np.std(force)
+        errors[cutoff] = clean_error(model, x, force)
     assert errors[60.0] < 0.5 * errors[None], errors
+
+
+def test_retraining_low_passes_the_inputs_as_the_first_fit_did():
+    """A fresh retraining of a low-pass-trained network on the same noisy record stays as good on the clean motion
+    (it would learn the noise bias from the raw inputs) and keeps the cut-off in its settings."""
+    from nnfmu.models.retrain import RetrainSettings, retrain
+    from nnfmu.models.train import Architecture, TrainSettings, train_model
+
+    spec, m, x, force = noisy_friction_record()
+    first = train_model(m, spec, Architecture("mlp", (3,)), TrainSettings(max_epochs=60, restarts=1, input_cutoff=60.0))
+    rows = np.arange(len(force))
+    again = retrain(
+        first.model,
+        spec,
+        m,
+        rows[: 9 * len(rows) // 10],
+        rows[9 * len(rows) // 10 :],
+        RetrainSettings(max_epochs=60),
+        "again",
+        start="fresh",
+    ).model
+    assert again.settings["input_cutoff"] == 60.0
+    assert clean_error(again, x, force) < 2.0 * clean_error(first.model, x, force) + 0.01
