@@ -19,6 +19,8 @@ from typing import Sequence
 
 import numpy as np
 
+from nnfmu.cosim.units import PortUnit, port_unit
+
 Messages = list[tuple[int, str, str]]  # (status, category, message) as an FMU logged them
 _FMI2_SINKS: dict[int, Messages] = {}  # an FMI 2 instance's key (its componentEnvironment) -> its messages
 _FMI2_KEYS = itertools.count(1)
@@ -126,6 +128,10 @@ class FmuSlave:
     def unit(self, name: str) -> str:
         variable = self.variables[name]
         return variable.unit or (variable.declaredType.unit if variable.declaredType else "") or ""
+
+    def port_unit(self, name: str) -> PortUnit:
+        """The variable's unit, resolved to SI by the FMU's UnitDefinitions or nnfmu's unit table where it can be."""
+        return port_unit(self.variables[name], self.description.unitDefinitions or ())
 
     def value_references(self, names: Sequence[str]) -> list[int]:
         try:
