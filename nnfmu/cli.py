@@ -571,7 +571,7 @@ def cosim(
         if step_study:
             if master != "fmpy":
                 raise typer.BadParameter("--step-study runs on --master fmpy")
-            json_path = check_output_file(str(Path(out).with_suffix(".json")), [system, drive])
+            json_path = check_output_file(str(Path(out).with_suffix(".json")), [system, drive, target])
             with _warnings_as_lines(CosimWarning):
                 study = run_step_study(system, drive, settings, json_path, target_nrmse, target)
             for line in study_lines(study):

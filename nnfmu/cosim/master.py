@@ -30,6 +30,12 @@ The default (the driven element first, linear extrapolation, refresh) makes one 
 the damper force extrapolated linearly, the components sample at t_{n+1} on its motion, and the refresh gives the
 vehicle their forces at t_{n+1}: second order in h for motions, forces and accelerations (bench/cosim_coupling.py).
 
+Units: every coupling value is kept in SI where its output's unit converts (`units.py`: the FMU's UnitDefinitions,
+else nnfmu's unit table), and converted into each input's unit (a scale and offset per input, applied by the
+blocks of `direct.py` and by the C loop alike); connections no conversion joins are refused when the system is
+read, before any run. An element with feedthrough that cannot interpolate its inputs holds them over the step
+whatever the master estimates: a run with such an element warns (`CosimWarning`) with what it cost.
+
 Cost: per element and pass, one FMI call sets all its inputs, one steps it and one reads all its Real outputs into
 the result row (`direct`, buffers and value references prepared once); the refresh adds one set and one get per
 element with feedthrough; the drive is interpolated for blocks of steps at once. From Python each such call costs

@@ -118,8 +118,11 @@ class FmuSlave:
     @property
     def feedthrough(self) -> bool:
         """Some output depends on an input at a communication point (ModelStructure), so inputs set after a step
-        change the outputs there."""
-        return any(output.dependencies for output in self.description.outputs)
+        change the outputs there. An output without a `dependencies` attribute depends on every known (FMI 2 and 3),
+        as many other tools' FMUs declare them; nnfmu's sampled FMUs list none (`dependencies=""`)."""
+        if not self.names("input"):
+            return False
+        return any(output.dependencies is None or output.dependencies for output in self.description.outputs)
 
     def names(self, causality: str) -> list[str]:
         """Names of the variables with the given causality ("input", "output", "parameter", ...)."""

@@ -27,6 +27,8 @@ def test_units_resolve_by_the_fmus_definitions_then_by_the_table() -> None:
     assert port_unit(_variable("z", "mm"), own) == PortUnit("mm", "m", 1e-3, 0.0)
     assert port_unit(_variable("torque", "N.mm"), own) == PortUnit("N.mm", "N.m", 1e-3, 0.0)
     assert port_unit(_variable("len", "furlong"), own).si == "m"
+    assert port_unit(_variable("k", "kN/m"), [_definition("kN/m", 1e3, kg=1, s=-2)]) == PortUnit("kN/m", "N/m", 1e3)
+    assert port_unit(_variable("q", "J/K"), [_definition("J/K", kg=1, m=2, s=-2, K=-1)]).si == "kg.m^2/s^2.K"
     assert port_unit(_variable("a", declared="m/s2")) == PortUnit("m/s2", "m/s^2", 1.0, 0.0)
     assert port_unit(_variable("f", "kN")) == PortUnit("kN", "N", 1e3, 0.0)
     assert port_unit(_variable("w", "deg")).si == "rad"
@@ -51,3 +53,13 @@ def test_connections_convert_within_a_quantity_and_refuse_across() -> None:
         input_conversion(n, m, "c")
     with pytest.raises(UnitError, match=r"the input in 'furlong', and nnfmu knows no conversion of 'furlong'"):
         input_conversion(m, PortUnit("furlong"), "c")
+
+
+def test_outputs_are_recorded_in_si_where_they_convert_and_never_refused_for_a_missing_unit() -> None:
+    from nnfmu.cosim.master import result_unit
+
+    assert result_unit(table_unit("lbf"), "pull") == "N"
+    assert result_unit(table_unit("m/s2"), "body_acceleration") == "m/s^2"
+    assert result_unit(PortUnit(""), "body_acceleration") == "m/s^2"  # named after its quantity: SI assumed
+    assert result_unit(PortUnit(""), "a_spindle") == "1"
+    assert result_unit(PortUnit("1/s"), "rate") == "1/s"  # unknown to nnfmu: as declared

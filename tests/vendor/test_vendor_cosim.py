@@ -151,3 +151,13 @@ def test_libcosim_runs_the_vendor_car_with_results_in_si_and_refuses_a_conversio
         assert np.max(np.abs(cross[name] - own[name])) <= 1e-12 * np.max(np.abs(own[name])), name
     with pytest.raises(CosimError, match=r"connection vehicle\.v_damper -> damper\.velocity joins 'mm/s'"):
         run_libcosim(write_vendor_system(tmp_path / "mm", velocity_unit="mm/s"), road(0.3), settings)
+
+
+def test_outputs_without_dependencies_attributes_feed_through(tmp_path: Path) -> None:
+    from vendor_fmu import build_vendor_quarter_car
+
+    from nnfmu.cosim.slave import FmuSlave
+
+    for listed in (True, False):
+        with FmuSlave(build_vendor_quarter_car(tmp_path / str(listed), dependencies=listed)) as slave:
+            assert slave.feedthrough  # a_body on F_damper listed, or every output on every input (attribute absent)

@@ -57,8 +57,9 @@ UNITS = (  # name, base-unit exponents and factor, as FMI 2 UnitDefinitions writ
 )
 
 
-def model_description(velocity_unit: str = "m/s") -> str:
-    """The FMU's modelDescription.xml text (v_damper in `velocity_unit`, m/s or mm/s)."""
+def model_description(velocity_unit: str = "m/s", dependencies: bool = True) -> str:
+    """The FMU's modelDescription.xml text (v_damper in `velocity_unit`, m/s or mm/s; `dependencies` False leaves
+    the outputs' dependencies attributes out, as many tools do: FMI reads that as depending on every known)."""
     variables, outputs = [], []
     for index, (name, vr, causality, unit, start, description) in enumerate(REALS, start=1):
         unit = velocity_unit if name == "v_damper" else unit
@@ -72,7 +73,8 @@ def model_description(velocity_unit: str = "m/s") -> str:
             f"      <Real {typed}{start_attr}/>\n    </ScalarVariable>"
         )
         if causality == "output":
-            outputs.append(f'      <Unknown index="{index}" dependencies="{DEPENDENCIES[name]}"/>')
+            listed = f' dependencies="{DEPENDENCIES[name]}"' if dependencies else ""
+            outputs.append(f'      <Unknown index="{index}"{listed}/>')
     variables.append(
         '    <ScalarVariable name="substeps" valueReference="0" causality="parameter" variability="fixed" '
         'initial="exact" description="RK4 substeps per communication step">\n      <Integer start="4"/>\n'
@@ -109,7 +111,7 @@ def model_description(velocity_unit: str = "m/s") -> str:
 """
 
 
-def build_vendor_quarter_car(folder: Path, velocity_unit: str = "m/s") -> Path:
+def build_vendor_quarter_car(folder: Path, velocity_unit: str = "m/s", dependencies: bool = True) -> Path:
     """Compile the vendor quarter car with the host `cc` and zip it into `folder`/quarter_car.fmu; return its path.
     `velocity_unit` 'mm/s' builds the variant whose v_damper is in mm/s (a connection the master must convert)."""
     scale = {"m/s": "1.0", "mm/s": "1000.0"}[velocity_unit]
@@ -139,7 +141,7 @@ def build_vendor_quarter_car(folder: Path, velocity_unit: str = "m/s") -> Path:
     )
     fmu = folder / f"{IDENTIFIER}.fmu"
     with zipfile.ZipFile(fmu, "w", zipfile.ZIP_DEFLATED) as archive:
-        archive.writestr("modelDescription.xml", model_description(velocity_unit))
+        archive.writestr("modelDescription.xml", model_description(velocity_unit, dependencies))
         archive.write(library, f"binaries/linux64/{IDENTIFIER}.so")
         archive.write(SOURCE, f"sources/{SOURCE.name}")
     library.unlink()
