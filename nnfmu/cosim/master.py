@@ -542,10 +542,10 @@ class _System:
             flag = "canInterpolateInputs=false" if slave.fmi_version == 2 else "FMI 3: no input derivatives"
             parts.append(
                 f"element {name!r} ({slave.path.name}) cannot interpolate its inputs ({flag}) and holds them over "
-                f"each {h:g} s step, so the master's {self.settings.extrapolation} extrapolation and slopes cannot "
-                f"reach inside the step; the coupling then costs an error of order h*|du/dt| (first order in h): "
-                f"the largest change within one step, of the input's peak: {moved}. Take a smaller step if that is "
-                "much, and check the step with `nnfmu cosim --step-study`"
+                f"each {h:g} s step, so the master's estimate of their course over the step (extrapolation, "
+                "slopes) cannot reach inside it; the coupling then costs an error of order h*|du/dt| (first order "
+                f"in h): the largest change within one step, of the input's peak: {moved}. Take a smaller step "
+                "if that is much, and check the step with `nnfmu cosim --step-study`"
             )
         return "; ".join(parts)
 

@@ -55,12 +55,12 @@ class ChannelEstimate:
 
 @dataclass
 class StepStudy:
-    """The study's runs (step -> wall time [s] or the reason the master refused it), the target NRMSE, the channels'
-    estimates and the sample periods of the elements that have one."""
+    """The study's runs (step [s] -> wall time [s]), the steps the master refused (step -> its reason), the target
+    NRMSE, the channels' estimates and the sample periods [s] of the elements that have one."""
 
     step: float
     target: float
-    runs: dict[float, str] = field(default_factory=dict)
+    runs: dict[float, float] = field(default_factory=dict)
     refused: dict[float, str] = field(default_factory=dict)
     channels: list[ChannelEstimate] = field(default_factory=list)
     sample_periods: dict[str, float] = field(default_factory=dict)
@@ -73,7 +73,7 @@ class StepStudy:
         return {
             "step_s": self.step,
             "target_nrmse": self.target,
-            "runs": {f"{h:.9g}": wall for h, wall in self.runs.items()},
+            "runs_wall_time_s": {f"{h:.9g}": wall for h, wall in self.runs.items()},
             "refused": {f"{h:.9g}": why for h, why in self.refused.items()},
             "sample_periods_s": self.sample_periods,
             "largest_step_s": _number(self.largest_step()),
@@ -153,7 +153,7 @@ def step_study(
                 raise
             study.refused[step] = str(error)
             break
-        study.runs[step] = f"{clock.perf_counter() - started:.3f} s"
+        study.runs[step] = round(clock.perf_counter() - started, 3)
         results.append(result.measurement)
     if len(results) < 2:
         return study
