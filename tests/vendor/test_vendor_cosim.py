@@ -99,7 +99,7 @@ def test_step_study_estimates_the_error_at_h_close_to_a_fine_runs(vendor: tuple[
     for c in study.channels:
         y, truth = coarse[c.name], fine[c.name][::32]
         actual = np.sqrt(np.mean((y - truth) ** 2)) / np.sqrt(np.mean(truth**2))
-        assert 0.6 * actual < c.nrmse_h < 1.6 * actual, (c.name, c.nrmse_h, actual)
+        assert 0.9 * actual < c.nrmse_h < 1.2 * actual, (c.name, c.nrmse_h, actual)  # seen: 1.03-1.05 x
         assert c.observed and 0.8 < c.order < 1.2, (c.name, c.order)  # inputs held: first order
 
 

@@ -128,6 +128,7 @@ def build_vendor_quarter_car(folder: Path, velocity_unit: str = "m/s", dependenc
             "-Wall",
             "-Wextra",
             "-Werror",
+            "-Wvla",
             "-shared",
             "-fPIC",
             f"-I{HEADERS}",
