@@ -25,6 +25,7 @@ from nnfmu.cosim.units import PortUnit, input_conversion, port_unit, table_unit
 from nnfmu.data import Measurement
 
 NANOSECONDS = 1_000_000_000
+UNCONVERTED = 1e-12  # relative: a connection whose unit conversion is 1 within rounding needs none
 NANOSECOND_TOLERANCE = 1e-3  # [ns]: how far from a whole number of nanoseconds a time may lie (float rounding)
 
 
@@ -154,7 +155,8 @@ def check_for_libcosim(system: SystemStructure) -> dict[str, dict[str, PortUnit]
     for c in system.connections:
         source, target = units[c.start_element][c.start_connector], units[c.end_element][c.end_connector]
         a, b = input_conversion(source, target, f"system {system.name!r}: connection {c}")
-        if a * source.scale != 1.0 or a * source.offset + b != 0.0:
+        scale, offset = a * source.scale, a * source.offset + b  # output -> input, unit to unit
+        if abs(scale - 1.0) > UNCONVERTED or abs(offset) > UNCONVERTED * max(1.0, abs(b)):
             raise CosimError(
                 f"system {system.name!r}: connection {c} joins {source.describe()} and {target.describe()}; "
                 "libcosim passes values unconverted, so use --master fmpy (which converts) or FMUs of one unit"
