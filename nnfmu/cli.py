@@ -82,19 +82,21 @@ def _platforms(items: Optional[list[str]]) -> Optional[tuple[str, ...]]:
 
 
 @contextmanager
-def _warnings_as_lines() -> Iterator[None]:
-    """Print each distinct build warning (a platform left out) raised inside the block as one `warning: ...` line on
-    stderr; other warnings pass on as Python shows them."""
+def _warnings_as_lines(*categories: type[Warning]) -> Iterator[None]:
+    """Print each distinct warning of `categories` (default: a build's platform left out) raised inside the block
+    as one `warning: ...` line on stderr; other warnings pass on as Python shows them."""
     from nnfmu.workflows.fmu_build import PlatformSkippedWarning
 
+    categories = categories or (PlatformSkippedWarning,)
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", PlatformSkippedWarning)
+        for category in categories:
+            warnings.simplefilter("always", category)
         try:
             yield
         finally:
             lines = []
             for w in caught:
-                if issubclass(w.category, PlatformSkippedWarning):
+                if issubclass(w.category, categories):
                     lines.append(str(w.message))
                 else:
                     warnings.showwarning(w.message, w.category, w.filename, w.lineno)
@@ -538,13 +540,22 @@ def cosim(
     master: str = typer.Option(
         "fmpy",
         help="fmpy (this package's master) or libcosim (cross-check: only --scheme "
-        "jacobi --no-extrapolate --no-refresh, libcosim's own algorithm).",
+        "jacobi --no-extrapolate --no-refresh, libcosim's own algorithm; FMI 2 FMUs only).",
+    ),
+    step_study: bool = typer.Option(
+        False,
+        "--step-study",
+        help="Also run at step/2 and step/4 and print each channel's estimated coupling error (NRMSE, step "
+        "halving) and the largest step [s] meeting --target-nrmse; the study goes to OUT with .json as suffix.",
+    ),
+    target_nrmse: float = typer.Option(
+        0.01, help="Step study: the NRMSE (fraction, 0.01 = 1 %) each channel should meet."
     ),
 ) -> None:
     """Co-simulate a vehicle FMU with component FMUs on a drive file."""
     from rich.progress import Progress
 
-    from nnfmu.workflows.cosim import CosimSettings, run_cosim
+    from nnfmu.workflows.cosim import CosimSettings, CosimWarning, run_cosim, run_step_study, study_lines
 
     try:
         target = check_output_file(out, [system, drive])
@@ -557,7 +568,17 @@ def cosim(
             extrapolation="linear" if extrapolate else "none",
             iterations=iterations,
         )
-        with Progress(transient=True) as bar:
+        if step_study:
+            if master != "fmpy":
+                raise typer.BadParameter("--step-study runs on --master fmpy")
+            json_path = check_output_file(str(Path(out).with_suffix(".json")), [system, drive, target])
+            with _warnings_as_lines(CosimWarning):
+                study = run_step_study(system, drive, settings, json_path, target_nrmse, target)
+            for line in study_lines(study):
+                typer.echo(line)
+            typer.echo(f"result at {step:g} s: {out}; study: {json_path}")
+            return
+        with Progress(transient=True) as bar, _warnings_as_lines(CosimWarning):
             task = bar.add_task("co-simulation", total=None)
             result = run_cosim(
                 system,

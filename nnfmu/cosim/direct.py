@@ -49,6 +49,8 @@ class RealBlock:
     variables and `get()` reads them into it, each with one FMI call.
 
     `values` may be a contiguous view into a larger array (a row of results), so an output lands where it is kept.
+    With a unit conversion (`convert`), `set()` first turns the array in place into the FMU's units and `get()`
+    turns what the FMU wrote into the master's (value * scale + offset, per variable).
     """
 
     def __init__(self, slave: FmuSlave, names: Sequence[str], values: np.ndarray | None = None) -> None:
@@ -75,8 +77,22 @@ class RealBlock:
             self._get = _TRANSFER3((self._get_name, library))
             self._args = (instance, references, n, pointer, n)
         self._references = references  # the C function reads them on every call: keep them alive
+        self.scale: np.ndarray | None = None
+        self.offset: np.ndarray | None = None
+
+    def convert(self, scale: np.ndarray, offset: np.ndarray) -> None:
+        """Apply value * scale + offset (per variable) before each set, or after each get (None when all identity)."""
+        n = len(self.names)
+        if np.all(scale == 1.0) and np.all(offset == 0.0):
+            self.scale = self.offset = None
+            return
+        self.scale = np.ascontiguousarray(scale, dtype=np.float64).reshape(n)
+        self.offset = np.ascontiguousarray(offset, dtype=np.float64).reshape(n)
 
     def set(self) -> None:
+        if self.scale is not None:
+            self.values *= self.scale
+            self.values += self.offset
         status = self._set(*self._args)
         if status > WARNING:
             raise self.set_error(status)
@@ -85,6 +101,9 @@ class RealBlock:
         status = self._get(*self._args)
         if status > WARNING:
             raise self.get_error(status)
+        if self.scale is not None:
+            self.values *= self.scale
+            self.values += self.offset
 
     def set_error(self, status: int) -> FmiStatusError:
         return FmiStatusError(self.slave, f"{self._set_name}({', '.join(self.names)})", status)
@@ -108,8 +127,11 @@ class SlopeBlock:
         self._orders = (c_int * n)(*([1] * n))
         self._call = _SLOPES2(("fmi2SetRealInputDerivatives", slave.fmu.dll))
         self._args = (slave.fmu.component, self._references, n, self._orders, self.values.ctypes.data_as(_DOUBLES))
+        self.scale: np.ndarray | None = None  # the inputs' unit scales: a slope converts by the scale alone
 
     def set(self) -> None:
+        if self.scale is not None:
+            self.values *= self.scale
         status = self._call(*self._args)
         if status > WARNING:
             raise self.error(status)

@@ -35,6 +35,7 @@ class DriveInputs:
                 f"(the drive has: {', '.join(drive.names)})"
             )
         self.names = list(names)
+        self.units = [source.units.get(n, "") for n in self.names]  # SI (or kept) units of the drive channels
         self.time = np.asarray(source.time, dtype=float)
         self._columns = [np.ascontiguousarray(source[n], dtype=float) for n in self.names]
         self.source = drive.source

@@ -41,6 +41,10 @@ typedef struct {
     int64_t span_start;
     int64_t is_driven;
     int64_t feedthrough;
+    const double *in_scale; /* units: input = value * in_scale + in_offset before each set (NULL: as they are) */
+    const double *in_offset;
+    const double *out_scale; /* row value = output * out_scale + out_offset after each get (NULL: as they are) */
+    const double *out_offset;
 } nn_element;
 
 /* Elements in stepping order; group g is elements [group_starts[g], group_starts[g + 1]). */
@@ -73,6 +77,19 @@ typedef struct {
 enum { NN_CALL_SET = 0, NN_CALL_SLOPES = 1, NN_CALL_STEP = 2, NN_CALL_GET = 3, NN_CALL_REFRESH_SET = 4,
        NN_CALL_REFRESH_GET = 5 };
 
+/* The element's inputs in its own units, then one set (master.py: RealBlock.set with a conversion). */
+static int set_real(const nn_element *e, int64_t step, int64_t index, int64_t call, nn_failure *failure);
+
+/* What the FMU wrote into its span, in the master's units (master.py: RealBlock.get with a conversion). */
+static void outputs_in_row_units(const nn_element *e, double *span) {
+    int64_t i;
+    if (e->out_scale == NULL) return;
+    for (i = 0; i < e->n_outputs; i++) {
+        span[i] *= e->out_scale[i];
+        span[i] += e->out_offset[i];
+    }
+}
+
 static int failed(nn_failure *failure, int64_t step, int64_t element, int64_t call, int status) {
     if (status <= NN_WARNING) return 0;
     failure->step = step;
@@ -80,6 +97,18 @@ static int failed(nn_failure *failure, int64_t step, int64_t element, int64_t ca
     failure->call = call;
     failure->status = status;
     return 1;
+}
+
+static int set_real(const nn_element *e, int64_t step, int64_t index, int64_t call, nn_failure *failure) {
+    int64_t i, n_inputs = e->n_coupled + e->n_driven;
+    if (e->in_scale != NULL) {
+        for (i = 0; i < n_inputs; i++) {
+            e->inputs[i] *= e->in_scale[i];
+            e->inputs[i] += e->in_offset[i];
+        }
+    }
+    return failed(failure, step, index, call, e->set_real(e->instance, e->input_references, (size_t)n_inputs,
+                                                          e->inputs));
 }
 
 /* The element's inputs before its step (master.py: _System._set_inputs, scheme not plain). */
@@ -93,13 +122,13 @@ static int set_inputs(const nn_plan *plan, int64_t index, const double *source, 
         if (plan->n_refreshed == 0) {
             for (i = 0; i < n; i++) e->inputs[i] = plan->now[e->sources[i]];
             if (e->is_driven) memcpy(e->inputs + n, drive, (size_t)e->n_driven * sizeof(double));
-            if (failed(failure, step, index, NN_CALL_SET, e->set_real(e->instance, e->input_references, n_inputs,
-                                                                     e->inputs)))
-                return 1;
+            if (set_real(e, step, index, NN_CALL_SET, failure)) return 1;
         }
         if (e->set_slopes != NULL) {
             for (i = 0; i < n; i++) e->slopes[i] = (source[e->sources[i]] - plan->now[e->sources[i]]) / h;
             for (i = 0; i < e->n_driven; i++) e->slopes[n + i] = (end[i] - drive[i]) / h;
+            if (e->in_scale != NULL)
+                for (i = 0; i < (int64_t)n_inputs; i++) e->slopes[i] *= e->in_scale[i];
             return failed(failure, step, index, NN_CALL_SLOPES,
                           e->set_slopes(e->instance, e->slope_references, n_inputs, e->slope_orders, e->slopes));
         }
@@ -111,8 +140,7 @@ static int set_inputs(const nn_plan *plan, int64_t index, const double *source, 
     } else {
         for (i = 0; i < n; i++) e->inputs[i] = source[e->sources[i]];
     }
-    return failed(failure, step, index, NN_CALL_SET, e->set_real(e->instance, e->input_references, n_inputs,
-                                                                 e->inputs));
+    return set_real(e, step, index, NN_CALL_SET, failure);
 }
 
 /* Inputs at t_{n+1} for the elements with feedthrough, then their outputs again (master.py: _System.refresh). */
@@ -121,16 +149,14 @@ static int refresh(const nn_plan *plan, const double *end, int64_t step, nn_fail
     for (r = 0; r < plan->n_refreshed; r++) {
         int64_t index = plan->refreshed[r];
         nn_element *e = &plan->elements[index];
-        size_t n_inputs = (size_t)(e->n_coupled + e->n_driven);
         for (i = 0; i < e->n_coupled; i++) e->inputs[i] = plan->values[e->sources[i]];
         if (e->is_driven) memcpy(e->inputs + e->n_coupled, end, (size_t)e->n_driven * sizeof(double));
-        if (failed(failure, step, index, NN_CALL_REFRESH_SET,
-                   e->set_real(e->instance, e->input_references, n_inputs, e->inputs)))
-            return 1;
+        if (set_real(e, step, index, NN_CALL_REFRESH_SET, failure)) return 1;
         if (failed(failure, step, index, NN_CALL_REFRESH_GET,
                    e->get_real(e->instance, e->output_references, (size_t)e->n_outputs,
                                plan->values + e->span_start)))
             return 1;
+        outputs_in_row_units(e, plan->values + e->span_start);
     }
     return 0;
 }
@@ -161,6 +187,7 @@ static int one_step(const nn_plan *plan, int64_t n, double t0, double h, const d
             if (failed(failure, n, k, NN_CALL_GET, e->get_real(e->instance, e->output_references,
                                                                (size_t)e->n_outputs, span)))
                 return 1;
+            outputs_in_row_units(e, span);
             if (plan->gauss_seidel) memcpy(plan->fresh + e->span_start, span, (size_t)e->n_outputs * sizeof(double));
         }
     }

@@ -31,22 +31,26 @@ _LIBRARY: CDLL | None = None
 class _CElement(Structure):
     """`nn_element` of inner_loop.c."""
 
-    _fields_ = [
-        (name, c_void_p)
-        for name in ("instance", "set_real", "get_real", "set_slopes", "do_step", "input_references", "inputs")
-    ] + [
-        ("n_coupled", c_int64),
-        ("n_driven", c_int64),
-        ("sources", c_void_p),
-        ("slope_references", c_void_p),
-        ("slope_orders", c_void_p),
-        ("slopes", c_void_p),
-        ("output_references", c_void_p),
-        ("n_outputs", c_int64),
-        ("span_start", c_int64),
-        ("is_driven", c_int64),
-        ("feedthrough", c_int64),
-    ]
+    _fields_ = (
+        [
+            (name, c_void_p)
+            for name in ("instance", "set_real", "get_real", "set_slopes", "do_step", "input_references", "inputs")
+        ]
+        + [
+            ("n_coupled", c_int64),
+            ("n_driven", c_int64),
+            ("sources", c_void_p),
+            ("slope_references", c_void_p),
+            ("slope_orders", c_void_p),
+            ("slopes", c_void_p),
+            ("output_references", c_void_p),
+            ("n_outputs", c_int64),
+            ("span_start", c_int64),
+            ("is_driven", c_int64),
+            ("feedthrough", c_int64),
+        ]
+        + [(name, c_void_p) for name in ("in_scale", "in_offset", "out_scale", "out_offset")]
+    )
 
 
 class _CPlan(Structure):
@@ -160,6 +164,10 @@ class CompiledLoop:
             slot.output_references = cast(element.outputs._references, c_void_p).value
             slot.n_outputs, slot.span_start = len(element.outputs.names), element.span.start
             slot.is_driven, slot.feedthrough = int(element.driven_element), int(element.feedthrough)
+            if inputs is not None and inputs.scale is not None:
+                slot.in_scale, slot.in_offset = _pointer(inputs.scale), _pointer(inputs.offset)
+            if element.outputs.scale is not None:
+                slot.out_scale, slot.out_offset = _pointer(element.outputs.scale), _pointer(element.outputs.offset)
         starts = np.cumsum([0] + [len(group) for group in groups], dtype=np.int64)
         refreshed = np.array([index[id(e)] for e in system.refreshed], dtype=np.int64)
         self.values, n = system.values, len(system.values)

@@ -18,12 +18,14 @@ import numpy as np
 
 from nnfmu.cosim.binding import DriveBinding, bind_free_inputs
 from nnfmu.cosim.drive_inputs import DriveInputs
-from nnfmu.cosim.master import CosimError, CosimSettings, result_table, step_count, whole_steps
+from nnfmu.cosim.master import CosimError, CosimSettings, result_table, result_unit, step_count, whole_steps
 from nnfmu.cosim.results import CosimResult
 from nnfmu.cosim.ssp import SystemStructure, open_system
+from nnfmu.cosim.units import PortUnit, input_conversion, port_unit, table_unit
 from nnfmu.data import Measurement
 
 NANOSECONDS = 1_000_000_000
+UNCONVERTED = 1e-12  # relative: a connection whose unit conversion is 1 within rounding needs none
 NANOSECOND_TOLERANCE = 1e-3  # [ns]: how far from a whole number of nanoseconds a time may lie (float rounding)
 
 
@@ -63,6 +65,7 @@ def run_libcosim(
         stop = settings.stop_time if settings.stop_time is not None else system.stop_time
         binding = binding if binding is not None else bind_free_inputs(system)
         driven = binding.element
+        units = check_for_libcosim(system)
         log_output_level(CosimLogLevel.ERROR)
         # the system file open_system read and checked: for an .ssp the extracted copy, never the archive itself,
         # which libcosim would extract again without open_system's checks
@@ -87,6 +90,7 @@ def run_libcosim(
             )
         drive_names = list(binding.inputs)
         inputs = DriveInputs(drive, binding.channels)
+        drive_scale, drive_offset = _drive_conversion(system, inputs, binding, units)
         h = settings.step
         n_steps = step_count(0.0, stop, h) if stop is not None else whole_steps(0.0, inputs.end, h)
         channels = _channels(system, driven)
@@ -100,11 +104,12 @@ def run_libcosim(
         execution.add_observer(series)
         for element, output, _, _ in channels:
             series.start_time_series(index[element], refs[element][output][0], CosimVariableType.REAL)
-        for ref, value in zip(drive_refs, inputs.at(0.0)):
+        for ref, value in zip(drive_refs, drive_scale * inputs.at(0.0) + drive_offset):
             execution.real_initial_value(index[driven], ref, float(value))
         for n in range(n_steps):
             if drive_refs:
-                manipulator.slave_real_values(index[driven], drive_refs, [float(x) for x in inputs.at(n * h)])
+                values = drive_scale * inputs.at(n * h) + drive_offset
+                manipulator.slave_real_values(index[driven], drive_refs, [float(x) for x in values])
             if not execution.step(1):
                 raise CosimError(f"{path}: libcosim failed at step {n} (t = {n * h_ns} ns)")
             rows[n + 1] = _read(last, index, refs, channels)
@@ -114,14 +119,66 @@ def run_libcosim(
                 raise CosimError(f"{path}: libcosim recorded no initial value of {element}.{output}")
             rows[0, j] = values[0]
         del execution
+    for j, (element, output, _, _) in enumerate(channels):  # outputs in SI where their unit converts, as fmpy's
+        unit = units[element][output]
+        rows[:, j] = rows[:, j] * unit.scale + unit.offset
     measurement = Measurement.uniform(
         0.0,
         h,
         channels={name: rows[:, j] for j, (_, _, name, _) in enumerate(channels)},
-        units={name: unit for _, _, name, unit in channels},
+        units={name: result_unit(units[element][output], name) for element, output, name, _ in channels},
         source=f"libcosim co-simulation of {system.name} (h = {h_ns} ns) on {drive.source}",
     )
     return CosimResult(measurement, n_steps, n_steps, 0, master="libcosim")
+
+
+def check_for_libcosim(system: SystemStructure) -> dict[str, dict[str, PortUnit]]:
+    """Refuse, before libcosim loads anything, what it cannot run: an FMI 3 FMU (libcosim has no FMI 3 and loses the
+    process in add_local_slave) and a connection whose ends need a unit conversion (libcosim passes values as they
+    are); CosimError naming the element or connection. Returns every element's Real variables' units by name."""
+    from fmpy import read_model_description
+
+    units: dict[str, dict[str, PortUnit]] = {}
+    for element in system.elements:
+        fmu = system.fmu_path(element)
+        description = read_model_description(str(fmu))
+        if not description.fmiVersion.startswith("2"):
+            raise CosimError(
+                f"system {system.name!r}: element {element.name!r} ({fmu.name}) is an FMI {description.fmiVersion} "
+                "FMU; libcosim runs FMI 2 co-simulation FMUs only (an FMI 3 FMU crashes it); build it with --fmi 2 "
+                "or use --master fmpy"
+            )
+        definitions = description.unitDefinitions or ()
+        units[element.name] = {
+            v.name: port_unit(v, definitions) for v in description.modelVariables if v.type in ("Real", "Float64")
+        }
+    for c in system.connections:
+        source, target = units[c.start_element][c.start_connector], units[c.end_element][c.end_connector]
+        a, b = input_conversion(source, target, f"system {system.name!r}: connection {c}")
+        scale, offset = a * source.scale, a * source.offset + b  # output -> input, unit to unit
+        if abs(scale - 1.0) > UNCONVERTED or abs(offset) > UNCONVERTED * max(1.0, abs(b)):
+            raise CosimError(
+                f"system {system.name!r}: connection {c} joins {source.describe()} and {target.describe()}; "
+                "libcosim passes values unconverted, so use --master fmpy (which converts) or FMUs of one unit"
+            )
+    return units
+
+
+def _drive_conversion(
+    system: SystemStructure, drive: DriveInputs, binding: DriveBinding, units: dict[str, dict[str, PortUnit]]
+) -> tuple[np.ndarray, np.ndarray]:
+    """(a, b) per bound input: the value set = a * drive value (SI) + b; UnitError naming input and channel."""
+    pairs = [
+        input_conversion(
+            table_unit(unit, channel),
+            units[binding.element][name],
+            f"system {system.name!r}: element {binding.element!r}, input {name!r} read from drive channel "
+            f"{channel!r} of {drive.source}",
+            "the drive",
+        )
+        for name, channel, unit in zip(binding.inputs, binding.channels, drive.units)
+    ]
+    return np.array([a for a, _ in pairs]), np.array([b for _, b in pairs])
 
 
 def _channels(system: SystemStructure, driven: str) -> list[tuple[str, str, str, str]]:

@@ -30,6 +30,12 @@ The default (the driven element first, linear extrapolation, refresh) makes one 
 the damper force extrapolated linearly, the components sample at t_{n+1} on its motion, and the refresh gives the
 vehicle their forces at t_{n+1}: second order in h for motions, forces and accelerations (bench/cosim_coupling.py).
 
+Units: every coupling value is kept in SI where its output's unit converts (`units.py`: the FMU's UnitDefinitions,
+else nnfmu's unit table), and converted into each input's unit (a scale and offset per input, applied by the
+blocks of `direct.py` and by the C loop alike); connections no conversion joins are refused when the system is
+read, before any run. An element with feedthrough that cannot interpolate its inputs holds them over the step
+whatever the master estimates: a run with such an element warns (`CosimWarning`) with what it cost.
+
 Cost: per element and pass, one FMI call sets all its inputs, one steps it and one reads all its Real outputs into
 the result row (`direct`, buffers and value references prepared once); the refresh adds one set and one get per
 element with feedthrough; the drive is interpolated for blocks of steps at once. From Python each such call costs
@@ -42,6 +48,7 @@ from __future__ import annotations
 
 import math
 import time as clock
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -56,7 +63,9 @@ from nnfmu.cosim.instances import InstancePool
 from nnfmu.cosim.results import CosimResult
 from nnfmu.cosim.slave import FmuSlave
 from nnfmu.cosim.ssp import SystemStructure
-from nnfmu.data import Measurement
+from nnfmu.cosim.units import PortUnit, input_conversion, table_unit
+from nnfmu.data import Measurement, check_measurement
+from nnfmu.data.units import si_unit_of
 from nnfmu.errors import NnfmuError
 
 SCHEMES = ("gauss-seidel", "jacobi")
@@ -71,6 +80,11 @@ MAX_RESULT_BYTES = 2 * 1024**3  # the result table a run holds in memory: one fl
 
 class CosimError(NnfmuError, ValueError):
     """The system or settings cannot be co-simulated; the message names the element, connector or setting."""
+
+
+class CosimWarning(UserWarning):
+    """Something about a run the user should know and nothing refuses: inputs an element holds over the step while
+    the master's options assume it interpolates them, an output recorded in a unit it did not declare."""
 
 
 class _Diverged(Exception):
@@ -233,6 +247,10 @@ class _System:
                 name: [n for n in slave.names("output") if slave.variables[n].type in ("Real", "Float64")]
                 for name, slave in self.slaves.items()
             }
+            self.units = {
+                name: {n: slave.port_unit(n) for n in [*slave.names("input"), *self.outputs[name]]}
+                for name, slave in self.slaves.items()
+            }
             self.elements = self._wire(system.name)
         except BaseException:
             self.close(healthy=False)
@@ -294,12 +312,25 @@ class _System:
         self.values = np.zeros(start)
         self.link_positions = np.array([position[(link.source, link.output)] for link in self.links], dtype=np.intp)
         elements = {}
+        self.link_conversions = [self._link_conversion(system_name, link) for link in self.links]
+        self.drive_conversion = self._drive_conversion(system_name)
         for name, slave in self.slaves.items():
             incoming = [link for link in self.links if link.target == name]
             is_driven = name == self.driven
             names = [link.input for link in incoming] + (self.drive_names if is_driven else [])
             inputs = RealBlock(slave, names) if names else None
             buffer = inputs.values if inputs is not None else np.zeros(0)
+            conversions = [self.link_conversions[self.links.index(link)][2:] for link in incoming]
+            conversions += list(zip(*self.drive_conversion)) if is_driven else []
+            slopes = SlopeBlock(slave, names) if names and slave.feedthrough and slave.takes_input_slopes else None
+            if inputs is not None:
+                scale, offset = (np.array(column, dtype=float) for column in zip(*conversions))
+                inputs.convert(scale, offset)
+                if slopes is not None and inputs.scale is not None:
+                    slopes.scale = scale
+            outputs = RealBlock(slave, self.outputs[name], self.values[spans[name]])
+            units = [self.units[name][n] for n in self.outputs[name]]
+            outputs.convert(np.array([u.scale for u in units]), np.array([u.offset for u in units]))
             elements[name] = _Element(
                 name=name,
                 driven_element=is_driven,
@@ -308,12 +339,34 @@ class _System:
                 coupled=buffer[: len(incoming)],
                 driven=buffer[len(incoming) :],
                 inputs=inputs,
-                slopes=SlopeBlock(slave, names) if names and slave.feedthrough and slave.takes_input_slopes else None,
-                outputs=RealBlock(slave, self.outputs[name], self.values[spans[name]]),
+                slopes=slopes,
+                outputs=outputs,
                 stepper=Stepper(slave),
                 span=spans[name],
             )
         return elements
+
+    def _link_conversion(self, system_name: str, link: _Link) -> tuple[float, float, float, float]:
+        """(s, o, a, b) of a connection: row value = s * output + o, input = a * row value + b; UnitError naming
+        the connection, both ports and their units when no conversion joins them."""
+        source, target = self.units[link.source][link.output], self.units[link.target][link.input]
+        where = f"system {system_name!r}: connection {link.source}.{link.output} -> {link.target}.{link.input}"
+        a, b = input_conversion(source, target, where)
+        return source.scale, source.offset, a, b
+
+    def _drive_conversion(self, system_name: str) -> tuple[list[float], list[float]]:
+        """(a, b) per drive input of the driven element: its value = a * drive value (SI) + b; UnitError naming the
+        element, the input, the drive channel and both units when no conversion joins them."""
+        scales, offsets = [], []
+        for name, channel, unit in zip(self.drive_names, self.drive.names, self.drive.units):
+            where = (
+                f"system {system_name!r}: element {self.driven!r}, input {name!r} read from drive channel "
+                f"{channel!r} of {self.drive.source}"
+            )
+            a, b = input_conversion(table_unit(unit, channel), self.units[self.driven][name], where, "the drive")
+            scales.append(a)
+            offsets.append(b)
+        return scales, offsets
 
     def close(self, healthy: bool) -> None:
         """Close the instances, or give them back to the pool (kept for another run only if this one went well)."""
@@ -331,10 +384,12 @@ class _System:
             if self.parameters[name]:
                 slave.set_real(list(self.parameters[name]), list(self.parameters[name].values()))
         if self.drive_names:
-            self.slaves[self.driven].set_real(self.drive_names, drive)
+            scale, offset = (np.array(column) for column in self.drive_conversion)
+            self.slaves[self.driven].set_real(self.drive_names, scale * drive + offset)
         for _ in range(len(self.slaves)):
-            for link in self.links:
-                self.slaves[link.target].set_real([link.input], self.slaves[link.source].get_real([link.output]))
+            for link, (s, o, a, b) in zip(self.links, self.link_conversions):
+                value = self.slaves[link.source].get_real([link.output])
+                self.slaves[link.target].set_real([link.input], a * (s * value + o) + b)
         for slave in self.slaves.values():
             slave.exit_initialization()
         for element in self.elements.values():
@@ -391,7 +446,7 @@ class _System:
         described = []
         for i in bad:
             link, slave = incoming[i], self.slaves[incoming[i].source]
-            unit = slave.unit(link.output)
+            unit = self.units[link.source][link.output].row_unit
             described.append(
                 f"{link.source} ({slave.path.name}) output {link.output} went from "
                 f"{self.now[element.sources[i]]:.6g} to {source[element.sources[i]]:.6g} {unit} "
@@ -464,19 +519,85 @@ class _System:
         self.peak = np.maximum(self.peak, np.abs(self.now[self.link_positions]))
         return passes, converged
 
+    def held_inputs(self) -> dict[str, list[int]]:
+        """Elements with feedthrough that cannot interpolate their inputs (FMI 2 `canInterpolateInputs` false, or FMI
+        3), by name, with the positions in their input block of the inputs they take, when the settings are not plain:
+        the master then estimates each input's course over the step, which such an element never sees."""
+        if self.settings.plain:
+            return {}
+        return {
+            name: list(range(len(element.inputs.names)))
+            for name, element in self.elements.items()
+            if element.feedthrough and element.inputs is not None and element.slopes is None
+        }
+
+    def holding_warning(self, held: dict[str, list[int]], changes: dict[tuple[str, int], float]) -> str:
+        """The warning for `held` inputs, with each input's largest change over one step relative to its peak."""
+        h = self.settings.step
+        parts = []
+        for name, positions in held.items():
+            slave = self.slaves[name]
+            names = self.elements[name].inputs.names
+            moved = ", ".join(f"{names[i]} {100 * changes.get((name, i), math.nan):.2g} %" for i in positions)
+            flag = "canInterpolateInputs=false" if slave.fmi_version == 2 else "FMI 3: no input derivatives"
+            parts.append(
+                f"element {name!r} ({slave.path.name}) cannot interpolate its inputs ({flag}) and holds them over "
+                f"each {h:g} s step, so the master's estimate of their course over the step (extrapolation, "
+                "slopes) cannot reach inside it; the coupling then costs an error of order h*|du/dt| (first order "
+                f"in h): the largest change within one step, of the input's peak: {moved}. Take a smaller step "
+                "if that is much, and check the step with `nnfmu cosim --step-study`"
+            )
+        return "; ".join(parts)
+
+    def input_changes(self, rows: np.ndarray, times: np.ndarray, held: dict[str, list[int]]) -> dict:
+        """Per held input (element, position): max |u_{n+1} - u_n| over max |u| along the run (rows: values rows,
+        in row units; drive inputs from the drive at `times`)."""
+        result: dict[tuple[str, int], float] = {}
+        drive = self.drive.table(times) if any(self.elements[n].driven_element for n in held) else None
+        for name, positions in held.items():
+            element = self.elements[name]
+            n = len(element.sources)
+            for i in positions:
+                u = rows[:, element.sources[i]] if i < n else drive[:, i - n]
+                peak = float(np.max(np.abs(u)))
+                result[(name, i)] = float(np.max(np.abs(np.diff(u)))) / peak if peak > 0 else 0.0
+        return result
+
     def channels(self) -> list[tuple[str, str]]:
         """(channel name, unit) of every output: the driven element's outputs by name, the others'
-        as element_output."""
+        as element_output; in SI where the output's unit converts, else as declared (`result_unit`)."""
         result = []
+        self.assumed = []  # channels of outputs that declare no unit, recorded in the SI unit their name says
         for name, outputs in self.outputs.items():
             for output in outputs:
                 channel = output if name == self.driven else f"{name}_{output}"
-                result.append((channel, self.slaves[name].unit(output) or "1"))
+                unit = self.units[name][output]
+                result.append((channel, result_unit(unit, channel)))
+                if not unit.text and si_unit_of(channel):
+                    self.assumed.append(f"{channel} [{si_unit_of(channel)}]")
         names = [c for c, _ in result]
         clashes = sorted({c for c in names if names.count(c) > 1})
         if clashes:
             raise CosimError(f"output channel name(s) {', '.join(clashes)} occur twice; rename an element")
         return result
+
+
+def result_unit(unit: PortUnit, channel: str) -> str:
+    """The unit a result channel is recorded in: its row unit; for an output that declares none, the SI unit its
+    name says (`body_acceleration` -> m/s^2, as nnfmu's records name channels), else '1'."""
+    if unit.row_unit:
+        return unit.row_unit
+    return si_unit_of(channel) or "1"
+
+
+def _check_channel_units(system_name: str, channels: list[tuple[str, str]]) -> None:
+    """Before the run: a result a record can hold (a channel named after a quantity in that quantity's SI unit, as
+    `save_result` demands), else DataError naming the channel; outputs of known units are in SI by now."""
+    units = dict(channels)
+    if not units:
+        return
+    empty = Measurement.uniform(0.0, 1.0, {name: np.zeros(2) for name in units}, units, source=system_name)
+    check_measurement(empty, min_samples=2, source=f"system {system_name!r}: result")
 
 
 def _compiled_loop(parts: _System, settings: CosimSettings) -> CompiledLoop | None:
@@ -528,6 +649,14 @@ def cosimulate(
         n_steps = step_count(t0, stop, h) if stop is not None else whole_steps(t0, parts.drive.end, h)
         parts.drive.at(t0 + n_steps * h)  # a drive that ends early fails here, before the run
         channels = parts.channels()
+        _check_channel_units(system.name, channels)
+        if parts.assumed:
+            warnings.warn(
+                f"system {system.name!r}: output(s) declaring no unit, recorded in the SI unit their name says: "
+                f"{', '.join(parts.assumed)}",
+                CosimWarning,
+                stacklevel=2,
+            )
         rows = result_table(n_steps, len(channels))
         parts.check_periods(system.name, h)
         parts.initialise(t0, parts.drive.at(t0))
@@ -568,6 +697,10 @@ def cosimulate(
         healthy = True
     finally:
         parts.close(healthy)
+    held = parts.held_inputs()
+    if held:
+        times = t0 + np.arange(n_steps + 1) * h
+        warnings.warn(parts.holding_warning(held, parts.input_changes(rows, times, held)), CosimWarning, stacklevel=2)
     measurement = Measurement.uniform(
         t0,
         h,

@@ -19,6 +19,8 @@ from typing import Sequence
 
 import numpy as np
 
+from nnfmu.cosim.units import PortUnit, port_unit
+
 Messages = list[tuple[int, str, str]]  # (status, category, message) as an FMU logged them
 _FMI2_SINKS: dict[int, Messages] = {}  # an FMI 2 instance's key (its componentEnvironment) -> its messages
 _FMI2_KEYS = itertools.count(1)
@@ -116,8 +118,11 @@ class FmuSlave:
     @property
     def feedthrough(self) -> bool:
         """Some output depends on an input at a communication point (ModelStructure), so inputs set after a step
-        change the outputs there."""
-        return any(output.dependencies for output in self.description.outputs)
+        change the outputs there. An output without a `dependencies` attribute depends on every known (FMI 2 and 3),
+        as many other tools' FMUs declare them; nnfmu's sampled FMUs list none (`dependencies=""`)."""
+        if not self.names("input"):
+            return False
+        return any(output.dependencies is None or output.dependencies for output in self.description.outputs)
 
     def names(self, causality: str) -> list[str]:
         """Names of the variables with the given causality ("input", "output", "parameter", ...)."""
@@ -126,6 +131,10 @@ class FmuSlave:
     def unit(self, name: str) -> str:
         variable = self.variables[name]
         return variable.unit or (variable.declaredType.unit if variable.declaredType else "") or ""
+
+    def port_unit(self, name: str) -> PortUnit:
+        """The variable's unit, resolved to SI by the FMU's UnitDefinitions or nnfmu's unit table where it can be."""
+        return port_unit(self.variables[name], self.description.unitDefinitions or ())
 
     def value_references(self, names: Sequence[str]) -> list[int]:
         try:

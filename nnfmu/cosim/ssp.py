@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from nnfmu.atomic import atomic_path
+from nnfmu.cosim.units import PortUnit, UnitError, input_conversion, port_unit
 from nnfmu.errors import NnfmuError
 from nnfmu.safe_zip import ArchiveError, check_zip, confined_source, extract_zip
 
@@ -288,19 +289,21 @@ def _check_structure(system: SystemStructure, path: Path) -> None:
 
 def check_against_fmus(system: SystemStructure) -> None:
     """Every element's FMU exists and has each declared connector as a Real variable of the same causality, and
-    every connection joins variables of the same unit where both declare one (the master converts nothing)."""
+    every connection joins units the master can convert (`nnfmu.cosim.units`: the same unit, or units of one
+    quantity by the FMU's UnitDefinitions or nnfmu's unit table, or an end without a unit)."""
     from fmpy import read_model_description
 
-    units: dict[tuple[str, str], str] = {}
+    units: dict[tuple[str, str], PortUnit] = {}
     for element in system.elements:
         fmu = system.fmu_path(element)
         if not fmu.is_file():
             raise SspError(f"system {system.name!r}: element {element.name!r}: FMU {fmu} not found")
         try:
             check_zip(fmu)  # a zip bomb or a member climbing out, before fmpy reads or extracts anything
-            variables = {v.name: v for v in read_model_description(str(fmu)).modelVariables}
+            description = read_model_description(str(fmu))
         except Exception as error:  # fmpy raises plain exceptions for broken archives and XML
             raise SspError(f"system {system.name!r}: element {element.name!r}: cannot read {fmu}: {error}") from None
+        variables = {v.name: v for v in description.modelVariables}
         declared = [(c.name, c.kind) for c in element.connectors] + [(p, "parameter") for p in element.parameters]
         for name, kind in declared:
             variable = variables.get(name)
@@ -319,24 +322,19 @@ def check_against_fmus(system: SystemStructure) -> None:
                     f"system {system.name!r}: element {element.name!r}: connector {name!r} is declared "
                     f"{kind} but is {variable.causality} in {fmu.name}"
                 )
-            units[(element.name, name)] = (
-                variable.unit or (variable.declaredType.unit if variable.declaredType else None) or ""
-            )
+            units[(element.name, name)] = port_unit(variable, description.unitDefinitions or ())
     _check_units(system, units)
 
 
-def _check_units(system: SystemStructure, units: Mapping[tuple[str, str], str]) -> None:
-    """SspError naming the connection and both units when its ends declare different units."""
-    from nnfmu.data.units import normalise_unit
-
+def _check_units(system: SystemStructure, units: Mapping[tuple[str, str], PortUnit]) -> None:
+    """SspError naming the connection, both ports and their units when no conversion joins them (before any run)."""
     for c in system.connections:
-        start = units.get((c.start_element, c.start_connector), "")
-        end = units.get((c.end_element, c.end_connector), "")
-        if start and end and normalise_unit(start) != normalise_unit(end):
-            raise SspError(
-                f"system {system.name!r}: connection {c}: the output is in {start!r}, the input in "
-                f"{end!r}; connect variables of the same unit"
-            )
+        start = units.get((c.start_element, c.start_connector), PortUnit(""))
+        end = units.get((c.end_element, c.end_connector), PortUnit(""))
+        try:
+            input_conversion(start, end, f"system {system.name!r}: connection {c}")
+        except UnitError as error:
+            raise SspError(str(error)) from None
 
 
 @contextmanager

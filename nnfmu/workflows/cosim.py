@@ -2,16 +2,19 @@
 
 from __future__ import annotations
 
+import json
 import os
 
-from nnfmu.cosim.master import CosimSettings, Progress, cosimulate
+from nnfmu.atomic import write_text_atomic
+from nnfmu.cosim.master import CosimSettings, CosimWarning, Progress, cosimulate
 from nnfmu.cosim.results import CosimResult, save_result
 from nnfmu.cosim.ssp import open_system
+from nnfmu.cosim.step_study import DEFAULT_TARGET, StepStudy, step_study, study_lines
 from nnfmu.data.drive_files import read_drive
 from nnfmu.errors import SettingsError
 from nnfmu.workflows.vehicle_binding import vehicle_binding
 
-__all__ = ["CosimSettings", "run_cosim"]
+__all__ = ["DEFAULT_TARGET", "CosimSettings", "CosimWarning", "run_cosim", "run_step_study", "study_lines"]
 
 MASTERS = ("fmpy", "libcosim")
 
@@ -41,3 +44,34 @@ def run_cosim(
     if out_path is not None:
         save_result(result, out_path)
     return result
+
+
+def run_step_study(
+    ssd_path: str | os.PathLike[str],
+    drive_path: str | os.PathLike[str],
+    settings: CosimSettings,
+    json_path: str | os.PathLike[str] | None = None,
+    target: float = DEFAULT_TARGET,
+    out_path: str | os.PathLike[str] | None = None,
+) -> StepStudy:
+    """Co-simulate the system at settings.step, its half and quarter (fmpy master) and estimate each channel's
+    coupling error at the step (`nnfmu.cosim.step_study`); write the study as JSON to `json_path` and the run at
+    the step to `out_path` when given."""
+    drive = read_drive(drive_path)
+    first: list[CosimResult] = []
+
+    with open_system(ssd_path) as system:
+        binding = vehicle_binding(system)
+
+        def run(each: CosimSettings) -> CosimResult:
+            result = cosimulate(system, drive, each, binding=binding)
+            if not first:
+                first.append(result)
+            return result
+
+        study = step_study(system, settings, run, target)
+    if out_path is not None:
+        save_result(first[0], out_path)
+    if json_path is not None:
+        write_text_atomic(json_path, json.dumps(study.as_dict(), indent=2) + "\n")
+    return study
