@@ -75,12 +75,12 @@ class MassEstimate:
         )
 
 
-def _design(g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _design(g: np.ndarray, source: str) -> tuple[np.ndarray, np.ndarray]:
     """Cubic B-spline design matrix of `g` (shape (n, KNOTS + 4)) and its knot vector; DataError if g is constant."""
     inner = np.unique(np.quantile(g, np.linspace(0.0, 1.0, KNOTS + 2)[1:-1]))
     lo, hi = float(np.min(g)), float(np.max(g))
     if not hi > lo or inner.size < 2:
-        raise DataError("the force does not vary enough to fit the valve characteristic")
+        raise DataError(f"{source}: the force does not vary enough to fit the valve characteristic")
     knots = np.r_[[lo] * 4, inner[(inner > lo) & (inner < hi)], [hi] * 4]
     return BSpline.design_matrix(np.clip(g, lo, hi), knots, 3).toarray(), knots
 
@@ -125,7 +125,7 @@ def estimate_moving_mass(m: Measurement, force: str = "force") -> MassEstimate:
     for _ in range(ITERATIONS):
         g = f - theta[0] * a - theta[1] * s - theta[2] - theta[3] * x
         g_rate = f_rate - theta[0] * jerk - theta[3] * v
-        basis, knots = _design(g)
+        basis, knots = _design(g, m.source)
         base = np.column_stack([basis, g_rate])
         coef = _solve(base, v)
         slope = BSpline(knots, coef[:-1], 3).derivative()(np.clip(g, knots[0], knots[-1]))
@@ -133,10 +133,10 @@ def estimate_moving_mass(m: Measurement, force: str = "force") -> MassEstimate:
         design = np.column_stack([base, *steps])
         full = _solve(design, v)
         theta = theta + full[base.shape[1] :]
+        if not np.all(np.isfinite(theta)):
+            raise DataError(f"{m.source}: the moving-mass fit did not converge")
         if abs(full[base.shape[1]]) < TOLERANCE:
             break
-    if not np.all(np.isfinite(theta)):
-        raise DataError(f"{m.source}: the moving-mass fit did not converge")
     error = _jackknife(design, v, base.shape[1])
     rms = float(np.sqrt(np.mean(f**2)))
     share = abs(theta[0]) * float(np.sqrt(np.mean(a**2))) / rms if rms > 0 else 0.0
