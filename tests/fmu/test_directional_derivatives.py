@@ -43,13 +43,33 @@ RICH = replace(
 )
 
 
+def gru_network(path: Path) -> Path:
+    """The recurrent option: a random GRU on FORCE, exported as its gate equations (the hidden state in the state)."""
+    import torch
+
+    from nnfmu.export import export_onnx
+    from nnfmu.models.networks import GRUNet
+
+    model = random_model(FORCE, SEED)
+    torch.manual_seed(SEED)
+    network = GRUNet(FORCE.n_features, 4)
+    with torch.no_grad():
+        for p in network.parameters():
+            p.mul_(2.0)
+    return export_onnx(replace(model, network=network), path, name="gru_net").path
+
+
 @pytest.fixture(scope="module")
 def networks(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     folder = tmp_path_factory.mktemp("derivative_networks")
     return {
         "force": export_network(FORCE, folder / "force.onnx", SEED),
         "rich": export_network(RICH, folder / "rich.onnx", 3),
+        "gru": gru_network(folder / "gru.onnx"),
     }
+
+
+BUILDS = [("force", 2), ("force", 3), ("rich", 2), ("rich", 3), ("gru", 3)]
 
 
 @pytest.fixture(scope="module")
@@ -58,9 +78,10 @@ def fmus(tmp_path_factory: pytest.TempPathFactory, networks) -> dict[tuple[str, 
     folder = tmp_path_factory.mktemp("derivative_fmus")
     host = (host_target().name,)
     return {
-        (name, fmi): build_fmu(path, BuildOptions(out=folder / f"{name}{fmi}.fmu", fmi_version=fmi, platforms=host))
-        for name, path in networks.items()
-        for fmi in (2, 3)
+        (name, fmi): build_fmu(
+            networks[name], BuildOptions(out=folder / f"{name}{fmi}.fmu", fmi_version=fmi, platforms=host)
+        )
+        for name, fmi in BUILDS
     }
 
 
@@ -112,11 +133,10 @@ def central_differences(slave, inputs: np.ndarray, eps: float = 1e-6) -> np.ndar
 
 
 @pytest.mark.parametrize("filtered", [False, True], ids=["unfiltered", "filtered"])
-@pytest.mark.parametrize("fmi", [2, 3])
-@pytest.mark.parametrize("network", ["force", "rich"])
+@pytest.mark.parametrize("network, fmi", BUILDS)
 def test_derivatives_equal_central_differences_of_the_fmus_outputs(fmus, open_fmu, network, fmi, filtered):
     """With gain 1.7 and, filtered, the 100 Hz output filter: the derivative is that of the FMU's actual output."""
-    spec = FORCE if network == "force" else RICH
+    spec = RICH if network == "rich" else FORCE
     inputs = record(spec, N_STEPS)
     slave = open_fmu(fmus[(network, fmi)])
     run_to(slave, inputs[:-1], gain=1.7, cutoff=100.0 if filtered else 0.0)
