@@ -1,4 +1,5 @@
-/* nn_fmu.c: instance life cycle, logging, variable access, fixed-rate sampling and FMU state of an nnfmu FMU.
+/* nn_fmu.c: instance life cycle, logging, variable access, fixed-rate sampling, FMU state and directional
+ * derivatives of an nnfmu FMU.
  *
  * Time: sample k falls at t_start + k*T, k counted with an integer and compared with the time elapsed since t_start
  * (the sum of the step sizes), never with absolute time, so a large t_start loses no sample. doStep(t, h) evaluates,
