@@ -11,7 +11,7 @@ import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Optional
+from typing import Literal, Optional, Union
 
 import click
 import typer
@@ -193,6 +193,16 @@ def _int_list(items: Optional[list[str]], option: str) -> tuple[int, ...]:
         raise typer.BadParameter(f"{option}: give whole numbers, e.g. 0,1,2") from None
 
 
+def _moving_mass(text: Optional[str]) -> Union[float, Literal["auto"], None]:
+    """`--moving-mass`: a mass [kg], `auto`, or None when not given."""
+    if text is None or text.strip().lower() == "auto":
+        return None if text is None else "auto"
+    try:
+        return float(text)
+    except ValueError:
+        raise typer.BadParameter(f"--moving-mass: give a mass in kg (e.g. 2.0) or auto, not {text!r}") from None
+
+
 @app.command()
 def train(
     data: Path = typer.Argument(..., help="Rig data (CSV with `name [unit]` headers, MDF4, or an MTS 793 export)."),
@@ -222,9 +232,9 @@ def train(
     seed: int = typer.Option(0, help="Seed: the same seed gives the same network."),
     name: str = typer.Option("", help="Model name stored in the ONNX metadata (default: from the preset)."),
     channel_map: Optional[list[str]] = typer.Option(None, "--map", help=MAP_HELP),
-    moving_mass: float = typer.Option(
-        0.0,
-        help="Dyno mass [kg] between load cell and actuator (rod, piston, fixture): subtracted from the force as m·a before training, as a dyno's mass compensation does; 0: none.",
+    moving_mass: Optional[str] = typer.Option(
+        None,
+        help="Dyno mass [kg] between load cell and actuator (rod, piston, fixture): subtracted from the force as m·a before training, as a dyno's mass compensation does; 0: none; auto: estimated from the record and subtracted; default: for damper-spline and damper-hysteresis estimated and reported (a warning where it matters), not subtracted (docs/moving-mass.md).",
     ),
     input_cutoff: Optional[float] = typer.Option(
         None,
@@ -254,7 +264,7 @@ def train(
         optimizer=optimizer,
         name=name,
         channel_map=tuple(_channel_map(channel_map).items()),
-        moving_mass=moving_mass,
+        moving_mass=_moving_mass(moving_mass),
         input_cutoff=input_cutoff,
     )
     console = Console(markup=False)  # feature and channel names carry brackets: velocity[k]

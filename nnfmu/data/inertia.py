@@ -13,9 +13,26 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import numpy as np
+
 from nnfmu.data.derive import derivative
 from nnfmu.data.errors import DataError
 from nnfmu.data.measurement import Measurement
+
+
+def stroke_acceleration(m: Measurement) -> tuple[np.ndarray, str]:
+    """The stroke acceleration [m/s^2] of `m` and where it came from: the measured acceleration, else the derivative
+    of the measured velocity, else the second derivative of the displacement; DataError when there is none."""
+    if "acceleration" in m.channels and m.units["acceleration"] == "m/s^2":
+        return m["acceleration"], "the acceleration channel"
+    if "velocity" in m.channels and m.units["velocity"] == "m/s":
+        return derivative(m["velocity"], m.sample_period, 1), "d/dt of the measured velocity"
+    if "displacement" in m.channels and m.units["displacement"] == "m":
+        return derivative(m["displacement"], m.sample_period, 2), "d²/dt² of the measured displacement"
+    raise DataError(
+        f"{m.source}: the moving mass's m·a needs an acceleration [m/s^2], velocity [m/s] or displacement [m] "
+        f"channel (has: {', '.join(m.names)})"
+    )
 
 
 def compensate_inertia(m: Measurement, mass: float, force: str = "force") -> Measurement:
@@ -31,17 +48,7 @@ def compensate_inertia(m: Measurement, mass: float, force: str = "force") -> Mea
             f"{m.source}: channel {force!r} is in {m.units[force]}, not N: only a force can be compensated "
             "for a moving mass"
         )
-    if "acceleration" in m.channels and m.units["acceleration"] == "m/s^2":
-        acceleration, source = m["acceleration"], "the measured acceleration"
-    elif "velocity" in m.channels and m.units["velocity"] == "m/s":
-        acceleration, source = derivative(m["velocity"], m.sample_period, 1), "d/dt of the measured velocity"
-    elif "displacement" in m.channels and m.units["displacement"] == "m":
-        acceleration, source = derivative(m["displacement"], m.sample_period, 2), "d²/dt² of the measured displacement"
-    else:
-        raise DataError(
-            f"{m.source}: compensating {force!r} for a moving mass needs an acceleration [m/s^2], "
-            f"velocity [m/s] or displacement [m] channel (has: {', '.join(m.names)})"
-        )
+    acceleration, source = stroke_acceleration(m)
     channels = dict(m.channels) | {force: m[force] - mass * acceleration}
     note = f"{force} compensated for {mass:g} kg of moving mass (force - m·a, a from {source})"
     return replace(m, channels=channels, notes=dict(m.notes) | {"inertia": note})

@@ -26,7 +26,7 @@ MTS_SUFFIXES = (".dat", ".txt")  # read only as MTS 793 exports; a `.csv` starti
 def to_measurement(raw: RawTable, source: str, min_samples: int = 16) -> Measurement:
     """Convert every channel of a file's table to SI (see `units.to_si`) as a `Measurement` from `source` with at
     least `min_samples` samples, its stamps replaced by their least-squares uniform base where they stray within
-    their resolution or the sampling jitter (said in `notes["time"]`; see `timebase`)."""
+    their resolution or a clock's scatter (said in `notes["time"]`; see `timebase`)."""
     time, _ = to_si(raw.time, raw.time_unit, "time", source)
     check_sample_count(len(time), min_samples, source)
     resolution = None
@@ -82,10 +82,10 @@ def load_measurement(
     """Read a `.csv`, `.mf4`/`.mdf` or MTS 793 export (`.dat`/`.txt`) rig file as a checked `Measurement` in SI units.
 
     `channel_map` renames file channels to nnfmu's names ({"Axial Force": "force"}; see `channel_map`). Stamps that
-    are uniform within their printed resolution or the sampling jitter are replaced by the least-squares uniform base,
-    said in `notes["time"]` (see `timebase`). Missing rates are derived (`derive_rates`), then the `required`
-    channels must exist. Every problem (unknown file type, header, unit, NaN, time axis, missing channel, too few
-    samples) raises DataError naming the file.
+    are uniform within their printed resolution or a clock's scatter (5 % of the period) are replaced by the
+    least-squares uniform base, said in `notes["time"]` (see `timebase`). Missing rates are derived (`derive_rates`),
+    then the `required` channels must exist. Every problem (unknown file type, header, unit, NaN, time axis, missing
+    channel, too few samples) raises DataError naming the file.
     """
     path = Path(path)
     measurement = to_measurement(read_table(path, channel_map), str(path), min_samples)

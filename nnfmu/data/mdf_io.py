@@ -6,7 +6,7 @@ units are the MDF channel names and units (two names for one channel, `force` an
 invalidated samples become NaN, so the checks report them.
 
 Time stamps are binary floats, so no print rounding applies: a float64 (or integer) time channel is taken as exact
-and only the sampling jitter of `timebase.TIME_JITTER` is accepted; a float32 time channel is resolved to the float32
+and only a clock's scatter of `timebase.CLOCK_SCATTER` is accepted; a float32 time channel is resolved to the float32
 spacing at each stamp (7.6e-6 s between 64 and 128 s), which `timebase` accepts as it accepts print rounding.
 
 A file asammdf cannot read is refused with one DataError; the traceback asammdf's destructor prints for an object

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from nnfmu.data.errors import DataError
-from nnfmu.data.timebase import check_uniform
+from nnfmu.data.timebase import measurement_axis
 
 
 @dataclass(frozen=True)
@@ -19,12 +19,14 @@ class Measurement:
     `source` names where the data came from (a file path, or a rig simulator) for error messages and provenance.
 
     The measurement owns its time axis: construction refuses a `time` that is not one-dimensional, has fewer than two
-    samples, a non-finite stamp, or stamps that do not increase uniformly within the sampling-jitter tolerance of
-    `timebase` (DataError naming `source` and the first offending sample), and stores `start` [s] (the first stamp)
-    and `sample_period` [s] (the mean step, (t[n-1] - t[0]) / (n - 1)), which everything else reads instead of
-    deriving its own. `time` is kept as given, a checked view of start + k * sample_period: files and simulators
-    produce stamps, and keeping them makes saving and reloading a record exact. Rounded file stamps coarser than the
-    jitter tolerance go through the loader, which replaces them by their fitted base first (`timebase`).
+    samples, a non-finite stamp, or stamps that do not increase uniformly within the clock-scatter tolerance of
+    `timebase` (5 % of the period; DataError naming `source` and the first offending sample), and stores `start` [s]
+    (the first stamp) and `sample_period` [s] (the mean step, (t[n-1] - t[0]) / (n - 1)), which everything else reads
+    instead of deriving its own. Stamps within the sampling jitter (0.1 % of the period) of their fitted base are kept
+    as given, a checked view of start + k * sample_period: files and simulators produce stamps, and keeping them makes
+    saving and reloading a record exact. Stamps that scatter farther are replaced by their least-squares base, said in
+    `notes["time"]` (`timebase.measurement_axis`); the loaders, which know how finely a file printed its stamps, do
+    that before the measurement is made (`timebase.uniform_stamps`).
     """
 
     time: np.ndarray
@@ -43,7 +45,9 @@ class Measurement:
             raise DataError(
                 f"{self.source}: {time.size} sample(s); a measurement needs at least 2 for its sample period"
             )
-        check_uniform(time, self.source)
+        time, note = measurement_axis(time, self.source)
+        if note is not None:
+            object.__setattr__(self, "notes", dict(self.notes) | {"time": note})
         object.__setattr__(self, "time", time)  # frozen: the axis and the start and period read off it stay together
         object.__setattr__(self, "start", float(time[0]))
         object.__setattr__(self, "sample_period", float(time[-1] - time[0]) / (time.size - 1))

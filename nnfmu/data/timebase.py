@@ -1,4 +1,4 @@
-"""A uniform time base fitted to a record's stamps: print rounding and sampling jitter accepted, gaps and drift refused.
+"""A uniform time base fitted to a record's stamps: rounding and a clock's scatter accepted, gaps and drift refused.
 
 nnfmu trains on uniformly sampled records, t_k = t_0 + k·T. Files store rounded stamps: a controller printing 8
 significant digits resolves 1e-7 s on [1, 10) s, 1e-6 s on [10, 100) s (0.1 % of a 1024 Hz period) and 1e-5 s
@@ -8,15 +8,22 @@ tolerance, the largest of
   magnitude, inferred per file from the stamps' text by `printed_resolution`), plus RESOLUTION_SIGMAS standard
   deviations of the fitted line itself under that rounding (the line is estimated from rounded stamps too);
   binary stamps (MDF) have no print rounding, except a float32 time channel, resolved to the float32 spacing;
-- sampling jitter: TIME_JITTER of the period, for every record;
+- a clock's scatter: CLOCK_SCATTER (5 %) of the period, for every record. A controller that keeps time in a 32-bit
+  float stores each stamp to 2^-23 of its value (1.9 us at 16-32 s, 3.8 us at 32-64 s, 7.6 us at 64-128 s) before it
+  prints it, so its stamps scatter by up to 0.4 % of a 1024 Hz period about the line, more than print rounding
+  explains; so does a clock with a few per cent of sampling jitter. A missing sample moves the stamps after it by a
+  whole period, a clock whose rate drifts moves them ever farther: both lie far beyond 5 %;
 - float64 noise: FLOAT_NOISE units of float64 epsilon of the largest stamp.
-Rounding to nearest is assumed; a controller that truncates is covered as far as the sampling jitter reaches.
+Rounding to nearest is assumed; a controller that truncates is covered as far as the clock's scatter reaches.
 
 A record whose stamps all lie within float64 noise of the line keeps them as stored. Otherwise `uniform_stamps` replaces
-them by the fitted base and notes in one line how far they strayed and which tolerance covered it. A stamp beyond its
-tolerance is refused, naming the sample: the first step that differs from the median step by more than its two
-stamps' tolerances (a gap or a jump), else the stamp farthest off the line (a clock whose rate drifts, or a stamp
-out of line).
+them by the fitted base and notes in one line how far they strayed and which tolerance covered it (a scatter beyond
+TIME_JITTER of the period that the resolution does not explain is named as a clock's, with the float32 spacing at the
+last stamp for comparison). A stamp beyond its tolerance is refused, naming the sample: the first step that differs
+from the median step by more than its two stamps' tolerances (a gap or a jump), else the stamp farthest off the line
+(a clock whose rate drifts, or a stamp out of line). `Measurement` keeps stamps within TIME_JITTER of their base as
+given and takes the fitted base (with the note) for those scattering farther (`measurement_axis`), so it accepts
+exactly what the loaders accept.
 """
 
 from __future__ import annotations
@@ -28,7 +35,8 @@ import numpy as np
 
 from nnfmu.data.errors import DataError
 
-TIME_JITTER = 1e-3  # sampling jitter accepted at every stamp, relative to the period
+TIME_JITTER = 1e-3  # sampling jitter a Measurement keeps its stamps for, relative to the period
+CLOCK_SCATTER = 0.05  # scatter about the fitted base accepted at every stamp, relative to the period
 FLOAT_NOISE = 64.0  # float64 rounding accepted at every stamp, in units of epsilon times the largest |stamp|
 RESOLUTION_SIGMAS = 3.0  # standard deviations of the fitted line's own rounding error added to half the resolution
 
@@ -131,7 +139,7 @@ def stamp_tolerance(time: np.ndarray, period: float, resolution: Resolution | No
     """How far each stamp of `time` [s] may lie off a uniform base of `period` [s]: the module docstring's rule."""
     time = np.asarray(time, dtype=float)
     noise = FLOAT_NOISE * np.finfo(float).eps * float(np.max(np.abs(time), initial=0.0))
-    tolerance = np.full(time.size, max(TIME_JITTER * abs(period), noise))
+    tolerance = np.full(time.size, max(CLOCK_SCATTER * abs(period), noise))
     return tolerance if resolution is None else np.maximum(tolerance, _rounding(resolution))
 
 
@@ -152,7 +160,7 @@ def fit_uniform(time: np.ndarray, resolution: Resolution | None = None) -> Unifo
 
 def _tolerance_text(fit: UniformFit, row: int, resolution: Resolution | None) -> str:
     """Which tolerance applies at one stamp, for an error message."""
-    jitter = f"{TIME_JITTER:g} of the period"
+    jitter = f"{CLOCK_SCATTER:g} of the period (a clock's scatter)"
     if resolution is None:
         return jitter
     return (
@@ -207,9 +215,21 @@ def check_uniform(time: np.ndarray, where: str, resolution: Resolution | None = 
 def _note(fit: UniformFit, resolution: Resolution | None) -> str:
     """One line: how far the stamps strayed, which tolerance covered it, and the base the record now uses."""
     worst = float(np.max(np.abs(fit.deviation)))
-    why = f"within the sampling jitter of {TIME_JITTER:g} of the period nnfmu accepts"
-    if resolution is not None and np.all(np.abs(fit.deviation) <= np.maximum(_rounding(resolution), fit.noise)):
+    resolved = resolution is not None and bool(
+        np.all(np.abs(fit.deviation) <= np.maximum(_rounding(resolution), fit.noise))
+    )
+    if resolved:
         why = f"within their resolution ({resolution.format}; {_g(resolution.step[-1])} s at the last stamp)"
+    elif worst <= TIME_JITTER * fit.period:
+        why = f"within the sampling jitter of {TIME_JITTER:g} of the period"
+    else:
+        last = float(np.spacing(np.float32(abs(fit.times()[-1]))))
+        explains = f"their resolution ({resolution.format})" if resolution is not None else "sampling jitter"
+        why = (
+            f"more than {explains} explains but within the {CLOCK_SCATTER:g} of the period nnfmu accepts as a "
+            f"clock's scatter (a clock keeping time as a 32-bit float resolves 2^-23 of the time, {last:.3g} s at the "
+            f"last stamp, and its stamps look like this)"
+        )
     return (
         f"time stamps deviate from a uniform base by up to {worst:.3g} s ({worst / fit.period:.3%} of the period), "
         f"{why}; the record uses the least-squares base t = {_g(fit.start)} s + k * {_g(fit.period * 1e3)} ms "
@@ -226,3 +246,12 @@ def uniform_stamps(time: np.ndarray, where: str, resolution: Resolution | None =
     if fit is None or fit.exact:
         return time, None
     return fit.times(), _note(fit, resolution)
+
+
+def measurement_axis(time: np.ndarray, where: str) -> tuple[np.ndarray, str | None]:
+    """A `Measurement`'s axis: `time` [s] itself and None when every stamp lies within TIME_JITTER of the period of
+    its fitted base, else the base and a one-line note; DataError naming `where` as `check_uniform` raises it."""
+    fit = check_uniform(time, where)
+    if fit is None or float(np.max(np.abs(fit.deviation))) <= max(TIME_JITTER * fit.period, fit.noise):
+        return time, None
+    return fit.times(), _note(fit, None)

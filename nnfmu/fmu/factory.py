@@ -47,10 +47,15 @@ class BuildPlan:
     def fmi_version(self) -> int:
         return self.options.fmi_version
 
-    def view(self, token: str, source_files: Sequence[str] = ()) -> ModelDescriptionView:
-        """What the modelDescription templates read, with the backend's instantiation token and C sources."""
+    def view(
+        self, token: str, source_files: Sequence[str] = (), directional_derivatives: bool = False
+    ) -> ModelDescriptionView:
+        """What the modelDescription templates read, with the backend's instantiation token, C sources and whether
+        its binaries provide directional derivatives."""
         identity = FmuIdentity(self.component.name, self.identifier, token, self.fmi_version)
-        return ModelDescriptionView(identity, self.component, self.variables, self.dependencies, list(source_files))
+        return ModelDescriptionView(
+            identity, self.component, self.variables, self.dependencies, list(source_files), directional_derivatives
+        )
 
 
 Backend = Callable[[BuildPlan, Path], None]

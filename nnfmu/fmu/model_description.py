@@ -125,6 +125,7 @@ class ModelDescriptionView:
     fmu_variables: FmuVariables
     dependencies: dict[str, set[str]]
     source_files: list[str] = field(default_factory=list)
+    directional_derivatives: bool = False  # the binaries compute d(outputs)/d(inputs) (native, graph with tangents)
 
     @property
     def model_name(self) -> str:

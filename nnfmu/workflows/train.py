@@ -7,9 +7,13 @@ import os
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Literal
 
 from nnfmu.data import Measurement, load_measurement
+from nnfmu.data.errors import DataError
 from nnfmu.data.inertia import compensate_inertia
+from nnfmu.data.moving_mass import estimate_moving_mass
+from nnfmu.errors import SettingsError
 from nnfmu.export import ExportResult, export_onnx
 from nnfmu.models.features import FeatureSpec
 from nnfmu.models.metrics import SplitMetrics
@@ -29,8 +33,10 @@ class TrainRequest:
     select_inputs: choose the inputs by sensitivity analysis (overrides the preset's and `inputs`); optimizer: auto, lm,
     adam or lbfgs; channel_map: (file channel, nnfmu name) pairs passed to `load_measurement`; moving_mass [kg]: the
     dyno's mass between load cell and actuator, subtracted from the force as m·a before training (`nnfmu.data.inertia`;
-    0: none); input_cutoff [Hz]: the inputs' zero-phase low-pass before the features (`TrainSettings.input_cutoff`;
-    0: none; None: the preset's).
+    0: none; "auto": estimated from the record (`nnfmu.data.moving_mass`) and subtracted where its interval excludes
+    0; None: for a passive damper estimated and reported, with a warning where it matters, not subtracted);
+    input_cutoff [Hz]: the inputs' zero-phase low-pass before the features (`TrainSettings.input_cutoff`; 0: none;
+    None: the preset's).
     """
 
     preset: str
@@ -47,7 +53,7 @@ class TrainRequest:
     optimizer: str | None = None
     name: str = ""
     channel_map: tuple[tuple[str, str], ...] = ()
-    moving_mass: float = 0.0
+    moving_mass: float | Literal["auto"] | None = None
     input_cutoff: float | None = None
 
 
@@ -96,11 +102,64 @@ def _stage(progress: Progress | None, start: float, end: float) -> Progress | No
     return lambda label, done: progress(label, start + (end - start) * done)
 
 
-def _load(data: str | os.PathLike[str], required: list[str], output: str, request: TrainRequest) -> Measurement:
-    """The rig file with the request's channel map, its output compensated for the dyno's moving mass if asked."""
+PASSIVE_DAMPERS = ("damper-spline", "damper-hysteresis")  # presets whose force the moving-mass estimate models
+
+
+def _load(
+    data: str | os.PathLike[str], required: list[str], output: str, request: TrainRequest
+) -> tuple[Measurement, float, list[str]]:
+    """The rig file with the request's channel map, its output compensated for the dyno's moving mass as the request
+    says; also the mass taken out [kg] and the warnings about it."""
     required = [c for c in required if c != COMMAND]  # bound to the record's command channel once it is read
     measurement = load_measurement(data, required=required, channel_map=dict(request.channel_map))
-    return compensate_inertia(measurement, request.moving_mass, output) if request.moving_mass else measurement
+    mass = request.moving_mass
+    if mass is not None and mass != "auto":
+        return (compensate_inertia(measurement, mass, output) if mass else measurement), float(mass), []
+    passive = request.preset in PASSIVE_DAMPERS and output == "force"
+    if mass == "auto" and not passive:
+        raise SettingsError(
+            f"--moving-mass auto estimates a passive damper's dyno mass from its force; preset {request.preset!r} "
+            f"with output {output!r} is not one ({', '.join(PASSIVE_DAMPERS)} with output 'force'): give the mass "
+            f"in kg"
+        )
+    if not passive:
+        return measurement, 0.0, []
+    try:
+        estimate = estimate_moving_mass(measurement, output)
+    except DataError as error:
+        if mass == "auto":
+            raise
+        note = {"moving_mass": f"moving mass not estimated: {error}"}
+        return (
+            replace(measurement, notes=measurement.notes | note),
+            0.0,
+            [],
+        )
+    notes = measurement.notes | {"moving_mass": estimate.describe()}
+    measurement = replace(measurement, notes=notes)
+    if mass == "auto":
+        if estimate.mass - estimate.half_width > 0.0:
+            return compensate_inertia(measurement, estimate.mass, output), estimate.mass, []
+        return (
+            measurement,
+            0.0,
+            [
+                f"--moving-mass auto: the estimate {estimate.mass:.3g} ± {estimate.half_width:.2g} kg does not "
+                f"exclude 0 kg; {output} left as measured"
+            ],
+        )
+    if not estimate.matters:
+        return measurement, 0.0, []
+    return (
+        measurement,
+        0.0,
+        [
+            f"{output} holds m·a of an estimated {estimate.mass:.3g} ± {estimate.half_width:.2g} kg moving mass "
+            f"({estimate.share:.1%} of its rms): a network trained on it adds that mass to the car's unsprung mass a "
+            f"second time; train with --moving-mass auto (or the dyno's mass in kg) to take it out, --moving-mass 0 "
+            f"if the force is compensated already"
+        ],
+    )
 
 
 def train_from_file(
@@ -118,15 +177,14 @@ def train_from_file(
     )
     selection = None
     if request.select_inputs:
-        measurement = _load(data, [spec.output], spec.output, request)
+        measurement, mass, mass_warnings = _load(data, [spec.output], spec.output, request)
         selection_settings = SelectionSettings(training=replace(settings, restarts=min(settings.restarts, 2)))
         selection = select_inputs(measurement, spec.output, selection_settings, _stage(progress, 0.0, 0.5))
         spec = selection.spec
         progress = _stage(progress, 0.5, 1.0)
     else:
-        measurement = _load(data, [*spec.channels, spec.output], spec.output, request)
+        measurement, mass, mass_warnings = _load(data, [*spec.channels, spec.output], spec.output, request)
     spec = bind_command(spec, measurement.channels, str(data))
-    mass = request.moving_mass
     compensated = f" ({spec.output} compensated for {mass:g} kg of moving mass)" if mass else ""
     candidates = [spec]
     if (
@@ -155,7 +213,7 @@ def train_from_file(
         export=export,
         trials=result.trials,
         selection=selection,
-        warnings=result.warnings,
+        warnings=[*mass_warnings, *result.warnings],
         seconds=time.perf_counter() - started,
         data_notes=list(measurement.notes.values()),
         feature_choice=feature_choice,

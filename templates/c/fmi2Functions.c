@@ -200,8 +200,14 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
                                         const fmi2ValueReference vKnown_ref[], size_t nKnown,
                                         const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
-    return unsupported(c, "fmi2GetDirectionalDerivative",
-                       vUnknown_ref, nUnknown, vKnown_ref, nKnown, dvKnown, dvUnknown);
+    const char *function = "fmi2GetDirectionalDerivative";
+    NNInstance *instance = checked(c, function, READABLE);
+    if (!instance || !nn_check_array(instance, function, vUnknown_ref, nUnknown, "vUnknown_ref") ||
+        !nn_check_array(instance, function, vKnown_ref, nKnown, "vKnown_ref") ||
+        !nn_check_array(instance, function, dvKnown, nKnown, "dvKnown") ||
+        !nn_check_array(instance, function, dvUnknown, nUnknown, "dvUnknown")) return fmi2Error;
+    return (fmi2Status)nn_directional_derivative(instance, function, vUnknown_ref, nUnknown, vKnown_ref, nKnown,
+                                                 dvKnown, dvUnknown);
 }
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,

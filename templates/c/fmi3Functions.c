@@ -297,8 +297,20 @@ fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte seriali
 fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[], size_t nUnknowns,
                                         const fmi3ValueReference knowns[], size_t nKnowns, const fmi3Float64 seed[],
                                         size_t nSeed, fmi3Float64 sensitivity[], size_t nSensitivity) {
-    return unsupported(instance, "fmi3GetDirectionalDerivative",
-                       unknowns, nUnknowns, knowns, nKnowns, seed, nSeed, sensitivity, nSensitivity);
+    const char *function = "fmi3GetDirectionalDerivative";
+    NNInstance *self = checked(instance, function, READABLE);
+    if (!self || !nn_check_array(self, function, unknowns, nUnknowns, "unknowns") ||
+        !nn_check_array(self, function, knowns, nKnowns, "knowns") ||
+        !nn_check_array(self, function, seed, nSeed, "seed") ||
+        !nn_check_array(self, function, sensitivity, nSensitivity, "sensitivity")) return fmi3Error;
+    if (nSeed != nKnowns || nSensitivity != nUnknowns) { /* scalar variables only: one value per reference */
+        nn_log(self, NN_ERROR, NN_LOG_ERROR, "%s: nSeed = %lu and nSensitivity = %lu must equal nKnowns = %lu and "
+               "nUnknowns = %lu (all variables are scalars)", function, (unsigned long)nSeed,
+               (unsigned long)nSensitivity, (unsigned long)nKnowns, (unsigned long)nUnknowns);
+        return fmi3Error;
+    }
+    return (fmi3Status)nn_directional_derivative(self, function, unknowns, nUnknowns, knowns, nKnowns, seed,
+                                                 sensitivity);
 }
 
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[], size_t nUnknowns,

@@ -1,4 +1,5 @@
-/* nn_fmu.c: instance life cycle, logging, variable access, fixed-rate sampling and FMU state of an nnfmu FMU.
+/* nn_fmu.c: instance life cycle, logging, variable access, fixed-rate sampling, FMU state and directional
+ * derivatives of an nnfmu FMU.
  *
  * Time: sample k falls at t_start + k*T, k counted with an integer and compared with the time elapsed since t_start
  * (the sum of the step sizes), never with absolute time, so a large t_start loses no sample. doStep(t, h) evaluates,
@@ -678,5 +679,116 @@ NNStatus nn_deserialize(const NNInstance *instance, const unsigned char *buffer,
     }
     free(*state);
     *state = copy;
+    return NN_OK;
+}
+
+/* ---- Directional derivatives: fmi2GetDirectionalDerivative, fmi3GetDirectionalDerivative ----
+ *
+ * d(outputs)/d(inputs) times a seed, exact (forward mode through the generated graph, nn_graph_jvp), at the current
+ * point: the inputs set now (`input`), the graph state of current_graph_state and, for an interpolating FMU, the
+ * inputs its latest sample's interval starts from (held, like the state). The output gain and filter scale it as they
+ * scale the network's output (output_weight). docs/fmu.md, "Directional derivatives". */
+
+/* The graph state the outputs at the current communication point are computed from: the state the latest sample
+ * was evaluated from (before initialisation ends: the state sample 0 starts from). The derivatives' one view of
+ * "the current state". */
+static void current_graph_state(const NNInstance *instance, double *state) {
+    const NNModelData *d = &instance->data;
+    memcpy(state, d->samples_done == 0 ? d->state : d->state_before, sizeof d->state);
+}
+
+/* d(output)/d(network output) of the latest sample: output_gain times the filter's weight of the new value (1 for
+ * sample 0, whose output is not filtered, and with the filter off). A graph without a sample period filters with the
+ * weight of the last step's size, which is not kept: refused (logged, naming `function`) while its filter is on. */
+static NNStatus output_weight(const NNInstance *instance, const char *function, double *weight) {
+    const NNModelData *d = &instance->data;
+    double a = 1.0;
+    if (d->samples_done > 1 && d->filter_cutoff > 0.0) {
+        if (!NN_HAS_SAMPLE_PERIOD) {
+            nn_log(instance, NN_ERROR, NN_LOG_ERROR, "%s: %s has no sample period and its output filter is on "
+                   "(filter_cutoff = %g Hz); derivatives are given with filter_cutoff = 0 only", function,
+                   NN_MODEL_IDENTIFIER, d->filter_cutoff);
+            return NN_ERROR;
+        }
+        a = filter_coefficient(d->filter_cutoff, NN_SAMPLE_PERIOD);
+    }
+    *weight = d->output_gain * a;
+    return NN_OK;
+}
+
+/* 1 if every unknown is a Real output and every known an input, else logs the first that is not and returns 0. */
+static int derivative_references(const NNInstance *instance, const char *function, const unsigned unknowns[],
+                                 size_t n_unknowns, const unsigned knowns[], size_t n_knowns) {
+    size_t i;
+    for (i = 0; i < n_unknowns; i++) {
+        if (!in_range(unknowns[i], NN_VR_FIRST_OUTPUT, NN_N_OUTPUTS)) {
+            nn_log(instance, NN_ERROR, NN_LOG_ERROR, "%s: unknown with value reference %u is not a real output of %s "
+                   "(unknowns must be outputs)", function, unknowns[i], NN_MODEL_IDENTIFIER);
+            return 0;
+        }
+    }
+    for (i = 0; i < n_knowns; i++) {
+        if (!in_range(knowns[i], NN_VR_FIRST_INPUT, NN_N_INPUTS)) {
+            nn_log(instance, NN_ERROR, NN_LOG_ERROR, "%s: known with value reference %u is not an input of %s "
+                   "(knowns must be inputs)", function, knowns[i], NN_MODEL_IDENTIFIER);
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* out_dot = J in_dot at the point in instance->graph_in (outputs into graph_out), or logged why not. */
+static NNStatus graph_derivative(NNInstance *instance, const char *function, const double *in_dot, double *out_dot) {
+#if NN_HAS_JVP
+    if (nn_graph_jvp(instance->graph_in, in_dot, instance->graph_out, out_dot) == 0) return NN_OK;
+    nn_log(instance, NN_ERROR, NN_LOG_ERROR, "%s: the network's derivative failed to evaluate", function);
+#else
+    (void)in_dot;
+    (void)out_dot;
+    nn_log(instance, NN_ERROR, NN_LOG_ERROR, "%s: %s provides no directional derivatives (an operator of its graph "
+           "has no tangent rule)", function, NN_MODEL_IDENTIFIER);
+#endif
+    return NN_ERROR;
+}
+
+NNStatus nn_directional_derivative(NNInstance *instance, const char *function, const unsigned unknowns[],
+                                   size_t n_unknowns, const unsigned knowns[], size_t n_knowns, const double seed[],
+                                   double sensitivity[]) {
+    const NNModelData *d = &instance->data;
+    const int starts_move = NN_INTERPOLATES_INPUTS && d->samples_done == 0; /* the preview's interval is the point */
+    double in_dot[NN_N_IN];
+    double out_dot[NN_N_OUT];
+    double state[NN_STATE_CAPACITY];
+    double weight;
+    size_t i;
+    int j;
+    if (!derivative_references(instance, function, unknowns, n_unknowns, knowns, n_knowns)) return NN_ERROR;
+    if (output_weight(instance, function, &weight) != NN_OK) return NN_ERROR;
+    memset(instance->graph_in, 0, sizeof instance->graph_in);
+    memset(in_dot, 0, sizeof in_dot);
+    current_graph_state(instance, state);
+    for (j = 0; j < NN_N_INPUTS; j++) {
+        instance->graph_in[nn_input_graph_index[j]] = d->input[j];
+        if (NN_INTERPOLATES_INPUTS) {
+            instance->graph_in[nn_input_start_graph_index[j]] = starts_move ? d->input[j] : d->knot_before[j];
+        }
+    }
+    for (j = 0; j < NN_N_STATE; j++) instance->graph_in[nn_state_graph_input[j]] = state[j];
+    for (i = 0; i < n_knowns; i++) {
+        const unsigned port = knowns[i] - NN_VR_FIRST_INPUT;
+        in_dot[nn_input_graph_index[port]] += seed[i];
+        if (starts_move) in_dot[nn_input_start_graph_index[port]] += seed[i];
+    }
+    if (graph_derivative(instance, function, in_dot, out_dot) != NN_OK) return NN_ERROR;
+    for (i = 0; i < n_unknowns; i++) {
+        const unsigned port = unknowns[i] - NN_VR_FIRST_OUTPUT;
+        const double value = weight * out_dot[nn_output_graph_index[port]];
+        if (!isfinite(value)) {
+            nn_log(instance, NN_ERROR, NN_LOG_ERROR, "%s: the derivative of output '%s' is %g at the current inputs "
+                   "and state", function, nn_output_names[port], value);
+            return NN_ERROR;
+        }
+        sensitivity[i] = value;
+    }
     return NN_OK;
 }

@@ -109,6 +109,14 @@ NNStatus nn_set_input_slopes(NNInstance *instance, const unsigned vr[], size_t n
                              const double value[]);
 NNStatus nn_refuse_type(const NNInstance *instance, const char *function, const char *type, unsigned vr);
 
+/* The directional derivative d(unknowns)/d(knowns) * seed of the FMU's outputs with respect to its inputs at the
+ * current inputs and state (docs/fmu.md): unknowns must be Real outputs, knowns inputs, else an error naming the
+ * value reference; `function` names the FMI call in messages. An FMU whose graph has no derivative (NN_HAS_JVP 0)
+ * refuses every call. */
+NNStatus nn_directional_derivative(NNInstance *instance, const char *function, const unsigned unknowns[],
+                                   size_t n_unknowns, const unsigned knowns[], size_t n_knowns, const double seed[],
+                                   double sensitivity[]);
+
 /* FMI 2 SetupExperiment: the start time (finite) becomes the instance's time too, so that a state saved before
  * initialisation is one DeserializeFMUstate accepts. */
 NNStatus nn_setup_experiment(NNInstance *instance, double start_time);

@@ -180,10 +180,18 @@ def test_time_that_does_not_increase_names_the_sample(tmp_path):
 
 def test_non_uniform_time_names_the_sample(tmp_path):
     rows = _rows()
-    rows[20][0] += 0.01 / RATE  # 1 % of the period, ten times the tolerance
+    rows[20][0] += 0.2 / RATE  # a fifth of the period, four times the clock-scatter tolerance
     path = _write_csv(tmp_path / "jitter.csv", "time [s],displacement [m],force [N]", rows)
-    with pytest.raises(DataError, match=r"jitter\.csv: time is not uniformly sampled at sample 20 \(t = 0\.02001 s\)"):
+    with pytest.raises(DataError, match=r"jitter\.csv: time is not uniformly sampled at sample 20 \(t = 0\.0202 s\)"):
         load_measurement(path)
+
+
+def test_a_stamp_scattering_within_the_clock_bound_gets_the_fitted_base_and_a_note(tmp_path):
+    rows = _rows()
+    rows[20][0] += 0.01 / RATE  # 1 % of the period: more than sampling jitter, well within a clock's 5 %
+    m = load_measurement(_write_csv(tmp_path / "scatter.csv", "time [s],displacement [m],force [N]", rows))
+    np.testing.assert_allclose(m.time, np.arange(N) / RATE, rtol=0, atol=1e-3 / RATE)
+    assert "within the 0.05 of the period nnfmu accepts as a clock's scatter" in m.notes["time"]
 
 
 def test_jitter_within_tolerance_is_accepted(tmp_path):

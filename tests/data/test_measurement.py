@@ -44,10 +44,21 @@ def test_a_uniform_time_array_is_kept_and_its_start_and_period_stored() -> None:
 
 def test_a_non_uniform_time_array_is_refused_naming_the_source_and_sample() -> None:
     time = np.arange(N) / RATE
-    time[100:] += 0.01 / RATE  # 1 % of the period from sample 100 on: ten times the jitter tolerance
+    time[100:] += 0.2 / RATE  # a fifth of the period from sample 100 on: four times the clock-scatter tolerance
     channels, units = _channels()
-    with pytest.raises(DataError, match=r"^bench rig: time is not uniformly sampled at sample 100 \(t = 0\.09766"):
+    with pytest.raises(DataError, match=r"^bench rig: time is not uniformly sampled at sample 100 \(t = 0\.0978"):
         Measurement(time, channels, units, "bench rig")
+
+
+def test_stamps_scattering_beyond_the_jitter_get_their_fitted_base_and_a_note() -> None:
+    """What a loader accepts the measurement accepts too: float32 stamps of a 1024 Hz clock jump by a few us where
+    they pass 64 s (its rounding differs on each side); the axis becomes their least-squares base, uniform again."""
+    time = (63.9173 + np.arange(N) / RATE).astype(np.float32).astype(float)
+    channels, units = _channels()
+    m = Measurement(time, channels, units, "f32 clock", notes={"format": "kept"})
+    assert np.max(np.abs(m.time - time)) > 1e-3 / RATE  # the stamps scatter beyond the jitter ...
+    assert np.max(np.abs(np.diff(m.time) - m.sample_period)) < 1e-9 / RATE  # ... the axis does not
+    assert "clock's scatter" in m.notes["time"] and m.notes["format"] == "kept"
 
 
 @pytest.mark.parametrize(

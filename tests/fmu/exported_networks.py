@@ -45,15 +45,15 @@ def signals(channels: list[str], n: int, seed: int) -> dict[str, np.ndarray]:
     }
 
 
-def export_network(spec: FeatureSpec, path: Path, seed: int) -> Path:
-    """A random-weight network on `spec` exported to `path` with held-out inputs (`signals` of seed + 100)."""
+def random_model(spec: FeatureSpec, seed: int) -> TrainedModel:
+    """A random-weight network on `spec` with scalers fitted to `signals` of `seed`: a trained model's shape."""
     torch.manual_seed(seed)
     network = MLP(spec.n_features, 5)
     with torch.no_grad():
         for p in network.parameters():
             p.mul_(3.0)
     train = signals(spec.channels, 400, seed)
-    model = TrainedModel(
+    return TrainedModel(
         spec=spec,
         network=network,
         feature_scaler=MinMaxScaler.fit(spec.features(train, T)),
@@ -65,5 +65,10 @@ def export_network(spec: FeatureSpec, path: Path, seed: int) -> Path:
         data_hash="ab" * 32,
         settings={"seed": seed},
     )
+
+
+def export_network(spec: FeatureSpec, path: Path, seed: int) -> Path:
+    """A random-weight network on `spec` exported to `path` with held-out inputs (`signals` of seed + 100)."""
+    model = random_model(spec, seed)
     held_out = signals(spec.channels, 700, seed + HELD_OUT_SEED_OFFSET)
     return export_onnx(model, path, name=f"{spec.output}_net", verify_on=held_out).path

@@ -2,8 +2,8 @@
  *
  * Usage: fmi2_driver BINARY GUID N_INPUTS N_OUTPUTS   (BINARY: the .so on POSIX, the .dll on Windows)
  * Exercises every path of the glue: a wrong GUID, two instances, initialisation, many steps with changing step
- * sizes, outputs and flags read, FMU state get/set/serialise/deserialise/free, a refused NaN input, a refused call,
- * reset and re-initialisation, termination and freeing. Exits 0 only if every status is the one expected.
+ * sizes, outputs, flags and directional derivatives read, FMU state get/set/serialise/deserialise/free, a refused
+ * NaN input, a refused call, reset and re-initialisation, termination and freeing. Exits 0 only if every status is the one expected.
  * Prints the outputs after every step (stdout), so runs of one FMU's binaries on two platforms can be compared.
  */
 #include <math.h>
@@ -32,7 +32,7 @@ int main(int argc, char **argv) {
     fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
     fmi2Component a, b;
     fmi2ValueReference in_vr[16], out_vr[16], flag_vr;
-    fmi2Real in[16], out[16], t = 0.0;
+    fmi2Real in[16], out[16], seed[16], t = 0.0;
     fmi2FMUstate state = NULL, restored = NULL;
     fmi2Byte *buffer;
     size_t size = 0;
@@ -51,6 +51,7 @@ int main(int argc, char **argv) {
         LOAD(fmi2GetReal);
         LOAD(fmi2GetBoolean);
         LOAD(fmi2DoStep);
+        LOAD(fmi2GetDirectionalDerivative);
         LOAD(fmi2GetFMUstate);
         LOAD(fmi2SetFMUstate);
         LOAD(fmi2FreeFMUstate);
@@ -94,6 +95,12 @@ int main(int argc, char **argv) {
             print_outputs("step", k, out, n_out);
             EXPECT(fmi2GetBoolean(a, &flag_vr, 1, &flag), fmi2OK);
             if (k == 1000) EXPECT(fmi2GetFMUstate(a, &state), fmi2OK);
+            if (k % 500 == 0) { /* d(outputs)/d(inputs) along the seed 1, 2, ...; a refused input unknown */
+                for (i = 0; i < n_in; i++) seed[i] = i + 1.0;
+                EXPECT(fmi2GetDirectionalDerivative(a, out_vr, (size_t)n_out, in_vr, (size_t)n_in, seed, out), fmi2OK);
+                print_outputs("derivative", k, out, n_out);
+                EXPECT(fmi2GetDirectionalDerivative(a, in_vr, 1, in_vr, 1, seed, out), fmi2Error);
+            }
         }
         EXPECT(fmi2GetFMUstate(a, &state), fmi2OK); /* overwrite in place */
         EXPECT(fmi2SerializedFMUstateSize(a, state, &size), fmi2OK);

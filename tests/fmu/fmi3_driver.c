@@ -2,8 +2,8 @@
  *
  * Usage: fmi3_driver BINARY TOKEN N_INPUTS N_OUTPUTS   (BINARY: the .so on POSIX, the .dll on Windows)
  * The FMI 3 counterpart of fmi2_driver.c: wrong token, two instances, initialisation, steps of changing size,
- * outputs, flag and time read, FMU state get/set/serialise/deserialise/free, refused NaN input and refused calls,
- * unsupported functions, reset, termination and freeing. Exits 0 only if every status is the one expected.
+ * outputs, flag, time and directional derivatives read, FMU state get/set/serialise/deserialise/free, refused NaN
+ * input and refused calls, unsupported functions, reset, termination and freeing. Exits 0 only if every status is the one expected.
  * Prints the outputs after every step (stdout), so runs of one FMU's binaries on two platforms can be compared.
  */
 #include <math.h>
@@ -24,7 +24,7 @@ int main(int argc, char **argv) {
     library_t lib;
     fmi3Instance a, b;
     fmi3ValueReference in_vr[16], out_vr[16], flag_vr, time_vr;
-    fmi3Float64 in[16], out[16], now = 0.0, last = 0.0;
+    fmi3Float64 in[16], out[16], seed[16], now = 0.0, last = 0.0;
     fmi3FMUState state = NULL, restored = NULL;
     fmi3Byte *buffer;
     fmi3Boolean flag, event, terminate, early;
@@ -43,6 +43,7 @@ int main(int argc, char **argv) {
         LOAD(fmi3GetBoolean);
         LOAD(fmi3GetInt32);
         LOAD(fmi3DoStep);
+        LOAD(fmi3GetDirectionalDerivative);
         LOAD(fmi3GetFMUState);
         LOAD(fmi3SetFMUState);
         LOAD(fmi3FreeFMUState);
@@ -91,6 +92,14 @@ int main(int argc, char **argv) {
             print_outputs("step", k, out, n_out);
             EXPECT(fmi3GetBoolean(a, &flag_vr, 1, &flag, 1), fmi3OK);
             if (k == 1000) EXPECT(fmi3GetFMUState(a, &state), fmi3OK);
+            if (k % 500 == 0) { /* d(outputs)/d(inputs) along the seed 1, 2, ...; refused: an input unknown, sizes */
+                for (i = 0; i < n_in; i++) seed[i] = i + 1.0;
+                EXPECT(fmi3GetDirectionalDerivative(a, out_vr, (size_t)n_out, in_vr, (size_t)n_in, seed, (size_t)n_in,
+                                                    out, (size_t)n_out), fmi3OK);
+                print_outputs("derivative", k, out, n_out);
+                EXPECT(fmi3GetDirectionalDerivative(a, in_vr, 1, in_vr, 1, seed, 1, out, 1), fmi3Error);
+                EXPECT(fmi3GetDirectionalDerivative(a, out_vr, 1, in_vr, 1, seed, 2, out, 1), fmi3Error);
+            }
         }
         EXPECT(fmi3GetFloat64(a, &time_vr, 1, out, 1), fmi3OK);
         if (out[0] != now || last != now) {

@@ -9,13 +9,14 @@
  * Sequence s (s = 0, 1, ...) draws its calls from the seed SEED + s: instances created and freed, initialisation,
  * reals set and read with valid and invalid value references and values (NaN, inf, huge, denormal), steps with
  * valid, zero, negative, huge and non-finite sizes at right and wrong communication points, FMU states saved,
- * restored, serialised and deserialised from intact, truncated and corrupted bytes, reset and terminate in any mode.
+ * restored, serialised and deserialised from intact, truncated and corrupted bytes, reset and terminate in any mode,
+ * directional derivatives of any value references with ordinary and hostile seeds.
  * Half the calls are well-formed ones for the mode the driver believes an instance is in (set up, initialise, set
  * inputs and step), so that sequences reach far into stepping between the hostile ones.
  * It stops after SECONDS or MAX_SEQUENCES sequences. Checked invariants: every status is a valid fmi2Status, the
- * outputs read after an OK doStep (and any OK read of outputs) are finite, a state serialised and deserialised
- * intact is accepted, an OK fmi3DoStep reports no event, no termination, no early return and t + h as its last
- * successful time. Exits 0 when no invariant broke, printing how many sequences and calls ran.
+ * outputs read after an OK doStep (and any OK read of outputs or derivatives) are finite, a state serialised and
+ * deserialised intact is accepted, an OK fmi3DoStep reports no event, no termination, no early return and t + h as
+ * its last successful time. Exits 0 when no invariant broke, printing how many sequences and calls ran.
  */
 #define _POSIX_C_SOURCE 200112L /* clock_gettime */
 #include <math.h>
@@ -37,7 +38,8 @@
 static unsigned long long rng_state;
 static int failures = 0;
 static long long calls = 0, ok_calls = 0, logged = 0;
-static long long ok_steps = 0, ok_restores = 0, ok_slopes = 0; /* how deep the sequences reach */
+/* how deep the sequences reach */
+static long long ok_steps = 0, ok_restores = 0, ok_slopes = 0, ok_derivatives = 0;
 static unsigned long long current_seed = 0;
 static char last_message[2048]; /* the FMU's latest log message, shown with a failure */
 
@@ -137,6 +139,7 @@ static struct {
     fmi2SerializedFMUstateSizeTYPE *state_size;
     fmi2SerializeFMUstateTYPE *serialize;
     fmi2DeSerializeFMUstateTYPE *deserialize;
+    fmi2GetDirectionalDerivativeTYPE *derivative;
 } f;
 
 
@@ -163,6 +166,7 @@ static struct {
     fmi3SerializedFMUStateSizeTYPE *state_size;
     fmi3SerializeFMUStateTYPE *serialize;
     fmi3DeserializeFMUStateTYPE *deserialize;
+    fmi3GetDirectionalDerivativeTYPE *derivative;
 } g;
 
 /* FMI 3 takes the start time in EnterInitializationMode: SetupExperiment's is kept per instance until then. */
@@ -271,6 +275,13 @@ static fmi2Status set_slopes3(fmi2Component c, const fmi2ValueReference vr[], si
     if (n > MAX_VR) return fmi2Error;
     for (i = 0; i < n; i++) orders[i] = order[i];
     return (fmi2Status)g.get_output_derivatives(c, vr, n, orders, got, n);
+}
+
+static fmi2Status derivative3(fmi2Component c, const fmi2ValueReference unknowns[], size_t n_unknowns,
+                               const fmi2ValueReference knowns[], size_t n_knowns, const fmi2Real seed[],
+                               fmi2Real sensitivity[]) {
+    return (fmi2Status)g.derivative(c, unknowns, n_unknowns, knowns, n_knowns, seed, n_knowns, sensitivity,
+                                    n_unknowns);
 }
 
 static fmi2Status do_step3(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean no_set_prior) {
@@ -496,8 +507,8 @@ static void lawful_call(Slot *s) {
 
 /* One random call on slot `s`. */
 static void random_call(Slot *s) {
-    fmi2ValueReference vr[MAX_VR];
-    fmi2Real values[MAX_VR];
+    fmi2ValueReference vr[MAX_VR], in_vr[MAX_VR];
+    fmi2Real values[MAX_VR], out[MAX_VR];
     fmi2Integer order[MAX_VR];
     fmi2Boolean flags[MAX_VR];
     size_t n = below(4) == 0 ? 0 : 1 + below(n_in > 0 ? (unsigned)n_in : 1u);
@@ -579,6 +590,23 @@ static void random_call(Slot *s) {
             read_outputs(s, __LINE__);
         }
         return;
+    case 18: /* directional derivatives: mostly outputs by inputs; an OK result is finite */
+        k = (int)below(3);
+        for (i = 0; i < n; i++) {
+            vr[i] = pick_vr(n_in, n_out);
+            values[i] = below(4) ? uniform() - 0.5 : any_value();
+        }
+        for (i = 0; i < (size_t)k; i++) in_vr[i] = pick_vr(0, n_in);
+        if (CHECK(f.derivative(s->c, vr, n, in_vr, (size_t)k, values, out)) == fmi2OK) {
+            if (n > 0 && k > 0) ok_derivatives++;
+            for (i = 0; i < n; i++) {
+                if (!isfinite(out[i])) {
+                    fprintf(stderr, "seed %llu: derivative of vr %u is %g\n", current_seed, vr[i], out[i]);
+                    failures++;
+                }
+            }
+        }
+        return;
     case 17: /* calls with missing arrays must be refused, not followed */
         CHECK(f.get_real(s->c, NULL, 1 + below(3), values));
         CHECK(f.set_real(s->c, vr, 1, NULL));
@@ -658,6 +686,7 @@ int main(int argc, char **argv) {
         FIND(f.state_size, "fmi2SerializedFMUstateSize");
         FIND(f.serialize, "fmi2SerializeFMUstate");
         FIND(f.deserialize, "fmi2DeSerializeFMUstate");
+        FIND(f.derivative, "fmi2GetDirectionalDerivative");
     } else {
         FIND(g.instantiate, "fmi3InstantiateCoSimulation");
         FIND(g.instantiate_me, "fmi3InstantiateModelExchange");
@@ -680,6 +709,7 @@ int main(int argc, char **argv) {
         FIND(g.state_size, "fmi3SerializedFMUStateSize");
         FIND(g.serialize, "fmi3SerializeFMUState");
         FIND(g.deserialize, "fmi3DeserializeFMUState");
+        FIND(g.derivative, "fmi3GetDirectionalDerivative");
         f.instantiate = instantiate3;
         f.free_instance = free_instance3;
         f.set_debug_logging = set_debug_logging3;
@@ -702,6 +732,7 @@ int main(int argc, char **argv) {
         f.state_size = state_size3;
         f.serialize = serialize3;
         f.deserialize = deserialize3;
+        f.derivative = derivative3;
     }
 
     start = now_s();
@@ -717,8 +748,8 @@ int main(int argc, char **argv) {
         sequences++;
     }
     dlclose(lib);
-    printf("%lld sequences, %lld calls (%lld OK: %lld steps, %lld deserialised states restored, %lld input slopes), "
-           "%lld log messages in %.1f s; %d invariant failures\n", sequences, calls, ok_calls, ok_steps, ok_restores,
-           ok_slopes, logged, now_s() - start, failures);
+    printf("%lld sequences, %lld calls (%lld OK: %lld steps, %lld deserialised states restored, %lld input slopes, "
+           "%lld directional derivatives), %lld log messages in %.1f s; %d invariant failures\n", sequences, calls,
+           ok_calls, ok_steps, ok_restores, ok_slopes, ok_derivatives, logged, now_s() - start, failures);
     return failures == 0 ? 0 : 1;
 }

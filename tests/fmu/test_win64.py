@@ -1,9 +1,9 @@
 """win64 binaries: the FMU's DLL, cross-compiled with MinGW-w64, runs under wine and gives the linux64 binary's
 outputs; without the cross compiler a default build warns and still lands, an explicit request fails.
 
-The C masters of test_memcheck.py (fmi2_driver.c, fmi3_driver.c: every glue path, outputs printed after each step)
-are built twice: for linux64 (dlopen of the .so) and, cross-compiled, for win64 (LoadLibrary of the .dll, run by
-wine). Both must pass every status check and print the same outputs.
+The C masters of test_memcheck.py (fmi2_driver.c, fmi3_driver.c: every glue path, outputs printed after each step,
+directional derivatives every 500 steps) are built twice: for linux64 (dlopen of the .so) and, cross-compiled, for
+win64 (LoadLibrary of the .dll, run by wine). Both must pass every status check and print the same outputs.
 """
 
 from __future__ import annotations
@@ -143,10 +143,12 @@ def test_win64_binary_under_wine_gives_the_linux64_outputs(delay_fmus, tmp_path,
         assert run.returncode == 0, run.stderr[-3000:]
         assert "0 unexpected statuses" in run.stderr
     expected, got = _outputs(on_linux.stdout), _outputs(on_wine.stdout.replace("\r", ""))
-    assert len(expected) == 2001 and [row[:2] for row in got] == [row[:2] for row in expected]
+    # 2001 rows of outputs (initialisation, 2000 steps) and 4 of directional derivatives
+    assert len(expected) == 2005 and [row[:2] for row in got] == [row[:2] for row in expected]
+    assert sum(row[0] == "derivative" for row in expected) == 4
     want = np.array([row[2] for row in expected])
     have = np.array([row[2] for row in got])
-    assert want.shape == have.shape == (2001, n_out)
+    assert want.shape == have.shape == (2005, n_out)
     relative = np.max(np.abs(have - want), axis=0) / np.max(np.abs(want), axis=0)
     assert np.all(relative <= RELATIVE), f"win64 vs linux64, largest difference / peak per output: {relative}"
 

@@ -452,3 +452,40 @@ def test_a_given_initial_state_is_where_the_fmu_starts() -> None:
     )
     with pytest.raises(VehicleBuildError, match=f"initial state has 2 values; the vehicle has {len(start)} states"):
         vehicle_step_graph("quarter-car", VehicleBuildSettings(initial_state=(0.0, 0.0)))
+
+
+@pytest.mark.parametrize("at", ["initialization", "step"])
+def test_directional_derivatives_are_those_of_the_outputs_at_the_communication_point(
+    quarter_car_fmus: dict[str, Path], at: str
+) -> None:
+    """Inputs set at a communication point move the outputs there (the latest sample is evaluated again, or the
+    preview before initialisation ends): fmi2GetDirectionalDerivative equals their central differences."""
+    with FmuSlave(quarter_car_fmus["external"]) as slave:
+        inputs = slave.names("input")
+        outputs = [name for name in slave.names("output") if name != "extrapolating"]
+        rng = np.random.default_rng(5)
+        values = rng.normal(size=len(inputs)) * np.array([1e-3 if slave.unit(n) != "N" else 300.0 for n in inputs])
+        slave.enter_initialization(0.0)
+        slave.set_real(inputs, values)
+        if at == "step":
+            slave.exit_initialization()
+            for m in range(10):
+                slave.set_real(inputs, values * (1.0 + 0.1 * m))
+                slave.do_step(m * 1e-3, 1e-3)
+            values = values * 2.0
+            slave.set_real(inputs, values)
+        unknowns, knowns = slave.value_references(outputs), slave.value_references(inputs)
+        for j, vr in enumerate(knowns):
+            step = 1e-6 * max(1.0, abs(values[j]))
+            sides = []
+            for sign in (1.0, -1.0):
+                moved = values.copy()
+                moved[j] += sign * step
+                slave.set_real(inputs, moved)
+                sides.append(slave.get_real(outputs))
+            slave.set_real(inputs, values)
+            central = (sides[0] - sides[1]) / (2.0 * step)
+            derivative = np.array(slave.fmu.getDirectionalDerivative(unknowns, [vr], [1.0]))
+            scale = max(float(np.abs(central).max()), 1e-12)
+            assert np.abs(central).max() > 0.0, inputs[j]
+            np.testing.assert_allclose(derivative, central, rtol=1e-6, atol=1e-7 * scale, err_msg=inputs[j])

@@ -52,7 +52,8 @@ def write_native(plan: BuildPlan, tree: Path) -> None:
         raise FmuBuildError(f"{plan.source}: {err}") from err
     layout = GraphLayout.of(model, generated.input_sizes, generated.output_sizes)
     ports = port_map(component, layout)
-    view = plan.view(instantiation_token(model.SerializeToString(), component, fmi), source_files(fmi))
+    token = instantiation_token(model.SerializeToString(), component, fmi)
+    view = plan.view(token, source_files(fmi), directional_derivatives=generated.has_jvp)
     platforms, skipped = select_targets(plan.options.platforms)
     if skipped:
         warnings.warn(skipped, PlatformSkippedWarning, stacklevel=5)

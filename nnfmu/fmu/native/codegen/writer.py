@@ -1,4 +1,5 @@
-"""Print graph.h and graph.c from a StaticGraph: weights, one static function per node, the run function."""
+"""Print graph.h and graph.c from a StaticGraph: weights, one static function per node, the run function, and, when
+every node has a tangent rule, one tangent function per node and the forward-mode derivative function `_graph_jvp`."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import numpy as np
 
 from nnfmu import __version__
 from nnfmu.fmu.native.codegen.cnames import NameTable, comment_text
-from nnfmu.fmu.native.codegen.emitters.base import Params
+from nnfmu.fmu.native.codegen.emitters.base import Params, TangentParams
 from nnfmu.fmu.native.codegen.errors import UnsupportedGraphError
 from nnfmu.fmu.native.codegen.graph import StaticGraph, Step
 from nnfmu.fmu.native.codegen.tensors import RUNTIME_DTYPES, Tensor, c_literal
@@ -61,6 +62,12 @@ class SourceWriter:
         self.names = NameTable()
         self.cnames: dict[str, str] = {}  # ONNX tensor name -> C identifier
         self.weights: list[Tensor] = []  # constants the C reads, in order of first use
+        self.jvp_missing: str | None = "graph.c not written yet"  # why graph.c has no `_graph_jvp`
+
+    @property
+    def has_jvp(self) -> bool:
+        """Whether the source defines `<prefix>_graph_jvp` (call after `source()`)."""
+        return self.jvp_missing is None
 
     def header(self) -> str:
         """graph.h: sizes of the flat in/out arrays, their layout as comments, the run function's prototype."""
@@ -80,6 +87,17 @@ class SourceWriter:
             " * Returns 0 on success, 1 when a pointer is NULL. */",
             f"int {self.prefix}_graph_run(const double *in, double *out);",
             "",
+            "/* 1 when graph.c defines the forward-mode derivative below (every node has a tangent rule). */",
+            f"#define {upper}_HAS_JVP {int(self.has_jvp)}",
+            f"#if {upper}_HAS_JVP",
+            "/* The graph at in[] (outputs to out[], as the run function) and its directional derivative:",
+            " * out_dot[] = J(in) in_dot[], J the Jacobian of all outputs with respect to all inputs, exact up to",
+            " * rounding. At a kink (Relu, Abs, Clip at a bound) the derivative of the branch the evaluation takes;",
+            " * sqrt at 0 passes a zero tangent as zero. Re-entrant like the run function. Returns 0 on success, 1",
+            " * when a pointer is NULL. */",
+            f"int {self.prefix}_graph_jvp(const double *in, const double *in_dot, double *out, double *out_dot);",
+            "#endif",
+            "",
             f"#endif /* {upper}_GRAPH_H */",
         ]
         return "\n".join(lines) + "\n"
@@ -89,12 +107,27 @@ class SourceWriter:
         self.names, self.cnames, self.weights = NameTable(), {}, []
         functions = [self._function(step) for step in self.graph.steps]
         run = self._run(functions)
+        tangents = [self._tangent_function(step) for step in self.graph.steps]
+        jvp: list[str] = []
+        missing = [step for step, tangent in zip(self.graph.steps, tangents) if tangent is None]
+        self.jvp_missing = None
+        if missing:
+            node = missing[0].node
+            self.jvp_missing = f"node {node.name!r} (op {node.op_type}) has no tangent rule"
+        else:
+            try:
+                jvp = self._jvp(functions, [t for t in tangents if t is not None])
+            except UnsupportedGraphError as err:
+                self.jvp_missing = err.reason
         lines = [*self._banner("graph.c"), "#include <math.h>", "", '#include "graph.h"', "", *SPECIAL_VALUES, ""]
         for tensor in self.weights:
             lines += self._weight(tensor)
         for _, text in functions:
             lines += text
-        return "\n".join(lines + run) + "\n"
+        if not self.jvp_missing:
+            for _, text in tangents:
+                lines += text
+        return "\n".join(lines + run + ([""] + jvp if jvp else [])) + "\n"
 
     def _banner(self, file: str) -> list[str]:
         return [
@@ -154,6 +187,99 @@ class SourceWriter:
             "",
         ]
         return name, text
+
+    def _tangent_function(self, step: Step) -> tuple[str, list[str]] | None:
+        """The node's tangent function `(x..., y..., dx... of run-time inputs, dy...)`, or None without a rule."""
+        node = step.node
+        x: list[str | None] = [None] * len(node.inputs)
+        dx: list[str | None] = [None] * len(node.inputs)
+        declared, unused = [], []
+        for index in step.data_inputs:
+            x[index] = f"x{index}"
+            declared.append(f"const {node.inputs[index].ctype} *x{index}")
+            unused.append(f"x{index}")
+        y: list[str | None] = [None if t is None else f"y{j}" for j, t in enumerate(node.outputs)]
+        declared += [f"const {t.ctype} *y{j}" for j, t in enumerate(node.outputs) if t is not None]
+        unused += [f"y{j}" for j, t in enumerate(node.outputs) if t is not None]
+        for index in step.data_inputs:
+            if not node.inputs[index].is_constant:
+                dx[index] = f"dx{index}"
+                declared.append(f"const {node.inputs[index].ctype} *dx{index}")
+                unused.append(f"dx{index}")
+        dy: list[str | None] = [None if t is None else f"dy{j}" for j, t in enumerate(node.outputs)]
+        declared += [f"{t.ctype} *dy{j}" for j, t in enumerate(node.outputs) if t is not None]
+        body = step.emitter.tangent(node, TangentParams(x, y, dx, dy))
+        if body is None:
+            return None
+        name = self.names.make("tangent", f"{node.op_type}_{node.name}")
+        text = [
+            f"/* Tangent of ONNX {comment_text(node.op_type)} node {quoted(node.name)}: dy from dx at x, y. */",
+            f"static void {name}({', '.join(declared)})",
+            "{",
+            *(f"    (void){param};" for param in unused),
+            *("    " + line for line in body),
+            "}",
+            "",
+        ]
+        return name, text
+
+    def _jvp(self, functions: list[tuple[str, list[str]]], tangents: list[tuple[str, list[str]]]) -> list[str]:
+        """`<prefix>_graph_jvp`: every node and then its tangent, in order; tangents of constants are zero and not
+        passed. Raises UnsupportedGraphError when the tensors and their tangents need too much stack."""
+        graph = self.graph
+        lines = ["    if (in == 0 || in_dot == 0 || out == 0 || out_dot == 0) {", "        return 1;", "    }"]
+        stack = 0
+        used = {step.node.inputs[i].name for step in graph.steps for i in step.data_inputs}
+        used.update(tensor.name for tensor in graph.outputs)
+        for tensor, offset in zip(graph.inputs, layout(graph.inputs).offsets):
+            if tensor.name not in used:
+                continue
+            name = self._tensor(tensor)
+            for array, cname in (("in", name), ("in_dot", f"d_{name}")):
+                if tensor.dtype == np.float64:
+                    lines.append(f"    const double *const {cname} = {array} + {offset}; /* {describe(tensor)} */")
+                else:
+                    stack += tensor.size * tensor.dtype.itemsize
+                    lines.append(f"    {tensor.ctype} {cname}[{tensor.size}]; /* {describe(tensor)} */")
+                    lines.append(f"    for (int i = 0; i < {tensor.size}; ++i) {{")
+                    lines.append(f"        {cname}[i] = ({tensor.ctype}){array}[{offset} + i];")
+                    lines.append("    }")
+        for step, (function, _), (tangent, _) in zip(graph.steps, functions, tangents):
+            inputs = [self._tensor(step.node.inputs[i]) for i in step.data_inputs]
+            d_inputs = [
+                f"d_{self._tensor(step.node.inputs[i])}"
+                for i in step.data_inputs
+                if not step.node.inputs[i].is_constant
+            ]
+            outputs, d_outputs = [], []
+            for tensor in step.node.outputs:
+                if tensor is not None:
+                    name = self._tensor(tensor)
+                    stack += 2 * tensor.size * tensor.dtype.itemsize
+                    lines.append(f"    {tensor.ctype} {name}[{tensor.size}]; /* {describe(tensor)} */")
+                    lines.append(f"    {tensor.ctype} d_{name}[{tensor.size}];")
+                    outputs.append(name)
+                    d_outputs.append(f"d_{name}")
+            lines.append(f"    {function}({', '.join(inputs + outputs)});")
+            lines.append(f"    {tangent}({', '.join(inputs + outputs + d_inputs + d_outputs)});")
+        for tensor, offset in zip(graph.outputs, layout(graph.outputs).offsets):
+            name = self._tensor(tensor)
+            d_value = "0.0" if tensor.is_constant else f"(double)d_{name}[i]"
+            lines.append(f"    for (int i = 0; i < {tensor.size}; ++i) {{ /* {describe(tensor)} */")
+            lines.append(f"        out[{offset} + i] = (double){name}[i];")
+            lines.append(f"        out_dot[{offset} + i] = {d_value};")
+            lines.append("    }")
+        if stack > STACK_LIMIT_BYTES:
+            raise UnsupportedGraphError(
+                f"the derivative's tensors and tangents need {stack} bytes of stack, more than the "
+                f"{STACK_LIMIT_BYTES} bytes allowed"
+            )
+        signature = [
+            f"/* Runs every node and its tangent in order. Tensors and tangents: {stack} bytes on the stack. */",
+            f"int {self.prefix}_graph_jvp(const double *in, const double *in_dot, double *out, double *out_dot)",
+            "{",
+        ]
+        return [*signature, *lines, "    return 0;", "}"]
 
     def _run(self, functions: list[tuple[str, list[str]]]) -> list[str]:
         graph = self.graph

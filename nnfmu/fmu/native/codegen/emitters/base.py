@@ -88,6 +88,17 @@ class Params:
     y: list[str | None]
 
 
+@dataclass(frozen=True)
+class TangentParams:
+    """C parameter names of one node's tangent function: the primal data inputs `x` and outputs `y` (read only), the
+    tangents `dx` of the data inputs (None for a constant input, whose tangent is zero) and `dy` of the outputs."""
+
+    x: list[str | None]
+    y: list[str | None]
+    dx: list[str | None]
+    dy: list[str | None]
+
+
 class Emitter(ABC):
     """Translate one ONNX operator (or family) to C."""
 
@@ -105,3 +116,30 @@ class Emitter(ABC):
     @abstractmethod
     def body(self, node: Node, params: Params) -> list[str]:
         """Lines of the C function body computing the outputs from the data inputs."""
+
+    def tangent(self, node: Node, params: TangentParams) -> list[str] | None:
+        """Lines of the C function body computing the outputs' tangents (forward-mode derivative) from the inputs'
+        tangents at the primal point `params.x`/`params.y`; None when the operator has no tangent rule."""
+        return None
+
+
+def zero_tangents(node: Node, params: TangentParams) -> tuple[list[str], list[str | None]]:
+    """Declarations of all-zero arrays standing for the tangents of constant data inputs, and the tangent names of
+    every input with those filled in (for rules that treat every operand alike)."""
+    lines: list[str] = []
+    names = list(params.dx)
+    for index, name in enumerate(params.x):
+        if name is not None and names[index] is None:
+            tensor = node.input(index)
+            lines.append(f"static const {tensor.ctype} zero{index}[{tensor.size}] = {{0}};")
+            names[index] = f"zero{index}"
+    return lines, names
+
+
+class Linear(Emitter):
+    """An operator linear in its data inputs (data movement, casts): its tangent is the operator applied to the
+    inputs' tangents."""
+
+    def tangent(self, node: Node, params: TangentParams) -> list[str] | None:
+        zeros, names = zero_tangents(node, params)
+        return zeros + self.body(node, Params(names, params.dy))

@@ -1,4 +1,6 @@
-"""Element-wise operators: unary activations, broadcasting binary arithmetic, Clip and float casts."""
+"""Element-wise operators: unary activations, broadcasting binary arithmetic, Clip and float casts, with their tangent
+rules. At a kink the one-sided derivative the primal branch takes is used: Relu and Abs have derivative 0 at 0 (as
+torch's autograd), Clip follows the bound it returns (bound's tangent when clipped, else the input's)."""
 
 from __future__ import annotations
 
@@ -7,18 +9,21 @@ from collections.abc import Callable
 import numpy as np
 from onnx import TensorProto
 
-from nnfmu.fmu.native.codegen.emitters.base import Emitter, Node, Params, TensorType
+from nnfmu.fmu.native.codegen.emitters.base import Emitter, Linear, Node, Params, TangentParams, TensorType
 from nnfmu.fmu.native.codegen.emitters.loops import broadcast_access, loop_nest
 from nnfmu.fmu.native.codegen.tensors import c_literal, math_fn
 
 UnaryFormula = Callable[[str, np.dtype, Node], str]
+# f'(x) dx as C from the expressions of x, y = f(x) and dx, the dtype and the node
+TangentFormula = Callable[[str, str, str, np.dtype, Node], str]
 
 
 class Unary(Emitter):
-    """y = f(x) element by element; `formula(x expression, dtype, node)` gives f as C."""
+    """y = f(x) element by element; `formula(x expression, dtype, node)` gives f as C, `derivative` dy from dx."""
 
-    def __init__(self, formula: UnaryFormula) -> None:
+    def __init__(self, formula: UnaryFormula, derivative: TangentFormula) -> None:
         self.formula = formula
+        self.derivative = derivative
 
     def infer(self, node: Node) -> list[TensorType]:
         return [(node.runtime_dtype(0), node.input(0).shape)]
@@ -31,6 +36,20 @@ class Unary(Emitter):
             f"for (int i = 0; i < {tensor.size}; ++i) {{",
             f"    const {tensor.ctype} v = {x}[i];",
             f"    {y}[i] = {expression};",
+            "}",
+        ]
+
+    def tangent(self, node: Node, params: TangentParams) -> list[str] | None:
+        tensor = node.input(0)
+        expression = self.derivative("v", "w", "dv", tensor.dtype, node)
+        return [
+            f"for (int i = 0; i < {tensor.size}; ++i) {{",
+            f"    const {tensor.ctype} v = {params.x[0]}[i];",
+            f"    const {tensor.ctype} w = {params.y[0]}[i];",
+            f"    const {tensor.ctype} dv = {params.dx[0]}[i];",
+            "    (void)v;",
+            "    (void)w;",
+            f"    {params.dy[0]}[i] = {expression};",
             "}",
         ]
 
@@ -58,17 +77,43 @@ def _softplus(v: str, dtype: np.dtype, node: Node) -> str:
     return f"{v} > {zero} ? {v} + {log1p}({exp}(-{v})) : {log1p}({exp}({v}))"
 
 
-UNARY: dict[str, UnaryFormula] = {
-    "Neg": lambda v, dtype, node: f"-{v}",
-    "Abs": _call("fabs"),
-    "Exp": _call("exp"),
-    "Log": _call("log"),
-    "Sqrt": _call("sqrt"),
-    "Tanh": _call("tanh"),
-    "Sigmoid": _sigmoid,
-    "Relu": _relu,
-    "LeakyRelu": _leaky_relu,
-    "Softplus": _softplus,
+def _d_abs(v: str, w: str, dv: str, dtype: np.dtype, node: Node) -> str:
+    zero = c_literal(0.0, dtype)
+    return f"{v} > {zero} ? {dv} : ({v} < {zero} ? -{dv} : {zero})"
+
+
+def _d_sqrt(v: str, w: str, dv: str, dtype: np.dtype, node: Node) -> str:
+    """dv / (2 sqrt(x)); a zero tangent stays zero at x = 0 (where the derivative is infinite)."""
+    zero = c_literal(0.0, dtype)
+    return f"{dv} == {zero} ? {zero} : {dv} / ({c_literal(2.0, dtype)} * {w})"
+
+
+def _d_relu(v: str, w: str, dv: str, dtype: np.dtype, node: Node) -> str:
+    zero = c_literal(0.0, dtype)
+    return f"{v} > {zero} ? {dv} : {zero}"
+
+
+def _d_leaky_relu(v: str, w: str, dv: str, dtype: np.dtype, node: Node) -> str:
+    alpha = c_literal(node.attr("alpha", 0.01), dtype)
+    return f"{v} >= {c_literal(0.0, dtype)} ? {dv} : {alpha} * {dv}"
+
+
+def _d_softplus(v: str, w: str, dv: str, dtype: np.dtype, node: Node) -> str:
+    one = c_literal(1.0, dtype)
+    return f"{dv} / ({one} + {math_fn('exp', dtype)}(-{v}))"
+
+
+UNARY: dict[str, tuple[UnaryFormula, TangentFormula]] = {
+    "Neg": (lambda v, dtype, node: f"-{v}", lambda v, w, dv, dtype, node: f"-{dv}"),
+    "Abs": (_call("fabs"), _d_abs),
+    "Exp": (_call("exp"), lambda v, w, dv, dtype, node: f"{w} * {dv}"),
+    "Log": (_call("log"), lambda v, w, dv, dtype, node: f"{dv} / {v}"),
+    "Sqrt": (_call("sqrt"), _d_sqrt),
+    "Tanh": (_call("tanh"), lambda v, w, dv, dtype, node: f"({c_literal(1.0, dtype)} - {w} * {w}) * {dv}"),
+    "Sigmoid": (_sigmoid, lambda v, w, dv, dtype, node: f"{w} * ({c_literal(1.0, dtype)} - {w}) * {dv}"),
+    "Relu": (_relu, _d_relu),
+    "LeakyRelu": (_leaky_relu, _d_leaky_relu),
+    "Softplus": (_softplus, _d_softplus),
 }
 
 
@@ -93,6 +138,28 @@ class Binary(Emitter):
         accesses = [broadcast_access(node.input(i).shape, shape) for i in (0, 1)]
         a, b, y = params.x[0], params.x[1], params.y[0]
         return loop_nest(shape, accesses, lambda idx, out: f"{y}[{out}] = {a}[{idx[0]}] {self.operator} {b}[{idx[1]}];")
+
+    def tangent(self, node: Node, params: TangentParams) -> list[str] | None:
+        """Sum and product rules; terms of a constant operand (zero tangent) are left out."""
+        shape = node.outputs[0].shape
+        accesses = [broadcast_access(node.input(i).shape, shape) for i in (0, 1)]
+        a, b = params.x
+        da, db = params.dx
+        zero = c_literal(0.0, node.input(0).dtype)
+
+        def statement(idx: list[str], out: str) -> str:
+            x_a, x_b = f"{a}[{idx[0]}]", f"{b}[{idx[1]}]"
+            d_a = f"{da}[{idx[0]}]" if da else None
+            d_b = f"{db}[{idx[1]}]" if db else None
+            terms = {
+                "+": [d_a, d_b],
+                "-": [d_a, f"-{d_b}" if d_b else None],
+                "*": [f"{d_a} * {x_b}" if d_a else None, f"{x_a} * {d_b}" if d_b else None],
+                "/": [f"{d_a} / {x_b}" if d_a else None, f"-{x_a} * {d_b} / ({x_b} * {x_b})" if d_b else None],
+            }[self.operator]
+            return f"{params.dy[0]}[{out}] = {' + '.join(t for t in terms if t) or zero};"
+
+        return loop_nest(shape, accesses, statement)
 
 
 class Clip(Emitter):
@@ -122,8 +189,34 @@ class Clip(Emitter):
             lines.append(f"    if (v > {high}) v = {high};")
         return [*lines, f"    {y}[i] = v;", "}"]
 
+    def tangent(self, node: Node, params: TangentParams) -> list[str] | None:
+        """The tangent of what is returned: a bound's (zero for a constant one) where clipped, else the input's."""
+        tensor = node.input(0)
+        zero = c_literal(0.0, tensor.dtype)
+        dx = f"{params.dx[0]}[i]" if params.dx[0] else zero
+        if node.opset < 11:
+            low = c_literal(node.attr("min", -np.inf), tensor.dtype)
+            high = c_literal(node.attr("max", np.inf), tensor.dtype)
+            bounds = [(low, zero), (high, zero)]
+        else:
+            bounds = [
+                (f"{params.x[i]}[0]", f"{params.dx[i]}[0]" if params.dx[i] else zero) if params.x[i] else (None, None)
+                for i in (1, 2)
+            ]
+        (low, d_low), (high, d_high) = bounds
+        lines = [
+            f"for (int i = 0; i < {tensor.size}; ++i) {{",
+            f"    {tensor.ctype} v = {params.x[0]}[i];",
+            f"    {tensor.ctype} dv = {dx};",
+        ]
+        if low is not None:
+            lines.append(f"    if (v < {low}) {{ v = {low}; dv = {d_low}; }}")
+        if high is not None:
+            lines.append(f"    if (v > {high}) {{ v = {high}; dv = {d_high}; }}")
+        return [*lines, "    (void)v;", f"    {params.dy[0]}[i] = dv;", "}"]
 
-class Cast(Emitter):
+
+class Cast(Linear):
     """Conversion between float32 and float64."""
 
     TARGETS = {TensorProto.FLOAT: np.dtype(np.float32), TensorProto.DOUBLE: np.dtype(np.float64)}
@@ -142,7 +235,7 @@ class Cast(Emitter):
 
 
 EMITTERS: dict[str, Emitter] = {
-    **{op: Unary(formula) for op, formula in UNARY.items()},
+    **{op: Unary(formula, derivative) for op, (formula, derivative) in UNARY.items()},
     "Add": Binary("+"),
     "Sub": Binary("-"),
     "Mul": Binary("*"),

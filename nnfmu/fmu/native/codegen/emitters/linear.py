@@ -1,4 +1,5 @@
-"""Matrix products: Gemm (with transposes, alpha, beta and a broadcast bias) and numpy-style MatMul."""
+"""Matrix products: Gemm (with transposes, alpha, beta and a broadcast bias) and numpy-style MatMul, with their
+tangents by the product rule (terms of constant operands, such as weights, left out)."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ import math
 
 import numpy as np
 
-from nnfmu.fmu.native.codegen.emitters.base import Emitter, Node, Params, TensorType
+from nnfmu.fmu.native.codegen.emitters.base import Emitter, Node, Params, TangentParams, TensorType
 from nnfmu.fmu.native.codegen.emitters.loops import broadcast_access, contiguous_strides
 from nnfmu.fmu.native.codegen.tensors import c_literal
 
@@ -54,28 +55,49 @@ class Gemm(Emitter):
         return [(dtype, (a[0], b[1]))]
 
     def body(self, node: Node, params: Params) -> list[str]:
+        bias = params.x[2] if len(params.x) > 2 and node.optional(2) is not None else None
+        return self._product(node, params.x[0], params.x[1], bias, params.y[0], "=")
+
+    def _product(
+        self, node: Node, x_a: str | None, x_b: str | None, bias: str | None, y: str, assign: str
+    ) -> list[str]:
+        """`y assign alpha * A' B' + beta * C`, with the product left out when an operand is None and the bias term
+        when `bias` is None (or beta is 0); `assign` is "=" or "+="."""
         (m, k, a_row, a_col), (_, n, b_row, b_col) = self._dims(node)
         dtype = node.input(0).dtype
         alpha, beta = float(node.attr("alpha", 1.0)), float(node.attr("beta", 1.0))
         ctype = node.input(0).ctype
-        x_a, x_b, y = params.x[0], params.x[1], params.y[0]
-        product = "acc" if alpha == 1.0 else f"{c_literal(alpha, dtype)} * acc"
-        bias = node.optional(2)
+        terms = []
+        if x_a is not None and x_b is not None:
+            terms.append("acc" if alpha == 1.0 else f"{c_literal(alpha, dtype)} * acc")
         if bias is not None and beta != 0.0:
-            access = broadcast_access(bias.shape, (m, n))
-            term = f"{params.x[2]}[{_index(access.strides[0], 'r', access.strides[1], 'c')}]"
-            product += f" + {term}" if beta == 1.0 else f" + {c_literal(beta, dtype)} * {term}"
-        return [
-            f"for (int r = 0; r < {m}; ++r) {{",
-            f"    for (int c = 0; c < {n}; ++c) {{",
-            f"        {ctype} acc = {c_literal(0.0, dtype)};",
-            f"        for (int j = 0; j < {k}; ++j) {{",
-            f"            acc += {x_a}[{_index(a_row, 'r', a_col, 'j')}] * {x_b}[{_index(b_row, 'j', b_col, 'c')}];",
-            "        }",
-            f"        {y}[{n} * r + c] = {product};",
-            "    }",
-            "}",
-        ]
+            access = broadcast_access(node.input(2).shape, (m, n))
+            term = f"{bias}[{_index(access.strides[0], 'r', access.strides[1], 'c')}]"
+            terms.append(term if beta == 1.0 else f"{c_literal(beta, dtype)} * {term}")
+        lines = [f"for (int r = 0; r < {m}; ++r) {{", f"    for (int c = 0; c < {n}; ++c) {{"]
+        if x_a is not None and x_b is not None:
+            a_index, b_index = _index(a_row, "r", a_col, "j"), _index(b_row, "j", b_col, "c")
+            lines += [
+                f"        {ctype} acc = {c_literal(0.0, dtype)};",
+                f"        for (int j = 0; j < {k}; ++j) {{",
+                f"            acc += {x_a}[{a_index}] * {x_b}[{b_index}];",
+                "        }",
+            ]
+        lines += [f"        {y}[{n} * r + c] {assign} {' + '.join(terms) or c_literal(0.0, dtype)};", "    }", "}"]
+        return lines
+
+    def tangent(self, node: Node, params: TangentParams) -> list[str] | None:
+        """dY = alpha (dA' B' + A' dB') + beta dC."""
+        x_a, x_b = params.x[0], params.x[1]
+        d_a, d_b = params.dx[0], params.dx[1]
+        d_c = params.dx[2] if len(params.dx) > 2 and node.optional(2) is not None else None
+        dy = params.dy[0]
+        if d_a is None and d_b is None:
+            return self._product(node, None, None, d_c, dy, "=")
+        lines = self._product(node, d_a, x_b, d_c, dy, "=") if d_a is not None else []
+        if d_b is not None:
+            lines += self._product(node, x_a, d_b, None if lines else d_c, dy, "+=" if lines else "=")
+        return lines
 
 
 class MatMul(Emitter):
@@ -108,10 +130,22 @@ class MatMul(Emitter):
         return [(dtype, self._shapes(node)[3])]
 
     def body(self, node: Node, params: Params) -> list[str]:
+        return self._product(node, params.x[0], params.x[1], params.y[0], "=")
+
+    def tangent(self, node: Node, params: TangentParams) -> list[str] | None:
+        """dY = dA B + A dB."""
+        (x_a, x_b), (d_a, d_b), dy = params.x, params.dx, params.dy[0]
+        lines = self._product(node, d_a, x_b, dy, "=") if d_a is not None else []
+        if d_b is not None:  # in a block of its own: each product may declare its batch offset tables
+            second = self._product(node, x_a, d_b, dy, "+=" if lines else "=")
+            lines += ["{", *("    " + line for line in second), "}"] if lines else second
+        return lines
+
+    def _product(self, node: Node, x_a: str, x_b: str, y: str, assign: str) -> list[str]:
+        """`y assign A B` (assign "=" or "+=")."""
         a2, b2, batch, _ = self._shapes(node)
         m, k, n = a2[-2], a2[-1], b2[-1]
         dtype = node.input(0).dtype
-        x_a, x_b, y = params.x[0], params.x[1], params.y[0]
         offsets_a = self._batch_offsets(a2, batch, m * k)
         offsets_b = self._batch_offsets(b2, batch, k * n)
         lines: list[str] = []
@@ -129,7 +163,7 @@ class MatMul(Emitter):
             f"        for (int j = 0; j < {k}; ++j) {{",
             f"            acc += {x_a}[{a_base}{k} * r + j] * {x_b}[{b_base}{n} * j + c];",
             "        }",
-            f"        {y}[{y_base}{n} * r + c] = acc;",
+            f"        {y}[{y_base}{n} * r + c] {assign} acc;",
             "    }",
             "}",
         ]

@@ -1,4 +1,5 @@
-"""Data movement: reshapes (copies), Transpose, Concat, Slice and Gather on constant indices."""
+"""Data movement: reshapes (copies), Transpose, Concat, Slice and Gather on constant indices; all linear, so each
+one's tangent is itself applied to the tangents."""
 
 from __future__ import annotations
 
@@ -6,11 +7,11 @@ import math
 
 import numpy as np
 
-from nnfmu.fmu.native.codegen.emitters.base import Emitter, Node, Params, TensorType
+from nnfmu.fmu.native.codegen.emitters.base import Linear, Node, Params, TensorType
 from nnfmu.fmu.native.codegen.emitters.loops import Access, contiguous_strides, loop_nest
 
 
-class Copy(Emitter):
+class Copy(Linear):
     """Operators that only change the shape (Identity, Reshape, Flatten, Squeeze, Unsqueeze): y = x elementwise."""
 
     def infer(self, node: Node) -> list[TensorType]:
@@ -103,7 +104,7 @@ class Unsqueeze(Copy):
         return tuple(1 if i in inserted else next(rest) for i in range(rank))
 
 
-class Transpose(Emitter):
+class Transpose(Linear):
     """Permute axes (reversed when `perm` is absent)."""
 
     def _perm(self, node: Node) -> list[int]:
@@ -125,7 +126,7 @@ class Transpose(Emitter):
         return loop_nest(node.outputs[0].shape, [access], lambda idx, out: f"{y}[{out}] = {x}[{idx[0]}];")
 
 
-class Concat(Emitter):
+class Concat(Linear):
     """Join inputs along `axis`, copying each block of each input into place."""
 
     def _axis(self, node: Node) -> int:
@@ -166,7 +167,7 @@ class Concat(Emitter):
         return [f"for (int o = 0; o < {outer}; ++o) {{", *lines, "}"]
 
 
-class Slice(Emitter):
+class Slice(Linear):
     """Slice with constant starts/ends/axes/steps (inputs since opset 10, attributes before)."""
 
     static_inputs = frozenset({1, 2, 3, 4})
@@ -200,7 +201,7 @@ class Slice(Emitter):
         return loop_nest(node.outputs[0].shape, [access], lambda idx, out: f"{y}[{out}] = {x}[{idx[0]}];")
 
 
-class Gather(Emitter):
+class Gather(Linear):
     """Gather along an axis with indices known when the C is generated."""
 
     static_inputs = frozenset({1})
@@ -240,7 +241,7 @@ class Gather(Emitter):
         ]
 
 
-EMITTERS: dict[str, Emitter] = {
+EMITTERS: dict[str, Linear] = {
     "Identity": Copy(),
     "Reshape": Reshape(),
     "Flatten": Flatten(),
