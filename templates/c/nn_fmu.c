@@ -207,7 +207,7 @@ static NNStatus evaluate(NNInstance *instance, const double *start, const double
             return NN_ERROR;
         }
     }
-    a = filter_coefficient(d->filter_cutoff, period);
+    a = d->samples_done == 0 ? 1.0 : filter_coefficient(d->filter_cutoff, period);
     for (i = 0; i < NN_N_OUTPUTS; i++) {
         double raw = instance->graph_out[nn_output_graph_index[i]];
         double target = d->output_gain * raw;
@@ -238,6 +238,7 @@ static NNStatus evaluate(NNInstance *instance, const double *start, const double
         extrapolating |= outside;
     }
     d->extrapolating = extrapolating;
+    d->filter_weight = a;
     memcpy(d->output, output, sizeof output);
     if (commit) {
         for (i = 0; i < NN_N_STATE; i++) d->state[i] = instance->graph_out[nn_state_graph_output[i]];
@@ -601,6 +602,7 @@ static int plausible_state(const NNInstance *instance, const NNModelData *s) {
     }
     else if (!isfinite(s->evaluated_at) || s->evaluated_at < 0.0 || s->evaluated_at > s->elapsed * (1.0 + 1e-12) ||
              !isfinite(s->alpha) || s->alpha < 0.0 || s->alpha > 1.0 || !isfinite(s->elapsed_carry) ||
+             !(s->filter_weight >= 0.0 && s->filter_weight <= 1.0) ||
              fabs(s->elapsed_carry) > 1e-9 * fmax(1.0, s->elapsed)) {
         wrong = "time";
     }
@@ -689,31 +691,11 @@ NNStatus nn_deserialize(const NNInstance *instance, const unsigned char *buffer,
  * inputs its latest sample's interval starts from (held, like the state). The output gain and filter scale it as they
  * scale the network's output (output_weight). docs/fmu.md, "Directional derivatives". */
 
-/* The graph state the outputs at the current communication point are computed from: the state the latest sample
- * was evaluated from (before initialisation ends: the state sample 0 starts from). The derivatives' one view of
- * "the current state". */
-static void current_graph_state(const NNInstance *instance, double *state) {
+/* d(output)/d(network output) of the latest evaluation: output_gain times the filter's weight of the new value
+ * (1 for sample 0, whose output is not filtered, and with the filter off), as the evaluation stored it. */
+static double output_weight(const NNInstance *instance) {
     const NNModelData *d = &instance->data;
-    memcpy(state, d->samples_done == 0 ? d->state : d->state_before, sizeof d->state);
-}
-
-/* d(output)/d(network output) of the latest sample: output_gain times the filter's weight of the new value (1 for
- * sample 0, whose output is not filtered, and with the filter off). A graph without a sample period filters with the
- * weight of the last step's size, which is not kept: refused (logged, naming `function`) while its filter is on. */
-static NNStatus output_weight(const NNInstance *instance, const char *function, double *weight) {
-    const NNModelData *d = &instance->data;
-    double a = 1.0;
-    if (d->samples_done > 1 && d->filter_cutoff > 0.0) {
-        if (!NN_HAS_SAMPLE_PERIOD) {
-            nn_log(instance, NN_ERROR, NN_LOG_ERROR, "%s: %s has no sample period and its output filter is on "
-                   "(filter_cutoff = %g Hz); derivatives are given with filter_cutoff = 0 only", function,
-                   NN_MODEL_IDENTIFIER, d->filter_cutoff);
-            return NN_ERROR;
-        }
-        a = filter_coefficient(d->filter_cutoff, NN_SAMPLE_PERIOD);
-    }
-    *weight = d->output_gain * a;
-    return NN_OK;
+    return d->output_gain * (d->samples_done == 0 ? 1.0 : d->filter_weight);
 }
 
 /* 1 if every unknown is a Real output and every known an input, else logs the first that is not and returns 0. */
@@ -763,10 +745,10 @@ NNStatus nn_directional_derivative(NNInstance *instance, const char *function, c
     size_t i;
     int j;
     if (!derivative_references(instance, function, unknowns, n_unknowns, knowns, n_knowns)) return NN_ERROR;
-    if (output_weight(instance, function, &weight) != NN_OK) return NN_ERROR;
+    weight = output_weight(instance);
     memset(instance->graph_in, 0, sizeof instance->graph_in);
     memset(in_dot, 0, sizeof in_dot);
-    current_graph_state(instance, state);
+    current_graph_state(d, state);
     for (j = 0; j < NN_N_INPUTS; j++) {
         instance->graph_in[nn_input_graph_index[j]] = d->input[j];
         if (NN_INTERPOLATES_INPUTS) {

@@ -52,6 +52,7 @@ typedef struct {
     int mode;                                 /* the NNMode the state was saved in */
     double filter_cutoff;                     /* [Hz], 0 = filter off */
     double output_gain;                       /* [1] */
+    double filter_weight;                     /* [1] the filter's weight of the latest evaluation's value */
     double start_time;                        /* [s] t_start: sample k falls at t_start + k*T */
     double time;                              /* [s] current communication point */
     double elapsed;                           /* [s] time since t_start, the sum of the step sizes */
