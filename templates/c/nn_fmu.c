@@ -3,9 +3,17 @@
  *
  * Time: sample k falls at t_start + k*T, k counted with an integer and compared with the time elapsed since t_start
  * (the sum of the step sizes), never with absolute time, so a large t_start loses no sample. doStep(t, h) evaluates,
- * in order, every sample with t < t_k <= t + h (within 1e-6*T); outputs hold the latest sample. Sample 0 is
- * evaluated when initialisation ends. A graph without a sample period (NN_HAS_SAMPLE_PERIOD 0) is evaluated once at
- * the end of every step. One doStep evaluates at most NN_MAX_SAMPLES_PER_STEP samples.
+ * in order, every sample with t < t_k <= t + h (within 1e-6*T); the graph state advances only at samples. Sample 0
+ * is evaluated when initialisation ends. A graph without a sample period (NN_HAS_SAMPLE_PERIOD 0) is evaluated once
+ * at the end of every step. One doStep evaluates at most NN_MAX_SAMPLES_PER_STEP samples.
+ *
+ * Between samples (a sampled FMU, any step h): a step that ends a fraction alpha of T after the latest sample k
+ * (0 < alpha < 1) evaluates the graph once more at its end, with the inputs set before the call and the graph state
+ * interpolated linearly between the state sample k was evaluated from and the state after it, (1-alpha) s_k +
+ * alpha s_{k+1}: a delay of n samples reads the input n*T ago from the history, filters, operators and rates follow
+ * the same way. Nothing advances but the output filter (over the time since the outputs were last evaluated), so
+ * at h = k*T the outputs are exactly those of the samples, and at any smaller h they follow the inputs at every
+ * communication point instead of holding the latest sample's (docs/fmu.md).
  *
  * Inputs: a sampled FMU (NN_INTERPOLATES_INPUTS 0) gives every sample of a step the inputs set before the call and
  * never evaluates its network when a variable is read. An interpolating FMU (a vehicle) sees each input as linear
@@ -167,12 +175,13 @@ static double filter_coefficient(double cutoff, double period) {
     return 1.0 - exp(-2.0 * NN_PI * cutoff * period);
 }
 
-/* Evaluate the next sample with the inputs `knot` (for an interpolating FMU: its interval starts at `start`) and
- * the current state. With `commit` the state, the sample counter and the envelope flags advance (a real sample; the
- * values before it are kept to evaluate it again); without it only outputs are refreshed (preview in Initialization
- * Mode). `warn` logs inputs that leave the training envelope. */
-static NNStatus evaluate(NNInstance *instance, const double *start, const double *knot, double period, int commit,
-                         int warn) {
+/* Evaluate the graph with the inputs `knot` (for an interpolating FMU: its interval starts at `start`) and the graph
+ * state `state`; the output filter runs over `period` seconds. With `commit` (`state` is then d->state) the state,
+ * the sample counter and the envelope flags advance (a real sample; the values before it are kept to evaluate it
+ * again); without it only outputs are refreshed (the preview in Initialization Mode, a communication point between
+ * samples). `warn` logs inputs that leave the training envelope. */
+static NNStatus evaluate(NNInstance *instance, const double *start, const double *knot, const double *state,
+                         double period, int commit, int warn) {
     NNModelData *d = &instance->data;
     const unsigned long long k = (unsigned long long)d->samples_done;
     double a;
@@ -185,7 +194,7 @@ static NNStatus evaluate(NNInstance *instance, const double *start, const double
     if (NN_INTERPOLATES_INPUTS) {
         for (i = 0; i < NN_N_INPUTS; i++) instance->graph_in[nn_input_start_graph_index[i]] = start[i];
     }
-    for (i = 0; i < NN_N_STATE; i++) instance->graph_in[nn_state_graph_input[i]] = d->state[i];
+    for (i = 0; i < NN_N_STATE; i++) instance->graph_in[nn_state_graph_input[i]] = state[i];
     if (nn_graph_run(instance->graph_in, instance->graph_out) != 0) {
         nn_log(instance, NN_ERROR, NN_LOG_ERROR, "the network failed to evaluate sample %llu", k);
         return NN_ERROR;
@@ -198,7 +207,7 @@ static NNStatus evaluate(NNInstance *instance, const double *start, const double
             return NN_ERROR;
         }
     }
-    a = filter_coefficient(d->filter_cutoff, period);
+    a = d->samples_done == 0 ? 1.0 : filter_coefficient(d->filter_cutoff, period);
     for (i = 0; i < NN_N_OUTPUTS; i++) {
         double raw = instance->graph_out[nn_output_graph_index[i]];
         double target = d->output_gain * raw;
@@ -229,11 +238,13 @@ static NNStatus evaluate(NNInstance *instance, const double *start, const double
         extrapolating |= outside;
     }
     d->extrapolating = extrapolating;
+    d->filter_weight = a;
     memcpy(d->output, output, sizeof output);
     if (commit) {
         for (i = 0; i < NN_N_STATE; i++) d->state[i] = instance->graph_out[nn_state_graph_output[i]];
         d->samples_done++;
         d->inputs_set = 0;
+        d->alpha = 0.0;
     }
     return NN_OK;
 }
@@ -242,7 +253,8 @@ static NNStatus evaluate(NNInstance *instance, const double *start, const double
 static NNStatus refresh_preview(NNInstance *instance) {
     NNStatus status;
     if (instance->mode != NN_INITIALIZATION || !instance->preview_stale) return NN_OK;
-    status = evaluate(instance, instance->data.input, instance->data.input, NN_SAMPLE_PERIOD, 0, 0);
+    status = evaluate(instance, instance->data.input, instance->data.input, instance->data.state, NN_SAMPLE_PERIOD, 0,
+                      0);
     if (status == NN_OK) instance->preview_stale = 0;
     return status;
 }
@@ -266,7 +278,7 @@ static NNStatus settle_latest_sample(NNInstance *instance) {
     memcpy(d->outside, d->outside_before, sizeof d->outside);
     memcpy(d->knot, d->knot_before, sizeof d->knot);
     d->samples_done--;
-    status = evaluate(instance, d->knot, d->input, NN_SAMPLE_PERIOD, 1, 1);
+    status = evaluate(instance, d->knot, d->input, d->state, NN_SAMPLE_PERIOD, 1, 1);
     if (status != NN_OK) instance->mode = NN_FAILED;
     return status;
 }
@@ -423,13 +435,15 @@ NNStatus nn_setup_experiment(NNInstance *instance, double start_time) {
 NNStatus nn_enter_initialization(NNInstance *instance, double start_time) {
     if (set_start_time(instance, "EnterInitializationMode", start_time) != NN_OK) return NN_ERROR;
     instance->data.elapsed = 0.0;
+    instance->data.elapsed_carry = 0.0;
     instance->mode = NN_INITIALIZATION;
     instance->preview_stale = 1;
     return NN_OK;
 }
 
 NNStatus nn_exit_initialization(NNInstance *instance) {
-    NNStatus status = evaluate(instance, instance->data.input, instance->data.input, NN_SAMPLE_PERIOD, 1, 1);
+    NNStatus status = evaluate(instance, instance->data.input, instance->data.input, instance->data.state,
+                               NN_SAMPLE_PERIOD, 1, 1);
     if (status != NN_OK) {
         instance->mode = NN_FAILED;
         return status;
@@ -437,6 +451,15 @@ NNStatus nn_exit_initialization(NNInstance *instance) {
     instance->mode = NN_STEPPING;
     nn_log(instance, NN_OK, NN_LOG_EVENTS, "initialised at t = %.17g s; sample 0 evaluated", instance->data.time);
     return NN_OK;
+}
+
+/* sum + step with Kahan's compensation (*carry holds what earlier sums lost), so that the elapsed time after n steps
+ * of h is n*h to the last bit or so: where a step ends between samples decides its outputs. */
+static double compensated_sum(double sum, double step, double *carry) {
+    const double y = step - *carry;
+    const double total = sum + y;
+    *carry = (total - sum) - y;
+    return total;
 }
 
 /* Number of samples due in a step that ends `elapsed_end` seconds after t_start. */
@@ -447,8 +470,9 @@ static uint64_t samples_due(const NNModelData *d, double elapsed_end) {
     return (uint64_t)(last + 1.0) - d->samples_done;
 }
 
-/* Evaluate the sample that ends the step `elapsed_end` after t_start with the inputs set before it (plus their
- * slopes over the time from the step's start, for an interpolating FMU). */
+/* Evaluate the `count` samples a step from `step_start` (elapsed time) reaches, with the inputs set before it (plus
+ * their slopes over the time from the step's start, for an interpolating FMU); each sample's output filter runs
+ * from the time the outputs were last evaluated. */
 static NNStatus step_samples(NNInstance *instance, uint64_t count, double step_start) {
     NNModelData *d = &instance->data;
     double knot[NN_INPUT_CAPACITY];
@@ -456,16 +480,43 @@ static NNStatus step_samples(NNInstance *instance, uint64_t count, double step_s
     uint64_t j;
     int i;
     for (j = 0; j < count && status == NN_OK; j++) {
-        const double ahead = sample_offset(d->samples_done) - step_start;
+        const double at = sample_offset(d->samples_done);
+        const double ahead = at - step_start;
         for (i = 0; i < NN_N_INPUTS; i++) knot[i] = d->input[i] + (NN_INTERPOLATES_INPUTS ? ahead * d->input_slope[i] : 0.0);
-        status = evaluate(instance, d->knot, knot, NN_SAMPLE_PERIOD, 1, 1);
+        status = evaluate(instance, d->knot, knot, d->state, at - d->evaluated_at, 1, 1);
+        d->evaluated_at = at;
     }
+    return status;
+}
+
+/* The graph state at the latest evaluation: before the first sample the initial state, at a sample the state it
+ * was evaluated from, between samples (1 - alpha) s_k + alpha s_{k+1}. */
+static void current_graph_state(const NNModelData *d, double *state) {
+    int i;
+    for (i = 0; i < NN_N_STATE; i++) {
+        state[i] = d->samples_done == 0 ? d->state[i] : (1.0 - d->alpha) * d->state_before[i] + d->alpha * d->state[i];
+    }
+}
+
+/* A step of a sampled FMU that ends between samples: outputs from the inputs set before it and the interpolated
+ * graph state at `elapsed_end`, the output filter run up to it; the graph state stays at the latest sample. */
+static NNStatus evaluate_between(NNInstance *instance, double elapsed_end) {
+    NNModelData *d = &instance->data;
+    double state[NN_STATE_CAPACITY];
+    const double alpha = (elapsed_end - sample_offset(d->samples_done - 1)) / NN_SAMPLE_PERIOD;
+    NNStatus status;
+    if (NN_INTERPOLATES_INPUTS || d->samples_done == 0 || !(alpha > NN_SAMPLE_TOLERANCE)) return NN_OK;
+    d->alpha = fmin(alpha, 1.0);
+    current_graph_state(d, state);
+    status = evaluate(instance, d->knot, d->input, state, elapsed_end - d->evaluated_at, 0, 0);
+    d->evaluated_at = elapsed_end;
     return status;
 }
 
 NNStatus nn_do_step(NNInstance *instance, double current_time, double step_size) {
     NNModelData *d = &instance->data;
     double elapsed_end;
+    double carry = d->elapsed_carry;
     NNStatus status = NN_OK;
     if (!isfinite(current_time) || !isfinite(step_size) || step_size < 0.0) {
         nn_log(instance, NN_ERROR, NN_LOG_ERROR, "DoStep(t = %g s, h = %g s) refused: t must be finite and h >= 0",
@@ -477,7 +528,7 @@ NNStatus nn_do_step(NNInstance *instance, double current_time, double step_size)
                "FMU's time %.17g s", current_time, d->time);
         return NN_ERROR;
     }
-    elapsed_end = d->elapsed + step_size;
+    elapsed_end = compensated_sum(d->elapsed, step_size, &carry);
     if (NN_HAS_SAMPLE_PERIOD) {
         uint64_t due = samples_due(d, elapsed_end);
         if (due > NN_MAX_SAMPLES_PER_STEP) {
@@ -488,8 +539,9 @@ NNStatus nn_do_step(NNInstance *instance, double current_time, double step_size)
         }
         status = settle_latest_sample(instance);
         if (status == NN_OK) status = step_samples(instance, due, d->elapsed);
+        if (status == NN_OK) status = evaluate_between(instance, elapsed_end);
     } else {
-        status = evaluate(instance, d->knot, d->input, step_size, 1, 1);
+        status = evaluate(instance, d->knot, d->input, d->state, step_size, 1, 1);
     }
     if (status != NN_OK) {
         instance->mode = NN_FAILED;
@@ -497,6 +549,7 @@ NNStatus nn_do_step(NNInstance *instance, double current_time, double step_size)
     }
     memset(d->input_slope, 0, sizeof d->input_slope);
     d->elapsed = elapsed_end;
+    d->elapsed_carry = carry;
     d->time = current_time + step_size;
     return NN_OK;
 }
@@ -545,6 +598,12 @@ static int plausible_state(const NNInstance *instance, const NNModelData *s) {
     if (!(s->mode & modes) || (s->mode & (s->mode - 1))) wrong = "mode";
     else if (!isfinite(s->time) || !isfinite(s->start_time) || !isfinite(s->elapsed) || s->elapsed < 0.0 ||
              fabs(s->time - (s->start_time + s->elapsed)) > NN_TIME_CONSISTENCY * fmax(1.0, fabs(s->time))) {
+        wrong = "time";
+    }
+    else if (!isfinite(s->evaluated_at) || s->evaluated_at < 0.0 || s->evaluated_at > s->elapsed * (1.0 + 1e-12) ||
+             !isfinite(s->alpha) || s->alpha < 0.0 || s->alpha > 1.0 || !isfinite(s->elapsed_carry) ||
+             !(s->filter_weight >= 0.0 && s->filter_weight <= 1.0) ||
+             fabs(s->elapsed_carry) > 1e-9 * fmax(1.0, s->elapsed)) {
         wrong = "time";
     }
     else if (!isfinite(s->filter_cutoff) || s->filter_cutoff < 0.0) wrong = "filter_cutoff";
@@ -632,31 +691,11 @@ NNStatus nn_deserialize(const NNInstance *instance, const unsigned char *buffer,
  * inputs its latest sample's interval starts from (held, like the state). The output gain and filter scale it as they
  * scale the network's output (output_weight). docs/fmu.md, "Directional derivatives". */
 
-/* The graph state the outputs at the current communication point are computed from: the state the latest sample
- * was evaluated from (before initialisation ends: the state sample 0 starts from). The derivatives' one view of
- * "the current state". */
-static void current_graph_state(const NNInstance *instance, double *state) {
+/* d(output)/d(network output) of the latest evaluation: output_gain times the filter's weight of the new value
+ * (1 for sample 0, whose output is not filtered, and with the filter off), as the evaluation stored it. */
+static double output_weight(const NNInstance *instance) {
     const NNModelData *d = &instance->data;
-    memcpy(state, d->samples_done == 0 ? d->state : d->state_before, sizeof d->state);
-}
-
-/* d(output)/d(network output) of the latest sample: output_gain times the filter's weight of the new value (1 for
- * sample 0, whose output is not filtered, and with the filter off). A graph without a sample period filters with the
- * weight of the last step's size, which is not kept: refused (logged, naming `function`) while its filter is on. */
-static NNStatus output_weight(const NNInstance *instance, const char *function, double *weight) {
-    const NNModelData *d = &instance->data;
-    double a = 1.0;
-    if (d->samples_done > 1 && d->filter_cutoff > 0.0) {
-        if (!NN_HAS_SAMPLE_PERIOD) {
-            nn_log(instance, NN_ERROR, NN_LOG_ERROR, "%s: %s has no sample period and its output filter is on "
-                   "(filter_cutoff = %g Hz); derivatives are given with filter_cutoff = 0 only", function,
-                   NN_MODEL_IDENTIFIER, d->filter_cutoff);
-            return NN_ERROR;
-        }
-        a = filter_coefficient(d->filter_cutoff, NN_SAMPLE_PERIOD);
-    }
-    *weight = d->output_gain * a;
-    return NN_OK;
+    return d->output_gain * (d->samples_done == 0 ? 1.0 : d->filter_weight);
 }
 
 /* 1 if every unknown is a Real output and every known an input, else logs the first that is not and returns 0. */
@@ -706,10 +745,10 @@ NNStatus nn_directional_derivative(NNInstance *instance, const char *function, c
     size_t i;
     int j;
     if (!derivative_references(instance, function, unknowns, n_unknowns, knowns, n_knowns)) return NN_ERROR;
-    if (output_weight(instance, function, &weight) != NN_OK) return NN_ERROR;
+    weight = output_weight(instance);
     memset(instance->graph_in, 0, sizeof instance->graph_in);
     memset(in_dot, 0, sizeof in_dot);
-    current_graph_state(instance, state);
+    current_graph_state(d, state);
     for (j = 0; j < NN_N_INPUTS; j++) {
         instance->graph_in[nn_input_graph_index[j]] = d->input[j];
         if (NN_INTERPOLATES_INPUTS) {

@@ -52,9 +52,13 @@ typedef struct {
     int mode;                                 /* the NNMode the state was saved in */
     double filter_cutoff;                     /* [Hz], 0 = filter off */
     double output_gain;                       /* [1] */
+    double filter_weight;                     /* [1] the filter's weight of the latest evaluation's value */
     double start_time;                        /* [s] t_start: sample k falls at t_start + k*T */
     double time;                              /* [s] current communication point */
     double elapsed;                           /* [s] time since t_start, the sum of the step sizes */
+    double elapsed_carry;                     /* [s] what summing the step sizes lost (Kahan) */
+    double evaluated_at;                      /* [s] elapsed time at which the outputs were last evaluated */
+    double alpha;                             /* [1] where in its sample period the latest evaluation fell (0: at it) */
     uint64_t samples_done;                    /* samples evaluated so far; the next one has index samples_done */
 } NNModelData;
 

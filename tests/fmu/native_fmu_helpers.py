@@ -150,7 +150,11 @@ class Reference:
         self.component = Component.from_onnx(self.model)
 
     def step(self, inputs: np.ndarray, state: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
-        """One evaluation: port inputs (n_in,) and state -> port outputs (n_out,) and next state."""
+        """One sample: port inputs (n_in,) and state -> port outputs (n_out,) and next state."""
+        return self.evaluate(inputs, state)
+
+    def evaluate(self, inputs: np.ndarray, state: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
+        """One evaluation of the graph (a sample, or a communication point between samples)."""
         feeds: dict[str, np.ndarray] = {}
         for node_input in self.session.get_inputs():
             shape = [d if isinstance(d, int) else 1 for d in node_input.shape]
@@ -170,27 +174,43 @@ class Reference:
     def simulate(self, inputs: np.ndarray, step: float, cutoff: float = 0.0, gain: float = 1.0) -> np.ndarray:
         """Outputs after each communication step when `inputs[n]` is set before step n (n = 0 at initialisation).
 
-        Returns shape (n_steps + 1, n_out): row 0 after initialisation, row n after doStep n.
+        Samples k T reached by a step are evaluated with the inputs set before it; a step ending a fraction alpha of
+        T after the latest sample evaluates the graph once more with the state interpolated between the state that
+        sample was evaluated from and the state after it (docs/fmu.md). The output filter runs over the time since
+        the outputs were last evaluated. Returns shape (n_steps + 1, n_out): row 0 after initialisation, row n after
+        doStep n.
         """
         period = self.component.sample_period
+
+        def filtered(y: np.ndarray, raw: np.ndarray, dt: float) -> np.ndarray:
+            a = 1.0 if cutoff <= 0 else 1.0 - np.exp(-2 * np.pi * cutoff * dt)
+            return y + a * (gain * raw - y)
+
         state = np.array(self.component.states[0].initial) if self.component.states else None
-        raw, state = self.step(inputs[0], state)
+        raw, after = self.step(inputs[0], state)
+        before, state = state, after
         y = gain * raw
         rows = [y.copy()]
-        k = 1
+        k, evaluated_at = 1, 0.0
         for n in range(1, len(inputs)):
             t, end = (n - 1) * step, n * step
             if period is None:
                 raw, state = self.step(inputs[n], state)
-                a = 1.0 if cutoff <= 0 else 1.0 - np.exp(-2 * np.pi * cutoff * step)
-                y = y + a * (gain * raw - y)
+                y = filtered(y, raw, step)
             else:
-                a = 1.0 if cutoff <= 0 else 1.0 - np.exp(-2 * np.pi * cutoff * period)
                 while k * period <= end + 1e-6 * period:
                     assert k * period > t - 1e-6 * period
-                    raw, state = self.step(inputs[n], state)
-                    y = y + a * (gain * raw - y)
+                    raw, after = self.step(inputs[n], state)
+                    before, state = state, after
+                    y = filtered(y, raw, k * period - evaluated_at)
+                    evaluated_at = k * period
                     k += 1
+                alpha = (end - (k - 1) * period) / period
+                if alpha > 1e-6:
+                    between = None if state is None else (1.0 - alpha) * before + alpha * state
+                    raw, _ = self.evaluate(inputs[n], between)
+                    y = filtered(y, raw, end - evaluated_at)
+                    evaluated_at = end
             rows.append(y.copy())
         return np.array(rows)
 

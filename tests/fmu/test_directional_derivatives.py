@@ -9,6 +9,7 @@ and for the refusals FMI asks for. Tiny random-weight networks exported like tra
 
 from __future__ import annotations
 
+import math
 import xml.etree.ElementTree as ET
 import zipfile
 from dataclasses import replace
@@ -91,13 +92,13 @@ def record(spec, n: int) -> np.ndarray:
     return np.column_stack([channels[c] for c in spec.channels])
 
 
-def run_to(slave, inputs: np.ndarray, gain: float = 1.0, cutoff: float = 0.0) -> None:
-    """Initialise with inputs[0], gain and filter cut-off [Hz], then one step of T per further row (inputs set before
+def run_to(slave, inputs: np.ndarray, gain: float = 1.0, cutoff: float = 0.0, h: float = T) -> None:
+    """Initialise with inputs[0], gain and filter cut-off [Hz], then one step of h per further row (inputs set before
     each step)."""
     slave.initialize(inputs[0], parameters={"output_gain": gain, "filter_cutoff": cutoff})
     for n in range(1, len(inputs)):
         slave.set_real(slave.inputs, inputs[n])
-        slave.do_step((n - 1) * T, T)
+        slave.do_step((n - 1) * h, h)
 
 
 def jacobian(slave) -> np.ndarray:
@@ -109,7 +110,7 @@ def jacobian(slave) -> np.ndarray:
     return np.array(columns).T
 
 
-def central_differences(slave, inputs: np.ndarray, eps: float = 1e-6) -> np.ndarray:
+def central_differences(slave, inputs: np.ndarray, eps: float = 1e-6, h: float = T) -> np.ndarray:
     """(outputs, inputs): the last step taken again from the FMU state before it with each input moved by ±eps."""
     n = len(inputs) - 1
     saved = slave.get_state()
@@ -121,13 +122,13 @@ def central_differences(slave, inputs: np.ndarray, eps: float = 1e-6) -> np.ndar
             moved[j] += sign * eps * max(1.0, abs(moved[j]))
             slave.set_state(saved)
             slave.set_real(slave.inputs, moved)
-            slave.do_step((n - 1) * T, T)
+            slave.do_step((n - 1) * h, h)
             sides.append((slave.outputs_now(), moved[j]))
         (up, x_up), (down, x_down) = sides
         columns.append((up - down) / (x_up - x_down))
     slave.set_state(saved)
     slave.set_real(slave.inputs, inputs[n])
-    slave.do_step((n - 1) * T, T)
+    slave.do_step((n - 1) * h, h)
     slave.free_state(saved)
     return np.array(columns).T
 
@@ -143,6 +144,22 @@ def test_derivatives_equal_central_differences_of_the_fmus_outputs(fmus, open_fm
     differences = central_differences(slave, inputs)
     derivatives = jacobian(slave)
     assert np.abs(derivatives).max() > 1.0  # the network is in its nonlinear range, not flat
+    np.testing.assert_allclose(derivatives, differences, rtol=1e-6, atol=1e-6 * np.abs(derivatives).max())
+
+
+@pytest.mark.parametrize("network, fmi", BUILDS)
+def test_between_samples_the_derivative_is_that_of_the_interpolated_evaluation(fmus, open_fmu, network, fmi):
+    """h = 0.3 T, the last step ending between samples without reaching one: the outputs there are the graph on the
+    inputs set before the step and the interpolated state, and the derivative is theirs (filter on, gain 1.7)."""
+    h = 0.3 * T
+    steps = next(n for n in range(N_STEPS, 0, -1) if math.floor((n - 1) * 0.3 + 1e-9) == math.floor(n * 0.3 - 1e-9))
+    spec = RICH if network == "rich" else FORCE
+    inputs = record(spec, steps + 1)
+    slave = open_fmu(fmus[(network, fmi)])
+    run_to(slave, inputs[:-1], gain=1.7, cutoff=100.0, h=h)
+    differences = central_differences(slave, inputs, h=h)
+    derivatives = jacobian(slave)
+    assert np.abs(derivatives).max() > 1.0
     np.testing.assert_allclose(derivatives, differences, rtol=1e-6, atol=1e-6 * np.abs(derivatives).max())
 
 

@@ -47,7 +47,11 @@ def test_libcosim_matches_fmpy_and_onnxruntime(filtered_fmus, open_fmu):
     inputs = np.column_stack([rng.uniform(-1.2, 1.2, 2_000), rng.uniform(-0.1, 0.1, 2_000)])
     cosim_rows, cosim_flags = run_in_libcosim(filtered_fmus[2], inputs)
     fmpy_rows = open_fmu(filtered_fmus[2]).simulate(inputs, STEP)[1:]
-    np.testing.assert_array_equal(cosim_rows, fmpy_rows)  # same binary, same calls: bit-identical
+    # Same binary, same calls; libcosim's step sizes are differences of its time points in doubles, fmpy's the one h,
+    # so the elapsed time can differ in the last bit, and a communication point between samples (every other one
+    # here) evaluates the graph at that fraction of the period: equal to rounding, 1e-10 of the peak at most.
+    peak = np.max(np.abs(fmpy_rows), axis=0)
+    assert np.all(np.max(np.abs(cosim_rows - fmpy_rows), axis=0) <= 1e-10 * peak)
     expected = Reference(delay_step_graph()).simulate(inputs, STEP, cutoff=100.0)[1:]
     np.testing.assert_allclose(cosim_rows, expected, rtol=1e-9, atol=1e-12)
     assert any(cosim_flags) and not all(cosim_flags)  # inputs beyond +-1 m/s raise the flag

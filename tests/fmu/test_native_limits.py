@@ -99,12 +99,12 @@ def _forged(blob: bytes, value: float, forged: float) -> bytes:
 )
 def test_a_forged_serialised_state_is_refused_naming_the_field(damper_fmus, open_fmu, fmi, field, forged, named):
     slave = open_fmu(damper_fmus[fmi])
-    slave.initialize([0.5], parameters={"output_gain": 1.2345})
+    slave.initialize([0.5], start=0.25, parameters={"output_gain": 1.2345})
     for n in range(37):
-        slave.do_step(n * 0.0173, 0.0173)  # t = 0.6401 s, a value no other field holds
+        slave.do_step(0.25 + n * 0.0173, 0.0173)  # t = 0.8901 s, a value no other field holds (elapsed: 0.6401 s)
     saved = slave.get_state()
     blob = bytes(slave.fmu.serializeFMUState(saved))
-    value = {"time": 36 * 0.0173 + 0.0173, "gain": 1.2345}[field]  # the FMU's time: the last point plus its step
+    value = {"time": 0.25 + 36 * 0.0173 + 0.0173, "gain": 1.2345}[field]  # the last point plus its step
     with pytest.raises(FMICallException):
         slave.fmu.deserializeFMUState(_forged(blob, value, forged))
     assert f"the state's {named} is not one this FMU can have" in _errors(slave)

@@ -34,12 +34,15 @@ STATE_FIELDS = (
     "outputs",
     "parameters",
     "graph_state",
+    "graph_state_before",
     "outside",
     "refused",
     "extrapolating",
     "t_start",
     "time",
     "sample",
+    "evaluated_at",
+    "elapsed",
 )
 _ORT_DTYPES = {"tensor(double)": np.float64, "tensor(float)": np.float32}  # graph input types the slave feeds
 
@@ -72,6 +75,14 @@ def _envelope(port: dict[str, Any]) -> tuple[float, float]:
     return lo, hi
 
 
+def _compensated_sum(total: float, carry: float, step: float) -> tuple[float, float]:
+    """total + step with Kahan's compensation: after n steps of h the sum is n h to the last bit or so, which decides
+    where between two samples a communication point falls."""
+    y = step - carry
+    new_total = total + y
+    return new_total, (new_total - total) - y
+
+
 def _static_shape(node_arg: Any) -> tuple[int, ...]:
     """Shape of a graph tensor with symbolic or unknown dimensions (a batch) taken as 1."""
     return tuple(d if isinstance(d, int) and d > 0 else 1 for d in node_arg.shape)
@@ -90,8 +101,9 @@ class _Tensor:
 
 
 class SampledComponent:
-    """One FMU instance's model data and behaviour: zero-order-hold outputs at the sample period, output low-pass
-    and gain, envelope flag, refused non-finite values, and a JSON-serialisable state."""
+    """One FMU instance's model data and behaviour: samples at the sample period, outputs between them from the
+    interpolated graph state, output low-pass and gain, envelope flag, refused non-finite values, and a
+    JSON-serialisable state."""
 
     def __init__(self, resources: Path, report: Report) -> None:
         """Load the graph and the variable table from `resources`; ValueError when they do not fit each other."""
@@ -116,12 +128,17 @@ class SampledComponent:
         self._outputs = [0.0] * len(self._out_ports)  # after gain and filter: what the FMU reports
         self._parameters = {v["name"]: float(v["start"]) for v in self.variables if v["causality"] == "parameter"}
         self._graph_state = {s["input"]: [float(v) for v in s["initial"]] for s in self._states}
+        self._graph_state_before = {k: list(v) for k, v in self._graph_state.items()}  # the latest sample's own
         self._outside = [False] * len(self._in_ports)
         self._refused: dict[str, str] = {}  # variable name -> why its last value was refused
         self._extrapolating = False
         self._t_start: float | None = None  # set by `start`, else by the first step
         self._time = 0.0
         self._sample = -1  # index of the latest evaluated sample; -1 before initialisation ends
+        self._evaluated_at = (
+            0.0  # [s] since the start, when the outputs were last evaluated (the filter runs from there)
+        )
+        self._elapsed = (0.0, 0.0)  # [s] the step sizes summed since the start, and what the sum lost (Kahan)
         self._preview: tuple[list[float], bool] | None = None  # sample 0 from the current values, until one changes
 
     def _check_tensors(self) -> None:
@@ -249,18 +266,29 @@ class SampledComponent:
                 )
                 return False
             while t_start + (self._sample + 1) * self._period <= end + REACHED * self._period:
-                self._evaluate(self._period, t_start + (self._sample + 1) * self._period)
+                offset = (self._sample + 1) * self._period  # times since the start: no rounding of large t_start
+                self._evaluate(offset - self._evaluated_at, t_start + offset)
+                self._evaluated_at = offset
+            self._elapsed = _compensated_sum(*self._elapsed, step_size)
+            alpha = (self._elapsed[0] - self._sample * self._period) / self._period
+            if alpha > REACHED:
+                self._evaluate_between(min(alpha, 1.0), self._elapsed[0] - self._evaluated_at)
+                self._evaluated_at = self._elapsed[0]
         self._time = end
         return True
 
     # ----- one sample ------------------------------------------------------------------------------------------------
-    def _run_graph(self) -> tuple[dict[str, list[float]], list[float]]:
-        """The graph's next state and raw outputs from the current inputs and state; nothing is changed."""
+    def _run_graph(
+        self, graph_state: dict[str, list[float]] | None = None
+    ) -> tuple[dict[str, list[float]], list[float]]:
+        """The graph's next state and raw outputs from the current inputs and `graph_state` (default: the current
+        one); nothing is changed."""
+        graph_state = self._graph_state if graph_state is None else graph_state
         feeds = {name: t.zeros() for name, t in self._tensors.items()}
         for port, value in zip(self._in_ports, self._inputs):
             feeds[port["tensor"]].reshape(-1)[port["index"]] = value
         for state in self._states:
-            feeds[state["input"]].reshape(-1)[:] = self._graph_state[state["input"]]
+            feeds[state["input"]].reshape(-1)[:] = graph_state[state["input"]]
         results = dict(zip(self._output_names, self._session.run(self._output_names, feeds)))
         graph_state = {s["input"]: [float(v) for v in np.ravel(results[s["output"]])] for s in self._states}
         raw = [float(np.ravel(results[p["tensor"]])[p["index"]]) for p in self._out_ports]
@@ -279,17 +307,31 @@ class SampledComponent:
         return self._preview
 
     def _evaluate(self, period: float, t_sample: float) -> None:
-        """Run the graph for the next sample, advance its state, filter the outputs and check the envelope."""
+        """Run the graph for the next sample, advance its state, filter the outputs (over `period` seconds) and
+        check the envelope."""
+        self._graph_state_before = self._graph_state
         self._graph_state, self._raw = self._run_graph()
         self._sample += 1
-        self._filter(period)
+        self._filter(period, first=self._sample == 0)
         self._check_envelope(t_sample)
 
-    def _filter(self, period: float) -> None:
-        """First-order low-pass of the gained outputs: y_k = y_{k-1} + a (g u_k - y_{k-1}), y_0 = g u_0."""
+    def _evaluate_between(self, alpha: float, period: float) -> None:
+        """Outputs at a communication point a fraction `alpha` of the period after the latest sample: the graph on
+        the current inputs and the state interpolated between the latest sample's own and the one after it; only
+        the output filter (over `period` seconds) advances (docs/fmu.md)."""
+        between = {
+            name: [(1.0 - alpha) * b + alpha * a for b, a in zip(self._graph_state_before[name], after)]
+            for name, after in self._graph_state.items()
+        }
+        _, self._raw = self._run_graph(between)
+        self._filter(period)
+
+    def _filter(self, period: float, first: bool = False) -> None:
+        """First-order low-pass of the gained outputs over `period` seconds: y = y + a (g u - y), y_0 = g u_0 at the
+        `first` sample."""
         gain, cutoff = self._parameters["output_gain"], self._parameters["filter_cutoff"]
         gained = [gain * u for u in self._raw]
-        if self._sample == 0 or cutoff == 0.0:
+        if first or cutoff == 0.0:
             self._outputs[:] = gained
             return
         a = 1.0 - math.exp(-2.0 * math.pi * cutoff * period)
@@ -319,12 +361,15 @@ class SampledComponent:
             "outputs": list(self._outputs),
             "parameters": dict(self._parameters),
             "graph_state": {k: list(v) for k, v in self._graph_state.items()},
+            "graph_state_before": {k: list(v) for k, v in self._graph_state_before.items()},
             "outside": list(self._outside),
             "refused": dict(self._refused),
             "extrapolating": self._extrapolating,
             "t_start": self._t_start,
             "time": self._time,
             "sample": self._sample,
+            "evaluated_at": self._evaluated_at,
+            "elapsed": list(self._elapsed),
         }
 
     def restore(self, state: dict[str, Any]) -> None:
@@ -344,12 +389,15 @@ class SampledComponent:
         self._outputs[:] = state["outputs"]
         self._parameters = {k: float(v) for k, v in state["parameters"].items()}
         self._graph_state = {k: list(v) for k, v in state["graph_state"].items()}
+        self._graph_state_before = {k: list(v) for k, v in state["graph_state_before"].items()}
         self._outside[:] = state["outside"]
         self._refused = dict(state["refused"])
         self._extrapolating = bool(state["extrapolating"])
         self._t_start = None if state["t_start"] is None else float(state["t_start"])
         self._time = float(state["time"])
         self._sample = int(state["sample"])
+        self._evaluated_at = float(state["evaluated_at"])
+        self._elapsed = (float(state["elapsed"][0]), float(state["elapsed"][1]))
         self._preview = None
 
     def _check_state(self, state: Any) -> None:
@@ -383,6 +431,7 @@ class SampledComponent:
         for key, expected in (
             ("parameters", {k: 1 for k in self._parameters}),
             ("graph_state", {k: len(v) for k, v in self._graph_state.items()}),
+            ("graph_state_before", {k: len(v) for k, v in self._graph_state.items()}),
         ):
             given = state[key]
             if not isinstance(given, dict) or set(given) != set(expected):
@@ -391,7 +440,7 @@ class SampledComponent:
                     f"{sorted(expected)}"
                 )
             for name, value in given.items():
-                values = value if key == "graph_state" else [value]
+                values = value if key.startswith("graph_state") else [value]
                 if not isinstance(values, list) or len(values) != expected[name] or not all(map(_finite, values)):
                     refuse(f"{key!r}: {name!r} is {value!r}")
         if not isinstance(state["refused"], dict) or not all(isinstance(v, str) for v in state["refused"].values()):
@@ -400,8 +449,12 @@ class SampledComponent:
             refuse(f"'extrapolating' is {state['extrapolating']!r}")
         if state["t_start"] is not None and not _finite(state["t_start"]):
             refuse(f"'t_start' is {state['t_start']!r}")
-        if not _finite(state["time"]):
-            refuse(f"'time' is {state['time']!r}")
+        for key in ("time", "evaluated_at"):
+            if not _finite(state[key]):
+                refuse(f"{key!r} is {state[key]!r}")
+        elapsed = state["elapsed"]
+        if not isinstance(elapsed, list) or len(elapsed) != 2 or not all(map(_finite, elapsed)):
+            refuse(f"'elapsed' is {elapsed!r}")
         sample = state["sample"]
         if isinstance(sample, bool) or not isinstance(sample, int) or sample < -1:
             refuse(f"'sample' is {sample!r}")
