@@ -653,7 +653,9 @@ def loop_vehicle(
     out: Path = typer.Option(..., "--out", "-o", help="Folder for report.json, report.html, the fixed system."),
     max_effects: int = typer.Option(3, help="Most (component, effect) pairs and sensor offsets to name."),
     model: Optional[list[str]] = typer.Option(
-        None, help="ELEMENT=ONNX: an element's step graph (default: <fmu stem>.onnx beside its FMU); repeat."
+        None,
+        help="ELEMENT=ONNX: an element's step graph (default: the one its FMU carries; a given one must be the same "
+        "network, checked by digest, unless the FMU records none); repeat.",
     ),
 ) -> None:
     """`nnfmu loop vehicle`: which component and which effect explain the lab car's difference from the virtual
@@ -683,6 +685,8 @@ def loop_vehicle(
             f"{after.mean_shift:.4g}"
         )
     typer.echo(f"system: {report.fixed_system}\nreport: {out / 'report.html'}")
+    for line in report.untested:
+        typer.echo(f"warning: {line}")
 
 
 @data_app.command("check")
