@@ -167,3 +167,11 @@ def check_same_graph(onnx_path: Path, record: StepGraphRecord, fmu: Path) -> Non
             f"{onnx_path} is not the network {fmu} was built from (graph sha256 {found[:12]}…, the FMU's "
             f"{record.graph_sha256[:12]}…)"
         )
+
+
+def load_fmu_graph(fmu: Path) -> onnx.ModelProto:
+    """The checked step graph the FMU at `fmu` carries; StepGraphError naming the FMU when it records none."""
+    found = read_fmu_graph(fmu)
+    if found is None:
+        raise StepGraphError(f"{fmu}: the FMU records no step graph (another tool's or an older nnfmu's); rebuild it")
+    return onnx.load_from_string(found[0])

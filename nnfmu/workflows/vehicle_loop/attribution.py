@@ -12,9 +12,19 @@ standard deviation, so every channel counts in fractions of its own signal) is t
 columns, all channels stacked, out of sample: the record's blocks are halved at random (`fold_mask`), each half
 predicted by the fit on the other. The test is the component diagnosis's (Diebold-Mariano on the held-out squared
 errors, summed over channels at each instant, with the Newey-West long-run variance), Bonferroni over the
-candidates. Forward selection: the candidate explaining most, if significant and above `min_explained`, is named;
-the rest are tested again beyond it. A sensor offset and a gas preload both shift their load cell; only the preload
-also lifts the corner (displacement, LCA angle), so the two part here.
+candidates. Forward selection: of the candidates significant and above `min_explained`, the one lowering an
+information criterion most is named (its held-out gain against ln(n_eff) per fitted parameter, `_delta_bic`: a
+gas force's two coefficients are charged twice an offset's one); the rest are tested again beyond it. A sensor
+offset and a gas preload both shift their load cell; only the preload also lifts the corner (displacement, LCA
+angle), so the two part here.
+
+One physical cause before several offsets: when two or more sensor offsets were named, each physical candidate left
+out is tried in their place (the named physical candidates and it, then those offsets still significant beyond
+them, by the same forward rule). The two stories are compared by an information criterion charging each fitted
+parameter, BIC = n_eff ln(SSE / n_eff) + k ln(n_eff) (SSE of the held-out errors of all channels, n_eff the
+residual's effective sample count, k the fitted coefficients: one per offset, two for a gas force); the lower wins,
+so two offsets that happen to satisfy the car's static balance give way to the one gas force that explains both.
+Every named candidate carries `why`: the rivals it beat in its round and by how much, or the comparison of stories.
 """
 
 from __future__ import annotations
@@ -105,6 +115,7 @@ class Evidence:
     channels: dict[str, float]
     named: bool
     alike: tuple[str, ...] = ()
+    why: str = ""
 
     def to_dict(self) -> dict[str, object]:
         return {
@@ -123,6 +134,7 @@ class Evidence:
             "channels_explained": self.channels,
             "named": self.named,
             "cannot_tell_apart_from": list(self.alike),
+            "why": self.why,
         }
 
 
@@ -179,21 +191,14 @@ def attribute(
     fold = np.tile(fold_mask(n, blocks), residual.shape[1])
     designs = {key: _stack(columns) for key, columns in sensitivities.items()}
     threshold = alpha / max(len(designs), 1)
-    base = np.zeros((len(target), 0))
-    alone = {key: _gain(target, base, d, fold, n) for key, d in designs.items()}
-    named: list[str] = []
-    tests: dict[str, tuple[float, ...]] = {}
-    remaining = list(designs)
-    while remaining and len(named) < max_named:
-        tests |= {key: _gain(target, base, designs[key], fold, n) for key in remaining}
-        good = [k for k in remaining if tests[k][1] < threshold and tests[k][0] >= min_explained]
-        if not good:
-            break
-        best = max(good, key=lambda k: tests[k][0])
-        named.append(best)
-        remaining.remove(best)
-        base = extend_base(base, designs[best])
-    tests |= {key: _gain(target, base, designs[key], fold, n) for key in remaining if key not in tests}
+    selection = Selection(target, designs, fold, n, threshold, min_explained, max_named)
+    alone = {key: selection.gain([], key) for key in designs}
+    why: dict[str, str] = {}
+    named, tests = selection.select([], list(designs), why)
+    named, replaced = one_cause(named, candidates, selection, why)
+    if replaced:
+        tests = {key: selection.gain([k for k in named if k != key], key) for key in designs}
+    remaining = [k for k in designs if k not in named]
     evidence = []
     for key in named + sorted(remaining, key=lambda k: -alone[k][0]):
         coefficients = _coefficients(target, designs, named, key)
@@ -210,9 +215,120 @@ def attribute(
                 channels=per_channel,
                 named=key in named,
                 alike=_alike(key, named, designs, alone, coefficients) if key in named else (),
+                why=why.get(key, "") if key in named else "",
             )
         )
     return Attribution(evidence, threshold, dict(untestable or {}))
+
+
+def _design(designs: Mapping[str, np.ndarray], keys: list[str], rows: int) -> np.ndarray:
+    """The named candidates' columns side by side, rescaled as forward selection builds them."""
+    base = np.zeros((rows, 0))
+    for key in keys:
+        base = extend_base(base, designs[key])
+    return base
+
+
+@dataclass(frozen=True)
+class Selection:
+    """The stacked residual `target` (n instants x channels), each candidate's design, the folds and the rules of
+    forward selection."""
+
+    target: np.ndarray
+    designs: Mapping[str, np.ndarray]
+    fold: np.ndarray
+    n: int
+    threshold: float
+    min_explained: float
+    max_named: int
+
+    def gain(self, named: list[str], key: str) -> tuple[float, ...]:
+        """(explained, p-value, effective samples) of `key` beyond `named`, held out."""
+        base = _design(self.designs, named, len(self.target))
+        return _gain(self.target, base, self.designs[key], self.fold, self.n)
+
+    def select(
+        self, start: list[str], pool: list[str], why: dict[str, str] | None = None
+    ) -> tuple[list[str], dict[str, tuple[float, ...]]]:
+        """Forward selection from `start` over `pool`: the named keys and the last tests of every key tested (each
+        named one's in the round it was named); with `why`, each named key's reason."""
+        chosen, tests = list(start), {}
+        base = _design(self.designs, chosen, len(self.target))
+        remaining = [k for k in pool if k not in chosen]
+        while remaining and len(chosen) < self.max_named:
+            tests |= {k: _gain(self.target, base, self.designs[k], self.fold, self.n) for k in remaining}
+            good = [k for k in remaining if tests[k][1] < self.threshold and tests[k][0] >= self.min_explained]
+            if not good:
+                break
+            best = min(good, key=lambda k: _delta_bic(tests[k], self.designs[k].shape[1]))
+            if why is not None:
+                why[best] = _beaten(best, remaining, tests, good)
+            chosen.append(best)
+            remaining.remove(best)
+            base = extend_base(base, self.designs[best])
+        tests |= {k: _gain(self.target, base, self.designs[k], self.fold, self.n) for k in remaining if k not in tests}
+        return chosen, tests
+
+    def bic(self, keys: list[str]) -> float:
+        """BIC of the story `keys` (module docstring): held-out SSE of all channels, the residual's effective sample
+        count, one charge per fitted coefficient."""
+        errors = cross_fit_errors(self.target, _design(self.designs, keys, len(self.target)), self.fold)
+        d = (errors**2).reshape(-1, self.n).sum(axis=0)  # per instant, over channels
+        long_run, _ = newey_west_variance(d)
+        variance = max(long_run, float(np.var(d)))
+        n_eff = max(self.n * float(np.var(d)) / variance if variance > 0 else float(self.n), 2.0)
+        sse = max(float(np.sum(errors**2)), 1e-300)
+        parameters = sum(self.designs[k].shape[1] for k in keys)
+        return n_eff * float(np.log(sse / n_eff)) + parameters * float(np.log(n_eff))
+
+
+def _delta_bic(test: tuple[float, ...], parameters: int) -> float:
+    """The change of BIC when a candidate is named: its held-out gain (explained share, over its effective sample
+    count) against a charge of ln(n_eff) per fitted parameter; lower is better."""
+    explained, _, n_eff = test[0], test[1], max(test[2], 2.0)
+    return n_eff * float(np.log(max(1.0 - explained, 1e-12))) + parameters * float(np.log(n_eff))
+
+
+def _beaten(best: str, remaining: list[str], tests: Mapping[str, tuple[float, ...]], good: list[str]) -> str:
+    """Why `best` was named in its round: what it explained beyond those named before and its BIC change, against
+    its closest rivals."""
+    rivals = sorted((k for k in remaining if k != best), key=lambda k: -tests[k][0])[:2]
+    words = f"explained {tests[best][0]:.1%} beyond those named before"
+    if not rivals:
+        return words + "; no rival left"
+    listed = ", ".join(f"{k} {tests[k][0]:.1%}" + ("" if k in good else " (not significant)") for k in rivals)
+    return f"{words}, the largest drop of BIC (each fitted parameter charged) against its closest rivals ({listed})"
+
+
+def one_cause(
+    named: list[str], candidates: Mapping[str, Candidate], selection: Selection, why: dict[str, str]
+) -> tuple[list[str], bool]:
+    """Try each physical candidate left out in place of two or more named sensor offsets (module docstring): the
+    story with the lower BIC, and whether it changed; the winner's reason goes into `why`."""
+    offsets = [k for k in named if candidates[k].effect == SENSOR_OFFSET]
+    if len(offsets) < 2:
+        return named, False
+    physical = [k for k in named if k not in offsets]
+    before = selection.bic(named)
+    best, best_bic = named, before
+    for key in selection.designs:
+        if key in named or candidates[key].effect == SENSOR_OFFSET:
+            continue
+        story, _ = selection.select([*physical, key], [*physical, key, *offsets])
+        if len([k for k in story if k in offsets]) > len(offsets) - 2:
+            continue
+        score = selection.bic(story)
+        if score < best_bic:
+            best, best_bic = story, score
+    if best is named:
+        return named, False
+    dropped = [k for k in offsets if k not in best]
+    cause = next(k for k in best if k not in named)
+    why[cause] = (
+        f"one physical cause before several offsets: {cause} explains what {' and '.join(dropped)} explained "
+        f"separately, with fewer fitted parameters (BIC {best_bic:.1f} against {before:.1f}; lower wins)"
+    )
+    return best, True
 
 
 def _coefficients(target: np.ndarray, designs: Mapping[str, np.ndarray], named: list[str], key: str) -> dict:

@@ -90,6 +90,7 @@ class VehicleLoopReport:
                     "component": e.candidate.component,
                     "effect": e.candidate.effect,
                     "evidence": words,
+                    "why": e.why,
                     "p_value": e.p_value,
                 }
             )
