@@ -404,8 +404,10 @@ def build(
 
 
 def _echo_reference_results(fmu: Path) -> None:
-    """Say whether the FMU carries reference results and how to check them."""
-    from nnfmu.workflows.fmu_build import has_reference_results
+    """Say where the FMU carries its step graph, whether it carries reference results and how to check them."""
+    from nnfmu.workflows.fmu_build import GRAPH_MEMBER, has_reference_results
+
+    typer.echo(f"step graph: {GRAPH_MEMBER} inside the FMU (read by nnfmu loop vehicle; verified by nnfmu check)")
 
     if has_reference_results(fmu):
         typer.echo(f"reference results: yes (FMI-LS-REF); verify with: nnfmu check {fmu}")
