@@ -82,6 +82,12 @@ def test_an_fmu_without_a_graph_takes_a_given_one_unverified_said_so(parts, tmp_
     assert car.onnx["damper"] == parts["folder"] / "other.onnx"
     (note,) = car.graph_notes
     assert "records no step graph" in note and "cannot be checked" in note
+    garbage = tmp_path / "garbage.onnx"
+    garbage.write_bytes(b"not an onnx file")
+    for fmu, where in ((parts["bare"], "b"), (parts["damper"], "c")):  # unverified or checked: a clear error
+        ssd = _system(parts, fmu, tmp_path / where)
+        with pytest.raises(VehicleLoopError, match=r"garbage\.onnx.*cannot read the ONNX model"):
+            read_virtual_car(ssd, tmp_path / "g", {"damper": garbage}, log=lambda _: None)
 
 
 def test_a_component_without_a_graph_is_reported_not_tested_naming_the_fix(parts, tmp_path: Path) -> None:

@@ -12,6 +12,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+import onnx
+
 from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd
 from nnfmu.fmu.step_graph import StepGraphError, check_same_graph, extract_fmu_graph
 from nnfmu.workflows.vehicle_binding import vehicle_binding
@@ -68,6 +70,14 @@ def read_virtual_car(
         )
 
 
+def _readable(element: str, path: Path) -> None:
+    """VehicleLoopError naming the element and file when `path` is no ONNX model."""
+    try:
+        onnx.load(str(path))
+    except Exception as err:  # onnx raises DecodeError, OSError or its own errors
+        raise VehicleLoopError(f"ONNX file of element {element!r} {path}: cannot read the ONNX model: {err}") from None
+
+
 def _step_graph(element: str, fmu: Path, given: Path | None, graphs: Path, notes: list[str]) -> Path | None:
     """The element's step graph: given (checked against the FMU's record where it has one), else the FMU's own,
     else an ONNX beside an FMU without a record; what cannot be verified or is ignored goes into `notes`."""
@@ -81,6 +91,7 @@ def _step_graph(element: str, fmu: Path, given: Path | None, graphs: Path, notes
     if record is None:
         found = given or (beside if beside.is_file() else None)
         if found is not None:
+            _readable(element, found)
             notes.append(
                 f"{element}: its FMU {fmu.name} records no step graph (another tool's or an older nnfmu's), so "
                 f"{found} cannot be checked to be its network; rebuild the FMU with nnfmu build to bind them"
