@@ -81,6 +81,15 @@ def test_attribution_names_the_cause_or_the_genuine_offset_and_says_why() -> Non
     found = attribute(residual, CHANNELS, columns, candidates, 20, 0.01, 0.005, 3)
     assert [e.candidate.key for e in found.named] == ["damper_force:sensor_offset"]
 
-    residual, candidates, columns = _problem((-0.8, 0.9, 0.0), {"damper:gas_force": pattern})  # both
+
+def test_a_cause_and_an_offset_the_channels_cannot_place_are_both_named_and_the_tie_is_said() -> None:
+    """Gas force and a load-cell offset at once: with one deflection channel the statics hold two numbers for three
+    knobs (preload, force offset, stroke offset), so after the gas force either offset completes the story; the
+    loop names the gas force and an offset, and says which offset it cannot tell from the other."""
+    residual, candidates, columns = _problem((-0.8, 1.3, 0.0), {"damper:gas_force": _columns((-0.8, 0.4, 0.0))})
     found = attribute(residual, CHANNELS, columns, candidates, 20, 0.01, 0.005, 3)
-    assert {e.candidate.key for e in found.named} == {"damper:gas_force", "damper_force:sensor_offset"}
+    named = [e.candidate.key for e in found.named]
+    assert "damper:gas_force" in named and len(named) == 2
+    (offset,) = [e for e in found.named if e.candidate.effect == "sensor_offset"]
+    other = ({"damper_force:sensor_offset", "damper_displacement:sensor_offset"} - {offset.candidate.key}).pop()
+    assert other in offset.alike  # in its place the other offset tells the same story

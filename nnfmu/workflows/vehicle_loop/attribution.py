@@ -20,10 +20,13 @@ angle), so the two part here.
 
 One physical cause before several offsets: when two or more sensor offsets were named, each physical candidate left
 out is tried in their place (the named physical candidates and it, then those offsets still significant beyond
-them, by the same forward rule). The two stories are compared by an information criterion charging each fitted
-parameter, BIC = n_eff ln(SSE / n_eff) + k ln(n_eff) (SSE of the held-out errors of all channels, n_eff the
-residual's effective sample count, k the fitted coefficients: one per offset, two for a gas force); the lower wins,
-so two offsets that happen to satisfy the car's static balance give way to the one gas force that explains both.
+them, by the same forward rule); a story that keeps as many offsets is not considered. The stories are compared by
+an information criterion charging each fitted parameter, BIC = n_eff ln(SSE / n_eff) + k ln(n_eff) (SSE of the
+held-out errors of all channels, n_eff the residual's effective sample count, k the fitted coefficients: one per
+offset, two for a gas force); the lower wins, a tie (within `BIC_TIE`) goes to the physical cause: two offsets that
+happen to satisfy the car's static balance give way to the one gas force that explains both, and where the channels
+cannot tell the stories apart (one deflection sensor: preload, load-cell and stroke offsets are three knobs for two
+static numbers) the report says so.
 Every named candidate carries `why`: the rivals it beat in its round and by how much, or the comparison of stories.
 """
 
@@ -41,6 +44,8 @@ from nnfmu.diagnosis.ranking import cross_fit_errors, extend_base, fold_mask
 from nnfmu.export.terms import OutputTerm
 
 SENSOR_OFFSET = "sensor_offset"
+BIC_TIE = 2.0  # stories whose BIC differ by less are a tie ("not worth more than a bare mention", Kass & Raftery
+# 1995): the one with fewer sensor offsets is named
 ALIKE = 0.9  # a rival explaining at least this share of what the named candidate explains, with predictions this
 # correlated, cannot be told apart from it by these channels
 
@@ -197,7 +202,7 @@ def attribute(
     named, tests = selection.select([], list(designs), why)
     named, replaced = one_cause(named, candidates, selection, why)
     if replaced:
-        tests = {key: selection.gain([k for k in named if k != key], key) for key in designs}
+        tests = {key: selection.gain(named[: named.index(key)] if key in named else named, key) for key in designs}
     remaining = [k for k in designs if k not in named]
     evidence = []
     for key in named + sorted(remaining, key=lambda k: -alone[k][0]):
@@ -214,7 +219,7 @@ def attribute(
                 coefficients=tuple(float(c) for c in coefficients[key]),
                 channels=per_channel,
                 named=key in named,
-                alike=_alike(key, named, designs, alone, coefficients) if key in named else (),
+                alike=_alike(key, named, selection, coefficients) if key in named else (),
                 why=why.get(key, "") if key in named else "",
             )
         )
@@ -303,30 +308,39 @@ def _beaten(best: str, remaining: list[str], tests: Mapping[str, tuple[float, ..
 def one_cause(
     named: list[str], candidates: Mapping[str, Candidate], selection: Selection, why: dict[str, str]
 ) -> tuple[list[str], bool]:
-    """Try each physical candidate left out in place of two or more named sensor offsets (module docstring): the
-    story with the lower BIC, and whether it changed; the winner's reason goes into `why`."""
+    """Try each physical candidate left out in place of the named sensor offsets when two or more were named
+    (module docstring): the story with the lower BIC, a story with fewer offsets winning ties (within `BIC_TIE`),
+    and whether it changed; the winner's reason goes into `why`."""
     offsets = [k for k in named if candidates[k].effect == SENSOR_OFFSET]
     if len(offsets) < 2:
         return named, False
     physical = [k for k in named if k not in offsets]
     before = selection.bic(named)
-    best, best_bic = named, before
+    best, best_bic, best_reasons = named, before + BIC_TIE, {}
     for key in selection.designs:
         if key in named or candidates[key].effect == SENSOR_OFFSET:
             continue
-        story, _ = selection.select([*physical, key], [*physical, key, *offsets])
-        if len([k for k in story if k in offsets]) > len(offsets) - 2:
+        reasons: dict[str, str] = {}
+        story, _ = selection.select([*physical, key], [*physical, key, *offsets], reasons)
+        if len([k for k in story if k in offsets]) >= len(offsets):
             continue
         score = selection.bic(story)
         if score < best_bic:
-            best, best_bic = story, score
+            best, best_bic, best_reasons = story, score, reasons
     if best is named:
         return named, False
+    why.update(best_reasons)  # the offsets kept, named beyond the cause
     dropped = [k for k in offsets if k not in best]
     cause = next(k for k in best if k not in named)
+    verdict = (
+        "lower wins"
+        if best_bic < before - BIC_TIE
+        else f"within {BIC_TIE:g} of each other, so these channels cannot tell the two stories apart and the "
+        "physical cause is preferred to offsets"
+    )
     why[cause] = (
         f"one physical cause before several offsets: {cause} explains what {' and '.join(dropped)} explained "
-        f"separately, with fewer fitted parameters (BIC {best_bic:.1f} against {before:.1f}; lower wins)"
+        f"(BIC {best_bic:.1f} against {before:.1f} for the offsets, each fitted parameter charged; {verdict})"
     )
     return best, True
 
@@ -351,20 +365,31 @@ def _per_channel(residual: np.ndarray, fitted: np.ndarray, channels: list[str]) 
     return {c: float(1 - a / b) if b > 0 else 0.0 for c, a, b in zip(channels, after, before)}
 
 
-def _alike(
-    key: str,
-    named: list[str],
-    designs: Mapping[str, np.ndarray],
-    alone: Mapping[str, tuple[float, ...]],
-    coefficients: Mapping[str, np.ndarray],
-) -> tuple[str, ...]:
-    """Candidates the channels cannot tell from `key`: explaining alone nearly as much, with nearly the same fit."""
-    mine = designs[key] @ coefficients[key]
+def _alike(key: str, named: list[str], selection: Selection, coefficients: Mapping[str, np.ndarray]) -> tuple[str, ...]:
+    """Candidates the channels cannot tell from `key`: beyond those named before it, explaining nearly as much with
+    nearly the same fit (both taken beyond the earlier named candidates' columns); or, put in its place in the named
+    story, leaving the story's BIC within `BIC_TIE` (three knobs for two static numbers)."""
+    before = named[: named.index(key)]
+    designs = selection.designs
+    base = _design(designs, before, len(selection.target))
+
+    def beyond(x: np.ndarray) -> np.ndarray:
+        return x - base @ np.linalg.lstsq(base, x, rcond=None)[0] if base.shape[1] else x
+
+    mine = beyond(designs[key] @ coefficients[key])
+    mine_gain = selection.gain(before, key)[0]
+    story = selection.bic(named)
     found = []
     for other, design in designs.items():
-        if other == key or other in named or alone[other][0] < ALIKE * alone[key][0]:
+        if other == key or other in named:
             continue
-        theirs = design @ np.linalg.lstsq(design, mine, rcond=None)[0]
+        if selection.bic([other if k == key else k for k in named]) <= story + BIC_TIE:
+            found.append(other)
+            continue
+        if selection.gain(before, other)[0] < ALIKE * mine_gain:
+            continue
+        own = beyond(design)
+        theirs = own @ np.linalg.lstsq(own, mine, rcond=None)[0]
         if np.dot(theirs, theirs) >= ALIKE**2 * np.dot(mine, mine):
             found.append(other)
     return tuple(found)
