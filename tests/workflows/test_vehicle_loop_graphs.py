@@ -3,13 +3,16 @@ another network beside the FMU ignored, loudly; an FMU without a graph reported 
 
 from __future__ import annotations
 
+import json
 import re
 import zipfile
 from pathlib import Path
 
 import onnx
 import pytest
+from typer.testing import CliRunner
 
+from nnfmu.cli import app
 from nnfmu.cosim.linear_damper import linear_damper_graph
 from nnfmu.data.drive_files import read_drive, write_drive
 from nnfmu.fmu.build import build_fmu
@@ -18,7 +21,7 @@ from nnfmu.fmu.step_graph import GRAPH_MEMBER, graph_digest
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.workflows.roadtest import build_vehicle, write_system
 from nnfmu.workflows.roadtest.lab_car import LabCar, write_lab_car
-from nnfmu.workflows.vehicle_loop import VehicleLoopError, VehicleLoopSettings, run_vehicle_loop
+from nnfmu.workflows.vehicle_loop import VehicleLoopError
 from nnfmu.workflows.vehicle_loop.system_files import read_virtual_car
 
 
@@ -94,9 +97,17 @@ def test_a_component_without_a_graph_is_reported_not_tested_naming_the_fix(parts
     ssd = _system(parts, parts["bare"], tmp_path / "a")
     drive = write_drive(generate_drive(DriveSettings(duration=4.001, seed=5)), tmp_path / "drive.csv")
     record = write_lab_car(LabCar(system="quarter-car"), read_drive(drive), tmp_path / "lab.csv")
-    report = run_vehicle_loop(record, ssd, drive, tmp_path / "out", VehicleLoopSettings(), log=lambda _: None)
-    assert report.summary.endswith("; NOT TESTED: damper (no step graph)")
-    (line,) = report.untested
+    out = tmp_path / "out"
+    result = CliRunner().invoke(
+        app, ["loop", "vehicle", str(record), "--system", str(ssd), "--drive", str(drive), "--out", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    written = json.loads((out / "report.json").read_text())
+    assert written["summary"].endswith("; NOT TESTED: damper (no step graph)")
+    assert written["summary"] in result.output
+    (line,) = written["untested_components"]
     assert line.startswith("damper: its effects are not tested: its FMU damper.fmu carries no step graph")
     assert "rebuild the FMU with nnfmu build" in line and "--model damper=ONNX" in line
-    assert "damper:gas_force" in report.attribution.untestable
+    assert result.output.strip().splitlines()[-1] == f"warning: {line}"  # the exit message says so last
+    assert "damper:gas_force" in written["untestable"]
+    assert "Not tested: damper" in (out / "report.html").read_text()
