@@ -53,8 +53,8 @@ def test_one_physical_cause_replaces_two_offsets_that_it_explains() -> None:
     offsets = ["damper_displacement:sensor_offset", "damper_force:sensor_offset"]
     story, replaced = one_cause(offsets, candidates, selection, why)
     assert replaced and story == ["damper:gas_force"]
-    assert why["damper:gas_force"].startswith("one physical cause before several offsets: damper:gas_force explains")
-    assert "damper_displacement:sensor_offset and damper_force:sensor_offset" in why["damper:gas_force"]
+    assert why["damper:gas_force"].startswith("physical causes before offsets: damper:gas_force first, then no offset")
+    assert "in place of damper_displacement:sensor_offset then damper_force:sensor_offset" in why["damper:gas_force"]
 
 
 def test_a_physical_cause_that_predicts_motion_nobody_measured_does_not_replace_offsets() -> None:

@@ -18,9 +18,11 @@ gas force's two coefficients are charged twice an offset's one); the rest are te
 offset and a gas preload both shift their load cell; only the preload also lifts the corner (displacement, LCA
 angle), so the two part here.
 
-One physical cause before several offsets: when two or more sensor offsets were named, each physical candidate left
-out is tried in their place (the named physical candidates and it, then those offsets still significant beyond
-them, by the same forward rule); a story that keeps as many offsets is not considered. The stories are compared by
+One physical cause before several offsets: when sensor offsets were named, stories with physical causes first are
+tried against the named one: each physical candidate left out in place of two or more named offsets (the named
+physical candidates and it, then those offsets still significant beyond them, by the same forward rule; it must
+keep fewer offsets), and the physical candidates selected first with every offset considered beyond them (no more
+offsets than named). The stories are compared by
 an information criterion charging each fitted parameter, BIC = n_eff ln(SSE / n_eff) + k ln(n_eff) (SSE of the
 held-out errors of all channels, n_eff the residual's effective sample count, k the fitted coefficients: one per
 offset, two for a gas force); the lower wins, a tie (within `BIC_TIE`) goes to the physical cause: two offsets that
@@ -308,40 +310,54 @@ def _beaten(best: str, remaining: list[str], tests: Mapping[str, tuple[float, ..
 def one_cause(
     named: list[str], candidates: Mapping[str, Candidate], selection: Selection, why: dict[str, str]
 ) -> tuple[list[str], bool]:
-    """Try each physical candidate left out in place of the named sensor offsets when two or more were named
-    (module docstring): the story with the lower BIC, a story with fewer offsets winning ties (within `BIC_TIE`),
-    and whether it changed; the winner's reason goes into `why`."""
-    offsets = [k for k in named if candidates[k].effect == SENSOR_OFFSET]
-    if len(offsets) < 2:
+    """Stories where physical causes come before offsets, against the named one when it holds offsets (module
+    docstring): each physical candidate left out in place of two or more named offsets (fewer offsets), and the
+    physical candidates selected first with the offsets beyond them (no more offsets). The lowest BIC wins, the
+    physical story winning ties (within `BIC_TIE`); returns the story and whether it changed, the winner's reason in
+    `why`."""
+    offset = {k for k in selection.designs if candidates[k].effect == SENSOR_OFFSET}
+    offsets = [k for k in named if k in offset]
+    if not offsets:
         return named, False
-    physical = [k for k in named if k not in offsets]
+    physical = [k for k in named if k not in offset]
+    stories: list[tuple[list[str], list[str], int]] = []  # start, pool, most offsets allowed
+    if len(offsets) >= 2:
+        stories += [
+            ([*physical, k], [*physical, k, *offsets], len(offsets) - 1)
+            for k in selection.designs
+            if k not in named and k not in offset
+        ]
+    first, _ = selection.select([], [k for k in selection.designs if k not in offset])
+    if first and first != physical:
+        stories.append((first, [*first, *sorted(offset)], len(offsets)))
     before = selection.bic(named)
     best, best_bic, best_reasons = named, before + BIC_TIE, {}
-    for key in selection.designs:
-        if key in named or candidates[key].effect == SENSOR_OFFSET:
-            continue
+    for start, pool, most in stories:
         reasons: dict[str, str] = {}
-        story, _ = selection.select([*physical, key], [*physical, key, *offsets], reasons)
-        if len([k for k in story if k in offsets]) >= len(offsets):
+        story, _ = selection.select(start, pool, reasons)
+        if len([k for k in story if k in offset]) > most:
             continue
         score = selection.bic(story)
         if score < best_bic:
             best, best_bic, best_reasons = story, score, reasons
     if best is named:
         return named, False
-    why.update(best_reasons)  # the offsets kept, named beyond the cause
-    dropped = [k for k in offsets if k not in best]
-    cause = next(k for k in best if k not in named)
+    why.update(best_reasons)  # the offsets kept, named beyond the causes
+    causes = [k for k in best if k not in offset]
+    kept = [k for k in best if k in offset]
     verdict = (
         "lower wins"
         if best_bic < before - BIC_TIE
         else f"within {BIC_TIE:g} of each other, so these channels cannot tell the two stories apart and the "
         "physical cause is preferred to offsets"
     )
-    why[cause] = (
-        f"one physical cause before several offsets: {cause} explains what {' and '.join(dropped)} explained "
-        f"(BIC {best_bic:.1f} against {before:.1f} for the offsets, each fitted parameter charged; {verdict})"
+    words = (
+        f"physical causes before offsets: {' and '.join(causes)} first, then "
+        + (" and ".join(kept) if kept else "no offset")
+        + f", in place of {' then '.join(named)}"
     )
+    for cause in causes:
+        why[cause] = f"{words} (BIC {best_bic:.1f} against {before:.1f}, each fitted parameter charged; {verdict})"
     return best, True
 
 
