@@ -416,8 +416,10 @@ def build(
 
 
 def _echo_reference_results(fmu: Path) -> None:
-    """Say whether the FMU carries reference results and how to check them."""
-    from nnfmu.workflows.fmu_build import has_reference_results
+    """Say where the FMU carries its step graph, whether it carries reference results and how to check them."""
+    from nnfmu.workflows.fmu_build import GRAPH_MEMBER, has_reference_results
+
+    typer.echo(f"step graph: {GRAPH_MEMBER} inside the FMU (read by nnfmu loop vehicle; verified by nnfmu check)")
 
     if has_reference_results(fmu):
         typer.echo(f"reference results: yes (FMI-LS-REF); verify with: nnfmu check {fmu}")
@@ -684,7 +686,9 @@ def loop_vehicle(
     out: Path = typer.Option(..., "--out", "-o", help="Folder for report.json, report.html, the fixed system."),
     max_effects: int = typer.Option(3, help="Most (component, effect) pairs and sensor offsets to name."),
     model: Optional[list[str]] = typer.Option(
-        None, help="ELEMENT=ONNX: an element's step graph (default: <fmu stem>.onnx beside its FMU); repeat."
+        None,
+        help="ELEMENT=ONNX: an element's step graph (default: the one its FMU carries; a given one must be the same "
+        "network, checked by digest, unless the FMU records none); repeat.",
     ),
 ) -> None:
     """`nnfmu loop vehicle`: which component and which effect explain the lab car's difference from the virtual
@@ -714,6 +718,8 @@ def loop_vehicle(
             f"{after.mean_shift:.4g}"
         )
     typer.echo(f"system: {report.fixed_system}\nreport: {out / 'report.html'}")
+    for line in report.untested:
+        typer.echo(f"warning: {line}")
 
 
 @data_app.command("check")

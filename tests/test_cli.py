@@ -60,8 +60,10 @@ def test_train_build_and_validate_chain(dyno: Path, tmp_path: Path) -> None:
     built = invoke("build", onnx_path, "--out", fmu)
     assert built.exit_code == 0, built.output
     assert fmu.exists() and "reference results: yes" in built.output
+    assert "step graph: extra/org.nnfmu/model.onnx inside the FMU" in built.output
     checked = invoke("check", fmu)  # the trained network's FMU replays its held-out test inputs
     assert checked.exit_code == 0 and "force: max error" in checked.output, checked.output
+    assert "step graph: extra/org.nnfmu/model.onnx (" in checked.output  # its graph, checked against its digest
     report = invoke("validate", dyno, dyno, "--channels", "force", "--out", tmp_path / "report")
     assert report.exit_code == 0, report.output
     assert "NRMSE 0" in report.output and (tmp_path / "report" / "index.html").exists()

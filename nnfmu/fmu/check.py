@@ -8,7 +8,8 @@ from attributes of `<Experiment>`; its parameters (SSV) become start values; its
 column of its references (CSV, first column time) is compared at the reference times. An output passes when
 max |simulated - reference| <= tolerance x its largest |reference| (tolerance alone for an all-zero reference);
 the tolerance is the experiment's, else `DEFAULT_TOLERANCE`, unless the caller gives one. Related files with a
-checksum must match it.
+checksum must match it. An FMU that records its step graph (`step_graph.py`) has the embedded graph checked against
+the sha256 its model description records.
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ from fmpy import read_model_description, simulate_fmu
 
 from nnfmu.errors import NnfmuError
 from nnfmu.fmu.reference_results import EXPERIMENTS_TYPE, LS_FOLDER, MANIFEST
+from nnfmu.fmu.step_graph import StepGraphError, read_fmu_graph
 from nnfmu.safe_zip import ArchiveError, check_members, extract_zip
 
 DEFAULT_TOLERANCE = 1e-6
@@ -81,11 +83,13 @@ class ExperimentResult:
 
 @dataclass
 class CheckReport:
-    """The whole check: checksum problems, experiments; passes when nothing failed and at least one ran."""
+    """The whole check: checksum problems, experiments, what the FMU's step graph record says; passes when nothing
+    failed and at least one experiment ran."""
 
     fmu: Path
     checksum_errors: list[str] = field(default_factory=list)
     experiments: list[ExperimentResult] = field(default_factory=list)
+    step_graph: str = ""
 
     @property
     def passed(self) -> bool:
@@ -340,7 +344,7 @@ def check_fmu(path: str | Path, tolerance: float | None = None) -> CheckReport:
     experiments, checksum_errors = read_experiments(archive)
     if not experiments:
         raise CheckError(f"{path}: {MANIFEST_PATH} lists no experiment")
-    report = CheckReport(path, checksum_errors)
+    report = CheckReport(path, checksum_errors, step_graph=_step_graph(path, checksum_errors))
     with tempfile.TemporaryDirectory(prefix="nnfmu-check-") as folder:
         extract_zip(path, Path(folder))  # its members were checked when it was read
         for experiment in experiments:
@@ -348,9 +352,23 @@ def check_fmu(path: str | Path, tolerance: float | None = None) -> CheckReport:
     return report
 
 
+def _step_graph(path: Path, checksum_errors: list[str]) -> str:
+    """What the FMU's step graph record says; an altered or missing graph is added to `checksum_errors`."""
+    try:
+        found = read_fmu_graph(path)
+    except StepGraphError as err:
+        checksum_errors.append(str(err))
+        return "altered or missing"
+    if found is None:
+        return "none recorded (an FMU of another tool or an older nnfmu)"
+    data, record = found
+    return f"{record.member} ({len(data)} bytes), sha256 as its model description records"
+
+
 def report_lines(report: CheckReport) -> list[str]:
-    """The report as the CLI prints it: one line per experiment and per output, then the verdict."""
-    lines = [f"checksum: {problem}" for problem in report.checksum_errors]
+    """The report as the CLI prints it: the step graph, one line per experiment and per output, then the verdict."""
+    lines = [f"step graph: {report.step_graph}"] if report.step_graph else []
+    lines += [f"checksum: {problem}" for problem in report.checksum_errors]
     for experiment in report.experiments:
         if experiment.skipped:
             lines.append(f"experiment {experiment.name!r}: skipped ({experiment.skipped})")

@@ -4,7 +4,9 @@ temporary folder, adds the reference results and zips the `.fmu` atomically.
 
 A backend is a function `(plan, tree) -> None` that writes only what differs between backends into the FMU folder
 `tree`: modelDescription.xml with its own instantiation token (the view comes from the plan), and its sources and
-compiled binaries (native) or its resources and runtime (pythonfmu). Every failure is an FmuBuildError naming the
+compiled binaries (native) or its resources and runtime (pythonfmu). The front half writes the graph with its
+component description at `extra/org.nnfmu/model.onnx` and the view carries its digests into the model description
+(`step_graph.py`), so every FMU nnfmu writes carries its own step graph. Every failure is an FmuBuildError naming the
 source (the ONNX file, or the in-memory graph); no `.fmu` is written then.
 """
 
@@ -24,6 +26,7 @@ from nnfmu.fmu.names import c_identifier
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.fmu.package import package_fmu
 from nnfmu.fmu.reference_results import write_reference_results
+from nnfmu.fmu.step_graph import EmbeddedGraph, embedded_graph, write_embedded_graph
 from nnfmu.fmu.variables import FmuVariables, fmu_variables
 
 
@@ -31,7 +34,7 @@ from nnfmu.fmu.variables import FmuVariables, fmu_variables
 class BuildPlan:
     """What every backend builds from: the graph (a private copy), its component, the options, where the graph came
     from (`source` names it in errors, `source_name` is the short form in generated comments), the model identifier,
-    the `.fmu` path and the FMU variables with their graph dependencies."""
+    the `.fmu` path, the FMU variables with their graph dependencies and the graph as the FMU carries it."""
 
     model: onnx.ModelProto
     component: Component
@@ -42,6 +45,7 @@ class BuildPlan:
     target: Path
     variables: FmuVariables
     dependencies: dict[str, set[str]]
+    graph: EmbeddedGraph
 
     @property
     def fmi_version(self) -> int:
@@ -54,7 +58,13 @@ class BuildPlan:
         its binaries provide directional derivatives."""
         identity = FmuIdentity(self.component.name, self.identifier, token, self.fmi_version)
         return ModelDescriptionView(
-            identity, self.component, self.variables, self.dependencies, list(source_files), directional_derivatives
+            identity,
+            self.component,
+            self.variables,
+            self.dependencies,
+            list(source_files),
+            directional_derivatives,
+            self.graph.record,
         )
 
 
@@ -107,14 +117,17 @@ def plan_build(
         target,
         fmu_variables(described),
         tensor_dependencies(private),
+        embedded_graph(private, described),
     )
 
 
 def assemble(plan: BuildPlan, backend: Backend) -> Path:
-    """Run `backend` on a temporary FMU folder, add the reference results and zip it to `plan.target`."""
+    """Run `backend` on a temporary FMU folder, add the step graph and the reference results and zip it to
+    `plan.target`."""
     with tempfile.TemporaryDirectory(prefix="nnfmu-build-") as tmp:
         tree = Path(tmp) / "fmu"
         tree.mkdir()
         backend(plan, tree)
+        write_embedded_graph(tree, plan.graph)
         write_reference_results(tree, plan.model, plan.component, plan.variables)
         return package_fmu(tree, plan.target)

@@ -23,6 +23,8 @@ import nnfmu
 from nnfmu.component import Component
 from nnfmu.fmu.names import xml_text
 from nnfmu.fmu.sampling import ANNOTATION_TOOL
+from nnfmu.fmu.step_graph import ANNOTATION_TOOL as STEP_GRAPH_TOOL
+from nnfmu.fmu.step_graph import StepGraphRecord
 from nnfmu.fmu.variables import FmuVariable, FmuVariables
 from nnfmu.resources import templates_dir
 
@@ -126,6 +128,7 @@ class ModelDescriptionView:
     dependencies: dict[str, set[str]]
     source_files: list[str] = field(default_factory=list)
     directional_derivatives: bool = False  # the binaries compute d(outputs)/d(inputs) (native, graph with tangents)
+    step_graph: StepGraphRecord | None = None
 
     @property
     def model_name(self) -> str:
@@ -154,6 +157,10 @@ class ModelDescriptionView:
     @property
     def annotation_tool(self) -> str:
         return ANNOTATION_TOOL
+
+    @property
+    def step_graph_tool(self) -> str:
+        return STEP_GRAPH_TOOL
 
     @cached_property
     def variables(self) -> list[FmuVariable]:

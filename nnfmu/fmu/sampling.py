@@ -23,11 +23,20 @@ class SamplingAnnotationError(FmuBuildError):
 def annotate_sample_period(root: ET.Element, period: float, fmi_version: int) -> None:
     """Add the sampling annotation to a model description's root element (the pythonfmu backend's writer; the
     native backend's templates write the same element)."""
-    if fmi_version == 2:
-        tool = ET.SubElement(ET.SubElement(root, "VendorAnnotations"), "Tool", name=ANNOTATION_TOOL)
-    else:
-        tool = ET.SubElement(ET.SubElement(root, "Annotations"), "Annotation", type=ANNOTATION_TOOL)
-    ET.SubElement(tool, "Sampling", period=repr(float(period)), unit="s")
+    ET.SubElement(tool_annotation(root, fmi_version, ANNOTATION_TOOL), "Sampling", period=repr(float(period)), unit="s")
+
+
+def tool_annotation(root: ET.Element, fmi_version: int, tool: str) -> ET.Element:
+    """A new tool element named `tool` in a model description's annotations (made where missing): FMI 2
+    `VendorAnnotations/Tool[@name]`, FMI 3 `Annotations/Annotation[@type]`. Each holds one element, as the FMI 2
+    schema allows."""
+    outer, inner, key = (
+        ("VendorAnnotations", "Tool", "name") if fmi_version == 2 else ("Annotations", "Annotation", "type")
+    )
+    annotations = root.find(outer)
+    if annotations is None:
+        annotations = ET.SubElement(root, outer)
+    return ET.SubElement(annotations, inner, {key: tool})
 
 
 def read_sample_period(model_description: Path) -> float | None:

@@ -7,9 +7,11 @@ from nnfmu.fmu.check import check_fmu, report_lines
 from nnfmu.fmu.errors import PlatformSkippedWarning
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.fmu.reference_results import has_reference_results
+from nnfmu.fmu.step_graph import GRAPH_MEMBER
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
 
 __all__ = [
+    "GRAPH_MEMBER",
     "BuildOptions",
     "PlatformSkippedWarning",
     "VehicleBuildSettings",

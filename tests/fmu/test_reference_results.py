@@ -26,9 +26,10 @@ from typer.testing import CliRunner
 from nnfmu.cli import app
 from nnfmu.export.merge import merge_step_graphs
 from nnfmu.fmu.build import build_fmu
-from nnfmu.fmu.check import CheckError, check_fmu
+from nnfmu.fmu.check import CheckError, check_fmu, report_lines
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.fmu.reference_results import LS_FOLDER, TOLERANCE
+from nnfmu.fmu.step_graph import GRAPH_MEMBER
 from nnfmu.reference_stimulus import METADATA_KEY, REFERENCE_SAMPLES, ReferenceStimulus
 
 runner = CliRunner()
@@ -203,6 +204,16 @@ def test_tampered_reference_file_fails_its_checksum(network, tmp_path):
     assert not report.passed and report.checksum_errors == [
         f"{LS_FOLDER}/stimuli.csv: SHA3-256 checksum does not match the manifest"
     ]
+
+
+def test_check_names_the_carried_step_graph_and_fails_when_it_was_swapped(network, tmp_path):
+    assert report_lines(check_fmu(network["fmi2"]))[0].startswith(f"step graph: {GRAPH_MEMBER} (")
+    other = export_network(TORQUE, tmp_path / "torque.onnx", 1).read_bytes()
+    swapped = _replace(network["fmi2"], {GRAPH_MEMBER: other}, tmp_path / "swapped.fmu")
+    report = check_fmu(swapped)
+    assert not report.passed
+    (problem,) = report.checksum_errors
+    assert f"swapped.fmu: {GRAPH_MEMBER} has sha256" in problem and "altered or replaced after the build" in problem
 
 
 @pytest.mark.parametrize(

@@ -106,3 +106,19 @@ def test_without_damper_channels_a_gas_force_is_named_on_its_damper_and_the_repo
     assert "no damper force measured" in coverage and "damper_fl_force, damper_fl_displacement not measured" in coverage
     assert "a zero offset of that corner's LCA angle or LVDT also gives" in coverage
     assert "no damper force measured" in html
+
+
+def test_a_gas_force_and_a_load_cell_offset_on_its_damper_are_both_named(truth_car, tmp_path: Path) -> None:
+    """Both at once on one corner: the LCA angle sees the corner's deflection beside the LVDT, so the gas preload is
+    the one cause of the corner's lift and of part of the load cell's shift, and the rest of that shift is the load
+    cell's own offset; each named candidate says why it beat its rivals."""
+    car = LabCar(damper_effects={"damper_fl": ("gas_force",)}, offsets={"damper_fl_force": 300.0})
+    report = loop(car, truth_car, tmp_path)
+    named = [(e.candidate.component, e.candidate.effect) for e in report.attribution.named]
+    assert named == [("damper_fl", "gas_force"), ("damper_fl_force", "sensor_offset")]
+    gas = report.attribution.named[0]
+    assert gas.coefficients[0] == pytest.approx(-DamperParams().gas_preload, rel=0.2)
+    assert report.offsets["damper_fl_force"] == pytest.approx(300.0, rel=0.1)
+    assert all("the largest drop of BIC" in e.why for e in report.attribution.named)
+    angle = report.channels["lca_fl_angle"]
+    assert abs(angle["after"].mean_shift) < abs(angle["before"].mean_shift) / 3

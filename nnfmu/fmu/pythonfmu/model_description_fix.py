@@ -17,6 +17,7 @@ from nnfmu.fmu.model_description import ModelDescriptionView
 from nnfmu.fmu.names import xml_text
 from nnfmu.fmu.pythonfmu.errors import PythonFmuBuildError
 from nnfmu.fmu.sampling import annotate_sample_period
+from nnfmu.fmu.step_graph import annotate_step_graph
 from nnfmu.fmu.variables import FmuVariable
 
 # the order of the elements of fmiModelDescription, per FMI version
@@ -80,6 +81,8 @@ def fix_model_description(root: ET.Element, fix: DescriptionFix) -> ET.Element:
     _add_default_experiment(root, fix.view.sample_period)
     if fix.view.sample_period is not None:
         annotate_sample_period(root, fix.view.sample_period, version)
+    if fix.view.step_graph is not None:
+        annotate_step_graph(root, fix.view.step_graph, version)
     _add_model_structure(root, fix.view)
     _sort_children(root, _ORDER[version])
     return root

@@ -29,6 +29,7 @@ from nnfmu.cosim.replay import replay_fmu
 from nnfmu.cosim.ssp import open_system
 from nnfmu.data import Measurement, save_measurement
 from nnfmu.data.drive_files import write_drive
+from nnfmu.fmu.step_graph import load_fmu_graph
 from nnfmu.validate import ChannelComparison, ValidationSettings, compare, write_report
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.workflows.roadtest.budget import BudgetRow, budget_rows
@@ -287,7 +288,7 @@ def _run_system(
     drive = _stretch(drive, run.duration)
     bushings = bool(bushing_elements(system))
     stabilisers = (
-        bushing_stabilisers(onnx.load(fmus.bushing.with_suffix(".onnx")), bushing_elements(system))
+        bushing_stabilisers(load_fmu_graph(fmus.bushing), bushing_elements(system))
         if bushings and fmus.bushing is not None
         else {}
     )
@@ -348,7 +349,7 @@ def _run_system(
             _excursions(
                 "reference",
                 bushing_elements(system),
-                Component.from_onnx(onnx.load(fmus.bushing.with_suffix(".onnx"))),
+                Component.from_onnx(load_fmu_graph(fmus.bushing)),
                 ref,
             )
         )

@@ -14,7 +14,6 @@ from the parameter file. The vehicle FMU samples at the communication step, so e
 
 from __future__ import annotations
 
-import shutil
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -90,14 +89,10 @@ class ComponentFmus:
 
 
 def build_component_fmus(models: Mapping[str, Path], out: Path, with_bushing: bool) -> ComponentFmus:
-    """Native FMUs of the damper networks (and the merged bushing when `with_bushing`) in `out`, each beside its
-    step graph (`<name>.onnx`), so that the systems built from them are ready for `nnfmu loop vehicle`."""
+    """Native FMUs of the damper networks (and the merged bushing when `with_bushing`) in `out`; each carries its
+    step graph (`nnfmu.fmu.step_graph`), so the systems built from them are ready for `nnfmu loop vehicle`."""
     out.mkdir(parents=True, exist_ok=True)
-    dampers = {}
-    for name in DAMPER_MODELS:
-        if Path(models[name]).resolve() != (out / f"{name}.onnx").resolve():
-            shutil.copyfile(models[name], out / f"{name}.onnx")
-        dampers[name] = build_fmu(out / f"{name}.onnx", BuildOptions(out=out / f"{name}.fmu"))
+    dampers = {name: build_fmu(Path(models[name]), BuildOptions(out=out / f"{name}.fmu")) for name in DAMPER_MODELS}
     bushing = None
     if with_bushing:
         merged = bushing_onnx(models, out / "lca-bushing.onnx")

@@ -12,9 +12,24 @@ standard deviation, so every channel counts in fractions of its own signal) is t
 columns, all channels stacked, out of sample: the record's blocks are halved at random (`fold_mask`), each half
 predicted by the fit on the other. The test is the component diagnosis's (Diebold-Mariano on the held-out squared
 errors, summed over channels at each instant, with the Newey-West long-run variance), Bonferroni over the
-candidates. Forward selection: the candidate explaining most, if significant and above `min_explained`, is named;
-the rest are tested again beyond it. A sensor offset and a gas preload both shift their load cell; only the preload
-also lifts the corner (displacement, LCA angle), so the two part here.
+candidates. Forward selection: of the candidates significant and above `min_explained`, the one lowering an
+information criterion most is named (its held-out gain against ln(n_eff) per fitted parameter, `_delta_bic`: a
+gas force's two coefficients are charged twice an offset's one); the rest are tested again beyond it. A sensor
+offset and a gas preload both shift their load cell; only the preload also lifts the corner (displacement, LCA
+angle), so the two part here.
+
+One physical cause before several offsets: when sensor offsets were named, stories with physical causes first are
+tried against the named one: each physical candidate left out in place of two or more named offsets (the named
+physical candidates and it, then those offsets still significant beyond them, by the same forward rule; it must
+keep fewer offsets), and the physical candidates selected first with every offset considered beyond them (no more
+offsets than named). The stories are compared by
+an information criterion charging each fitted parameter, BIC = n_eff ln(SSE / n_eff) + k ln(n_eff) (SSE of the
+held-out errors of all channels, n_eff the residual's effective sample count, k the fitted coefficients: one per
+offset, two for a gas force); the lower wins, a tie (within `BIC_TIE`) goes to the physical cause: two offsets that
+happen to satisfy the car's static balance give way to the one gas force that explains both, and where the channels
+cannot tell the stories apart (one deflection sensor: preload, load-cell and stroke offsets are three knobs for two
+static numbers) the report says so.
+Every named candidate carries `why`: the rivals it beat in its round and by how much, or the comparison of stories.
 """
 
 from __future__ import annotations
@@ -31,6 +46,8 @@ from nnfmu.diagnosis.ranking import cross_fit_errors, extend_base, fold_mask
 from nnfmu.export.terms import OutputTerm
 
 SENSOR_OFFSET = "sensor_offset"
+BIC_TIE = 2.0  # stories whose BIC differ by less are a tie ("not worth more than a bare mention", Kass & Raftery
+# 1995): the one with fewer sensor offsets is named
 ALIKE = 0.9  # a rival explaining at least this share of what the named candidate explains, with predictions this
 # correlated, cannot be told apart from it by these channels
 
@@ -105,6 +122,7 @@ class Evidence:
     channels: dict[str, float]
     named: bool
     alike: tuple[str, ...] = ()
+    why: str = ""
 
     def to_dict(self) -> dict[str, object]:
         return {
@@ -123,6 +141,7 @@ class Evidence:
             "channels_explained": self.channels,
             "named": self.named,
             "cannot_tell_apart_from": list(self.alike),
+            "why": self.why,
         }
 
 
@@ -179,21 +198,14 @@ def attribute(
     fold = np.tile(fold_mask(n, blocks), residual.shape[1])
     designs = {key: _stack(columns) for key, columns in sensitivities.items()}
     threshold = alpha / max(len(designs), 1)
-    base = np.zeros((len(target), 0))
-    alone = {key: _gain(target, base, d, fold, n) for key, d in designs.items()}
-    named: list[str] = []
-    tests: dict[str, tuple[float, ...]] = {}
-    remaining = list(designs)
-    while remaining and len(named) < max_named:
-        tests |= {key: _gain(target, base, designs[key], fold, n) for key in remaining}
-        good = [k for k in remaining if tests[k][1] < threshold and tests[k][0] >= min_explained]
-        if not good:
-            break
-        best = max(good, key=lambda k: tests[k][0])
-        named.append(best)
-        remaining.remove(best)
-        base = extend_base(base, designs[best])
-    tests |= {key: _gain(target, base, designs[key], fold, n) for key in remaining if key not in tests}
+    selection = Selection(target, designs, fold, n, threshold, min_explained, max_named)
+    alone = {key: selection.gain([], key) for key in designs}
+    why: dict[str, str] = {}
+    named, tests = selection.select([], list(designs), why)
+    named, replaced = one_cause(named, candidates, selection, why)
+    if replaced:
+        tests = {key: selection.gain(named[: named.index(key)] if key in named else named, key) for key in designs}
+    remaining = [k for k in designs if k not in named]
     evidence = []
     for key in named + sorted(remaining, key=lambda k: -alone[k][0]):
         coefficients = _coefficients(target, designs, named, key)
@@ -209,10 +221,144 @@ def attribute(
                 coefficients=tuple(float(c) for c in coefficients[key]),
                 channels=per_channel,
                 named=key in named,
-                alike=_alike(key, named, designs, alone, coefficients) if key in named else (),
+                alike=_alike(key, named, selection, coefficients) if key in named else (),
+                why=why.get(key, "") if key in named else "",
             )
         )
     return Attribution(evidence, threshold, dict(untestable or {}))
+
+
+def _design(designs: Mapping[str, np.ndarray], keys: list[str], rows: int) -> np.ndarray:
+    """The named candidates' columns side by side, rescaled as forward selection builds them."""
+    base = np.zeros((rows, 0))
+    for key in keys:
+        base = extend_base(base, designs[key])
+    return base
+
+
+@dataclass(frozen=True)
+class Selection:
+    """The stacked residual `target` (n instants x channels), each candidate's design, the folds and the rules of
+    forward selection."""
+
+    target: np.ndarray
+    designs: Mapping[str, np.ndarray]
+    fold: np.ndarray
+    n: int
+    threshold: float
+    min_explained: float
+    max_named: int
+
+    def gain(self, named: list[str], key: str) -> tuple[float, ...]:
+        """(explained, p-value, effective samples) of `key` beyond `named`, held out."""
+        base = _design(self.designs, named, len(self.target))
+        return _gain(self.target, base, self.designs[key], self.fold, self.n)
+
+    def select(
+        self, start: list[str], pool: list[str], why: dict[str, str] | None = None
+    ) -> tuple[list[str], dict[str, tuple[float, ...]]]:
+        """Forward selection from `start` over `pool`: the named keys and the last tests of every key tested (each
+        named one's in the round it was named); with `why`, each named key's reason."""
+        chosen, tests = list(start), {}
+        base = _design(self.designs, chosen, len(self.target))
+        remaining = [k for k in pool if k not in chosen]
+        while remaining and len(chosen) < self.max_named:
+            tests |= {k: _gain(self.target, base, self.designs[k], self.fold, self.n) for k in remaining}
+            good = [k for k in remaining if tests[k][1] < self.threshold and tests[k][0] >= self.min_explained]
+            if not good:
+                break
+            best = min(good, key=lambda k: _delta_bic(tests[k], self.designs[k].shape[1]))
+            if why is not None:
+                why[best] = _beaten(best, remaining, tests, good)
+            chosen.append(best)
+            remaining.remove(best)
+            base = extend_base(base, self.designs[best])
+        tests |= {k: _gain(self.target, base, self.designs[k], self.fold, self.n) for k in remaining if k not in tests}
+        return chosen, tests
+
+    def bic(self, keys: list[str]) -> float:
+        """BIC of the story `keys` (module docstring): held-out SSE of all channels, the residual's effective sample
+        count, one charge per fitted coefficient."""
+        errors = cross_fit_errors(self.target, _design(self.designs, keys, len(self.target)), self.fold)
+        d = (errors**2).reshape(-1, self.n).sum(axis=0)  # per instant, over channels
+        long_run, _ = newey_west_variance(d)
+        variance = max(long_run, float(np.var(d)))
+        n_eff = max(self.n * float(np.var(d)) / variance if variance > 0 else float(self.n), 2.0)
+        sse = max(float(np.sum(errors**2)), 1e-300)
+        parameters = sum(self.designs[k].shape[1] for k in keys)
+        return n_eff * float(np.log(sse / n_eff)) + parameters * float(np.log(n_eff))
+
+
+def _delta_bic(test: tuple[float, ...], parameters: int) -> float:
+    """The change of BIC when a candidate is named: its held-out gain (explained share, over its effective sample
+    count) against a charge of ln(n_eff) per fitted parameter; lower is better."""
+    explained, _, n_eff = test[0], test[1], max(test[2], 2.0)
+    return n_eff * float(np.log(max(1.0 - explained, 1e-12))) + parameters * float(np.log(n_eff))
+
+
+def _beaten(best: str, remaining: list[str], tests: Mapping[str, tuple[float, ...]], good: list[str]) -> str:
+    """Why `best` was named in its round: what it explained beyond those named before and its BIC change, against
+    its closest rivals."""
+    rivals = sorted((k for k in remaining if k != best), key=lambda k: -tests[k][0])[:2]
+    words = f"explained {tests[best][0]:.1%} beyond those named before"
+    if not rivals:
+        return words + "; no rival left"
+    listed = ", ".join(f"{k} {tests[k][0]:.1%}" + ("" if k in good else " (not significant)") for k in rivals)
+    return f"{words}, the largest drop of BIC (each fitted parameter charged) against its closest rivals ({listed})"
+
+
+def one_cause(
+    named: list[str], candidates: Mapping[str, Candidate], selection: Selection, why: dict[str, str]
+) -> tuple[list[str], bool]:
+    """Stories where physical causes come before offsets, against the named one when it holds offsets (module
+    docstring): each physical candidate left out in place of two or more named offsets (fewer offsets), and the
+    physical candidates selected first with the offsets beyond them (no more offsets). The lowest BIC wins, the
+    physical story winning ties (within `BIC_TIE`); returns the story and whether it changed, the winner's reason in
+    `why`."""
+    offset = {k for k in selection.designs if candidates[k].effect == SENSOR_OFFSET}
+    offsets = [k for k in named if k in offset]
+    if not offsets:
+        return named, False
+    physical = [k for k in named if k not in offset]
+    stories: list[tuple[list[str], list[str], int]] = []  # start, pool, most offsets allowed
+    if len(offsets) >= 2:
+        stories += [
+            ([*physical, k], [*physical, k, *offsets], len(offsets) - 1)
+            for k in selection.designs
+            if k not in named and k not in offset
+        ]
+    first, _ = selection.select([], [k for k in selection.designs if k not in offset])
+    if first and first != physical:
+        stories.append((first, [*first, *sorted(offset)], len(offsets)))
+    before = selection.bic(named)
+    best, best_bic, best_reasons = named, before + BIC_TIE, {}
+    for start, pool, most in stories:
+        reasons: dict[str, str] = {}
+        story, _ = selection.select(start, pool, reasons)
+        if len([k for k in story if k in offset]) > most:
+            continue
+        score = selection.bic(story)
+        if score < best_bic:
+            best, best_bic, best_reasons = story, score, reasons
+    if best is named:
+        return named, False
+    why.update(best_reasons)  # the offsets kept, named beyond the causes
+    causes = [k for k in best if k not in offset]
+    kept = [k for k in best if k in offset]
+    verdict = (
+        "lower wins"
+        if best_bic < before - BIC_TIE
+        else f"within {BIC_TIE:g} of each other, so these channels cannot tell the two stories apart and the "
+        "physical cause is preferred to offsets"
+    )
+    words = (
+        f"physical causes before offsets: {' and '.join(causes)} first, then "
+        + (" and ".join(kept) if kept else "no offset")
+        + f", in place of {' then '.join(named)}"
+    )
+    for cause in causes:
+        why[cause] = f"{words} (BIC {best_bic:.1f} against {before:.1f}, each fitted parameter charged; {verdict})"
+    return best, True
 
 
 def _coefficients(target: np.ndarray, designs: Mapping[str, np.ndarray], named: list[str], key: str) -> dict:
@@ -235,20 +381,31 @@ def _per_channel(residual: np.ndarray, fitted: np.ndarray, channels: list[str]) 
     return {c: float(1 - a / b) if b > 0 else 0.0 for c, a, b in zip(channels, after, before)}
 
 
-def _alike(
-    key: str,
-    named: list[str],
-    designs: Mapping[str, np.ndarray],
-    alone: Mapping[str, tuple[float, ...]],
-    coefficients: Mapping[str, np.ndarray],
-) -> tuple[str, ...]:
-    """Candidates the channels cannot tell from `key`: explaining alone nearly as much, with nearly the same fit."""
-    mine = designs[key] @ coefficients[key]
+def _alike(key: str, named: list[str], selection: Selection, coefficients: Mapping[str, np.ndarray]) -> tuple[str, ...]:
+    """Candidates the channels cannot tell from `key`: beyond those named before it, explaining nearly as much with
+    nearly the same fit (both taken beyond the earlier named candidates' columns); or, put in its place in the named
+    story, leaving the story's BIC within `BIC_TIE` (three knobs for two static numbers)."""
+    before = named[: named.index(key)]
+    designs = selection.designs
+    base = _design(designs, before, len(selection.target))
+
+    def beyond(x: np.ndarray) -> np.ndarray:
+        return x - base @ np.linalg.lstsq(base, x, rcond=None)[0] if base.shape[1] else x
+
+    mine = beyond(designs[key] @ coefficients[key])
+    mine_gain = selection.gain(before, key)[0]
+    story = selection.bic(named)
     found = []
     for other, design in designs.items():
-        if other == key or other in named or alone[other][0] < ALIKE * alone[key][0]:
+        if other == key or other in named:
             continue
-        theirs = design @ np.linalg.lstsq(design, mine, rcond=None)[0]
+        if selection.bic([other if k == key else k for k in named]) <= story + BIC_TIE:
+            found.append(other)
+            continue
+        if selection.gain(before, other)[0] < ALIKE * mine_gain:
+            continue
+        own = beyond(design)
+        theirs = own @ np.linalg.lstsq(own, mine, rcond=None)[0]
         if np.dot(theirs, theirs) >= ALIKE**2 * np.dot(mine, mine):
             found.append(other)
     return tuple(found)

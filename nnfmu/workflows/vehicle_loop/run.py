@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import tempfile
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -67,6 +68,7 @@ class VehicleLoopReport:
     ignored: list[str]
     summary: str
     notes: list[str] = field(default_factory=list)
+    untested: list[str] = field(default_factory=list)
 
     @property
     def iterations(self) -> list[dict[str, object]]:
@@ -88,6 +90,7 @@ class VehicleLoopReport:
                     "component": e.candidate.component,
                     "effect": e.candidate.effect,
                     "evidence": words,
+                    "why": e.why,
                     "p_value": e.p_value,
                 }
             )
@@ -116,6 +119,7 @@ class VehicleLoopReport:
             "candidates": [e.to_dict() for e in self.attribution.evidence],
             "significance_threshold": self.attribution.threshold,
             "untestable": self.attribution.untestable,
+            "untested_components": self.untested,
             "in_situ": {k: d.to_dict() for k, d in self.in_situ.items()},
             "coverage": self.coverage,
             "ignored_channels": self.ignored,
@@ -156,7 +160,7 @@ def _coverage(car: VirtualCar, channels: list[str], retrainable: Mapping[str, bo
     for element in car.fmus:
         kind = car.kind(element)
         if car.onnx[element] is None:
-            notes.append(f"{element}: no ONNX step graph known (--model), so its effects are not tested")
+            notes.append(f"{element}: {_untested_words(car, element)}")
         elif kind == "damper":
             force, stroke = f"{element}_force" in channels, f"{element}_displacement" in channels
             if force and stroke and retrainable[element]:
@@ -250,11 +254,34 @@ def run_vehicle_loop(
     log: Log = print,
 ) -> VehicleLoopReport:
     """Close the loop at vehicle level (module docstring); write DIR/report.json, report.html, plots, the fixed
-    system (system/SystemStructure.ssd) and its FMUs. `models` maps elements to their ONNX step graphs (default:
-    `<fmu stem>.onnx` beside each FMU)."""
+    system (system/SystemStructure.ssd) and its FMUs. Each element's step graph is the one its FMU carries; `models`
+    maps elements to ONNX step graphs that override them (`system_files.read_virtual_car`)."""
+    with tempfile.TemporaryDirectory(prefix="nnfmu-step-graphs-") as graphs:
+        return _run_vehicle_loop(measured, system, drive, out_dir, settings, models, log, Path(graphs))
+
+
+def _untested_words(car: VirtualCar, element: str) -> str:
+    """Why an element's effects are not tested and how to make them testable."""
+    return (
+        f"its effects are not tested: its FMU {car.fmus[element].name} carries no step graph and none was given; "
+        f"rebuild the FMU with nnfmu build (it then carries its graph) or give --model {element}=ONNX"
+    )
+
+
+def _run_vehicle_loop(
+    measured: str | os.PathLike[str] | Measurement,
+    system: str | os.PathLike[str],
+    drive: str | os.PathLike[str] | Measurement,
+    out_dir: str | os.PathLike[str],
+    settings: VehicleLoopSettings,
+    models: Mapping[str, str | Path] | None,
+    log: Log,
+    graphs: Path,
+) -> VehicleLoopReport:
+    """`run_vehicle_loop` with the elements' step graphs read into `graphs`."""
     inputs = [Path(p) for p in (measured, system, drive) if not isinstance(p, Measurement)]
     out_dir = check_output_dir(out_dir, "vehicle-loop", inputs)
-    car = read_virtual_car(system, models)
+    car = read_virtual_car(system, graphs, models, log)
     m = _load(measured, "measurement", _read_record)
     d = _load(drive, "drive", read_drive)
     log(f"replaying {car.name} on {d.source}")
@@ -350,6 +377,9 @@ def run_vehicle_loop(
         after = channel_errors(after_result, corrected, channels)
         named = found.named
         summary = "named " + ", ".join(map(_named_words, named)) if named else f"nothing added; {BUDGET}"
+        untested = [f"{e}: {_untested_words(car, e)}" for e in car.fmus if car.onnx[e] is None]
+        if untested:
+            summary += "; NOT TESTED: " + ", ".join(e for e in car.fmus if car.onnx[e] is None) + " (no step graph)"
         report = VehicleLoopReport(
             measured=m.source,
             system=str(car.ssd),
@@ -363,6 +393,8 @@ def run_vehicle_loop(
             coverage=_coverage(car, channels, retrainable),
             ignored=ignored,
             summary=summary,
+            notes=list(car.graph_notes),
+            untested=untested,
         )
         write_vehicle_report(staging, report, record, virtual, after_result, corrected)
         mark_output_dir(staging, "vehicle-loop")
@@ -414,5 +446,5 @@ def _fixed_system(car: VirtualCar, fixes: list[Fixed], staging: Path, out_dir: P
         fmus[element] = copies[source]
     vehicle = folder / "fmu" / car.vehicle_fmu.name
     shutil.copyfile(car.vehicle_fmu, vehicle)
-    moved = VirtualCar(car.ssd, car.name, car.vehicle, vehicle, dict(fmus), car.onnx, car.parameters)
+    moved = VirtualCar(car.ssd, car.name, car.vehicle, vehicle, dict(fmus), car.onnx, car.parameters, car.graph_notes)
     return swapped_system(moved, {}, folder, "fixed by nnfmu loop vehicle"), fmus
