@@ -8,6 +8,7 @@ from typing import Protocol
 
 from rich import box
 from rich.table import Table
+from rich.text import Text
 
 from nnfmu.workflows.progress import clock_time
 
@@ -44,7 +45,7 @@ def _per_cent(value: float) -> str:
 
 def metrics_table(metrics: Mapping[str, Mapping[str, float]]) -> Table:
     """A metric per row, a split (train, validation, test) per column."""
-    table = Table(box=box.SIMPLE_HEAD)
+    table = Table(box=box.SIMPLE_HEAD, show_edge=False, pad_edge=False, collapse_padding=True)
     table.add_column("metric")
     for split in metrics:
         table.add_column(split, justify="right")
@@ -55,9 +56,15 @@ def metrics_table(metrics: Mapping[str, Mapping[str, float]]) -> Table:
 
 def component_table(models: Sequence[ModelRow]) -> Table:
     """The demo's component FMUs on their held-out records, one per row."""
-    table = Table(title="component FMUs on held-out random rig records", box=box.SIMPLE_HEAD)
+    table = Table(
+        title="component FMUs on held-out random rig records",
+        box=box.SIMPLE_HEAD,
+        show_edge=False,
+        pad_edge=False,
+        collapse_padding=True,
+    )
     for column in ("preset", "train [s]", "test [%]", "FMU [%]", "R²", "peak [%]", "damage"):
-        table.add_column(column, justify="left" if column == "preset" else "right", no_wrap=True)
+        table.add_column(Text(column), justify="left" if column == "preset" else "right", no_wrap=True)
     for m in models:
         table.add_row(
             m.preset,
@@ -73,9 +80,15 @@ def component_table(models: Sequence[ModelRow]) -> Table:
 
 def loop_table(effects: Sequence[str], before: Mapping[str, float], after: Mapping[str, float]) -> Table:
     """The loop's held-out error before and after the effects it added."""
-    table = Table(title=f"effects added: {', '.join(effects) or 'none'}", box=box.SIMPLE_HEAD)
+    table = Table(
+        title=f"effects added: {', '.join(effects) or 'none'}",
+        box=box.SIMPLE_HEAD,
+        show_edge=False,
+        pad_edge=False,
+        collapse_padding=True,
+    )
     for column in ("held-out error", "before", "after"):
-        table.add_column(column, justify="left" if column == "held-out error" else "right")
+        table.add_column(Text(column), justify="left" if column == "held-out error" else "right")
     table.add_row("NRMSE [%]", _per_cent(before["nrmse"]), _per_cent(after["nrmse"]))
     table.add_row("R²", f"{before['r2']:.4f}", f"{after['r2']:.4f}")
     table.add_row("peak error [%]", f"{100 * before['peak_error']:+.1f}", f"{100 * after['peak_error']:+.1f}")
@@ -85,7 +98,7 @@ def loop_table(effects: Sequence[str], before: Mapping[str, float], after: Mappi
 
 def stage_table(seconds: Mapping[str, float], total: float) -> Table:
     """Each stage's wall time and the whole run's."""
-    table = Table(title="time per stage", box=box.SIMPLE_HEAD)
+    table = Table(title="time per stage", box=box.SIMPLE_HEAD, show_edge=False, pad_edge=False, collapse_padding=True)
     table.add_column("stage")
     table.add_column("time", justify="right")
     for stage, spent in seconds.items():
