@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable
+from contextlib import nullcontext
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
@@ -40,6 +41,7 @@ from nnfmu.models.train import Progress
 from nnfmu.out_paths import check_output_dir, mark_output_dir
 from nnfmu.validate import ValidationSettings, compare, write_report
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.workflows.fmu_build import host_binaries_only
 from nnfmu.workflows.loop import LoopReport, run_loop
 from nnfmu.workflows.loop.blocks import training_part
 from nnfmu.workflows.loop.settings import LoopSettings
@@ -365,41 +367,42 @@ def run_demo(
     mark_output_dir(out, "demo")
     clock = StageClock(log)
     try:
-        clock.log(settings.announcement)
-        with clock.stage("component networks"):
-            report, results = _components(out, settings, clock)
-        onnx_files = {r.preset: Path(r.onnx) for r in results}
-        vehicle_bushings = None
-        if settings.vehicle_bushings:
-            with clock.stage("vehicle-derived bushing networks"):
-                vehicle_bushings = train_vehicle_bushings(
-                    out / "vehicle_bushing",
-                    settings.road_test,
-                    settings.bushing_drive,
-                    lambda preset: settings.request(preset, "bushing"),
-                    clock.log,
-                )
-            onnx_files |= vehicle_bushings.models
-        vehicle_dampers = None
-        if settings.vehicle_dampers and vehicle_bushings is not None:
-            with clock.stage("vehicle-derived damper networks"):
-                vehicle_dampers = train_vehicle_dampers(
-                    vehicle_bushings.source,
-                    out / "vehicle_damper",
-                    lambda preset: settings.request(preset, "damper"),
-                    rig_seed=settings.seed,
-                    rig_duration=settings.lab_duration("damper"),
-                    log=clock.log,
-                )
-            onnx_files |= vehicle_dampers.models
-        with clock.stage("road test"):
-            road = run_road_test(out / "road_test", onnx_files, settings.road_test, clock.log)
-            for system, path in road.reports().items():
-                clock.log(f"road test {system}: report {path}")
-        with clock.stage("component loop"):
-            loop = close_the_loop(out, settings, clock.log, clock.progress)
-        with clock.stage("vehicle loop"):
-            vehicle_loop = thesis_residual(road, out / "vehicle_loop", settings, clock.log)
+        with host_binaries_only() if settings.quick else nullcontext():  # quick: no win64 cross builds
+            clock.log(settings.announcement)
+            with clock.stage("component networks"):
+                report, results = _components(out, settings, clock)
+            onnx_files = {r.preset: Path(r.onnx) for r in results}
+            vehicle_bushings = None
+            if settings.vehicle_bushings:
+                with clock.stage("vehicle-derived bushing networks"):
+                    vehicle_bushings = train_vehicle_bushings(
+                        out / "vehicle_bushing",
+                        settings.road_test,
+                        settings.bushing_drive,
+                        lambda preset: settings.request(preset, "bushing"),
+                        clock.log,
+                    )
+                onnx_files |= vehicle_bushings.models
+            vehicle_dampers = None
+            if settings.vehicle_dampers and vehicle_bushings is not None:
+                with clock.stage("vehicle-derived damper networks"):
+                    vehicle_dampers = train_vehicle_dampers(
+                        vehicle_bushings.source,
+                        out / "vehicle_damper",
+                        lambda preset: settings.request(preset, "damper"),
+                        rig_seed=settings.seed,
+                        rig_duration=settings.lab_duration("damper"),
+                        log=clock.log,
+                    )
+                onnx_files |= vehicle_dampers.models
+            with clock.stage("road test"):
+                road = run_road_test(out / "road_test", onnx_files, settings.road_test, clock.log)
+                for system, path in road.reports().items():
+                    clock.log(f"road test {system}: report {path}")
+            with clock.stage("component loop"):
+                loop = close_the_loop(out, settings, clock.log, clock.progress)
+            with clock.stage("vehicle loop"):
+                vehicle_loop = thesis_residual(road, out / "vehicle_loop", settings, clock.log)
         seconds = clock.elapsed()
     finally:
         clock.close()
