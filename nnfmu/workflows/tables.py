@@ -12,16 +12,16 @@ from rich.text import Text
 
 from nnfmu.workflows.progress import clock_time
 
-# Rows of `metrics_table`: (key of SplitMetrics.as_dict, label, format); fractions are shown in per cent.
+# Rows of `metrics_table`: (key of SplitMetrics.as_dict, label, scale, format); NRMSE is shown in per cent.
 METRIC_ROWS = (
-    ("nrmse", "NRMSE [%]", "{:.2%}"),
-    ("r2", "R²", "{:.4f}"),
-    ("peak_error", "peak error [%]", "{:+.1%}"),
-    ("slope", "slope", "{:.4f}"),
-    ("intercept", "intercept [SI]", "{:.4g}"),
-    ("mse_scaled", "MSE (scaled)", "{:.3g}"),
-    ("max_abs_weight", "largest |weight|", "{:.3g}"),
-    ("samples", "samples", "{:d}"),
+    ("nrmse", "NRMSE [%]", 100.0, "{:.2f}"),
+    ("r2", "R²", 1.0, "{:.4f}"),
+    ("peak_error", "max |error| [SI]", 1.0, "{:.4g}"),
+    ("slope", "slope", 1.0, "{:.4f}"),
+    ("intercept", "intercept [SI]", 1.0, "{:.4g}"),
+    ("mse_scaled", "MSE (scaled)", 1.0, "{:.3g}"),
+    ("max_abs_weight", "largest |weight|", 1.0, "{:.3g}"),
+    ("samples", "samples", 1.0, "{:.0f}"),
 )
 COMPONENT_LEGEND = (
     "train: training time [s]; test: NRMSE on the lab record's test split; FMU: NRMSE of the FMU replayed on the "
@@ -49,8 +49,8 @@ def metrics_table(metrics: Mapping[str, Mapping[str, float]]) -> Table:
     table.add_column("metric")
     for split in metrics:
         table.add_column(split, justify="right")
-    for key, label, form in METRIC_ROWS:
-        table.add_row(label, *(form.format(values[key]) for values in metrics.values()))
+    for key, label, scale, form in METRIC_ROWS:
+        table.add_row(label, *(form.format(scale * values[key]) for values in metrics.values()))
     return table
 
 

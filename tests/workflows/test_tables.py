@@ -50,6 +50,7 @@ def test_metrics_loop_and_stage_tables_fit_80_columns() -> None:
     ):
         text = _render(table)
         assert max(len(line) for line in text.splitlines()) <= 80 and "…" not in text
-    assert "1.06" in _render(metrics_table({"test": split}))  # NRMSE [%]
+    rows = {line.split("  ")[0]: line.split()[-1] for line in _render(metrics_table({"test": split})).splitlines()}
+    assert rows["NRMSE [%]"] == "1.06" and rows["max |error| [SI]"] == "0.012" and rows["samples"] == "12000"
     assert "2.57" in _render(loop_table([], errors, errors))
     assert "1 min 17 s" in _render(stage_table({"a": 77.2}, 77.2))
