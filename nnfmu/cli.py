@@ -300,7 +300,8 @@ def demo(
     out: Path = typer.Option(Path("demo-out"), "--out", "-o", help="Folder for everything the demo writes."),
     seed: int = typer.Option(0, help="Seed of the rig records and the training."),
     quick: bool = typer.Option(
-        False, help="Short records and training: checks every stage runs, not results to quote."
+        False,
+        help="Short records and trainings, every stage in about 2 min on 2 idle cores: checks every stage runs, not results to quote.",
     ),
     lab_bushings: bool = typer.Option(
         False,
