@@ -250,7 +250,7 @@ def close_the_loop(
     report = run_loop(measured, first, "force", out / "loop", loop_settings)
     log(
         f"loop: {report.summary}; effects added: {', '.join(report.effects_added) or 'none'}; held-out NRMSE "
-        f"{report.error_before['nrmse']:.4f} -> {report.error_after['nrmse']:.4f}"
+        f"{report.error_before['nrmse']:.2%} -> {report.error_after['nrmse']:.2%}"
     )
     return report
 
