@@ -212,6 +212,13 @@ class DemoSummary:
     stage_seconds: dict[str, float] = field(default_factory=dict)  # wall time of each stage, in run order
 
 
+def channel_label(preset: str, output: str) -> str:
+    """The report's name for `preset`'s `output`, said once: `damper_spline_force`, `bushing_axial_force` (not
+    `bushing_axial_force_axial_force`)."""
+    name = preset.replace("-", "_")
+    return name if name.endswith(f"_{output}") else f"{name}_{output}"
+
+
 def _single(m: Measurement, channel: str, label: str) -> Measurement:
     """`channel` of `m` renamed to `label`, so several models' outputs can share one report."""
     return Measurement(time=m.time, channels={label: m[channel]}, units={label: m.units[channel]}, source=m.source)
@@ -325,7 +332,7 @@ def _components(out: Path, settings: DemoSettings, clock: StageClock) -> tuple[P
             fmu = build_fmu(trained.path, BuildOptions(out=out / "fmu" / f"{preset}.fmu"))
             output = trained.model.spec.output
             replayed = replay_fmu(fmu, measured)
-            label = f"{preset.replace('-', '_')}_{output}"
+            label = channel_label(preset, output)
             (comparison,) = compare(
                 _single(replayed, output, label), _single(measured, output, label), [label], ValidationSettings()
             )

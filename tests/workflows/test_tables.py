@@ -54,3 +54,11 @@ def test_metrics_loop_and_stage_tables_fit_80_columns() -> None:
     assert rows["NRMSE [%]"] == "1.06" and rows["max |error| [SI]"] == "0.012" and rows["samples"] == "12000"
     assert "2.57" in _render(loop_table([], errors, errors))
     assert "1 min 17 s" in _render(stage_table({"a": 77.2}, 77.2))
+
+
+def test_report_channel_names_say_the_output_once() -> None:
+    from nnfmu.workflows.demo import channel_label
+
+    assert channel_label("bushing-axial-force", "axial_force") == "bushing_axial_force"
+    assert channel_label("bushing-conical-torque", "conical_torque") == "bushing_conical_torque"
+    assert channel_label("damper-spline", "force") == "damper_spline_force"
