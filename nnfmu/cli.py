@@ -35,6 +35,7 @@ app = typer.Typer(
     cls=_Commands,
     no_args_is_help=True,
     add_completion=False,
+    rich_markup_mode=None,
     help="Neural-network component models from rig data, shipped as FMI co-simulation FMUs.",
 )
 data_app = typer.Typer(no_args_is_help=True, help="Inspect rig data files.")
@@ -247,6 +248,7 @@ def train(
     from rich.table import Table
     from rich.text import Text
 
+    from nnfmu.workflows.tables import metrics_table
     from nnfmu.workflows.train import TrainRequest, train_from_file
 
     request = TrainRequest(
@@ -287,15 +289,9 @@ def train(
             ranking.add_row(feature, f"{increase:.4g}")
         console.print(ranking)
         console.print(f"chosen inputs: {', '.join(outcome.selection.chosen)}")
-    table = Table(title=f"{preset}: {', '.join(outcome.model.spec.feature_names)} -> {outcome.model.spec.output}")
-    columns = ("mse_scaled", "nrmse", "r2", "slope", "intercept", "peak_error", "max_abs_weight", "samples")
-    table.add_column("split")
-    for column in columns:
-        table.add_column(column, justify="right")
-    for split, metrics in outcome.metrics.items():
-        values = metrics.as_dict()
-        table.add_row(split, *(f"{values[c]:.4g}" for c in columns))
-    console.print(table)
+    spec = outcome.model.spec
+    console.print(f"{preset}: {', '.join(spec.feature_names)} -> {spec.output}")
+    console.print(metrics_table({split: m.as_dict() for split, m in outcome.metrics.items()}))
     if len(outcome.trials) > 1:
         console.print(
             "hidden size by validation MSE (scaled): "
@@ -316,7 +312,8 @@ def demo(
     out: Path = typer.Option(Path("demo-out"), "--out", "-o", help="Folder for everything the demo writes."),
     seed: int = typer.Option(0, help="Seed of the rig records and the training."),
     quick: bool = typer.Option(
-        False, help="Short records and training: checks every stage runs, not results to quote."
+        False,
+        help="Short records and trainings, every stage in about 2 min on 2 idle cores: checks every stage runs, not results to quote.",
     ),
     lab_bushings: bool = typer.Option(
         False,
@@ -331,9 +328,9 @@ def demo(
 ) -> None:
     """Run the pipeline end to end on built-in data: rig data, networks, ONNX, FMUs, replay, road test, loop."""
     from rich.console import Console
-    from rich.table import Table
 
     from nnfmu.workflows.demo import DemoSettings, run_demo
+    from nnfmu.workflows.tables import COMPONENT_LEGEND, component_table, loop_table, stage_table
 
     console = Console(markup=False)  # diagnosis test names carry brackets: test[velocity]
     try:
@@ -347,39 +344,28 @@ def demo(
             )
     except NnfmuError as error:
         _fail(error)
-    table = Table(title="component FMUs replayed on held-out random rig records")
-    for column in ("preset", "train [s]", "test-split NRMSE", "FMU NRMSE", "R²", "peak error", "pseudo-damage ratio"):
-        table.add_column(column, justify="left" if column == "preset" else "right")
-    for m in summary.models:
-        table.add_row(
-            m.preset,
-            f"{m.train_seconds:.1f}",
-            f"{m.test_split_nrmse:.4f}",
-            f"{m.replay_nrmse:.4f}",
-            f"{m.replay_r2:.4f}",
-            f"{m.replay_peak_error:+.3f}",
-            f"{m.replay_pseudo_damage_ratio:.3f}",
-        )
-    console.print(table)
+    console.print(component_table(summary.models))
+    console.print(COMPONENT_LEGEND)
     console.print(f"component report: {summary.report}")
     for system, report in summary.road_test.items():
         console.print(f"road test {system} report: {report}")
     loop = summary.loop
     console.print(f"closing the loop: {loop.summary}")
-    table = Table(title=f"effects added: {', '.join(loop.effects_added) or 'none'}")
-    for column in ("held-out error", "before", "after"):
-        table.add_column(column, justify="left" if column == "held-out error" else "right")
-    for key in ("nrmse", "r2", "peak_error", "pseudo_damage_ratio"):
-        table.add_row(key, f"{loop.error_before[key]:.4f}", f"{loop.error_after[key]:.4f}")
-    console.print(table)
+    console.print(loop_table(loop.effects_added, loop.error_before, loop.error_after))
     console.print(f"loop report: {summary.out / 'loop' / 'report.html'}")
-    console.print(f"summary: {summary.out / 'summary.json'} ({summary.seconds:.0f} s)")
+    console.print(stage_table(summary.stage_seconds, summary.seconds))
+    console.print(f"summary: {summary.out / 'summary.json'}")
 
 
 @app.command()
 def build(
     model: Path = typer.Argument(..., help="ONNX file: an nnfmu step graph, or any graph the backends support."),
-    out: Optional[str] = typer.Option(None, "--out", "-o", help="FMU path (default: exported/NAME.fmu)."),
+    out: Optional[str] = typer.Option(
+        None,
+        "--out",
+        "-o",
+        help="FMU path (default: exported/ and the ONNX file's name: damper.onnx -> exported/damper.fmu).",
+    ),
     backend: str = typer.Option(
         "native", help="native (generated C, no Python at run time) or pythonfmu (onnxruntime)."
     ),

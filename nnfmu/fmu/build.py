@@ -7,12 +7,13 @@ the backend of `options.backend`.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import onnx
 
 from nnfmu.component import Component
-from nnfmu.fmu.factory import Backend, BuildPlan, assemble, load_onnx, plan_build
+from nnfmu.fmu.factory import Backend, BuildPlan, assemble, default_output, load_onnx, plan_build
 from nnfmu.fmu.options import BuildOptions
 
 
@@ -28,10 +29,13 @@ def backend_of(options: BuildOptions) -> Backend:
 
 
 def build_fmu(onnx_path: Path, options: BuildOptions | None = None) -> Path:
-    """Build an FMU from the ONNX file `onnx_path` and return its path; any failure raises FmuBuildError naming the
-    file and writes no `.fmu`."""
-    options = options or BuildOptions()
+    """Build an FMU from the ONNX file `onnx_path` and return its path (without `options.out`: `exported/` with the
+    file's name, `damper.onnx` -> `exported/damper.fmu`, whatever component name the graph carries); any failure
+    raises FmuBuildError naming the file and writes no `.fmu`."""
     onnx_path = Path(onnx_path)
+    options = options or BuildOptions()
+    if options.out is None:
+        options = replace(options, out=default_output(onnx_path.stem))
     plan = plan_build(load_onnx(onnx_path), options, source=str(onnx_path), source_name=onnx_path.name)
     return _build(plan)
 

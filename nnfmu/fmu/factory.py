@@ -71,9 +71,10 @@ class BuildPlan:
 Backend = Callable[[BuildPlan, Path], None]
 
 
-def default_output(identifier: str) -> Path:
-    """Where `nnfmu build` writes an FMU when `--out` is not given."""
-    return Path("exported") / f"{identifier}.fmu"
+def default_output(stem: str) -> Path:
+    """Where an FMU named `stem` goes when no `--out` is given (`nnfmu build` names it after its ONNX file; a graph
+    built in memory after its model identifier)."""
+    return Path("exported") / f"{stem}.fmu"
 
 
 def load_onnx(onnx_path: Path) -> onnx.ModelProto:

@@ -21,7 +21,8 @@ FMI_VERSIONS: tuple[FmiVersion, ...] = (2, 3)
 
 @dataclass(frozen=True)
 class BuildOptions:
-    """What to build: `out` is the `.fmu` path (None: `exported/<name>.fmu`), `name` overrides the component name,
+    """What to build: `out` is the `.fmu` path (None: `exported/<ONNX file name>.fmu` from `build_fmu`,
+    `exported/<model identifier>.fmu` for a graph built in memory), `name` overrides the component name,
     `filter_cutoff` [Hz] the start value of the output low-pass (None: the component's own, 0 = off), `platforms` the
     binaries of the native backend (None: this machine's, plus win64 when its cross compiler is installed; names as
     `nnfmu build --platforms` takes them, e.g. ("linux64", "win64"))."""

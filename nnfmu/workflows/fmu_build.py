@@ -5,6 +5,7 @@ from __future__ import annotations
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.check import check_fmu, report_lines
 from nnfmu.fmu.errors import PlatformSkippedWarning
+from nnfmu.fmu.native.compiler import host_binaries_only
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.fmu.reference_results import has_reference_results
 from nnfmu.fmu.step_graph import GRAPH_MEMBER
@@ -19,5 +20,6 @@ __all__ = [
     "build_vehicle_fmu",
     "check_fmu",
     "has_reference_results",
+    "host_binaries_only",
     "report_lines",
 ]

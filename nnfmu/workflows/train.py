@@ -4,6 +4,7 @@ graph, and return everything the CLI prints. The CLI only formats; this module d
 from __future__ import annotations
 
 import os
+import re
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -17,6 +18,7 @@ from nnfmu.errors import SettingsError
 from nnfmu.export import ExportResult, export_onnx
 from nnfmu.models.features import FeatureSpec
 from nnfmu.models.metrics import SplitMetrics
+from nnfmu.models.networks import GRUNet
 from nnfmu.models.presets import COMMAND, Preset, bind_command, custom_spec, get_preset, recurrent
 from nnfmu.models.selection import SelectionResult, SelectionSettings, select_inputs
 from nnfmu.models.train import Architecture, Progress, SizeTrial, TrainResult, TrainSettings, train_model
@@ -202,7 +204,7 @@ def train_from_file(
         result.model,
         out,
         name=request.name or preset.name.replace("-", "_"),
-        description=f"{preset.description}; trained by nnfmu on {Path(data).name}{compensated}",
+        description=f"{network_description(preset, result.model)}; trained by nnfmu on {Path(data).name}{compensated}",
         verify_on={c: test[c] for c in spec.channels},
     )
     metrics = {name: SplitMetrics(**values) for name, values in result.model.metrics.items()}
@@ -218,6 +220,19 @@ def train_from_file(
         data_notes=list(measurement.notes.values()),
         feature_choice=feature_choice,
     )
+
+
+def network_description(preset: Preset, model: TrainedModel) -> str:
+    """What the model is and its real layout, e.g. `damper force with hysteresis ... history: 4-12-1 tanh MLP`: the
+    preset's words without the thesis's layout it names (`(thesis 2-5-1 ...)`), which the trained network need not
+    have."""
+    what = re.sub(r"\s*\(thesis [^)]*\)", "", preset.description)
+    network = model.network
+    if isinstance(network, GRUNet):
+        layout = f"{network.gru.input_size}-{network.gru.hidden_size}-{network.out.out_features} GRU"
+    else:
+        layout = f"{network.hidden.in_features}-{network.hidden.out_features}-{network.out.out_features} tanh MLP"
+    return f"{what}: {layout}"
 
 
 def _fit_candidates(

@@ -590,13 +590,14 @@ def test_graph_without_a_sample_period_is_evaluated_once_per_step(combo, built, 
 
 
 def test_default_output_and_generic_description_of_a_plain_graph(combo, master, tmp_path, monkeypatch):
-    """Without --out the FMU lands in exported/<identifier>.fmu; a graph without metadata gets one port per element
-    and, without a sample period, the filter runs at the step size of each step."""
+    """Without --out the FMU lands in exported/<ONNX file name>.fmu (its model identifier stays the graph's); a graph
+    without metadata gets one port per element and, without a sample period, the filter runs at the step size of
+    each step."""
     backend, fmi = combo
-    onnx.save(plain_tanh_graph(), str(tmp_path / "plain.onnx"))
+    onnx.save(plain_tanh_graph(), str(tmp_path / "renamed.onnx"))
     monkeypatch.chdir(tmp_path)
-    fmu = build_fmu(tmp_path / "plain.onnx", BuildOptions(backend=backend, fmi_version=fmi))
-    assert fmu == Path("exported") / "plain.fmu" and (tmp_path / "exported" / "plain.fmu").is_file()
+    fmu = build_fmu(tmp_path / "renamed.onnx", BuildOptions(backend=backend, fmi_version=fmi))
+    assert fmu == Path("exported") / "renamed.fmu" and (tmp_path / "exported" / "renamed.fmu").is_file()
     assert validate_fmu(str(fmu)) == []
     md = read_model_description(str(fmu))
     assert md.coSimulation.modelIdentifier == "plain" and md.defaultExperiment.stepSize is None

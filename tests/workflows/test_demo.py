@@ -12,7 +12,14 @@ from nnfmu.workflows.demo import PRESETS_BY_RIG, UNDECLARED_EFFECTS, DemoSetting
 
 
 def test_quick_demo_runs_every_stage(tmp_path: Path) -> None:
-    summary = run_demo(tmp_path, DemoSettings(quick=True), log=lambda _: None)
+    lines: list[str] = []
+    summary = run_demo(tmp_path, DemoSettings(quick=True), log=lines.append)
+    # it says what it is at the start, stamps every line with the elapsed time and times every stage
+    assert lines[0].startswith("[0:00] quick run:") and all(line.startswith("[") for line in lines)
+    stages = ["component networks", "vehicle-derived bushing networks", "vehicle-derived damper networks"]
+    stages += ["road test", "component loop", "vehicle loop"]
+    assert list(summary.stage_seconds) == stages and all(s > 0 for s in summary.stage_seconds.values())
+    assert sum(summary.stage_seconds.values()) <= summary.seconds
     presets = [p for group in PRESETS_BY_RIG.values() for p in group]
     assert [m.preset for m in summary.models] == presets
     for model in summary.models:
@@ -22,6 +29,7 @@ def test_quick_demo_runs_every_stage(tmp_path: Path) -> None:
     assert summary.report.name == "index.html" and summary.report.exists()
     written = json.loads((tmp_path / "summary.json").read_text())
     assert [m["preset"] for m in written["models"]] == presets
+    assert written["quick"] is True and list(written["stage_seconds"]) == stages
     assert sorted(summary.road_test) == ["full-vehicle", "quarter-car"]
     assert all(path.is_file() for path in summary.road_test.values())
     bushings = written["road_test"]["bushing_networks"]  # trained on a rig record derived from the car's deflections

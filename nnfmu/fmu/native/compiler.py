@@ -13,6 +13,9 @@ import platform
 import shlex
 import shutil
 import subprocess
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,6 +27,8 @@ HOST_FLAGS = (*WARNINGS, "-fPIC", "-shared", "-fvisibility=hidden")
 WIN64_FLAGS = (*WARNINGS, "-shared", "-static-libgcc", "-D__USE_MINGW_ANSI_STDIO=1")
 LIBRARIES = ("-lm",)
 COMPILE_TIMEOUT_S = 300
+# Set by `host_binaries_only`: platforms None builds the host binary alone.
+_HOST_ONLY: ContextVar[bool] = ContextVar("nnfmu_host_binaries_only", default=False)
 WIN64 = "win64"
 WIN64_COMPILER = "x86_64-w64-mingw32-gcc"
 WIN64_INSTALL_HINT = "on Debian/Ubuntu: apt-get install gcc-mingw-w64-x86-64; or set CC_WIN64"
@@ -99,11 +104,24 @@ def known_platforms() -> tuple[str, ...]:
     return (host_target().name, WIN64)
 
 
+@contextmanager
+def host_binaries_only() -> Iterator[None]:
+    """Within it, FMUs built without named platforms carry the host's binary only (no win64 cross build, no warning
+    about its compiler): the FMUs of a smoke run (`nnfmu demo --quick`) that never leave this machine."""
+    token = _HOST_ONLY.set(True)
+    try:
+        yield
+    finally:
+        _HOST_ONLY.reset(token)
+
+
 def select_targets(platforms: tuple[str, ...] | None) -> tuple[list[Target], str | None]:
     """The targets to build and a warning (or None). `platforms` None: the host, plus win64 when its cross compiler
-    is present (else a warning saying how to install it). Named platforms: exactly those, each buildable here, else
-    CompilerError naming the platform or the missing compiler."""
+    is present (else a warning saying how to install it; the host alone inside `host_binaries_only`). Named
+    platforms: exactly those, each buildable here, else CompilerError naming the platform or the missing compiler."""
     host = host_target()
+    if platforms is None and _HOST_ONLY.get():
+        return [host], None
     cross = win64_compiler()
     if platforms is None:
         if cross is None:

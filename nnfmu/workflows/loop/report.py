@@ -15,6 +15,7 @@ import nnfmu
 from nnfmu.atomic import write_text_atomic
 from nnfmu.data import Measurement
 from nnfmu.data.units import base_name
+from nnfmu.diagnosis.evidence import p_value_text
 from nnfmu.models.features import FeatureSpec
 from nnfmu.validate import welch_psd
 from nnfmu.validate.plots import axis_label, new_axes, psd_unit
@@ -162,6 +163,7 @@ def write_loop_report(
         loader=jinja2.PackageLoader("nnfmu.workflows.loop", "."), autoescape=True, undefined=jinja2.StrictUndefined
     )
     environment.filters["number"] = _number
+    environment.filters["p_value"] = p_value_text
     html = environment.get_template(TEMPLATE).render(report=document)
     write_text_atomic(folder / "report.html", html)
 

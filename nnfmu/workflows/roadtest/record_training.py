@@ -25,6 +25,6 @@ def train_on_record(
         seconds[preset] = trained.seconds
         log(
             f"{preset} on the vehicle-derived record: trained in {trained.seconds:.1f} s, test-split NRMSE "
-            f"{trained.metrics['test'].nrmse:.4f}"
+            f"{trained.metrics['test'].nrmse:.2%}"
         )
     return models

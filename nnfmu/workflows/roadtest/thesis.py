@@ -36,7 +36,12 @@ class ThesisRow:
 
 
 def amplitude_ratio(c: ChannelComparison, frequency: float = AMPLITUDE_FREQUENCY) -> float:
-    """sqrt(PSD_result / PSD_reference) at `frequency` [Hz] (linear between PSD lines): the amplitude ratio there."""
+    """sqrt(PSD_result / PSD_reference) at `frequency` [Hz] (linear between PSD lines): the amplitude ratio there;
+    NaN (not meaningful) when the record is too short for its spectrum to resolve `frequency` (a 0.3 s record's
+    first line lies at 3.3 Hz) or the reference has no power there."""
+    lines = c.psd_reference.frequency
+    if len(lines) < 2 or lines[1] > frequency:
+        return float("nan")
     result = float(np.interp(frequency, c.psd_result.frequency, c.psd_result.density))
     reference = float(np.interp(frequency, c.psd_reference.frequency, c.psd_reference.density))
     return float(np.sqrt(result / reference)) if reference > 0 else float("nan")

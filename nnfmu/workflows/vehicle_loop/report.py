@@ -13,6 +13,7 @@ import numpy as np
 import nnfmu
 from nnfmu.atomic import write_text_atomic
 from nnfmu.data import Measurement
+from nnfmu.diagnosis.evidence import p_value_text
 from nnfmu.validate.plots import axis_label, new_axes
 
 if TYPE_CHECKING:
@@ -88,4 +89,5 @@ def write_vehicle_report(
         undefined=jinja2.StrictUndefined,
     )
     environment.filters["number"] = _number
+    environment.filters["p_value"] = p_value_text
     write_text_atomic(folder / "report.html", environment.get_template(TEMPLATE).render(report=document))
