@@ -208,8 +208,7 @@ class SampledComponent:
         if self._refused:
             self._report(f"initialisation ends with refused values: {'; '.join(self._refused.values())}", "error")
             return False
-        self._evaluate(self._period or 0.0, self._t_start or 0.0)
-        return True
+        return self._evaluate(self._period or 0.0, self._t_start or 0.0)
 
     def step(self, current_time: float, step_size: float) -> bool:
         """Evaluate every sample t_k with current_time < t_k <= current_time + step_size; False refuses the step.
@@ -236,7 +235,8 @@ class SampledComponent:
             return False
         end = current_time + step_size
         if self._period is None:
-            self._evaluate(step_size, end)
+            if not self._evaluate(step_size, end):
+                return False
         else:
             t_start = self._t_start if self._t_start is not None else 0.0
             due = (end - t_start) / self._period + REACHED - self._sample
@@ -249,7 +249,8 @@ class SampledComponent:
                 )
                 return False
             while t_start + (self._sample + 1) * self._period <= end + REACHED * self._period:
-                self._evaluate(self._period, t_start + (self._sample + 1) * self._period)
+                if not self._evaluate(self._period, t_start + (self._sample + 1) * self._period):
+                    return False
         self._time = end
         return True
 
@@ -278,22 +279,37 @@ class SampledComponent:
             self._preview = ([gain * u for u in raw], outside)
         return self._preview
 
-    def _evaluate(self, period: float, t_sample: float) -> None:
-        """Run the graph for the next sample, advance its state, filter the outputs and check the envelope."""
-        self._graph_state, self._raw = self._run_graph()
-        self._sample += 1
-        self._filter(period)
+    def _evaluate(self, period: float, t_sample: float) -> bool:
+        """Run the graph for the next sample, advance its state, filter the outputs and check the envelope; a
+        non-finite state or output discards the sample (reported, False), as the native FMU does."""
+        graph_state, raw = self._run_graph()
+        k = self._sample + 1
+        for name, values in graph_state.items():
+            if not all(map(math.isfinite, values)):
+                self._report(f"state tensor {name!r} of sample {k} is not finite; the sample is discarded", "error")
+                return False
+        outputs = self._filtered(raw, period, k)
+        for port, value, u in zip(self._out_ports, outputs, raw):
+            if not math.isfinite(value):
+                self._report(
+                    f"output {port['name']!r} of sample {k} is {value!r} (network {u!r}, output_gain "
+                    f"{self._parameters['output_gain']!r}); the sample is discarded",
+                    "error",
+                )
+                return False
+        self._graph_state, self._raw, self._outputs[:] = graph_state, raw, outputs
+        self._sample = k
         self._check_envelope(t_sample)
+        return True
 
-    def _filter(self, period: float) -> None:
-        """First-order low-pass of the gained outputs: y_k = y_{k-1} + a (g u_k - y_{k-1}), y_0 = g u_0."""
+    def _filtered(self, raw: list[float], period: float, k: int) -> list[float]:
+        """The low-passed, gained outputs of sample `k`: y_k = y_{k-1} + a (g u_k - y_{k-1}), y_0 = g u_0."""
         gain, cutoff = self._parameters["output_gain"], self._parameters["filter_cutoff"]
-        gained = [gain * u for u in self._raw]
-        if self._sample == 0 or cutoff == 0.0:
-            self._outputs[:] = gained
-            return
+        gained = [gain * u for u in raw]
+        if k == 0 or cutoff == 0.0:
+            return gained
         a = 1.0 - math.exp(-2.0 * math.pi * cutoff * period)
-        self._outputs[:] = [y + a * (u - y) for y, u in zip(self._outputs, gained)]
+        return [y + a * (u - y) for y, u in zip(self._outputs, gained)]
 
     def _check_envelope(self, t_sample: float) -> None:
         """Flag inputs outside the training envelope; report one warning when an input leaves it."""

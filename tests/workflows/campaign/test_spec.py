@@ -36,6 +36,7 @@ def test_a_campaign_expands_to_events_times_variants_with_seeds_per_repeat(quart
         ("coupling", "bogus_setting = 1", ["[coupling]", "bogus_setting"]),
         ("coupling", 'scheme = "leapfrog"', ["[coupling]", "leapfrog"]),
         ("metrics", "basquin_slope = -2", ["[metrics]", "basquin_slope"]),
+        ("metrics", "basquin_slope = 1e308", ["[metrics]", "basquin_slope", "1e+308", "(0, 50]"]),
         ("metrics", "colour = 1", ["[metrics]", "colour"]),
         ("drive", "wheel_count = 4", ["[drive]", "wheel_count"]),
     ],
