@@ -126,6 +126,33 @@ def test_a_parameter_that_is_not_finite_is_refused_naming_element_and_parameter(
         )
 
 
+def test_a_parameter_outside_its_declared_range_is_refused_before_the_run(system: Path, tmp_path: Path) -> None:
+    """filter_cutoff declares min 0 in the network FMU: -5 Hz is refused naming element, parameter and bound."""
+    odd = system.with_name("odd_negative.ssd")
+    odd.write_text(system.read_text(encoding="utf-8").replace('value="0.0"', 'value="-5.0"'), encoding="utf-8")
+    refused(
+        invoke("cosim", odd, "--drive", system.parent / "drive.csv", "--out", tmp_path / "r.csv"),
+        "element 'damper'",
+        "parameter 'filter_cutoff' = -5.0",
+        "min 0",
+    )
+
+
+@pytest.mark.parametrize("master", ["fmpy", "libcosim"])
+def test_an_output_gain_that_overflows_the_output_is_one_error_line(system: Path, tmp_path: Path, master: str) -> None:
+    """output_gain = 1e308 is finite but makes the damper force inf: the FMU refuses the sample and the run ends in
+    one error line (it was a traceback with fmpy and SIGABRT with libcosim), with no result written."""
+    odd = system.with_name(f"odd_gain_{master}.ssd")
+    text = system.read_text(encoding="utf-8").replace('name="filter_cutoff"', 'name="output_gain"')
+    odd.write_text(text.replace('value="0.0"', 'value="1e308"'), encoding="utf-8")
+    plain = ("--scheme", "jacobi", "--no-extrapolate", "--no-refresh") if master == "libcosim" else ()
+    result = invoke(
+        "cosim", odd, "--drive", system.parent / "drive.csv", "--out", tmp_path / "r.csv", "--master", master, *plain
+    )
+    refused(result, "odd_gain" if master == "libcosim" else "output_gain")
+    assert not (tmp_path / "r.csv").exists()
+
+
 def test_rig_leaves_the_old_data_when_the_truth_file_cannot_be_written(tmp_path: Path) -> None:
     data = tmp_path / "dyno.csv"
     made = invoke("rig", "damper", "--out", data, "--duration", "20", "--seed", "1", "--excitation", "random")
