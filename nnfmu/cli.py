@@ -605,6 +605,7 @@ def batch(
             retry_failed=retry_failed,
             reuse_instances=reuse_instances,
             progress=CaseProgress(),
+            warn=lambda line: typer.echo(f"warning: {line}", err=True),
         )
     except NnfmuError as error:
         _fail(error)

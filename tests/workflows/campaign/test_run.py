@@ -7,6 +7,7 @@ import json
 import math
 
 import numpy as np
+import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 import rainflow
@@ -102,6 +103,30 @@ def test_an_interrupted_campaign_resumes_from_its_parts(quarter_car, tmp_path):
     assert metrics_of(read_rows(tmp_path / "out")) == metrics_of(read_rows(tmp_path / "whole"))
     again = run_campaign(path, tmp_path / "out", workers=0)
     assert again.skipped == 6 and again.engine.workers == 0
+
+
+def test_a_resumed_campaign_runs_again_the_cases_whose_part_is_truncated_swapped_or_changed(quarter_car, tmp_path):
+    """A truncated part was a traceback that blocked resuming; a part copied over another case's, or with a row
+    duplicated, was merged (duplicate rows, exit 0). Each is named in a warning and its case runs again."""
+    path = write_campaign(tmp_path, campaign_text(quarter_car, events=2))
+    run_campaign(path, tmp_path / "out", workers=0)
+    expected = metrics_of(read_rows(tmp_path / "out"))
+    parts = sorted((tmp_path / "out" / "parts").iterdir())
+    assert len(parts) == 4
+    truncated, swapped, doubled, kept = parts
+    truncated.write_bytes(truncated.read_bytes()[:100])
+    swapped.write_bytes(kept.read_bytes())
+    table = pq.read_table(doubled)
+    pq.write_table(pa.concat_tables([table, table.slice(0, 1)]), doubled)  # metadata kept, a row more
+    warnings: list[str] = []
+    resumed = run_campaign(path, tmp_path / "out", workers=0, warn=warnings.append)
+    assert (resumed.skipped, resumed.ok) == (1, 4)  # three run again, every case ok
+    assert len(warnings) == 3, warnings
+    for part, words in ((truncated, "cannot read"), (swapped, "does not name case"), (doubled, "checksum")):
+        assert any(str(part) in w and words in w for w in warnings), warnings
+    rows = pq.read_table(tmp_path / "out" / "results.parquet")
+    assert rows.num_rows == len(set(zip(rows.column("case").to_pylist(), rows.column("channel").to_pylist())))
+    assert metrics_of(read_rows(tmp_path / "out")) == expected
 
 
 def test_changed_inputs_rerun_only_their_cases_and_failed_cases_rerun_on_request(quarter_car, tmp_path):
