@@ -401,6 +401,8 @@ def read_campaign(path: str | Path) -> Campaign:
         raw = tomllib.loads(text.decode("utf-8"))
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
         raise CampaignError(f"{path}: cannot read the campaign: {error}") from None
+    except RecursionError:  # tomllib recurses once per nested array or table
+        raise CampaignError(f"{path}: cannot read the campaign: its arrays or tables are nested too deeply") from None
     where = str(path)
     _unknown(raw, TOP_KEYS, where)
     base = path.parent

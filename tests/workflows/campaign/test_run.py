@@ -167,6 +167,20 @@ def test_the_batch_command_names_a_bad_key_and_exits_non_zero(quarter_car, tmp_p
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.parametrize("address", ["not a url", "tcp://", "bogus://host:8786"])
+def test_a_scheduler_address_that_is_not_one_is_one_error_line(quarter_car, tmp_path, address):
+    from typer.testing import CliRunner
+
+    from nnfmu.cli import app
+
+    path = write_campaign(tmp_path, campaign_text(quarter_car))
+    result = CliRunner().invoke(app, ["batch", str(path), "--out", str(tmp_path / "out"), "--scheduler", address])
+    assert result.exit_code == 2, result.output
+    assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
+    last = result.output.strip().splitlines()[-1]
+    assert last.startswith("error: ") and repr(address) in last, result.output
+
+
 def test_the_batch_command_refuses_a_folder_it_did_not_write(quarter_car, tmp_path):
     from typer.testing import CliRunner
 
