@@ -13,6 +13,7 @@ from typer.testing import CliRunner
 from nnfmu.cli import app
 from nnfmu.cosim.linear_damper import linear_damper_graph
 from nnfmu.cosim.ssp import connect_by_name, write_ssd
+from nnfmu.data.drive_files import read_drive, write_drive
 
 runner = CliRunner()
 
@@ -150,6 +151,19 @@ def test_an_output_gain_that_overflows_the_output_is_one_error_line(system: Path
         "cosim", odd, "--drive", system.parent / "drive.csv", "--out", tmp_path / "r.csv", "--master", master, *plain
     )
     refused(result, "odd_gain" if master == "libcosim" else "output_gain")
+    assert not (tmp_path / "r.csv").exists()
+
+
+@pytest.mark.parametrize("delta_t", [b"1.0e300", b"1.0e-300"])
+def test_an_rpc_drive_with_an_absurd_time_step_is_one_error_line(system: Path, tmp_path: Path, delta_t: bytes) -> None:
+    """DELTA_T 1e300 was an OverflowError traceback in cosim, 1e-300 a ZeroDivisionError."""
+    rsp = write_drive(read_drive(system.parent / "drive.csv"), tmp_path / "drive.rsp")
+    data = bytearray(rsp.read_bytes())
+    at = data.index(b"DELTA_T")
+    data[at + 32 : at + 128] = delta_t.ljust(96, b"\0")
+    rsp.write_bytes(bytes(data))
+    result = invoke("cosim", system, "--drive", rsp, "--out", tmp_path / "r.csv")
+    refused(result, "drive.rsp", "DELTA_T", delta_t.decode())
     assert not (tmp_path / "r.csv").exists()
 
 
