@@ -41,8 +41,8 @@ class Resolution:
     format: str
 
     def scaled(self, factor: float) -> "Resolution":
-        """The same resolution in another time unit (`factor` = new units per old unit)."""
-        return Resolution(step=self.step * factor, format=self.format)
+        """The same resolution in another time unit (`factor` = new units per old unit; itself for 1)."""
+        return self if factor == 1.0 else Resolution(step=self.step * factor, format=self.format)
 
 
 def _digits(text: str) -> tuple[int, int] | None:
