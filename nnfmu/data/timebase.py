@@ -160,8 +160,11 @@ def stamp_tolerance(time: np.ndarray, period: float, resolution: Resolution | No
     """How far each stamp of `time` [s] may lie off a uniform base of `period` [s]: the module docstring's rule."""
     time = np.asarray(time, dtype=float)
     noise = FLOAT_NOISE * np.finfo(float).eps * float(np.max(np.abs(time), initial=0.0))
-    tolerance = np.full(time.size, max(TIME_JITTER * abs(period), noise))
-    return tolerance if resolution is None else np.maximum(tolerance, _rounding(resolution))
+    floor = max(TIME_JITTER * abs(period), noise)
+    if resolution is None:
+        return np.full(time.size, floor)
+    tolerance = _rounding(resolution)
+    return np.maximum(tolerance, floor, out=tolerance)
 
 
 def fit_uniform(time: np.ndarray, resolution: Resolution | None = None) -> UniformFit:
@@ -216,9 +219,9 @@ def check_uniform(time: np.ndarray, where: str, resolution: Resolution | None = 
             f"{where}: time does not increase at sample {row}: t = {_g(time[row - 1])} s then {_g(time[row])} s"
         )
     fit = fit_uniform(time, resolution)
-    off = np.abs(fit.deviation) > fit.tolerance
-    if not off.any():
+    if np.all(np.abs(fit.deviation) <= fit.tolerance):
         return fit
+    off = np.abs(fit.deviation) > fit.tolerance
     median = float(np.median(steps))
     jumps = np.flatnonzero(np.abs(steps - median) > fit.tolerance[1:] + fit.tolerance[:-1])
     if jumps.size:
