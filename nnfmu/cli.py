@@ -31,7 +31,26 @@ class _Commands(TyperGroup):
         return super().parse_args(ctx, args)
 
 
-app = typer.Typer(
+def _interrupt(signum: int, frame: object) -> None:
+    """Turn SIGTERM into the KeyboardInterrupt of Ctrl-C, so the same cleanup runs (temporary files and folders)."""
+    raise KeyboardInterrupt(f"signal {signum}")
+
+
+class _Nnfmu(typer.Typer):
+    """The `nnfmu` program: SIGTERM stops it as Ctrl-C does from before the arguments are parsed, even where the
+    parent left SIGTERM ignored (an inherited SIG_IGN made a run carry on to a complete result after two SIGTERMs),
+    and an interrupt anywhere ends in exit status 130."""
+
+    def __call__(self, *args: object, **kwargs: object) -> object:
+        if threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGTERM, _interrupt)
+        try:
+            return super().__call__(*args, **kwargs)
+        except KeyboardInterrupt:
+            raise SystemExit(130) from None
+
+
+app = _Nnfmu(
     cls=_Commands,
     no_args_is_help=True,
     add_completion=False,
@@ -52,14 +71,10 @@ PLATFORMS_HELP = (
 )
 
 
-def _interrupt(signum: int, frame: object) -> None:
-    """Turn SIGTERM into the KeyboardInterrupt of Ctrl-C, so the same cleanup runs (temporary files and folders)."""
-    raise KeyboardInterrupt(f"signal {signum}")
-
-
 @app.callback()
 def _on_start() -> None:
-    """Handle SIGTERM as SIGINT for every command (a scheduler's, a container's or kill's stop signal)."""
+    """Handle SIGTERM as SIGINT for every command (a scheduler's, a container's or kill's stop signal), also where
+    the commands are invoked in-process (unless the embedding program chose its own handler)."""
     if threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
         signal.signal(signal.SIGTERM, _interrupt)
 
@@ -624,6 +639,7 @@ def batch(
             retry_failed=retry_failed,
             reuse_instances=reuse_instances,
             progress=CaseProgress(),
+            warn=lambda line: typer.echo(f"warning: {line}", err=True),
         )
     except NnfmuError as error:
         _fail(error)

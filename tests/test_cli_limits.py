@@ -13,6 +13,7 @@ from typer.testing import CliRunner
 from nnfmu.cli import app
 from nnfmu.cosim.linear_damper import linear_damper_graph
 from nnfmu.cosim.ssp import connect_by_name, write_ssd
+from nnfmu.data.drive_files import read_drive, write_drive
 
 runner = CliRunner()
 
@@ -124,6 +125,46 @@ def test_a_parameter_that_is_not_finite_is_refused_naming_element_and_parameter(
             "parameter 'filter_cutoff'",
             value,
         )
+
+
+def test_a_parameter_outside_its_declared_range_is_refused_before_the_run(system: Path, tmp_path: Path) -> None:
+    """filter_cutoff declares min 0 in the network FMU: -5 Hz is refused naming element, parameter and bound."""
+    odd = system.with_name("odd_negative.ssd")
+    odd.write_text(system.read_text(encoding="utf-8").replace('value="0.0"', 'value="-5.0"'), encoding="utf-8")
+    refused(
+        invoke("cosim", odd, "--drive", system.parent / "drive.csv", "--out", tmp_path / "r.csv"),
+        "element 'damper'",
+        "parameter 'filter_cutoff' = -5.0",
+        "min 0",
+    )
+
+
+@pytest.mark.parametrize("master", ["fmpy", "libcosim"])
+def test_an_output_gain_that_overflows_the_output_is_one_error_line(system: Path, tmp_path: Path, master: str) -> None:
+    """output_gain = 1e308 is finite but makes the damper force inf: the FMU refuses the sample and the run ends in
+    one error line (it was a traceback with fmpy and SIGABRT with libcosim), with no result written."""
+    odd = system.with_name(f"odd_gain_{master}.ssd")
+    text = system.read_text(encoding="utf-8").replace('name="filter_cutoff"', 'name="output_gain"')
+    odd.write_text(text.replace('value="0.0"', 'value="1e308"'), encoding="utf-8")
+    plain = ("--scheme", "jacobi", "--no-extrapolate", "--no-refresh") if master == "libcosim" else ()
+    result = invoke(
+        "cosim", odd, "--drive", system.parent / "drive.csv", "--out", tmp_path / "r.csv", "--master", master, *plain
+    )
+    refused(result, "odd_gain" if master == "libcosim" else "output_gain")
+    assert not (tmp_path / "r.csv").exists()
+
+
+@pytest.mark.parametrize("delta_t", [b"1.0e300", b"1.0e-300"])
+def test_an_rpc_drive_with_an_absurd_time_step_is_one_error_line(system: Path, tmp_path: Path, delta_t: bytes) -> None:
+    """DELTA_T 1e300 was an OverflowError traceback in cosim, 1e-300 a ZeroDivisionError."""
+    rsp = write_drive(read_drive(system.parent / "drive.csv"), tmp_path / "drive.rsp")
+    data = bytearray(rsp.read_bytes())
+    at = data.index(b"DELTA_T")
+    data[at + 32 : at + 128] = delta_t.ljust(96, b"\0")
+    rsp.write_bytes(bytes(data))
+    result = invoke("cosim", system, "--drive", rsp, "--out", tmp_path / "r.csv")
+    refused(result, "drive.rsp", "DELTA_T", delta_t.decode())
+    assert not (tmp_path / "r.csv").exists()
 
 
 def test_rig_leaves_the_old_data_when_the_truth_file_cannot_be_written(tmp_path: Path) -> None:

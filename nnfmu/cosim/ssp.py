@@ -19,6 +19,7 @@ from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from nnfmu.atomic import atomic_path
 from nnfmu.cosim.units import PortUnit, UnitError, input_conversion, port_unit
@@ -323,7 +324,28 @@ def check_against_fmus(system: SystemStructure) -> None:
                     f"{kind} but is {variable.causality} in {fmu.name}"
                 )
             units[(element.name, name)] = port_unit(variable, description.unitDefinitions or ())
+            if kind == "parameter":
+                _check_range(system, element, name, variable, fmu)
     _check_units(system, units)
+
+
+def _check_range(system: SystemStructure, element: Element, name: str, variable: Any, fmu: Path) -> None:
+    """SspError naming the element, parameter and bound when a parameter value lies outside the min/max its FMU
+    declares (the FMU would refuse it only at run time)."""
+    value = element.parameters[name]
+    for bound, outside in (("min", lambda b: value < b), ("max", lambda b: value > b)):
+        text = getattr(variable, bound, None)
+        if text is None:
+            continue
+        try:
+            limit = float(text)
+        except ValueError:
+            continue
+        if outside(limit):
+            raise SspError(
+                f"system {system.name!r}: element {element.name!r}: parameter {name!r} = {value!r} lies outside "
+                f"the {bound} {limit:g} that {fmu.name} declares"
+            )
 
 
 def _check_units(system: SystemStructure, units: Mapping[tuple[str, str], PortUnit]) -> None:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import csv
 import re
 from pathlib import Path
+from typing import TextIO
 
 import numpy as np
 
@@ -20,9 +21,11 @@ from nnfmu.data.channel_map import first_duplicate
 from nnfmu.data.errors import DataError
 from nnfmu.data.measurement import Measurement
 from nnfmu.data.raw import RawTable
-from nnfmu.data.timebase import printed_resolution
+from nnfmu.data.timebase import combine_digits, digits_resolution, printed_digits
 
 MAX_HEADER_CHARS = 65536  # a header of 1000 channels with 64-character names fits
+CHUNK_CHARS = 1 << 20  # characters of data lines parsed at a time (a few MB of Python strings)
+Digits = tuple[int, int] | None  # (significant digits, decimals) the time stamps show (`timebase.printed_digits`)
 
 _BRACKETS = (("[", "]"), ("(", ")"))
 _FORBIDDEN_IN_NAME = re.compile(r"[\[\](),;\t\r\n]")
@@ -64,14 +67,17 @@ def _parse_header_cell(cell: str, column: int, path: Path) -> tuple[str, str]:
     return split[0], unit
 
 
-def _diagnose_rows(lines: list[str], delimiter: str, header: list[str], path: Path, reason: str) -> DataError:
-    """The error for the first data line that does not parse (numbers as in the file, line 1 = the header)."""
+def _diagnose_rows(
+    lines: list[str], delimiter: str, header: list[str], path: Path, reason: str, before: int = 0
+) -> DataError:
+    """The error for the first data line that does not parse (numbers as in the file, line 1 = the header, `before`
+    data lines read before these)."""
     for offset, line in enumerate(lines):
         try:
             cells = next(csv.reader([line], delimiter=delimiter), [])
         except csv.Error as error:
-            return DataError(f"{path}: line {offset + 2} cannot be split into cells: {error}")
-        line = offset + 2
+            return DataError(f"{path}: line {before + offset + 2} cannot be split into cells: {error}")
+        line = before + offset + 2
         if not cells:
             continue
         if len(cells) != len(header):
@@ -84,20 +90,53 @@ def _diagnose_rows(lines: list[str], delimiter: str, header: list[str], path: Pa
     return DataError(f"{path}: cannot read the data rows: {reason}")
 
 
-def _read_text(path: Path) -> tuple[str, str]:
-    """(header line, rest of the file) as UTF-8 text; DataError for an unreadable file or an overlong header line."""
-    try:
-        with path.open(encoding="utf-8-sig", newline="") as stream:
-            header_line = stream.readline(MAX_HEADER_CHARS + 1)
-            if len(header_line) > MAX_HEADER_CHARS:
-                raise DataError(
-                    f"{path}: the header line is longer than {MAX_HEADER_CHARS} characters; expected a header like "
-                    f"'time [s],displacement [m],force [N]'"
-                )
-            body = stream.read()
-    except (OSError, UnicodeDecodeError) as error:
-        raise DataError(f"{path}: cannot read as UTF-8 text: {error}") from None
-    return header_line.rstrip("\r\n"), body
+def _header_line(stream: TextIO, path: Path) -> str:
+    """The header line without its line end; DataError for an overlong one, before the rest is read."""
+    header_line = stream.readline(MAX_HEADER_CHARS + 1)
+    if len(header_line) > MAX_HEADER_CHARS:
+        raise DataError(
+            f"{path}: the header line is longer than {MAX_HEADER_CHARS} characters; expected a header like "
+            f"'time [s],displacement [m],force [N]'"
+        )
+    return header_line.rstrip("\r\n")
+
+
+def _data_blocks(stream: TextIO, delimiter: str, header: list[str], path: Path) -> tuple[list[np.ndarray], Digits]:
+    """The data rows as float64 blocks of about CHUNK_CHARS characters each, and the time column's printed digits:
+    the text is parsed a chunk at a time, so it is never held whole."""
+    blocks: list[np.ndarray] = []
+    digits = None
+    before = 0
+    while True:
+        chunk = stream.readlines(CHUNK_CHARS)
+        if not chunk:
+            return blocks, digits
+        lines = [line.rstrip("\r\n") for line in chunk if line.strip()]
+        del chunk
+        if not lines:
+            continue
+        try:
+            block = np.loadtxt(lines, delimiter=delimiter, ndmin=2, dtype=np.float64)
+        except ValueError as error:
+            raise _diagnose_rows(lines, delimiter, header, path, str(error), before) from None
+        if block.shape[1] != len(header):
+            raise _diagnose_rows(lines, delimiter, header, path, f"{block.shape[1]} values per row", before)
+        digits = combine_digits(digits, printed_digits(line.split(delimiter, 1)[0] for line in lines))
+        blocks.append(block)
+        before += len(lines)
+
+
+def _columns(blocks: list[np.ndarray], width: int) -> list[np.ndarray]:
+    """Each column of the stacked `blocks` as its own contiguous array (the blocks are emptied on the way)."""
+    n = sum(len(b) for b in blocks)
+    columns = [np.empty(n) for _ in range(width)]
+    row = 0
+    while blocks:
+        block = blocks.pop(0)
+        for j, column in enumerate(columns):
+            column[row : row + len(block)] = block[:, j]
+        row += len(block)
+    return columns
 
 
 def _refuse_duplicates(names: list[str], header: list[str], path: Path) -> None:
@@ -111,36 +150,32 @@ def _refuse_duplicates(names: list[str], header: list[str], path: Path) -> None:
 
 
 def read_csv(path: Path) -> RawTable:
-    """Read a CSV rig file as stored (units not converted); raise DataError naming the line or column at fault."""
-    header_line, body = _read_text(path)
-    if not header_line.strip():
-        raise DataError(f"{path}: empty file, expected a header like 'time [s],displacement [m],force [N]'")
-    delimiter = _delimiter(header_line)
-    header = next(csv.reader([header_line], delimiter=delimiter))
-    columns = [_parse_header_cell(cell, i, path) for i, cell in enumerate(header)]
-    names = [name for name, _ in columns]
-    if names[0].lower() != "time":
-        raise DataError(f"{path}: the first column must be 'time [s]', found {header[0].strip()!r}")
-    if len(names) < 2:
-        raise DataError(f"{path}: no channels besides time")
-    _refuse_duplicates(names, header, path)
-    lines = [line for line in body.splitlines() if line.strip()]
-    if lines:
-        try:
-            data = np.loadtxt(lines, delimiter=delimiter, ndmin=2, dtype=np.float64)
-        except ValueError as error:
-            raise _diagnose_rows(lines, delimiter, header, path, str(error)) from None
-    else:
-        data = np.empty((0, len(columns)))
-    if data.shape[1] != len(columns):
-        raise _diagnose_rows(lines, delimiter, header, path, f"{data.shape[1]} values per row")
-    time_cells = [line.split(delimiter, 1)[0] for line in lines]
+    """Read a CSV rig file as stored (units not converted); raise DataError naming the line or column at fault.
+    The rows are parsed in chunks into float64 columns (peak memory about twice the columns' size)."""
+    try:
+        with path.open(encoding="utf-8-sig", newline="") as stream:
+            header_line = _header_line(stream, path)
+            if not header_line.strip():
+                raise DataError(f"{path}: empty file, expected a header like 'time [s],displacement [m],force [N]'")
+            delimiter = _delimiter(header_line)
+            header = next(csv.reader([header_line], delimiter=delimiter))
+            columns = [_parse_header_cell(cell, i, path) for i, cell in enumerate(header)]
+            names = [name for name, _ in columns]
+            if names[0].lower() != "time":
+                raise DataError(f"{path}: the first column must be 'time [s]', found {header[0].strip()!r}")
+            if len(names) < 2:
+                raise DataError(f"{path}: no channels besides time")
+            _refuse_duplicates(names, header, path)
+            blocks, digits = _data_blocks(stream, delimiter, header, path)
+    except (OSError, UnicodeDecodeError) as error:
+        raise DataError(f"{path}: cannot read as UTF-8 text: {error}") from None
+    time, *values = _columns(blocks, len(columns))
     return RawTable(
-        time=data[:, 0].copy(),
+        time=time,
         time_unit=columns[0][1],
-        channels={name: data[:, i].copy() for i, (name, _) in enumerate(columns[1:], start=1)},
+        channels={name: column for (name, _), column in zip(columns[1:], values)},
         units={name: unit for name, unit in columns[1:]},
-        time_resolution=printed_resolution(time_cells, data[:, 0]),
+        time_resolution=digits_resolution(digits, time),
     )
 
 

@@ -25,6 +25,7 @@ from nnfmu.data.checks import check_measurement
 from nnfmu.data.errors import DataError
 from nnfmu.data.load import load_measurement
 from nnfmu.data.measurement import Measurement
+from nnfmu.data.rpc_header import check_rpc_header, read_rpc_header
 from nnfmu.data.save import save_measurement
 from nnfmu.data.units import to_si
 
@@ -142,10 +143,15 @@ def _read_rpc(path: Path) -> Measurement:
     if not path.is_file():
         raise DataError(f"{path}: no such file")
     try:
+        check_rpc_header(path, read_rpc_header(path))
         with _quiet_rpc3():
             channels, params = rpc3_file.read(str(path))
-    except (OSError, ValueError, KeyError, TypeError, IndexError) as error:
-        raise DataError(f"{path}: not a readable RPC III time-history file: {error}") from None
+    except OSError as error:
+        raise DataError(f"{path}: cannot read the RPC III file: {error}") from None
+    except (ValueError, KeyError, TypeError, IndexError, ArithmeticError) as error:
+        if isinstance(error, DataError):
+            raise
+        raise DataError(f"{path}: not a readable RPC III time-history file (rpc3: {error})") from None
     if not channels:
         raise DataError(f"{path}: RPC III file without channels")
     source = str(path)

@@ -26,7 +26,8 @@ MTS_SUFFIXES = (".dat", ".txt")  # read only as MTS 793 exports; a `.csv` starti
 def to_measurement(raw: RawTable, source: str, min_samples: int = 16) -> Measurement:
     """Convert every channel of a file's table to SI (see `units.to_si`) as a `Measurement` from `source` with at
     least `min_samples` samples, its stamps replaced by their least-squares uniform base where they stray within
-    their resolution or a clock's scatter (said in `notes["time"]`; see `timebase`)."""
+    their resolution or a clock's scatter (said in `notes["time"]`; see `timebase`). The channels are taken out of
+    `raw` as they are converted, so that a large table is not held twice."""
     time, _ = to_si(raw.time, raw.time_unit, "time", source)
     check_sample_count(len(time), min_samples, source)
     resolution = None
@@ -35,8 +36,8 @@ def to_measurement(raw: RawTable, source: str, min_samples: int = 16) -> Measure
         resolution = raw.time_resolution.scaled(scale)
     channels = {}
     units = {}
-    for name, values in raw.channels.items():
-        channels[name], units[name] = to_si(values, raw.units[name], name, source)
+    for name in list(raw.channels):
+        channels[name], units[name] = to_si(raw.channels.pop(name), raw.units[name], name, source)
     notes = dict(raw.notes)
     kept = [f"{name} [{units[name]}]" for name in channels if units[name] not in SI_UNITS]
     if kept:

@@ -28,7 +28,7 @@ exactly what the loaders accept.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -49,8 +49,8 @@ class Resolution:
     format: str
 
     def scaled(self, factor: float) -> "Resolution":
-        """The same resolution in another time unit (`factor` = new units per old unit)."""
-        return Resolution(step=self.step * factor, format=self.format)
+        """The same resolution in another time unit (`factor` = new units per old unit; itself for 1)."""
+        return self if factor == 1.0 else Resolution(step=self.step * factor, format=self.format)
 
 
 def _digits(text: str) -> tuple[int, int] | None:
@@ -70,23 +70,45 @@ def _digits(text: str) -> tuple[int, int] | None:
     return len(significant), len(fraction) - exponent
 
 
+def printed_digits(cells: Iterable[str]) -> tuple[int, int] | None:
+    """(most significant digits, most decimals) any of the stamps printed as `cells` shows, or None if no cell shows
+    a digit; what `printed_resolution` infers the file's format from, gathered a chunk of cells at a time by
+    `combine_digits`."""
+    found = None
+    for counts in map(_digits, cells):
+        if counts is not None:
+            found = counts if found is None else (max(found[0], counts[0]), max(found[1], counts[1]))
+    return found
+
+
+def combine_digits(a: tuple[int, int] | None, b: tuple[int, int] | None) -> tuple[int, int] | None:
+    """The `printed_digits` of two runs of cells together."""
+    if a is None or b is None:
+        return a if b is None else b
+    return max(a[0], b[0]), max(a[1], b[1])
+
+
 def printed_resolution(cells: Sequence[str], values: np.ndarray) -> Resolution | None:
     """The resolution of time stamps printed as `cells` (their text) with the parsed `values`, or None if no cell
-    shows a digit.
+    shows a digit (`digits_resolution` of `printed_digits`)."""
+    return digits_resolution(printed_digits(cells), values)
+
+
+def digits_resolution(digits: tuple[int, int] | None, values: np.ndarray) -> Resolution | None:
+    """The resolution of stamps `values` printed with `digits` = (S, D) from `printed_digits`, or None.
 
     The file's format is inferred from all cells: the most significant digits any stamp shows (S, for `%.8g`-style
     stamps whose last digit moves with the magnitude) and the most decimals (D, for fixed-decimal stamps). A stamp's
     resolution is the coarser of 10^-D and one unit in its S-th significant digit, which is the format's own
     resolution whichever of the two styles the file uses (trailing zeros a `%g` format drops do not count against it).
     """
-    counts = [d for d in map(_digits, cells) if d is not None]
-    if not counts:
+    if digits is None:
         return None
-    significant = max(s for s, _ in counts)
-    decimals = max(d for _, d in counts)
+    significant, decimals = digits
     magnitude = np.abs(np.asarray(values, dtype=float))
     exponent = np.floor(np.log10(np.where(magnitude > 0, magnitude, 1.0)))
     by_digits = np.where(magnitude > 0, 10.0 ** (exponent - significant + 1), 0.0)
+    del exponent, magnitude
     step = np.maximum(10.0**-decimals, by_digits)
     coarser_by_digits = step.size > 0 and float(np.max(by_digits)) > 10.0**-decimals
     style = f"{significant} significant digits" if coarser_by_digits else f"{decimals} decimals"
@@ -129,29 +151,44 @@ def _rounding(resolution: Resolution) -> np.ndarray:
     to stamps carrying independent rounding errors, uniform over one resolution step (variance step²/12)."""
     step = resolution.step
     n = step.size
-    k = np.arange(n) - (n - 1) / 2.0
-    variance = float(np.mean(step**2)) / 12.0
-    line_sigma = np.sqrt(variance * (1.0 / n + k**2 / max(float(np.dot(k, k)), 1.0)))
-    return 0.5 * step + RESOLUTION_SIGMAS * line_sigma
+    variance = float(np.dot(step, step)) / max(n, 1) / 12.0
+    spread = np.arange(n, dtype=float)  # k, then the line's standard deviation at k, in place (one array of n)
+    spread -= (n - 1) / 2.0
+    sum_k2 = max(float(np.dot(spread, spread)), 1.0)
+    np.square(spread, out=spread)
+    spread *= variance / sum_k2
+    spread += variance / max(n, 1)
+    np.sqrt(spread, out=spread)
+    spread *= RESOLUTION_SIGMAS
+    spread += 0.5 * step
+    return spread
 
 
 def stamp_tolerance(time: np.ndarray, period: float, resolution: Resolution | None = None) -> np.ndarray:
     """How far each stamp of `time` [s] may lie off a uniform base of `period` [s]: the module docstring's rule."""
     time = np.asarray(time, dtype=float)
     noise = FLOAT_NOISE * np.finfo(float).eps * float(np.max(np.abs(time), initial=0.0))
-    tolerance = np.full(time.size, max(CLOCK_SCATTER * abs(period), noise))
-    return tolerance if resolution is None else np.maximum(tolerance, _rounding(resolution))
+    floor = max(CLOCK_SCATTER * abs(period), noise)
+    if resolution is None:
+        return np.full(time.size, floor)
+    tolerance = _rounding(resolution)
+    return np.maximum(tolerance, floor, out=tolerance)
 
 
 def fit_uniform(time: np.ndarray, resolution: Resolution | None = None) -> UniformFit:
     """Fit t_k = start + k·period to `time` (shape (n,), n >= 2, in s) by least squares; tolerances as documented."""
     time = np.asarray(time, dtype=float)
     n = time.size
-    k = np.arange(n) - (n - 1) / 2.0
+    k = np.arange(n, dtype=float)
+    k -= (n - 1) / 2.0
     offset = time - time[0]  # fitting relative to the first stamp keeps the sums well conditioned
     mean = float(np.mean(offset))
-    period = float(np.dot(k, offset - mean) / np.dot(k, k))
-    deviation = offset - (mean + k * period)
+    offset -= mean
+    period = float(np.dot(k, offset) / np.dot(k, k))
+    k *= period
+    offset -= k  # the deviation, in place: offset - mean - k * period
+    deviation = offset
+    del k
     noise = FLOAT_NOISE * np.finfo(float).eps * float(np.max(np.abs(time)))
     tolerance = stamp_tolerance(time, period, resolution)
     start = float(time[0] + mean - period * (n - 1) / 2.0)
@@ -190,9 +227,9 @@ def check_uniform(time: np.ndarray, where: str, resolution: Resolution | None = 
             f"{where}: time does not increase at sample {row}: t = {_g(time[row - 1])} s then {_g(time[row])} s"
         )
     fit = fit_uniform(time, resolution)
-    off = np.abs(fit.deviation) > fit.tolerance
-    if not off.any():
+    if np.all(np.abs(fit.deviation) <= fit.tolerance):
         return fit
+    off = np.abs(fit.deviation) > fit.tolerance
     median = float(np.median(steps))
     jumps = np.flatnonzero(np.abs(steps - median) > fit.tolerance[1:] + fit.tolerance[:-1])
     if jumps.size:

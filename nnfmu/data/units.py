@@ -255,4 +255,6 @@ def to_si(values: np.ndarray, unit: str, channel: str, source: str | None = None
             f"{quantity.name} units are {quantity.listing()}"
         )
     scale, offset = quantity.units[spelling]
-    return np.asarray(values, dtype=np.float64) * scale + offset, quantity.si
+    converted = np.multiply(np.asarray(values, dtype=np.float64), scale)  # one new array: x * scale + offset
+    converted += offset
+    return converted, quantity.si

@@ -47,6 +47,9 @@ CHECKSUMS = {
 MANIFEST_PATH = f"{LS_FOLDER}/{MANIFEST}"
 
 
+MODEL_DESCRIPTION = "modelDescription.xml"
+
+
 class CheckError(NnfmuError):
     """The FMU or its reference data cannot be read; the message names the file and what is wrong."""
 
@@ -277,7 +280,10 @@ def _run(folder: str, experiment: Experiment, archive: _Archive, tolerance: floa
     if experiment.references is None:
         result.skipped = "no references"
         return result
-    md = read_model_description(folder)
+    try:
+        md = read_model_description(folder)
+    except Exception as error:  # fmpy raises plain exceptions for malformed XML and missing attributes
+        raise CheckError(f"{archive.path}: cannot read its {MODEL_DESCRIPTION}: {error}") from None
     names = {v.name for v in md.modelVariables}
     header, reference = _table(archive, experiment.references, "references")
     unknown = [n for n in header[1:] if n not in names]
@@ -341,6 +347,8 @@ def check_fmu(path: str | Path, tolerance: float | None = None) -> CheckReport:
     archive = _Archive(path)
     if MANIFEST_PATH not in archive.files:
         raise CheckError(f"{path}: no reference results ({MANIFEST_PATH} is not in the FMU)")
+    if MODEL_DESCRIPTION not in archive.files:
+        raise CheckError(f"{path}: no {MODEL_DESCRIPTION} in the FMU (every FMU holds one at its top level)")
     experiments, checksum_errors = read_experiments(archive)
     if not experiments:
         raise CheckError(f"{path}: {MANIFEST_PATH} lists no experiment")

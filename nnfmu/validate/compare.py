@@ -10,6 +10,7 @@ import numpy as np
 from nnfmu.data.errors import DataError
 from nnfmu.data.measurement import Measurement
 from nnfmu.data.units import base_name
+from nnfmu.validate.damage import MAX_SLOPE
 from nnfmu.validate.spectra import Spectrum, welch_psd
 from nnfmu.validate.summary import ChannelMetrics, channel_metrics
 
@@ -37,8 +38,10 @@ class ValidationSettings:
 
     def __post_init__(self) -> None:
         for key, value in {"basquin_slope": self.basquin_slope, **self.slopes}.items():
-            if not value > 0:
-                raise ValidationError(f"Basquin slope for {key!r} must be positive, got {value!r}")
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value <= MAX_SLOPE:
+                raise ValidationError(
+                    f"Basquin slope for {key!r} must be a number in (0, {MAX_SLOPE:g}], got {value!r}"
+                )
         if not (self.fmax > 0 and self.psd_resolution > 0 and self.window_length > 0):
             raise ValidationError(
                 f"fmax, psd_resolution and window_length must be positive, got {self.fmax!r} Hz, "

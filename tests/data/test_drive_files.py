@@ -134,3 +134,37 @@ def test_rewriting_a_drive_file_replaces_it_whole(tmp_path, drive):
     write_drive(shorter, path, rpc_data_type="float32")
     assert len(read_drive(path)) == 1000
     assert _files_in(tmp_path) == ["drive.tim"]
+
+
+def with_header_field(source, target, key: str, value: bytes):
+    """A copy of the RPC III file `source` at `target` with header field `key` set to `value`."""
+    data = bytearray(source.read_bytes())
+    at = next(i for i in range(0, len(data), 128) if data[i : i + 32].rstrip(b"\0 ") == key.encode())
+    data[at + 32 : at + 128] = value.ljust(96, b"\0")
+    target.write_bytes(bytes(data))
+    return target
+
+
+@pytest.mark.parametrize(
+    "key, value, words",
+    [
+        ("DELTA_T", b"1.0e300", "DELTA_T = '1.0e300' s is not a sample period in [1e-09, 10000] s"),
+        ("DELTA_T", b"1.0e-300", "DELTA_T = '1.0e-300' s is not a sample period"),
+        ("DELTA_T", b"1e300", "DELTA_T = '1e300' is not a finite number with a decimal point"),
+        ("DELTA_T", b"nan", "DELTA_T = 'nan' is not a finite number"),
+        ("CHANNELS", b"x4", "CHANNELS = 'x4' is not a whole number"),
+        ("CHANNELS", b"999999999", "CHANNELS = 999999999 is outside [1, 4096]"),
+        ("NUM_PARAMS", b"-3", "NUM_PARAMS = -3 is outside"),
+        ("DATA_TYPE", b"COMPLEX", "DATA_TYPE = 'COMPLEX' is not one of"),
+        ("SCALE.CHAN_2", b"big", "SCALE.CHAN_2 = 'big' is not a finite number"),
+        ("FRAMES", b"1.5", "FRAMES = '1.5' is not a whole number"),
+    ],
+)
+def test_a_bad_rpc_header_field_is_named_with_the_file(tmp_path, drive, key, value, words):
+    """These were tracebacks (DELTA_T 1e300: OverflowError, 1e-300: ZeroDivisionError, in cosim) or the rpc3
+    package's messages naming no field ("'<' not supported between instances of 'str' and 'int'")."""
+    good = write_drive(drive, tmp_path / "good.rsp")
+    bad = with_header_field(good, tmp_path / "bad.rsp", key, value)
+    with pytest.raises(DataError) as caught:
+        read_drive(bad)
+    assert str(bad) in str(caught.value) and words in str(caught.value), str(caught.value)

@@ -504,6 +504,33 @@ def test_non_finite_input_is_refused_with_an_error_status_and_a_logged_message(c
     np.testing.assert_allclose(m.outputs_now(), reference.simulate(inputs, T)[-1], rtol=RTOL, atol=ATOL)
 
 
+@pytest.mark.parametrize("gain", [4.6e305, 1e308])
+def test_an_output_gain_that_makes_an_output_infinite_discards_the_sample_with_a_logged_message(
+    combo, built, master, gain
+):
+    """A finite output_gain times a network output can overflow: at 4.6e305 sample 0 (outputs up to 362) is finite
+    and a step with larger outputs (405) is not; at 1e308 sample 0 already overflows. The FMU refuses the call with an
+    error status (native: Error from the call itself; pythonfmu: Discard from the first doStep) and a message naming
+    the output and the gain; it never reports inf with OK."""
+    backend, fmi = combo
+    m = master(built("delay", backend, fmi))
+    if gain < 1e308:
+        m.initialize([0.0, 0.0], parameters={"output_gain": gain})
+        kept = m.outputs_now()
+        assert np.all(np.isfinite(kept))
+        m.set_real(m.inputs, [1.0, -0.1])
+        assert m.refused(m.do_step, 0.0, T) == REFUSED_STEP[backend]
+        np.testing.assert_array_equal(m.outputs_now(), kept)
+    else:
+        status = m.refused(m.initialize, [0.0, 0.0], 0.0, {"output_gain": gain})
+        if backend == "native":
+            assert status == ERROR
+        else:
+            assert status == OK and m.refused(m.do_step, 0.0, T) == DISCARD
+    errors = m.logged(ERROR)
+    assert any("output_gain" in e and "discarded" in e for e in errors), m.messages
+
+
 def test_a_step_before_initialisation_and_a_step_at_the_wrong_time_are_refused(combo, built, master):
     backend, fmi = combo
     m = master(built("delay", backend, fmi))

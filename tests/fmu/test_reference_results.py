@@ -246,3 +246,12 @@ def test_malformed_stimulus_fails_the_build_naming_the_key(network, tmp_path):
     with pytest.raises(FmuBuildError, match="nnfmu.reference_stimulus.*sample 0"):
         build_fmu(tmp_path / "bad.onnx", BuildOptions(out=tmp_path / "bad.fmu"))
     assert not (tmp_path / "bad.fmu").exists()
+
+
+def test_an_fmu_without_its_model_description_is_one_check_error(network, tmp_path):
+    """An FMU with reference results but no modelDescription.xml was a traceback from fmpy."""
+    broken = _replace(network["fmi2"], {}, tmp_path / "nomd.fmu", drop=("modelDescription.xml",))
+    with pytest.raises(CheckError, match=r"nomd\.fmu.*modelDescription\.xml"):
+        check_fmu(broken)
+    result = CliRunner().invoke(app, ["check", str(broken)])
+    assert result.exit_code == 2 and result.output.startswith("error: "), result.output

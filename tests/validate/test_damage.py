@@ -1,9 +1,12 @@
 """Rainflow counting against a hand count, and Basquin pseudo-damage scaling laws."""
 
+import math
+
 import numpy as np
 import pytest
 
-from nnfmu.validate.damage import pseudo_damage, pseudo_damage_ratio, rainflow_cycles
+from nnfmu.validate.compare import ValidationError, ValidationSettings
+from nnfmu.validate.damage import DamageError, pseudo_damage, pseudo_damage_ratio, rainflow_cycles
 
 # ASTM E1049-85 rainflow example (its Fig. 6), counted by hand with the three-point rule:
 # half cycles A-B (3), B-C (4), C-D (8), D-G (9), G-H (8), H-I (6) and one full cycle E-F (4).
@@ -56,3 +59,19 @@ def test_no_cycles_gives_nan_ratio_and_zero_damage():
 def test_non_positive_slope_is_refused():
     with pytest.raises(ValueError, match="slope"):
         pseudo_damage(ASTM_EXAMPLE, 0.0)
+
+
+@pytest.mark.parametrize("slope", [1e308, 51.0, math.inf, math.nan])
+def test_a_slope_past_the_range_is_refused_naming_it(slope):
+    """A Basquin slope of 1e308 made every damage inf, which a campaign marked ok."""
+    with pytest.raises(DamageError, match=r"Basquin slope = .*\(0, 50\]"):
+        pseudo_damage(ASTM_EXAMPLE, slope)
+    with pytest.raises(ValidationError, match="Basquin slope"):
+        ValidationSettings(slopes={"force": slope})
+
+
+def test_a_damage_too_large_for_a_float_is_an_error_not_inf():
+    """Ranges of 1e7 (a force in N) to the slope 50 overflow: an error naming the slope and the range."""
+    with pytest.raises(DamageError, match=r"slope 50.*1e\+07"):
+        pseudo_damage(np.array([0.0, 1e7, 0.0, 1e7, 0.0]), 50.0)
+    assert math.isfinite(pseudo_damage(np.array([0.0, 1e5, 0.0, 1e5, 0.0]), 50.0))

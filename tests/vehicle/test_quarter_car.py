@@ -293,3 +293,10 @@ def test_monolithic_with_the_truth_damper_differs_from_the_spline_baseline(param
         np.abs(spline["damper_velocity"])
     )
     assert 1e-3 < relative < 0.5
+
+
+def test_a_parameter_file_nested_too_deeply_is_refused_naming_the_file(tmp_path) -> None:
+    path = tmp_path / "deep.toml"
+    path.write_text("body = " + "{ a = " * 20_000 + "\n", encoding="utf-8")
+    with pytest.raises(ParameterError, match=r"deep\.toml.*nested too deeply"):
+        VehicleParameters.load(path)

@@ -127,3 +127,17 @@ def test_a_record_without_any_channel_of_the_virtual_car_is_refused(virtual_car,
     with pytest.raises(VehicleLoopError, match="no measured channel is an output of the virtual car"):
         run_vehicle_loop(path, ssd, drive, tmp_path / "out", SETTINGS, log=lambda _: None)
     assert not (tmp_path / "out").exists()
+
+
+def test_a_record_that_does_not_match_its_drive_is_not_called_consistent(virtual_car, tmp_path: Path) -> None:
+    """The lab car's record cut 0.7 s late but stamped from 0 s: its channels are ~140 % off the virtual car's and
+    nothing tested explains that; the summary says it is beyond the error budget, never consistent with it."""
+    ssd, drive = virtual_car
+    m = lab_car_record(LabCar(system="quarter-car"), read_drive(drive))
+    n = int(round(0.7 / m.sample_period))
+    cut = Measurement(m.time[:-n], {c: m[c][n:] for c in m.names}, dict(m.units), "lab")
+    record = save_measurement(cut, tmp_path / "cut.csv")
+    report = run_vehicle_loop(record, ssd, drive, tmp_path / "out", SETTINGS, log=lambda _: None)
+    assert max(pair["before"].nrmse for pair in report.channels.values()) > 1.0
+    assert "NOT consistent with the co-simulation error budget" in report.summary, report.summary
+    assert "budget 25%" in report.summary

@@ -225,8 +225,7 @@ class SampledComponent:
         if self._refused:
             self._report(f"initialisation ends with refused values: {'; '.join(self._refused.values())}", "error")
             return False
-        self._evaluate(self._period or 0.0, self._t_start or 0.0)
-        return True
+        return self._evaluate(self._period or 0.0, self._t_start or 0.0)
 
     def step(self, current_time: float, step_size: float) -> bool:
         """Evaluate every sample t_k with current_time < t_k <= current_time + step_size; False refuses the step.
@@ -253,7 +252,8 @@ class SampledComponent:
             return False
         end = current_time + step_size
         if self._period is None:
-            self._evaluate(step_size, end)
+            if not self._evaluate(step_size, end):
+                return False
         else:
             t_start = self._t_start if self._t_start is not None else 0.0
             due = (end - t_start) / self._period + REACHED - self._sample
@@ -267,12 +267,14 @@ class SampledComponent:
                 return False
             while t_start + (self._sample + 1) * self._period <= end + REACHED * self._period:
                 offset = (self._sample + 1) * self._period  # times since the start: no rounding of large t_start
-                self._evaluate(offset - self._evaluated_at, t_start + offset)
+                if not self._evaluate(offset - self._evaluated_at, t_start + offset):
+                    return False
                 self._evaluated_at = offset
             self._elapsed = _compensated_sum(*self._elapsed, step_size)
             alpha = (self._elapsed[0] - self._sample * self._period) / self._period
             if alpha > REACHED:
-                self._evaluate_between(min(alpha, 1.0), self._elapsed[0] - self._evaluated_at)
+                if not self._evaluate_between(min(alpha, 1.0), self._elapsed[0] - self._evaluated_at):
+                    return False
                 self._evaluated_at = self._elapsed[0]
         self._time = end
         return True
@@ -306,36 +308,60 @@ class SampledComponent:
             self._preview = ([gain * u for u in raw], outside)
         return self._preview
 
-    def _evaluate(self, period: float, t_sample: float) -> None:
-        """Run the graph for the next sample, advance its state, filter the outputs (over `period` seconds) and
-        check the envelope."""
+    def _evaluate(self, period: float, t_sample: float) -> bool:
+        """Run the graph for the next sample, advance its state, filter the outputs (over `period` seconds) and check
+        the envelope; a non-finite state or output discards the sample (reported, False), as the native FMU does."""
+        graph_state, raw = self._run_graph()
+        k = self._sample + 1
+        for name, values in graph_state.items():
+            if not all(map(math.isfinite, values)):
+                self._report(f"state tensor {name!r} of sample {k} is not finite; the sample is discarded", "error")
+                return False
+        outputs = self._filtered(raw, period, first=k == 0)
+        if not self._finite_outputs(outputs, raw, f"sample {k}"):
+            return False
         self._graph_state_before = self._graph_state
-        self._graph_state, self._raw = self._run_graph()
-        self._sample += 1
-        self._filter(period, first=self._sample == 0)
+        self._graph_state, self._raw, self._outputs[:] = graph_state, raw, outputs
+        self._sample = k
         self._check_envelope(t_sample)
+        return True
 
-    def _evaluate_between(self, alpha: float, period: float) -> None:
+    def _evaluate_between(self, alpha: float, period: float) -> bool:
         """Outputs at a communication point a fraction `alpha` of the period after the latest sample: the graph on
         the current inputs and the state interpolated between the latest sample's own and the one after it; only
-        the output filter (over `period` seconds) advances (docs/fmu.md)."""
+        the output filter (over `period` seconds) advances (docs/fmu.md). Non-finite outputs: reported, False."""
         between = {
             name: [(1.0 - alpha) * b + alpha * a for b, a in zip(self._graph_state_before[name], after)]
             for name, after in self._graph_state.items()
         }
-        _, self._raw = self._run_graph(between)
-        self._filter(period)
+        _, raw = self._run_graph(between)
+        outputs = self._filtered(raw, period)
+        if not self._finite_outputs(outputs, raw, f"the communication point after sample {self._sample}"):
+            return False
+        self._raw, self._outputs[:] = raw, outputs
+        return True
 
-    def _filter(self, period: float, first: bool = False) -> None:
-        """First-order low-pass of the gained outputs over `period` seconds: y = y + a (g u - y), y_0 = g u_0 at the
+    def _finite_outputs(self, outputs: list[float], raw: list[float], where: str) -> bool:
+        """True when every output is finite, else reports the first that is not (the evaluation is discarded)."""
+        for port, value, u in zip(self._out_ports, outputs, raw):
+            if not math.isfinite(value):
+                self._report(
+                    f"output {port['name']!r} of {where} is {value!r} (network {u!r}, output_gain "
+                    f"{self._parameters['output_gain']!r}); the evaluation is discarded",
+                    "error",
+                )
+                return False
+        return True
+
+    def _filtered(self, raw: list[float], period: float, first: bool = False) -> list[float]:
+        """The low-passed, gained outputs over `period` seconds: y = y_prev + a (g u - y_prev), y_0 = g u_0 at the
         `first` sample."""
         gain, cutoff = self._parameters["output_gain"], self._parameters["filter_cutoff"]
-        gained = [gain * u for u in self._raw]
+        gained = [gain * u for u in raw]
         if first or cutoff == 0.0:
-            self._outputs[:] = gained
-            return
+            return gained
         a = 1.0 - math.exp(-2.0 * math.pi * cutoff * period)
-        self._outputs[:] = [y + a * (u - y) for y, u in zip(self._outputs, gained)]
+        return [y + a * (u - y) for y, u in zip(self._outputs, gained)]
 
     def _check_envelope(self, t_sample: float) -> None:
         """Flag inputs outside the training envelope; report one warning when an input leaves it."""

@@ -262,6 +262,8 @@ def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
         raise ParameterError(f"{path}: a folder, not a parameter file") from None
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(f"{path}: not valid TOML ({exc})") from None
+    except RecursionError:  # tomllib recurses once per nested array or table
+        raise ParameterError(f"{path}: not valid TOML (arrays or tables nested too deeply)") from None
 
 
 def corner_sprung_mass(params: VehicleParameters, axle: str) -> float:

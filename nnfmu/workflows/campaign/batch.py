@@ -7,6 +7,7 @@ flight; the table, `campaign.json` and `summary.html` are written at the end fro
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
@@ -60,11 +61,13 @@ def run_campaign(
     retry_failed: bool = False,
     reuse_instances: bool = True,
     progress: Progress | None = None,
+    warn: Callable[[str], None] = lambda _: None,
 ) -> CampaignRun:
     """Run a campaign into `out`: on the Dask cluster at `scheduler`, else on a LocalCluster of `workers` processes
     (None: one per core), or here one case after another when `workers` is 0. Cases with a part in `out` are skipped
     (failed ones too, unless `retry_failed`). `reuse_instances`: FMU instances are reset between cases instead of
-    opened again (the results are the same for FMUs whose reset works as FMI says)."""
+    opened again (the results are the same for FMUs whose reset works as FMI says). A part that fails verification
+    (unreadable, another case's, changed since written) is passed to `warn` and its case run again."""
     campaign = read_campaign(campaign_file)
     try:
         out = check_output_dir(out, "batch", [campaign_file])
@@ -73,7 +76,7 @@ def run_campaign(
     out.mkdir(parents=True, exist_ok=True)
     mark_output_dir(out, "batch")
     cases = expand_cases(campaign)
-    done = finished(out, cases, retry_failed)
+    done = finished(out, cases, retry_failed, warn)
     todo = [case for case in cases if case.key not in done]
     given = inputs(campaign, cases)
     started, clock = _now(), time.perf_counter()

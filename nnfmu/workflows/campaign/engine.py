@@ -198,6 +198,10 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator[tuple[An
         else:
             try:
                 client = Client(scheduler, timeout="30s")
+            except ValueError as error:  # distributed's address parsing: no scheme or port, an unknown protocol
+                raise CampaignError(
+                    f"--scheduler {scheduler!r} is not a Dask scheduler address (e.g. tcp://HOST:8786): {error}"
+                ) from None
             except (OSError, TimeoutError) as error:
                 raise CampaignError(f"cannot reach the Dask scheduler at {scheduler}: {error}") from None
         try:

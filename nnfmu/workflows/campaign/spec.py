@@ -46,6 +46,7 @@ from typing import Any
 
 from nnfmu.cosim.master import CosimSettings
 from nnfmu.cosim.ssp import Element, SspError, SystemStructure, check_against_fmus, open_system
+from nnfmu.validate.damage import MAX_SLOPE
 from nnfmu.vehicle.drive import DriveError, DriveSettings, KerbStrike, Pothole
 from nnfmu.workflows.campaign.errors import CampaignError
 from nnfmu.workflows.campaign.hashing import bytes_sha256, file_sha256
@@ -218,8 +219,8 @@ def _metrics(table: Mapping[str, Any], variants: list[str], where: str) -> Metri
         k: _number(v, f"{where}: slopes.{k}") for k, v in _table(table.get("slopes", {}), f"{where}: slopes").items()
     }
     for key, value in {"basquin_slope": slope, **slopes}.items():
-        if value <= 0:
-            raise CampaignError(f"{where}: Basquin slope {key} = {value!r} must be positive")
+        if not 0 < value <= MAX_SLOPE:
+            raise CampaignError(f"{where}: Basquin slope {key} = {value!r} must lie in (0, {MAX_SLOPE:g}]")
     reference = table.get("reference", variants[0] if variants else None)
     if reference not in variants:
         raise CampaignError(
@@ -400,6 +401,8 @@ def read_campaign(path: str | Path) -> Campaign:
         raw = tomllib.loads(text.decode("utf-8"))
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
         raise CampaignError(f"{path}: cannot read the campaign: {error}") from None
+    except RecursionError:  # tomllib recurses once per nested array or table
+        raise CampaignError(f"{path}: cannot read the campaign: its arrays or tables are nested too deeply") from None
     where = str(path)
     _unknown(raw, TOP_KEYS, where)
     base = path.parent

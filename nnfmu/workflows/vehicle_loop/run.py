@@ -19,6 +19,8 @@ from nnfmu.atomic import replace_dir, staging_dir
 from nnfmu.data import DataError, Measurement, load_measurement
 from nnfmu.data.drive_files import RPC_SUFFIXES, read_drive
 from nnfmu.diagnosis import Diagnosis
+from nnfmu.fmu.errors import FmuBuildError
+from nnfmu.fmu.factory import load_onnx
 from nnfmu.out_paths import check_output_dir, mark_output_dir
 from nnfmu.workflows.vehicle_loop.attribution import (
     SENSOR_OFFSET,
@@ -282,8 +284,10 @@ def _run_vehicle_loop(
     inputs = [Path(p) for p in (measured, system, drive) if not isinstance(p, Measurement)]
     out_dir = check_output_dir(out_dir, "vehicle-loop", inputs)
     car = read_virtual_car(system, graphs, models, log)
+    _check_step_graphs(car)
     m = _load(measured, "measurement", _read_record)
     d = _load(drive, "drive", read_drive)
+    _check_time_axes(m, d)
     log(f"replaying {car.name} on {d.source}")
     base = replay_system(car.ssd, d, settings.step)
     recorded = [c for c in m.names if f"derived:{c}" not in m.notes and not c.startswith("actuator_")]
@@ -376,7 +380,7 @@ def _run_vehicle_loop(
         before = channel_errors(virtual, record, channels)
         after = channel_errors(after_result, corrected, channels)
         named = found.named
-        summary = "named " + ", ".join(map(_named_words, named)) if named else f"nothing added; {BUDGET}"
+        summary = verdict(named, before, after, settings.budget)
         untested = [f"{e}: {_untested_words(car, e)}" for e in car.fmus if car.onnx[e] is None]
         if untested:
             summary += "; NOT TESTED: " + ", ".join(e for e in car.fmus if car.onnx[e] is None) + " (no step graph)"
@@ -403,6 +407,55 @@ def _run_vehicle_loop(
         if staging.exists():
             shutil.rmtree(staging)
     return report
+
+
+def _check_step_graphs(car: VirtualCar) -> None:
+    """Refuse an element's ONNX file that is not a readable ONNX model, naming the element and the file, before
+    any replay (it is read again when the element's sensitivities and fixes are built)."""
+    for element, path in car.onnx.items():
+        if path is not None:
+            try:
+                load_onnx(path)
+            except FmuBuildError as error:
+                raise VehicleLoopError(f"{car.ssd}: element {element!r}: {error}") from None
+
+
+def _check_time_axes(record: Measurement, drive: Measurement) -> None:
+    """Refuse a record whose time axis does not start where the drive's does (within half a sample of either): the
+    virtual car is replayed on the drive's axis and compared sample by sample at the record's stamps, so an offset
+    axis compares different instants of the run (a record stamped from 3 s against a drive from 0 s is off by 3 s)."""
+    tolerance = 0.5 * min(record.sample_period, drive.sample_period)
+    if abs(record.start - drive.start) > tolerance:
+        raise VehicleLoopError(
+            f"{record.source}: the record's time starts at {record.start:.9g} s, the drive {drive.source}'s at "
+            f"{drive.start:.9g} s; the two time axes must start together (the record from the moment the drive "
+            "started): shift the record's time by the difference"
+        )
+
+
+def verdict(
+    named: list[Evidence], before: Mapping[str, ChannelError], after: Mapping[str, ChannelError], budget: float
+) -> str:
+    """The report's one-line summary: what was named, and whether the residual left is within the error budget (no
+    channel's NRMSE above `budget`); an unexplained residual beyond it is never called consistent."""
+    left = after if named else before
+    beyond = sorted(((e.nrmse, c) for c, e in left.items() if not e.nrmse <= budget), reverse=True)
+    words = ", ".join(f"{c} {n:.0%}" for n, c in beyond[:3]) if beyond else ""
+    if named:
+        summary = "named " + ", ".join(map(_named_words, named))
+        if beyond:
+            summary += (
+                f"; after the fixes the residual is still beyond the co-simulation error budget (NRMSE {words}, "
+                f"budget {budget:.0%})"
+            )
+        return summary
+    if beyond:
+        return (
+            f"nothing added; NOT consistent with the co-simulation error budget: NRMSE {words} (budget {budget:.0%}) "
+            "and no component effect or sensor offset explains it; check the record against the drive and the "
+            "virtual car (time axis, units, channel names, sensor scaling)"
+        )
+    return f"nothing added; {BUDGET}"
 
 
 def _named_words(e: Evidence) -> str:

@@ -30,7 +30,9 @@ class VehicleLoopSettings:
     `alpha`: family-wise significance (Bonferroni over the candidates). `min_explained`: a candidate is added only
     when it explains at least this fraction of the residual left by those added before. `max_effects`: most
     (component, effect) pairs and sensor offsets named. `in_situ`: the component loop's settings on a damper's
-    in-situ record (damper force and displacement measured)."""
+    in-situ record (damper force and displacement measured). `budget`: the largest NRMSE [1] a channel may keep for
+    an unexplained residual to be called consistent with the co-simulation error budget (the networks' own error and
+    the coupling stay within a few per cent on the road test)."""
 
     step: float = 1e-3
     settle: float = 1.5
@@ -38,6 +40,7 @@ class VehicleLoopSettings:
     alpha: float = 0.05
     min_explained: float = 0.05
     max_effects: int = 3
+    budget: float = 0.25
     in_situ: LoopSettings = field(default_factory=_in_situ_loop)
 
     def __post_init__(self) -> None:
@@ -51,5 +54,7 @@ class VehicleLoopSettings:
             raise VehicleLoopError(
                 f"alpha must lie in (0, 1) and min_explained in [0, 1), got {self.alpha!r}, {self.min_explained!r}"
             )
+        if not (math.isfinite(self.budget) and 0 < self.budget < 1):
+            raise VehicleLoopError(f"budget {self.budget!r} (an NRMSE) must lie in (0, 1)")
         if isinstance(self.max_effects, bool) or not isinstance(self.max_effects, int) or self.max_effects < 0:
             raise VehicleLoopError(f"max_effects must be an integer >= 0, got {self.max_effects!r}")

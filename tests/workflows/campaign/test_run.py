@@ -7,6 +7,7 @@ import json
 import math
 
 import numpy as np
+import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 import rainflow
@@ -104,6 +105,30 @@ def test_an_interrupted_campaign_resumes_from_its_parts(quarter_car, tmp_path):
     assert again.skipped == 6 and again.engine.workers == 0
 
 
+def test_a_resumed_campaign_runs_again_the_cases_whose_part_is_truncated_swapped_or_changed(quarter_car, tmp_path):
+    """A truncated part was a traceback that blocked resuming; a part copied over another case's, or with a row
+    duplicated, was merged (duplicate rows, exit 0). Each is named in a warning and its case runs again."""
+    path = write_campaign(tmp_path, campaign_text(quarter_car, events=2))
+    run_campaign(path, tmp_path / "out", workers=0)
+    expected = metrics_of(read_rows(tmp_path / "out"))
+    parts = sorted((tmp_path / "out" / "parts").iterdir())
+    assert len(parts) == 4
+    truncated, swapped, doubled, kept = parts
+    truncated.write_bytes(truncated.read_bytes()[:100])
+    swapped.write_bytes(kept.read_bytes())
+    table = pq.read_table(doubled)
+    pq.write_table(pa.concat_tables([table, table.slice(0, 1)]), doubled)  # metadata kept, a row more
+    warnings: list[str] = []
+    resumed = run_campaign(path, tmp_path / "out", workers=0, warn=warnings.append)
+    assert (resumed.skipped, resumed.ok) == (1, 4)  # three run again, every case ok
+    assert len(warnings) == 3, warnings
+    for part, words in ((truncated, "cannot read"), (swapped, "does not name case"), (doubled, "checksum")):
+        assert any(str(part) in w and words in w for w in warnings), warnings
+    rows = pq.read_table(tmp_path / "out" / "results.parquet")
+    assert rows.num_rows == len(set(zip(rows.column("case").to_pylist(), rows.column("channel").to_pylist())))
+    assert metrics_of(read_rows(tmp_path / "out")) == expected
+
+
 def test_changed_inputs_rerun_only_their_cases_and_failed_cases_rerun_on_request(quarter_car, tmp_path):
     path = write_campaign(tmp_path, campaign_text(quarter_car, events=2, variants=("linear", "unstable")))
     first = run_campaign(path, tmp_path / "out", workers=0)
@@ -140,6 +165,20 @@ def test_the_batch_command_names_a_bad_key_and_exits_non_zero(quarter_car, tmp_p
     assert result.exit_code == 2
     assert "error:" in result.output and "step_size" in result.output
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("address", ["not a url", "tcp://", "bogus://host:8786"])
+def test_a_scheduler_address_that_is_not_one_is_one_error_line(quarter_car, tmp_path, address):
+    from typer.testing import CliRunner
+
+    from nnfmu.cli import app
+
+    path = write_campaign(tmp_path, campaign_text(quarter_car))
+    result = CliRunner().invoke(app, ["batch", str(path), "--out", str(tmp_path / "out"), "--scheduler", address])
+    assert result.exit_code == 2, result.output
+    assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
+    last = result.output.strip().splitlines()[-1]
+    assert last.startswith("error: ") and repr(address) in last, result.output
 
 
 def test_the_batch_command_refuses_a_folder_it_did_not_write(quarter_car, tmp_path):

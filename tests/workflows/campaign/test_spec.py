@@ -36,6 +36,7 @@ def test_a_campaign_expands_to_events_times_variants_with_seeds_per_repeat(quart
         ("coupling", "bogus_setting = 1", ["[coupling]", "bogus_setting"]),
         ("coupling", 'scheme = "leapfrog"', ["[coupling]", "leapfrog"]),
         ("metrics", "basquin_slope = -2", ["[metrics]", "basquin_slope"]),
+        ("metrics", "basquin_slope = 1e308", ["[metrics]", "basquin_slope", "1e+308", "(0, 50]"]),
         ("metrics", "colour = 1", ["[metrics]", "colour"]),
         ("drive", "wheel_count = 4", ["[drive]", "wheel_count"]),
     ],
@@ -114,3 +115,11 @@ def test_case_keys_follow_the_content_of_the_inputs(quarter_car, tmp_path):
     copy["firm"] = quarter_car["unstable"]
     swapped = _keys(write_campaign(tmp_path / "f", campaign_text(copy)))
     assert {k for k in first if swapped[k] != first[k]} == {k for k in first if k[1] == "firm"}
+
+
+def test_a_campaign_nested_too_deeply_is_refused_naming_the_file(tmp_path):
+    """tomllib recurses per nested array: 100 000 of them were a RecursionError traceback."""
+    path = tmp_path / "deep.toml"
+    path.write_text("name = " + "[" * 100_000 + "\n", encoding="utf-8")
+    with pytest.raises(CampaignError, match=r"deep\.toml.*nested too deeply"):
+        read_campaign(path)
