@@ -228,22 +228,7 @@ class SourceWriter:
         passed. Raises UnsupportedGraphError when the tensors and their tangents need too much stack."""
         graph = self.graph
         lines = ["    if (in == 0 || in_dot == 0 || out == 0 || out_dot == 0) {", "        return 1;", "    }"]
-        stack = 0
-        used = {step.node.inputs[i].name for step in graph.steps for i in step.data_inputs}
-        used.update(tensor.name for tensor in graph.outputs)
-        for tensor, offset in zip(graph.inputs, layout(graph.inputs).offsets):
-            if tensor.name not in used:
-                continue
-            name = self._tensor(tensor)
-            for array, cname in (("in", name), ("in_dot", f"d_{name}")):
-                if tensor.dtype == np.float64:
-                    lines.append(f"    const double *const {cname} = {array} + {offset}; /* {describe(tensor)} */")
-                else:
-                    stack += tensor.size * tensor.dtype.itemsize
-                    lines.append(f"    {tensor.ctype} {cname}[{tensor.size}]; /* {describe(tensor)} */")
-                    lines.append(f"    for (int i = 0; i < {tensor.size}; ++i) {{")
-                    lines.append(f"        {cname}[i] = ({tensor.ctype}){array}[{offset} + i];")
-                    lines.append("    }")
+        stack = self._bind_inputs(lines, (("in", ""), ("in_dot", "d_")))
         for step, (function, _), (tangent, _) in zip(graph.steps, functions, tangents):
             inputs = [self._tensor(step.node.inputs[i]) for i in step.data_inputs]
             d_inputs = [
@@ -281,24 +266,32 @@ class SourceWriter:
         ]
         return [*signature, *lines, "    return 0;", "}"]
 
-    def _run(self, functions: list[tuple[str, list[str]]]) -> list[str]:
+    def _bind_inputs(self, lines: list[str], arrays: tuple[tuple[str, str], ...]) -> int:
+        """Append the C that names each used graph input inside each of `arrays` ((C array, name prefix): a float64
+        tensor points into it, another is copied to a local of its type); return the stack bytes the copies take."""
         graph = self.graph
-        lines = ["    if (in == 0 || out == 0) {", "        return 1;", "    }"]
         stack = 0
         used = {step.node.inputs[i].name for step in graph.steps for i in step.data_inputs}
         used.update(tensor.name for tensor in graph.outputs)
         for tensor, offset in zip(graph.inputs, layout(graph.inputs).offsets):
             if tensor.name not in used:
                 continue
-            name = self._tensor(tensor)
-            if tensor.dtype == np.float64:
-                lines.append(f"    const double *const {name} = in + {offset}; /* {describe(tensor)} */")
-            else:
-                stack += tensor.size * tensor.dtype.itemsize
-                lines.append(f"    {tensor.ctype} {name}[{tensor.size}]; /* {describe(tensor)} */")
-                lines.append(f"    for (int i = 0; i < {tensor.size}; ++i) {{")
-                lines.append(f"        {name}[i] = ({tensor.ctype})in[{offset} + i];")
-                lines.append("    }")
+            for array, prefix in arrays:
+                cname = f"{prefix}{self._tensor(tensor)}"
+                if tensor.dtype == np.float64:
+                    lines.append(f"    const double *const {cname} = {array} + {offset}; /* {describe(tensor)} */")
+                else:
+                    stack += tensor.size * tensor.dtype.itemsize
+                    lines.append(f"    {tensor.ctype} {cname}[{tensor.size}]; /* {describe(tensor)} */")
+                    lines.append(f"    for (int i = 0; i < {tensor.size}; ++i) {{")
+                    lines.append(f"        {cname}[i] = ({tensor.ctype}){array}[{offset} + i];")
+                    lines.append("    }")
+        return stack
+
+    def _run(self, functions: list[tuple[str, list[str]]]) -> list[str]:
+        graph = self.graph
+        lines = ["    if (in == 0 || out == 0) {", "        return 1;", "    }"]
+        stack = self._bind_inputs(lines, (("in", ""),))
         for step, (function, _) in zip(graph.steps, functions):
             arguments = [self._tensor(step.node.inputs[i]) for i in step.data_inputs]
             for tensor in step.node.outputs:
