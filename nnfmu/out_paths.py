@@ -11,13 +11,20 @@ import os
 from collections.abc import Iterable
 from pathlib import Path
 
-from nnfmu.errors import NnfmuError
+from nnfmu.atomic import refuse_special
+from nnfmu.errors import OutputPathError
+
+__all__ = [
+    "MARKER",
+    "OutputPathError",
+    "check_output_dir",
+    "check_output_file",
+    "file_output",
+    "mark_output_dir",
+    "marker_kind",
+]
 
 MARKER = ".nnfmu-output"  # one line inside every result folder: the kind of output (loop, validate, batch, demo)
-
-
-class OutputPathError(NnfmuError, ValueError):
-    """An output path that would overwrite an input or someone else's files, or that cannot be a file or folder."""
 
 
 def _real(path: str | os.PathLike[str]) -> Path:
@@ -68,6 +75,7 @@ def check_output_file(
             )
     if out.is_dir():
         raise OutputPathError(f"{option} {out}: is an existing folder; give a file path (e.g. inside it)")
+    refuse_special(out, option)
     for parent in out.parents:
         if parent.exists() and not parent.is_dir():
             raise OutputPathError(f"{option} {out}: {parent} is a file, not a folder")

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import os
+import stat
 from pathlib import Path
 
 import pytest
@@ -141,3 +142,44 @@ def test_validate_refuses_an_existing_file_and_a_foreign_folder(work: Path, tmp_
         ok = invoke("validate", work / "dyno.csv", work / "dyno.csv", "--out", report, "-c", "force")
         assert ok.exit_code == 0, ok.output
     assert (report / MARKER).read_text().strip() == "validate"
+
+
+def _special_files(folder: Path, suffix: str) -> list[Path]:
+    """A FIFO named `pipe<suffix>` (mkfifo needs no privilege) and, when running as root, a character device like
+    /dev/null named `null<suffix>`: neither may be replaced by the regular file a command writes."""
+    fifo = folder / f"pipe{suffix}"
+    os.mkfifo(fifo)
+    made = [fifo]
+    if os.geteuid() == 0:
+        device = folder / f"null{suffix}"
+        os.mknod(device, 0o666 | stat.S_IFCHR, os.makedev(1, 3))
+        made.append(device)
+    return made
+
+
+def _still_special(path: Path) -> bool:
+    mode = path.lstat().st_mode
+    return stat.S_ISFIFO(mode) or stat.S_ISCHR(mode)
+
+
+@pytest.mark.parametrize(
+    "suffix, command",
+    [
+        (".fmu", lambda work, out: ("build", work / "model.onnx", "--out", out)),
+        (".onnx", lambda work, out: ("train", work / "dyno.csv", "--preset", "damper-spline", "--out", out)),
+        (".csv", lambda work, out: ("rig", "damper", "--out", out, "--duration", "1")),
+        (".fmu", lambda work, out: ("vehicle", "build", "quarter-car", "--out", out)),
+        (".fmu", lambda work, out: ("controller", "build", "skyhook", "--out", out)),
+        (".csv", lambda work, out: ("cosim", work / "SystemStructure.ssd", "--drive", work / "dyno.csv", "--out", out)),
+        (".csv", lambda work, out: ("drive", "generate", "--out", out, "--duration", "1")),
+        (".csv", lambda work, out: ("drive", "convert", work / "dyno.csv", out)),
+    ],
+)
+def test_a_fifo_or_device_as_the_output_file_is_refused_and_kept(work: Path, tmp_path: Path, suffix, command) -> None:
+    (work / "SystemStructure.ssd").write_text("<not read: the output is checked first/>")
+    for special in _special_files(tmp_path, suffix):
+        result = invoke(*command(work, special))
+        refused(result, special)
+        assert "regular file" in result.output, result.output
+        assert _still_special(special), f"{special} was replaced by {stat.filemode(special.lstat().st_mode)}"
+    assert all(p.name.startswith(("pipe", "null")) for p in tmp_path.iterdir()), list(tmp_path.iterdir())
