@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import os
-import shutil
 import stat
 import tempfile
 from collections.abc import Iterator
@@ -60,18 +59,6 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
     finally:
         if tmp_path.exists():
             tmp_path.unlink()
-
-
-def replace_dir(staging: Path, out_dir: Path) -> None:
-    """Put the finished folder `staging` in place of `out_dir`; an earlier result there (the caller has checked it
-    may go) is removed only after the new one is in."""
-    old = None
-    if out_dir.exists():
-        old = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.old-", dir=out_dir.parent))
-        os.replace(out_dir, old / out_dir.name)
-    os.replace(staging, out_dir)
-    if old is not None:
-        shutil.rmtree(old)
 
 
 def write_text_atomic(target: str | os.PathLike[str], text: str) -> None:

@@ -88,7 +88,7 @@ def test_loop_refuses_a_foreign_folder_and_replaces_its_own_earlier_result(work:
     for _ in range(2):  # the second run replaces the first one's folder: nnfmu wrote it
         ok = invoke("loop", work / "dyno.csv", "--model", work / "model.onnx", "--out", ours, "--max-effects", "0")
         assert ok.exit_code == 0, ok.output
-        assert (ours / "report.json").exists() and (ours / MARKER).read_text().strip() == "loop"
+        assert (ours / "report.json").exists() and (ours / MARKER).read_text().splitlines()[0] == "loop"
     (ours / MARKER).write_text("validate\n")  # another command's result is not the loop's to replace
     other = invoke("loop", work / "dyno.csv", "--model", work / "model.onnx", "--out", ours, "--max-effects", "0")
     refused(other, ours)
@@ -183,3 +183,37 @@ def test_a_fifo_or_device_as_the_output_file_is_refused_and_kept(work: Path, tmp
         assert "regular file" in result.output, result.output
         assert _still_special(special), f"{special} was replaced by {stat.filemode(special.lstat().st_mode)}"
     assert all(p.name.startswith(("pipe", "null")) for p in tmp_path.iterdir()), list(tmp_path.iterdir())
+
+
+def test_a_loop_rerun_keeps_the_users_files_in_its_folder_and_a_copied_marker_deletes_nothing(
+    work: Path, tmp_path: Path
+) -> None:
+    def loop(out: Path):
+        return invoke("loop", work / "dyno.csv", "--model", work / "model.onnx", "--out", out, "--max-effects", "0")
+
+    ours = tmp_path / "loop"
+    assert loop(ours).exit_code == 0
+    (ours / "precious_notes.txt").write_text("my notes")
+    (ours / "mine").mkdir()
+    (ours / "mine" / "plot.png").write_bytes(b"not nnfmu's")
+    again = loop(ours)
+    assert again.exit_code == 0, again.output
+    assert (ours / "precious_notes.txt").read_text() == "my notes" and (ours / "report.json").exists()
+    assert (ours / "mine" / "plot.png").read_bytes() == b"not nnfmu's"
+    (ours / "report.html").write_text("my edits of the report")  # nnfmu's file, changed since: the user's now
+    refused(loop(ours), ours / "report.html")
+    assert (ours / "report.html").read_text() == "my edits of the report"
+    elsewhere = tmp_path / "thesis"
+    elsewhere.mkdir()
+    (elsewhere / "report.json").write_text("my own report")
+    (elsewhere / "chapter.tex").write_text("do not lose me")
+    (elsewhere / MARKER).write_bytes((ours / MARKER).read_bytes())  # a copied marker makes nothing deletable
+    before = snapshot(elsewhere)
+    refused(loop(elsewhere), elsewhere / "report.json")
+    assert snapshot(elsewhere) == before
+    (elsewhere / "report.json").unlink()
+    assert loop(elsewhere).exit_code == 0
+    assert (elsewhere / "chapter.tex").read_text() == "do not lose me" and (elsewhere / "report.json").exists()
+    (ours / MARKER).write_text("loop\n")  # a marker without the list of nnfmu's files (an older nnfmu's)
+    refused(loop(ours), MARKER)
+    assert (ours / "precious_notes.txt").read_text() == "my notes"

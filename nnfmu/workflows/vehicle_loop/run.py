@@ -14,11 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
-from nnfmu.atomic import replace_dir, staging_dir
+from nnfmu.atomic import staging_dir
 from nnfmu.data import DataError, Measurement, load_measurement
 from nnfmu.data.drive_files import RPC_SUFFIXES, read_drive
 from nnfmu.diagnosis import Diagnosis
-from nnfmu.out_paths import check_output_dir, mark_output_dir
+from nnfmu.out_paths import check_output_dir, replace_output_dir
 from nnfmu.workflows.vehicle_loop.attribution import (
     SENSOR_OFFSET,
     Attribution,
@@ -253,7 +253,7 @@ def run_vehicle_loop(
     system (system/SystemStructure.ssd) and its FMUs. `models` maps elements to their ONNX step graphs (default:
     `<fmu stem>.onnx` beside each FMU)."""
     inputs = [Path(p) for p in (measured, system, drive) if not isinstance(p, Measurement)]
-    out_dir = check_output_dir(out_dir, "vehicle-loop", inputs)
+    out_dir = check_output_dir(out_dir, "vehicle-loop", inputs, replaces=True)
     car = read_virtual_car(system, models)
     m = _load(measured, "measurement", _read_record)
     d = _load(drive, "drive", read_drive)
@@ -365,8 +365,7 @@ def run_vehicle_loop(
             summary=summary,
         )
         write_vehicle_report(staging, report, record, virtual, after_result, corrected)
-        mark_output_dir(staging, "vehicle-loop")
-        replace_dir(staging, out_dir)
+        replace_output_dir(staging, out_dir, "vehicle-loop")
     finally:
         if staging.exists():
             shutil.rmtree(staging)
