@@ -60,12 +60,14 @@ def run_campaign(
     retry_failed: bool = False,
     reuse_instances: bool = True,
     progress: Progress | None = None,
+    allow_outside: bool = False,
 ) -> CampaignRun:
     """Run a campaign into `out`: on the Dask cluster at `scheduler`, else on a LocalCluster of `workers` processes
     (None: one per core), or here one case after another when `workers` is 0. Cases with a part in `out` are skipped
     (failed ones too, unless `retry_failed`). `reuse_instances`: FMU instances are reset between cases instead of
-    opened again (the results are the same for FMUs whose reset works as FMI says)."""
-    campaign = read_campaign(campaign_file)
+    opened again (the results are the same for FMUs whose reset works as FMI says). `allow_outside`: the campaign's
+    files may lie outside its folder."""
+    campaign = read_campaign(campaign_file, allow_outside)
     try:
         out = check_output_dir(out, "batch", [campaign_file])
     except OutputPathError as error:

@@ -254,11 +254,11 @@ def run_vehicle_loop(
     `<fmu stem>.onnx` beside each FMU)."""
     inputs = [Path(p) for p in (measured, system, drive) if not isinstance(p, Measurement)]
     out_dir = check_output_dir(out_dir, "vehicle-loop", inputs, replaces=True)
-    car = read_virtual_car(system, models)
+    car = read_virtual_car(system, models, settings.allow_outside)
     m = _load(measured, "measurement", _read_record)
     d = _load(drive, "drive", read_drive)
     log(f"replaying {car.name} on {d.source}")
-    base = replay_system(car.ssd, d, settings.step)
+    base = replay_system(car.ssd, d, settings.step, settings.allow_outside)
     recorded = [c for c in m.names if f"derived:{c}" not in m.notes and not c.startswith("actuator_")]
     channels = [c for c in recorded if c in base.channels]
     ignored = [c for c in recorded if c not in channels]

@@ -30,7 +30,8 @@ class VehicleLoopSettings:
     `alpha`: family-wise significance (Bonferroni over the candidates). `min_explained`: a candidate is added only
     when it explains at least this fraction of the residual left by those added before. `max_effects`: most
     (component, effect) pairs and sensor offsets named. `in_situ`: the component loop's settings on a damper's
-    in-situ record (damper force and displacement measured)."""
+    in-situ record (damper force and displacement measured). `allow_outside`: the system's FMUs may lie outside its
+    folder (`open_system`)."""
 
     step: float = 1e-3
     settle: float = 1.5
@@ -39,6 +40,7 @@ class VehicleLoopSettings:
     min_explained: float = 0.05
     max_effects: int = 3
     in_situ: LoopSettings = field(default_factory=_in_situ_loop)
+    allow_outside: bool = False
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.step) and self.step > 0):

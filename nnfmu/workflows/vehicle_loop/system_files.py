@@ -30,11 +30,14 @@ class VirtualCar:
         return next((k for k in ("damper", "bushing") if element.startswith(k)), "other")
 
 
-def read_virtual_car(ssd: str | Path, models: Mapping[str, str | Path] | None = None) -> VirtualCar:
+def read_virtual_car(
+    ssd: str | Path, models: Mapping[str, str | Path] | None = None, allow_outside: bool = False
+) -> VirtualCar:
     """The virtual car of `ssd`; `models` maps element names to their ONNX step graphs, else `<fmu stem>.onnx` beside
-    an element's FMU is used where it exists. VehicleLoopError for a system without a vehicle element."""
+    an element's FMU is used where it exists. VehicleLoopError for a system without a vehicle element; SspError for
+    one with FMUs outside its folder unless `allow_outside`."""
     models = {k: Path(v) for k, v in (models or {}).items()}
-    with open_system(ssd) as system:
+    with open_system(ssd, allow_outside) as system:
         binding = vehicle_binding(system)
         if not any(n.startswith("actuator_") for n in binding.inputs):
             raise VehicleLoopError(f"{ssd}: no element with a four-poster's actuator inputs (a vehicle FMU)")
