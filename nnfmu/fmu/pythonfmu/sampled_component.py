@@ -39,6 +39,7 @@ STATE_FIELDS = (
     "extrapolating",
     "t_start",
     "time",
+    "elapsed",
     "sample",
 )
 _ORT_DTYPES = {"tensor(double)": np.float64, "tensor(float)": np.float32}  # graph input types the slave feeds
@@ -121,6 +122,7 @@ class SampledComponent:
         self._extrapolating = False
         self._t_start: float | None = None  # set by `start`, else by the first step
         self._time = 0.0
+        self._elapsed = 0.0  # [s] since the start time: the sum of the step sizes, what samples are counted against
         self._sample = -1  # index of the latest evaluated sample; -1 before initialisation ends
         self._preview: tuple[list[float], bool] | None = None  # sample 0 from the current values, until one changes
 
@@ -199,9 +201,16 @@ class SampledComponent:
 
     # ----- time ------------------------------------------------------------------------------------------------------
     def start(self, start_time: float) -> None:
-        """Count samples from `start_time` (the FMI 2 start time; pythonfmu3 does not pass FMI 3's to the slave)."""
+        """Count samples from `start_time` (the FMI 2 start time; pythonfmu3 does not pass FMI 3's to the slave); a
+        start time that is not finite is refused (initialisation then ends in an error), as the native FMU does."""
+        if not _finite(start_time):
+            self._refused["start time"] = f"start time {start_time!r} s is not finite"
+            self._report(f"setupExperiment: start time {start_time!r} s is not finite", "error")
+            return
+        self._refused.pop("start time", None)
         self._t_start = float(start_time)
         self._time = float(start_time)
+        self._elapsed = 0.0
 
     def initialise(self) -> bool:
         """Evaluate sample 0 with the inputs set during initialisation; False (reported) while a value is refused."""
@@ -235,11 +244,13 @@ class SampledComponent:
             )
             return False
         end = current_time + step_size
+        elapsed = self._elapsed + step_size  # samples are counted against it, never against the absolute time, so a
+        # large start time (1e300 s, where a step of one period does not change the float time) loses none
         if self._period is None:
             self._evaluate(step_size, end)
         else:
             t_start = self._t_start if self._t_start is not None else 0.0
-            due = (end - t_start) / self._period + REACHED - self._sample
+            due = elapsed / self._period + REACHED - self._sample
             if not due <= MAX_SAMPLES_PER_STEP:  # also for an infinite or NaN count
                 self._report(
                     f"doStep({current_time!r}, {step_size!r}) refused: it spans {due:.4g} samples of "
@@ -248,9 +259,10 @@ class SampledComponent:
                     "error",
                 )
                 return False
-            while t_start + (self._sample + 1) * self._period <= end + REACHED * self._period:
+            for _ in range(max(0, math.floor(due))):
                 self._evaluate(self._period, t_start + (self._sample + 1) * self._period)
         self._time = end
+        self._elapsed = elapsed
         return True
 
     # ----- one sample ------------------------------------------------------------------------------------------------
@@ -324,6 +336,7 @@ class SampledComponent:
             "extrapolating": self._extrapolating,
             "t_start": self._t_start,
             "time": self._time,
+            "elapsed": self._elapsed,
             "sample": self._sample,
         }
 
@@ -349,6 +362,7 @@ class SampledComponent:
         self._extrapolating = bool(state["extrapolating"])
         self._t_start = None if state["t_start"] is None else float(state["t_start"])
         self._time = float(state["time"])
+        self._elapsed = float(state["elapsed"])
         self._sample = int(state["sample"])
         self._preview = None
 
@@ -402,6 +416,8 @@ class SampledComponent:
             refuse(f"'t_start' is {state['t_start']!r}")
         if not _finite(state["time"]):
             refuse(f"'time' is {state['time']!r}")
+        if not _finite(state["elapsed"]) or state["elapsed"] < 0:
+            refuse(f"'elapsed' is {state['elapsed']!r}")
         sample = state["sample"]
         if isinstance(sample, bool) or not isinstance(sample, int) or sample < -1:
             refuse(f"'sample' is {sample!r}")
