@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import os
-import shutil
+import stat
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+
+from nnfmu.errors import OutputPathError
 
 
 def _umask() -> int:
@@ -24,10 +26,28 @@ def staging_dir(parent: Path, prefix: str) -> Path:
     return path
 
 
+def refuse_special(target: Path, option: str = "output") -> None:
+    """OutputPathError when `target` exists (links followed) and is not a regular file: a device such as /dev/null,
+    a FIFO or a socket would be replaced by the regular file renamed onto its name."""
+    try:
+        mode = os.stat(target).st_mode
+    except (FileNotFoundError, NotADirectoryError):
+        return
+    except OSError as error:
+        raise OutputPathError(f"{option} {target}: cannot be checked ({error.strerror})") from None
+    if not stat.S_ISREG(mode) and not stat.S_ISDIR(mode):
+        kind = "a FIFO" if stat.S_ISFIFO(mode) else "a socket" if stat.S_ISSOCK(mode) else "a device"
+        raise OutputPathError(
+            f"{option} {target}: is {kind}, not a regular file; nnfmu writes only new names or regular files "
+            f"(writing would replace it), so give another path"
+        )
+
+
 @contextmanager
 def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
     """Yield a temporary path beside `target`; rename it onto `target` only if the block succeeds."""
     target = Path(target)
+    refuse_special(target)
     target.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
     os.close(fd)
@@ -39,18 +59,6 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
     finally:
         if tmp_path.exists():
             tmp_path.unlink()
-
-
-def replace_dir(staging: Path, out_dir: Path) -> None:
-    """Put the finished folder `staging` in place of `out_dir`; an earlier result there (the caller has checked it
-    may go) is removed only after the new one is in."""
-    old = None
-    if out_dir.exists():
-        old = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.old-", dir=out_dir.parent))
-        os.replace(out_dir, old / out_dir.name)
-    os.replace(staging, out_dir)
-    if old is not None:
-        shutil.rmtree(old)
 
 
 def write_text_atomic(target: str | os.PathLike[str], text: str) -> None:

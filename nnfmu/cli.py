@@ -65,6 +65,10 @@ drive_app = typer.Typer(no_args_is_help=True, help="Drive files for a four-post 
 app.add_typer(drive_app, name="drive")
 controller_app = typer.Typer(no_args_is_help=True, help="Controllers of semi-active dampers, as FMUs.")
 app.add_typer(controller_app, name="controller")
+ALLOW_OUTSIDE_HELP = (
+    "Load FMUs (and, for a campaign, drives and systems) from outside the system's or campaign's folder; an FMU is "
+    "native code, so this is asked for explicitly."
+)
 PLATFORMS_HELP = (
     "Binaries of the native backend, comma-separated: linux64, win64 (default: linux64, plus win64 when "
     "the MinGW-w64 cross compiler x86_64-w64-mingw32-gcc is installed)."
@@ -564,6 +568,7 @@ def cosim(
     target_nrmse: float = typer.Option(
         0.01, help="Step study: the NRMSE (fraction, 0.01 = 1 %) each channel should meet."
     ),
+    allow_outside: bool = typer.Option(False, help=ALLOW_OUTSIDE_HELP),
 ) -> None:
     """Co-simulate a vehicle FMU with component FMUs on a drive file."""
     from rich.progress import Progress
@@ -600,6 +605,7 @@ def cosim(
                 target,
                 master=master,
                 progress=lambda done, total: bar.update(task, completed=done, total=total),
+                allow_outside=allow_outside,
             )
     except NnfmuError as error:
         _fail(error)
@@ -623,6 +629,7 @@ def batch(
         True,
         help="Keep FMU instances between cases and reset them (fmi2Reset/fmi3Reset) instead of opening them again; --no-reuse-instances for FMUs whose reset is unreliable.",
     ),
+    allow_outside: bool = typer.Option(False, help=ALLOW_OUTSIDE_HELP),
 ) -> None:
     """Run a road-test campaign (events x variants) on Dask into one Parquet table of pseudo-damage per channel."""
     from nnfmu.workflows.campaign import run_campaign
@@ -640,6 +647,7 @@ def batch(
             reuse_instances=reuse_instances,
             progress=CaseProgress(),
             warn=lambda line: typer.echo(f"warning: {line}", err=True),
+            allow_outside=allow_outside,
         )
     except NnfmuError as error:
         _fail(error)
@@ -692,6 +700,7 @@ def loop_vehicle(
         help="ELEMENT=ONNX: an element's step graph (default: the one its FMU carries; a given one must be the same "
         "network, checked by digest, unless the FMU records none); repeat.",
     ),
+    allow_outside: bool = typer.Option(False, help=ALLOW_OUTSIDE_HELP),
 ) -> None:
     """`nnfmu loop vehicle`: which component and which effect explain the lab car's difference from the virtual
     car; the component fixed, its FMU swapped in, the vehicle error before and after."""
@@ -706,7 +715,13 @@ def loop_vehicle(
     try:
         with _warnings_as_lines():
             report = run_vehicle_loop(
-                measured, system, drive, out, VehicleLoopSettings(max_effects=max_effects), models, log=typer.echo
+                measured,
+                system,
+                drive,
+                out,
+                VehicleLoopSettings(max_effects=max_effects, allow_outside=allow_outside),
+                models,
+                log=typer.echo,
             )
     except NnfmuError as error:
         _fail(error)

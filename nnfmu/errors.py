@@ -10,3 +10,7 @@ class NnfmuError(Exception):
 
 class SettingsError(NnfmuError, ValueError):
     """A setting, option or request value out of its range or at odds with another; the message names it."""
+
+
+class OutputPathError(NnfmuError, ValueError):
+    """An output path that would overwrite an input or someone else's files, or that cannot be a file or folder."""

@@ -12,8 +12,8 @@ PACKAGE = Path(__file__).resolve().parents[1] / "nnfmu"
 # Floors, lowest first: a module may import its own top-level package and any package on a lower floor.
 FLOORS: tuple[tuple[str, ...], ...] = (
     ("errors",),
-    ("atomic", "safe_zip", "out_paths", "resources", "physics", "component"),
-    ("reference_stimulus",),
+    ("atomic", "safe_zip", "resources", "physics", "component"),
+    ("out_paths", "reference_stimulus"),
     ("data",),
     ("models",),
     ("export",),

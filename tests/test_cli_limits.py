@@ -3,6 +3,7 @@ anything large is allocated or any file is replaced: never a MemoryError or anot
 
 from __future__ import annotations
 
+import os
 import resource
 from pathlib import Path
 
@@ -192,3 +193,43 @@ def test_a_step_that_is_not_a_number_and_negative_iterations_are_refused(system:
     refused(
         invoke("cosim", system, "--drive", drive, "--out", tmp_path / "r.csv", "--iterations", "-3"), "iterations -3"
     )
+
+
+def test_fmus_outside_the_systems_folder_run_only_with_allow_outside(system: Path, tmp_path: Path) -> None:
+    """A plain .ssd naming FMUs elsewhere (here by absolute path) is refused naming the element and the option; the
+    option runs it."""
+    text = system.read_text(encoding="utf-8")
+    for name in ("car.fmu", "damper.fmu"):
+        assert f'source="{name}"' in text
+        text = text.replace(f'source="{name}"', f'source="{system.parent / name}"')
+    (tmp_path / "elsewhere").mkdir()
+    ssd = tmp_path / "elsewhere" / "SystemStructure.ssd"
+    ssd.write_text(text, encoding="utf-8")
+    args = ("cosim", ssd, "--drive", system.parent / "drive.csv", "--out", tmp_path / "r.csv")
+    refused(invoke(*args), "element 'vehicle'", "outside the system's folder", "--allow-outside")
+    assert not (tmp_path / "r.csv").exists()
+    allowed = invoke(*args, "--allow-outside")
+    assert allowed.exit_code == 0, allowed.output
+    assert (tmp_path / "r.csv").is_file()
+
+
+def test_a_campaign_naming_files_outside_its_folder_runs_only_with_allow_outside(system: Path, tmp_path: Path) -> None:
+    (tmp_path / "sys").mkdir()
+    for name in ("car.fmu", "damper.fmu", "SystemStructure.ssd"):
+        os.link(system.parent / name, tmp_path / "sys" / name)
+    campaign = tmp_path / "campaign.toml"
+    campaign.write_text(
+        '[[events]]\nname = "lab"\ndrive = "/etc/passwd"\n'
+        '[[variants]]\nname = "linear"\nsystem = "sys/SystemStructure.ssd"\n',
+        encoding="utf-8",
+    )
+    refused(invoke("batch", campaign, "--out", tmp_path / "out", "--workers", "0"), "/etc/passwd", "--allow-outside")
+    assert not (tmp_path / "out").exists()
+    campaign.write_text(
+        f'[drive]\nduration = 1.0\n[[events]]\nname = "C"\nclass = "C"\nspeed = 20.0\n'
+        f'[[variants]]\nname = "linear"\nsystem = "{system}"\n',
+        encoding="utf-8",
+    )
+    refused(invoke("batch", campaign, "--out", tmp_path / "out", "--workers", "0"), "variant 'linear'", "outside")
+    allowed = invoke("batch", campaign, "--out", tmp_path / "out", "--workers", "0", "--allow-outside")
+    assert allowed.exit_code == 0 and "1 cases: 1 ok" in allowed.output, allowed.output

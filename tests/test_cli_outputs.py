@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import os
+import stat
 from pathlib import Path
 
 import pytest
@@ -87,7 +88,7 @@ def test_loop_refuses_a_foreign_folder_and_replaces_its_own_earlier_result(work:
     for _ in range(2):  # the second run replaces the first one's folder: nnfmu wrote it
         ok = invoke("loop", work / "dyno.csv", "--model", work / "model.onnx", "--out", ours, "--max-effects", "0")
         assert ok.exit_code == 0, ok.output
-        assert (ours / "report.json").exists() and (ours / MARKER).read_text().strip() == "loop"
+        assert (ours / "report.json").exists() and (ours / MARKER).read_text().splitlines()[0] == "loop"
     (ours / MARKER).write_text("validate\n")  # another command's result is not the loop's to replace
     other = invoke("loop", work / "dyno.csv", "--model", work / "model.onnx", "--out", ours, "--max-effects", "0")
     refused(other, ours)
@@ -141,3 +142,78 @@ def test_validate_refuses_an_existing_file_and_a_foreign_folder(work: Path, tmp_
         ok = invoke("validate", work / "dyno.csv", work / "dyno.csv", "--out", report, "-c", "force")
         assert ok.exit_code == 0, ok.output
     assert (report / MARKER).read_text().strip() == "validate"
+
+
+def _special_files(folder: Path, suffix: str) -> list[Path]:
+    """A FIFO named `pipe<suffix>` (mkfifo needs no privilege) and, when running as root, a character device like
+    /dev/null named `null<suffix>`: neither may be replaced by the regular file a command writes."""
+    fifo = folder / f"pipe{suffix}"
+    os.mkfifo(fifo)
+    made = [fifo]
+    if os.geteuid() == 0:
+        device = folder / f"null{suffix}"
+        os.mknod(device, 0o666 | stat.S_IFCHR, os.makedev(1, 3))
+        made.append(device)
+    return made
+
+
+def _still_special(path: Path) -> bool:
+    mode = path.lstat().st_mode
+    return stat.S_ISFIFO(mode) or stat.S_ISCHR(mode)
+
+
+@pytest.mark.parametrize(
+    "suffix, command",
+    [
+        (".fmu", lambda work, out: ("build", work / "model.onnx", "--out", out)),
+        (".onnx", lambda work, out: ("train", work / "dyno.csv", "--preset", "damper-spline", "--out", out)),
+        (".csv", lambda work, out: ("rig", "damper", "--out", out, "--duration", "1")),
+        (".fmu", lambda work, out: ("vehicle", "build", "quarter-car", "--out", out)),
+        (".fmu", lambda work, out: ("controller", "build", "skyhook", "--out", out)),
+        (".csv", lambda work, out: ("cosim", work / "SystemStructure.ssd", "--drive", work / "dyno.csv", "--out", out)),
+        (".csv", lambda work, out: ("drive", "generate", "--out", out, "--duration", "1")),
+        (".csv", lambda work, out: ("drive", "convert", work / "dyno.csv", out)),
+    ],
+)
+def test_a_fifo_or_device_as_the_output_file_is_refused_and_kept(work: Path, tmp_path: Path, suffix, command) -> None:
+    (work / "SystemStructure.ssd").write_text("<not read: the output is checked first/>")
+    for special in _special_files(tmp_path, suffix):
+        result = invoke(*command(work, special))
+        refused(result, special)
+        assert "regular file" in result.output, result.output
+        assert _still_special(special), f"{special} was replaced by {stat.filemode(special.lstat().st_mode)}"
+    assert all(p.name.startswith(("pipe", "null")) for p in tmp_path.iterdir()), list(tmp_path.iterdir())
+
+
+def test_a_loop_rerun_keeps_the_users_files_in_its_folder_and_a_copied_marker_deletes_nothing(
+    work: Path, tmp_path: Path
+) -> None:
+    def loop(out: Path):
+        return invoke("loop", work / "dyno.csv", "--model", work / "model.onnx", "--out", out, "--max-effects", "0")
+
+    ours = tmp_path / "loop"
+    assert loop(ours).exit_code == 0
+    (ours / "precious_notes.txt").write_text("my notes")
+    (ours / "mine").mkdir()
+    (ours / "mine" / "plot.png").write_bytes(b"not nnfmu's")
+    again = loop(ours)
+    assert again.exit_code == 0, again.output
+    assert (ours / "precious_notes.txt").read_text() == "my notes" and (ours / "report.json").exists()
+    assert (ours / "mine" / "plot.png").read_bytes() == b"not nnfmu's"
+    (ours / "report.html").write_text("my edits of the report")  # nnfmu's file, changed since: the user's now
+    refused(loop(ours), ours / "report.html")
+    assert (ours / "report.html").read_text() == "my edits of the report"
+    elsewhere = tmp_path / "thesis"
+    elsewhere.mkdir()
+    (elsewhere / "report.json").write_text("my own report")
+    (elsewhere / "chapter.tex").write_text("do not lose me")
+    (elsewhere / MARKER).write_bytes((ours / MARKER).read_bytes())  # a copied marker makes nothing deletable
+    before = snapshot(elsewhere)
+    refused(loop(elsewhere), elsewhere / "report.json")
+    assert snapshot(elsewhere) == before
+    (elsewhere / "report.json").unlink()
+    assert loop(elsewhere).exit_code == 0
+    assert (elsewhere / "chapter.tex").read_text() == "do not lose me" and (elsewhere / "report.json").exists()
+    (ours / MARKER).write_text("loop\n")  # a marker without the list of nnfmu's files (an older nnfmu's)
+    refused(loop(ours), MARKER)
+    assert (ours / "precious_notes.txt").read_text() == "my notes"

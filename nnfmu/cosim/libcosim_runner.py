@@ -48,10 +48,15 @@ def _check_settings(settings: CosimSettings) -> None:
 
 
 def run_libcosim(
-    ssd_path: str | os.PathLike[str], drive: Measurement, settings: CosimSettings, binding: DriveBinding | None = None
+    ssd_path: str | os.PathLike[str],
+    drive: Measurement,
+    settings: CosimSettings,
+    binding: DriveBinding | None = None,
+    allow_outside: bool = False,
 ) -> CosimResult:
     """Co-simulate the system of `ssd_path` (.ssd, its folder or .ssp) in libcosim, the drive fed as `binding` says
-    (None: `bind_free_inputs`); channels named as fmpy names them."""
+    (None: `bind_free_inputs`); channels named as fmpy names them. The system's FMUs may lie outside its folder only
+    if `allow_outside`."""
     from libcosimpy.CosimEnums import CosimVariableCausality, CosimVariableType
     from libcosimpy.CosimExecution import CosimExecution
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
@@ -60,7 +65,7 @@ def run_libcosim(
 
     _check_settings(settings)
     path = Path(ssd_path)
-    with open_system(path) as system:
+    with open_system(path, allow_outside) as system:
         h_ns = _nanoseconds(settings.step, "communication step")
         stop = settings.stop_time if settings.stop_time is not None else system.stop_time
         binding = binding if binding is not None else bind_free_inputs(system)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import os
+import shutil
 import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
@@ -359,16 +360,33 @@ def _check_units(system: SystemStructure, units: Mapping[tuple[str, str], PortUn
             raise SspError(str(error)) from None
 
 
+def _check_inside(system: SystemStructure, path: Path) -> None:
+    """SspError naming the element, its source and the opt-in when an element's FMU, links followed, lies outside
+    the folder of the system file: an FMU is native code, so loading one from elsewhere is asked for explicitly."""
+    root = system.base.resolve()
+    for element in system.elements:
+        fmu = system.fmu_path(element).resolve()
+        if root not in fmu.parents:
+            raise SspError(
+                f"{path}: element {element.name!r}: source {element.source!r} lies outside the system's folder {root} "
+                f"(at {fmu}); an FMU is native code, so pass --allow-outside to load FMUs from elsewhere, or put it "
+                f"inside the folder"
+            )
+
+
 @contextmanager
-def open_system(path: str | os.PathLike[str]) -> Iterator[SystemStructure]:
+def open_system(path: str | os.PathLike[str], allow_outside: bool = False) -> Iterator[SystemStructure]:
     """The system of an `.ssd` file, a folder holding `SystemStructure.ssd`, or an `.ssp` zip (extracted meanwhile,
     once, refusing members that leave the folder or unpack too large, and element sources outside the archive; the
-    system's `path` and `base` then lie in the extracted folder, which is what every master must load)."""
+    system's `path` and `base` then lie in the extracted folder, which is what every master must load). An `.ssd`'s
+    element FMUs must lie inside its folder, links followed, unless `allow_outside`."""
     path = Path(path)
     if path.is_dir():
         path = path / SSD_NAME
     if path.suffix.lower() != ".ssp":
         system = read_ssd(path)
+        if not allow_outside:
+            _check_inside(system, path)
         check_against_fmus(system)
         yield system
         return
@@ -392,6 +410,44 @@ def open_system(path: str | os.PathLike[str]) -> Iterator[SystemStructure]:
         yield system
 
 
+def _same_bytes(a: Path, b: Path) -> bool:
+    """Whether two files are one (a link) or hold the same bytes."""
+    if os.path.samefile(a, b):
+        return True
+    if a.stat().st_size != b.stat().st_size:
+        return False
+    with open(a, "rb") as fa, open(b, "rb") as fb:
+        return all(x == y for x, y in zip(iter(lambda: fa.read(1 << 20), b""), iter(lambda: fb.read(1 << 20), b"")))
+
+
+def _link(source: Path, target: Path) -> None:
+    """`target` as a hard link of `source`, or a copy where a link cannot be made (another file system)."""
+    try:
+        os.link(source, target)
+    except OSError:
+        shutil.copyfile(source, target)
+
+
+def local_fmu(fmu: Path, base: Path) -> Path:
+    """`fmu` when it lies inside `base` (links followed); else its link or copy in `base/fmu/` (and its `<stem>.onnx`
+    step graph beside it where one exists), under a new name where another FMU of its name is there already."""
+    if base.resolve() in fmu.resolve().parents:
+        return fmu
+    folder = base / "fmu"
+    folder.mkdir(parents=True, exist_ok=True)
+    for n in range(1, 1000):
+        target = folder / (fmu.name if n == 1 else f"{fmu.stem}-{n}{fmu.suffix}")
+        if not target.exists():
+            _link(fmu, target)
+        elif not _same_bytes(fmu, target):
+            continue
+        graph = fmu.with_suffix(".onnx")
+        if graph.is_file() and not target.with_suffix(".onnx").exists():
+            _link(graph, target.with_suffix(".onnx"))
+        return target
+    raise SspError(f"{folder}: 999 different FMUs named like {fmu.name} already; give the system a new folder")
+
+
 def connect_by_name(
     name: str,
     vehicle: tuple[str, Path],
@@ -399,7 +455,9 @@ def connect_by_name(
     base: Path,
     parameters: Mapping[str, Mapping[str, float]] | None = None,
 ) -> SystemStructure:
-    """A system of one vehicle and components wired by name; FMU sources are written relative to `base`.
+    """A system of one vehicle and components wired by name; FMU sources are written relative to `base`, an FMU
+    outside `base` first linked (or copied) into `base/fmu/` with its `<stem>.onnx` step graph, so that the system
+    is self-contained (`open_system` loads FMUs only from inside a system's folder unless allowed).
 
     A component element `E` with input or output `X` connects to the vehicle's output or input named `E_X` (the
     vehicle's channel naming: element 'damper_fl', port 'velocity' -> 'damper_fl_velocity'), else to one named `X`.
@@ -417,6 +475,8 @@ def connect_by_name(
         }
 
     vehicle_name, vehicle_path = vehicle
+    vehicle_path = local_fmu(Path(vehicle_path), base)
+    components = {name: local_fmu(Path(path), base) for name, path in components.items()}
     vehicle_ports = ports(vehicle_path)
     elements = []
     connections = []

@@ -17,6 +17,7 @@ from __future__ import annotations
 import csv
 import hashlib
 import io
+import math
 import posixpath
 import tempfile
 import xml.etree.ElementTree as ET
@@ -45,6 +46,7 @@ CHECKSUMS = {
     "SHA-512": hashlib.sha512,
 }
 MANIFEST_PATH = f"{LS_FOLDER}/{MANIFEST}"
+MAX_STEPS = 1_000_000  # communication steps of one experiment (nnfmu's own reference results have some hundreds)
 
 
 MODEL_DESCRIPTION = "modelDescription.xml"
@@ -271,6 +273,26 @@ def _parameters(archive: _Archive, path: str) -> dict[str, object]:
     return values
 
 
+def _check_span(where: str, start: float, stop: float, step: float | None) -> None:
+    """CheckError naming the experiment unless start, stop and step are finite, the step positive and the steps from
+    start to stop at most MAX_STEPS: counted before the FMU runs, so a hostile experiment cannot keep it busy."""
+    for label, value in (("start time", start), ("stop time", stop), ("step size", step)):
+        if value is not None and not math.isfinite(value):
+            raise CheckError(f"{where}: {label} {value!r} s is not a finite number")
+    if step is None:
+        raise CheckError(f"{where}: no step size (neither the experiment nor the default experiment gives one)")
+    if not step > 0:
+        raise CheckError(f"{where}: step size {step!r} s must be positive")
+    if not stop >= start:
+        raise CheckError(f"{where}: stop time {stop!r} s lies before the start time {start!r} s")
+    steps = (stop - start) / step
+    if steps > MAX_STEPS:
+        raise CheckError(
+            f"{where}: stop time {stop:g} s from start {start:g} s in steps of {step:g} s is {steps:.3g} steps, "
+            f"more than the {MAX_STEPS} a reference check runs"
+        )
+
+
 def _run(folder: str, experiment: Experiment, archive: _Archive, tolerance: float | None) -> ExperimentResult:
     """Simulate one experiment on the extracted FMU `folder` and compare its references."""
     result = ExperimentResult(experiment.name)
@@ -300,11 +322,16 @@ def _run(folder: str, experiment: Experiment, archive: _Archive, tolerance: floa
             signals[name] = stimuli[:, i]
     times = reference[:, 0]
     default = md.defaultExperiment
-    step = experiment.step or (default.stepSize if default and default.stepSize else None)
+    step = experiment.step or (
+        _float(default.stepSize, f"{archive.path}: modelDescription.xml DefaultExperiment stepSize")
+        if default and default.stepSize
+        else None
+    )
     if step is None:
         step = float(np.min(np.diff(times))) if len(times) > 1 else None
     start = experiment.start if experiment.start is not None else float(times[0])
     stop = experiment.stop if experiment.stop is not None else float(times[-1])
+    _check_span(f"{archive.path}: experiment {experiment.name!r}", start, stop, step)
     parameters = _parameters(archive, experiment.parameters) if experiment.parameters else {}
     try:
         simulated = simulate_fmu(

@@ -17,7 +17,7 @@ from pathlib import Path
 import onnx
 
 from nnfmu.control import Command, SkyhookSettings, fixed_command_graph, known_command, skyhook_graph
-from nnfmu.cosim.ssp import Connection, Connector, Element, SspError, SystemStructure, write_ssd
+from nnfmu.cosim.ssp import Connection, Connector, Element, SspError, SystemStructure, local_fmu, write_ssd
 from nnfmu.errors import SettingsError
 from nnfmu.fmu.build import build_fmu_from_model
 from nnfmu.fmu.options import BuildOptions, FmiVersion
@@ -81,10 +81,12 @@ def _real_ports(path: Path) -> dict[str, str]:
 def closed_loop_system(
     vehicle_fmu: Path, damper_fmu: Path, controller_fmu: Path, base: Path, name: str = "semi-active quarter car"
 ) -> SystemStructure:
-    """The closed loop of the module docstring; FMU sources relative to `base`. SspError naming the element and
+    """The closed loop of the module docstring; FMU sources relative to `base`, FMUs from outside it linked into
+    `base/fmu/` (`local_fmu`: a system loads FMUs only from inside its folder). SspError naming the element and
     connector when a port finds no partner (a damper without the controller's command input, a vehicle without
     `body_velocity`, ...)."""
-    paths = {VEHICLE: Path(vehicle_fmu), DAMPER: Path(damper_fmu), CONTROLLER: Path(controller_fmu)}
+    given = {VEHICLE: Path(vehicle_fmu), DAMPER: Path(damper_fmu), CONTROLLER: Path(controller_fmu)}
+    paths = {element: local_fmu(path, base) for element, path in given.items()}
     ports = {element: _real_ports(path) for element, path in paths.items()}
     vehicle_out = {p for p, c in ports[VEHICLE].items() if c == "output"}
     controller_out = {p for p, c in ports[CONTROLLER].items() if c == "output"}

@@ -26,20 +26,22 @@ def run_cosim(
     out_path: str | os.PathLike[str] | None = None,
     progress: Progress | None = None,
     master: str = "fmpy",
+    allow_outside: bool = False,
 ) -> CosimResult:
     """Co-simulate the system (.ssd, folder or .ssp) on the drive file with `master` (fmpy, this package's master, or
-    libcosim, the cross-check); write the result to `out_path` when given."""
+    libcosim, the cross-check); write the result to `out_path` when given. The system's FMUs may lie outside its
+    folder only if `allow_outside`."""
     if master not in MASTERS:
         raise SettingsError(f"unknown master {master!r}; use {' or '.join(MASTERS)}")
     drive = read_drive(drive_path)
     if master == "libcosim":
         from nnfmu.cosim.libcosim_runner import run_libcosim
 
-        with open_system(ssd_path) as system:
+        with open_system(ssd_path, allow_outside) as system:
             binding = vehicle_binding(system)
-        result = run_libcosim(ssd_path, drive, settings, binding)
+        result = run_libcosim(ssd_path, drive, settings, binding, allow_outside)
     else:
-        with open_system(ssd_path) as system:
+        with open_system(ssd_path, allow_outside) as system:
             result = cosimulate(system, drive, settings, progress, binding=vehicle_binding(system))
     if out_path is not None:
         save_result(result, out_path)

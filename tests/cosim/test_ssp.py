@@ -251,5 +251,26 @@ def test_an_element_fmu_that_is_a_zip_bomb_is_refused_before_fmpy_reads_it(
         elements = [replace(e, source=str(bomb)) if e.name == "damper" else e for e in system.elements]
         ssd = write_ssd(replace(system, elements=elements), systems[1e-3].parent / "bomb.ssd")
     with pytest.raises(SspError, match=r"element 'damper': cannot read .*bomb\.fmu: .*'resources/zeros\.bin' inflates"):
-        with open_system(ssd):
+        with open_system(ssd, allow_outside=True):
             pass
+
+
+def test_a_plain_ssd_loads_fmus_only_from_its_own_folder_unless_allowed(
+    systems: dict[float, Path], tmp_path: Path
+) -> None:
+    """An FMU is native code: an element source leading out of the system's folder (absolute, `../`, or through a
+    link) is refused naming the element, the source and the opt-in, which then opens it."""
+    with open_system(systems[1e-3]) as system:
+        fmus = {e.name: system.fmu_path(e).resolve() for e in system.elements}
+    folder = tmp_path / "system"
+    folder.mkdir()
+    os.link(fmus["vehicle"], folder / "vehicle.fmu")
+    (folder / "linked.fmu").symlink_to(fmus["damper"])
+    for source in (str(fmus["damper"]), os.path.relpath(fmus["damper"], folder), "linked.fmu"):
+        elements = [replace(e, source=source if e.name == "damper" else "vehicle.fmu") for e in system.elements]
+        ssd = write_ssd(replace(system, elements=elements, base=folder), folder / "SystemStructure.ssd")
+        with pytest.raises(SspError, match=rf"element 'damper': source {re.escape(repr(source))} .*--allow-outside"):
+            with open_system(ssd):
+                pass
+        with open_system(ssd, allow_outside=True) as opened:
+            assert opened.fmu_path("damper").resolve() == fmus["damper"]

@@ -227,3 +227,32 @@ def test_name_option_renames_the_component_and_gives_a_c_model_identifier(damper
     assert (md.modelName, md.coSimulation.modelIdentifier) == ("front-left 1", "front_left_1")
     assert zipfile.ZipFile(fmu).getinfo("binaries/linux64/front_left_1.so").file_size > 0
     assert validate_fmu(str(fmu)) == []
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_a_huge_start_time_steps_as_from_zero(pythonfmu_dampers, open_fmu, fmi):
+    """At t_start = 1e300 a step of one sample period does not move the float time at all: the samples are counted
+    from the elapsed time (the sum of the steps), as the native FMU counts them, so each step evaluates one sample
+    instead of looping for ever."""
+    import time
+
+    onnx_path, fmu = pythonfmu_dampers[fmi]
+    period = Component.from_onnx(onnx.load(onnx_path)).sample_period
+    zero = open_fmu(fmu, "zero")
+    inputs = np.random.default_rng(2).uniform(-0.5, 0.5, (40, len(zero.inputs)))
+    expected = zero.simulate(inputs, period)
+    started = time.perf_counter()
+    got = open_fmu(fmu, "huge").simulate(inputs, period, start=1e300)
+    assert time.perf_counter() - started < 10
+    np.testing.assert_array_equal(got, expected)
+
+
+@pytest.mark.parametrize("start", [float("nan"), float("inf")])
+def test_a_start_time_that_is_not_finite_is_refused_at_initialisation(pythonfmu_dampers, open_fmu, start):
+    """The error is logged when the start time is set; pythonfmu gives initialisation no error status, so every step
+    is refused (an error status) instead of running on a clock that cannot advance."""
+    slave = open_fmu(pythonfmu_dampers[2][1])
+    slave.initialize(np.zeros(len(slave.inputs)), start=start)
+    assert any(f"start time {start!r} s is not finite" in message for _, _, message in slave.messages)
+    with pytest.raises(FMICallException):
+        slave.do_step(0.0, 1e-3)

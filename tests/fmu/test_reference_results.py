@@ -13,6 +13,7 @@ import csv
 import hashlib
 import io
 import json
+import re
 import zipfile
 from pathlib import Path
 
@@ -255,3 +256,47 @@ def test_an_fmu_without_its_model_description_is_one_check_error(network, tmp_pa
         check_fmu(broken)
     result = CliRunner().invoke(app, ["check", str(broken)])
     assert result.exit_code == 2 and result.output.startswith("error: "), result.output
+
+
+@pytest.mark.parametrize(
+    ("pattern", "value", "message"),
+    [
+        ("stopTime", "1e9", r"stop time 1e\+09 s .*steps of .* s .*more than the 1000000"),
+        ("stepSize", "1e-12", r"stop time .* in steps of 1e-12 s .*more than the 1000000"),
+        ("stopTime", "nan", r"stop time nan s is not a finite number"),
+        ("stepSize", "-1e-3", r"step size -0\.001 s must be positive"),
+    ],
+)
+def test_a_reference_experiment_past_the_step_limit_is_refused_before_simulating(
+    network, tmp_path, pattern, value, message
+):
+    """A hostile experiment (a stop time of 1e9 s, a step of 1e-12 s, NaN) would keep `nnfmu check` busy for ever:
+    its steps are counted and refused, naming the experiment, before the FMU is run."""
+    name = f"{LS_FOLDER}/reference.exp"
+    with zipfile.ZipFile(network["fmi2"]) as archive:
+        text = archive.read(name).decode()
+    assert f'{pattern}="' in text
+    hostile = _replace(
+        network["fmi2"],
+        {name: re.sub(rf'{pattern}="[^"]*"', f'{pattern}="{value}"', text).encode()},
+        tmp_path / "h.fmu",
+    )
+    with pytest.raises(CheckError, match=rf"h\.fmu: experiment 'reference': {message}"):
+        check_fmu(hostile)
+
+
+def test_a_default_experiment_step_past_the_limit_is_refused(network, tmp_path):
+    """Without a step in the experiment, the model description's default experiment gives it: bounded the same way."""
+    name = f"{LS_FOLDER}/reference.exp"
+    with zipfile.ZipFile(network["fmi2"]) as archive:
+        text = archive.read(name).decode()
+        description = archive.read("modelDescription.xml").decode()
+    files = {
+        name: re.sub(r' stepSize="[^"]*"', "", text).encode(),
+        "modelDescription.xml": re.sub(
+            r'(<DefaultExperiment[^>]*) stepSize="[^"]*"', r'\1 stepSize="1e-12"', description
+        ).encode(),
+    }
+    hostile = _replace(network["fmi2"], files, tmp_path / "d.fmu")
+    with pytest.raises(CheckError, match=r"steps of 1e-12 s.*more than the 1000000"):
+        check_fmu(hostile)

@@ -40,9 +40,9 @@ STATE_FIELDS = (
     "extrapolating",
     "t_start",
     "time",
+    "elapsed",
     "sample",
     "evaluated_at",
-    "elapsed",
 )
 _ORT_DTYPES = {"tensor(double)": np.float64, "tensor(float)": np.float32}  # graph input types the slave feeds
 
@@ -138,7 +138,10 @@ class SampledComponent:
         self._evaluated_at = (
             0.0  # [s] since the start, when the outputs were last evaluated (the filter runs from there)
         )
-        self._elapsed = (0.0, 0.0)  # [s] the step sizes summed since the start, and what the sum lost (Kahan)
+        # [s] the step sizes summed since the start, and what the sum lost (Kahan): samples are counted against it,
+        # never against the absolute time, so a large start time (1e300 s) loses none; it also says where between
+        # two samples a communication point falls
+        self._elapsed = (0.0, 0.0)
         self._preview: tuple[list[float], bool] | None = None  # sample 0 from the current values, until one changes
 
     def _check_tensors(self) -> None:
@@ -216,9 +219,16 @@ class SampledComponent:
 
     # ----- time ------------------------------------------------------------------------------------------------------
     def start(self, start_time: float) -> None:
-        """Count samples from `start_time` (the FMI 2 start time; pythonfmu3 does not pass FMI 3's to the slave)."""
+        """Count samples from `start_time` (the FMI 2 start time; pythonfmu3 does not pass FMI 3's to the slave); a
+        start time that is not finite is refused (initialisation then ends in an error), as the native FMU does."""
+        if not _finite(start_time):
+            self._refused["start time"] = f"start time {start_time!r} s is not finite"
+            self._report(f"setupExperiment: start time {start_time!r} s is not finite", "error")
+            return
+        self._refused.pop("start time", None)
         self._t_start = float(start_time)
         self._time = float(start_time)
+        self._elapsed = (0.0, 0.0)
 
     def initialise(self) -> bool:
         """Evaluate sample 0 with the inputs set during initialisation; False (reported) while a value is refused."""
@@ -251,12 +261,13 @@ class SampledComponent:
             )
             return False
         end = current_time + step_size
+        elapsed = _compensated_sum(*self._elapsed, step_size)
         if self._period is None:
             if not self._evaluate(step_size, end):
                 return False
         else:
             t_start = self._t_start if self._t_start is not None else 0.0
-            due = (end - t_start) / self._period + REACHED - self._sample
+            due = elapsed[0] / self._period + REACHED - self._sample
             if not due <= MAX_SAMPLES_PER_STEP:  # also for an infinite or NaN count
                 self._report(
                     f"doStep({current_time!r}, {step_size!r}) refused: it spans {due:.4g} samples of "
@@ -265,18 +276,18 @@ class SampledComponent:
                     "error",
                 )
                 return False
-            while t_start + (self._sample + 1) * self._period <= end + REACHED * self._period:
+            for _ in range(max(0, math.floor(due))):
                 offset = (self._sample + 1) * self._period  # times since the start: no rounding of large t_start
                 if not self._evaluate(offset - self._evaluated_at, t_start + offset):
                     return False
                 self._evaluated_at = offset
-            self._elapsed = _compensated_sum(*self._elapsed, step_size)
-            alpha = (self._elapsed[0] - self._sample * self._period) / self._period
+            alpha = (elapsed[0] - self._sample * self._period) / self._period
             if alpha > REACHED:
-                if not self._evaluate_between(min(alpha, 1.0), self._elapsed[0] - self._evaluated_at):
+                if not self._evaluate_between(min(alpha, 1.0), elapsed[0] - self._evaluated_at):
                     return False
-                self._evaluated_at = self._elapsed[0]
+                self._evaluated_at = elapsed[0]
         self._time = end
+        self._elapsed = elapsed
         return True
 
     # ----- one sample ------------------------------------------------------------------------------------------------
@@ -479,7 +490,7 @@ class SampledComponent:
             if not _finite(state[key]):
                 refuse(f"{key!r} is {state[key]!r}")
         elapsed = state["elapsed"]
-        if not isinstance(elapsed, list) or len(elapsed) != 2 or not all(map(_finite, elapsed)):
+        if not isinstance(elapsed, list) or len(elapsed) != 2 or not all(map(_finite, elapsed)) or elapsed[0] < 0:
             refuse(f"'elapsed' is {elapsed!r}")
         sample = state["sample"]
         if isinstance(sample, bool) or not isinstance(sample, int) or sample < -1:

@@ -62,13 +62,15 @@ def run_campaign(
     reuse_instances: bool = True,
     progress: Progress | None = None,
     warn: Callable[[str], None] = lambda _: None,
+    allow_outside: bool = False,
 ) -> CampaignRun:
     """Run a campaign into `out`: on the Dask cluster at `scheduler`, else on a LocalCluster of `workers` processes
     (None: one per core), or here one case after another when `workers` is 0. Cases with a part in `out` are skipped
     (failed ones too, unless `retry_failed`). `reuse_instances`: FMU instances are reset between cases instead of
     opened again (the results are the same for FMUs whose reset works as FMI says). A part that fails verification
-    (unreadable, another case's, changed since written) is passed to `warn` and its case run again."""
-    campaign = read_campaign(campaign_file)
+    (unreadable, another case's, changed since written) is passed to `warn` and its case run again. `allow_outside`:
+    the campaign's files may lie outside its folder."""
+    campaign = read_campaign(campaign_file, allow_outside)
     try:
         out = check_output_dir(out, "batch", [campaign_file])
     except OutputPathError as error:

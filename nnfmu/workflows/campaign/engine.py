@@ -11,8 +11,9 @@ worker would die with it). Groups are sent a window at a time (a few per worker 
 so the bytes in flight stay bounded. Robustness is Dask's own: a worker that dies takes its tasks back to the
 scheduler, which runs them elsewhere until `allowed-failures` deaths (set to 1 for the LocalCluster: a case is
 retried once), then reports KilledWorker, which is recorded as the failure of the group's cases; `retries=1` reruns
-a task that raised outside the cases' own error handling. A lost scheduler stops the run (nothing is recorded as
-failed for it), and a rerun resumes from the parts written.
+a task that raised outside the cases' own error handling. A lost scheduler, or a cluster left without any worker for
+WAIT_FOR_WORKERS seconds, stops the run with a CampaignError (nothing is recorded as failed for it), and a rerun
+resumes from the parts written.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from __future__ import annotations
 import logging
 import math
 import os
+import time
 import uuid
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
@@ -30,6 +32,7 @@ from typing import Any
 from nnfmu.workflows.campaign.cases import Case
 from nnfmu.workflows.campaign.errors import CampaignError
 from nnfmu.workflows.campaign.execute import FAILED, CaseOutcome, release_instances, run_case, run_cases
+from nnfmu.workflows.campaign.hashing import file_bytes
 
 ALLOWED_FAILURES = 1  # worker deaths a case may be involved in before it is given up (LocalCluster)
 LOCAL_CONFIG = {
@@ -39,7 +42,8 @@ LOCAL_CONFIG = {
 }
 GROUPS_PER_THREAD = 4  # groups per worker thread over the whole run (balance), also the groups in flight per thread
 MAX_GROUP = 16  # cases in one task at most
-WAIT_FOR_WORKERS = 60  # seconds to wait for a cluster without workers to get one
+WAIT_FOR_WORKERS = 60  # seconds to wait for a cluster without workers to get one (at the start or during a run)
+POLL = 0.1  # [s] between looks for a finished group while none is ready
 OnOutcome = Callable[[Case, CaseOutcome], None]
 
 
@@ -63,7 +67,7 @@ class FileBytes(Mapping[str, bytes]):
 
     def __getitem__(self, key: str) -> bytes:
         value = self._blobs[key]
-        return value.read_bytes() if isinstance(value, Path) else value
+        return file_bytes(value) if isinstance(value, Path) else value
 
     def __iter__(self) -> Iterator[str]:
         return iter(self._blobs)
@@ -153,7 +157,24 @@ def run_dask(
 
     for _ in range(window):
         submit_next()
-    for future in finished:
+    workerless_since = None
+    while running:
+        if not finished.has_ready():
+            if client.nthreads():
+                workerless_since = None
+            elif workerless_since is None:
+                workerless_since = time.monotonic()
+            elif time.monotonic() - workerless_since > WAIT_FOR_WORKERS:
+                first = next(iter(running.values()))[0]
+                raise CampaignError(
+                    f"the Dask cluster has had no workers for {WAIT_FOR_WORKERS:g} s with "
+                    f"{sum(len(g) for g in running.values())} case(s) sent and unfinished (the first "
+                    f"{first.event.name} x {first.variant.name}); start a worker, then run the campaign again to "
+                    f"resume from the parts written"
+                )
+            time.sleep(POLL)
+            continue
+        future = next(finished)
         group = running.pop(future)
         if future.status == "error":
             error = future.exception()

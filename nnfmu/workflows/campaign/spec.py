@@ -28,10 +28,12 @@ fmus = { damper = "fmus/firm.fmu" }            # element -> replacement FMU
 parameters = { damper = { filter_cutoff = 0.0 } }   # element -> parameter values
 ```
 
-Paths are relative to the campaign file. Every unknown key is an error naming the file, the entry and the key; the
-coupling and drive settings are checked by constructing `CosimSettings` and `DriveSettings` here, so a bad value
-fails before any case runs. FMU bytes are read and hashed now (they travel with the tasks); drive files are hashed
-now and read when their cases are sent.
+Paths are relative to the campaign file and must lead, links followed, to regular files inside its folder (an FMU
+is native code): `read_campaign(..., allow_outside=True)` (`nnfmu batch --allow-outside`) lifts the folder rule. A
+campaign has at most MAX_CASES cases (events x variants), checked before any is made. Every unknown key is an error
+naming the file, the entry and the key; the coupling and drive settings are checked by constructing `CosimSettings`
+and `DriveSettings` here, so a bad value fails before any case runs. FMU bytes are read and hashed now (they travel
+with the tasks); drive files are hashed now and read when their cases are sent (each at most MAX_FILE_BYTES).
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import tomllib
+from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -49,7 +52,7 @@ from nnfmu.cosim.ssp import Element, SspError, SystemStructure, check_against_fm
 from nnfmu.validate.damage import MAX_SLOPE
 from nnfmu.vehicle.drive import DriveError, DriveSettings, KerbStrike, Pothole
 from nnfmu.workflows.campaign.errors import CampaignError
-from nnfmu.workflows.campaign.hashing import bytes_sha256, file_sha256
+from nnfmu.workflows.campaign.hashing import bytes_sha256, file_bytes, file_sha256
 
 TOP_KEYS = ("name", "description", "coupling", "metrics", "drive", "events", "variants")
 METRIC_KEYS = ("channels", "basquin_slope", "slopes", "reference")
@@ -57,6 +60,8 @@ VARIANT_KEYS = ("name", "system", "fmus", "parameters")
 EVENT_ONLY_KEYS = ("name", "drive", "repeats", "potholes", "kerbs", "class")
 EVENT_KINDS = {"potholes": Pothole, "kerbs": KerbStrike}
 OFF_WHEN_ZERO = ("highpass", "lowpass")  # as on the command line: 0 switches the rig filter off
+MAX_CAMPAIGN_BYTES = 16 * 1024**2  # the campaign file itself
+MAX_CASES = 100_000  # events x variants of one campaign: each case is a co-simulation (a 10 s drive ~20 ms and up)
 
 
 @dataclass(frozen=True)
@@ -187,12 +192,21 @@ def _number(value: Any, where: str) -> float:
     return float(value)
 
 
-def _existing(base: Path, value: Any, where: str) -> Path:
+def _existing(base: Path, value: Any, where: str, allow_outside: bool, folder: bool = False) -> Path:
+    """The resolved path of `value` (relative to `base`): an existing regular file (or, if `folder`, a folder too),
+    inside `base` unless `allow_outside`."""
     if not isinstance(value, str) or not value:
         raise CampaignError(f"{where}: give a file path as a string, got {value!r}")
     path = (base / value).resolve()
     if not path.exists():
         raise CampaignError(f"{where}: {path} does not exist")
+    if not allow_outside and base.resolve() != path and base.resolve() not in path.parents:
+        raise CampaignError(
+            f"{where}: {value!r} leads to {path}, outside the campaign's folder {base.resolve()}; pass "
+            f"--allow-outside to use files from elsewhere (an FMU is native code), or put it inside the folder"
+        )
+    if not (path.is_file() or folder and path.is_dir()):
+        raise CampaignError(f"{where}: {path} is not a regular file (a device, FIFO or socket is never read)")
     return path
 
 
@@ -291,8 +305,15 @@ def _generator(fields: dict[str, Any], events: dict[str, list[dict[str, Any]]], 
 
 
 def _events(
-    entries: Any, defaults: Mapping[str, Any], base: Path, blobs: dict[str, bytes | Path], where: str
+    entries: Any,
+    defaults: Mapping[str, Any],
+    base: Path,
+    blobs: dict[str, bytes | Path],
+    where: str,
+    allow_outside: bool,
+    variants: int,
 ) -> list[EventSpec]:
+    """The events of the [[events]] entries, at most MAX_CASES // `variants` of them (checked before each is made)."""
     if not isinstance(entries, list) or not entries:
         raise CampaignError(f"{where}: give at least one [[events]] entry")
     shared = _drive_fields(defaults, f"{where}: [drive]")
@@ -305,6 +326,11 @@ def _events(
         repeats = entry.get("repeats", 1)
         if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
             raise CampaignError(f"{entry_where}: repeats must be a whole number >= 1, got {repeats!r}")
+        if (len(events) + (1 if "drive" in entry else repeats)) * variants > MAX_CASES:
+            raise CampaignError(
+                f"{entry_where}: repeats = {repeats} makes more than {MAX_CASES} cases ({len(events)} event(s) "
+                f"before it, x {variants} variant(s)), the most a campaign may have; split the campaign"
+            )
         if "drive" in entry:
             others = [k for k in entry if k not in ("name", "drive")]
             if others:
@@ -312,7 +338,7 @@ def _events(
                     f"{entry_where}: a drive file takes no generator key or repeats "
                     f"(found {others[0]!r}; a file gives the same drive every time)"
                 )
-            path = _existing(base, entry["drive"], f"{entry_where}: drive")
+            path = _existing(base, entry["drive"], f"{entry_where}: drive", allow_outside)
             sha = file_sha256(path)
             blobs[sha] = path
             events.append(EventSpec(name, drive=FileRef(sha, path.name)))
@@ -322,32 +348,38 @@ def _events(
         )
         road = _road_events(entry, entry_where)
         seed = fields.get("seed", 0)
-        for r in range(repeats):
-            repeat_fields = fields | ({"seed": seed + r} if repeats > 1 and isinstance(seed, int) else {})
-            label = f"{name}#{r}" if repeats > 1 else name
-            events.append(EventSpec(label, generator=_generator(repeat_fields, road, f"{where}: event {label!r}")))
-    names = [e.name for e in events]
-    twice = sorted({n for n in names if names.count(n) > 1})
+        seeded = repeats > 1 and isinstance(seed, int) and not isinstance(seed, bool)
+        labels = [f"{name}#{r}" if repeats > 1 else name for r in range(repeats)]
+        # repeats differ in the seed only: the settings are checked with the first and the last seed, not per repeat
+        first = _generator(fields, road, f"{where}: event {labels[0]!r}")
+        if seeded:
+            _generator(fields | {"seed": seed + repeats - 1}, road, f"{where}: event {labels[-1]!r}")
+        for r, label in enumerate(labels):
+            events.append(EventSpec(label, generator=first | {"seed": seed + r} if seeded else first))
+    twice = sorted(n for n, count in Counter(e.name for e in events).items() if count > 1)
     if twice:
         raise CampaignError(f"{where}: event name(s) used twice: {', '.join(map(repr, twice))}")
     return events
 
 
 def _fmu_ref(path: Path, blobs: dict[str, bytes | Path]) -> FileRef:
-    data = path.read_bytes()
+    data = file_bytes(path)
     sha = bytes_sha256(data)
     blobs[sha] = data
     return FileRef(sha, path.name)
 
 
-def _variant(entry: Mapping[str, Any], base: Path, blobs: dict[str, bytes | Path], where: str) -> VariantSpec:
+def _variant(
+    entry: Mapping[str, Any], base: Path, blobs: dict[str, bytes | Path], where: str, allow_outside: bool
+) -> VariantSpec:
     """The base system with the entry's FMU swaps and parameters, checked against the FMUs, FMU bytes read."""
     _unknown(entry, VARIANT_KEYS, where)
     name = _name(entry, where)
     where = f"{where.rsplit(':', 1)[0]}: variant {name!r}"
-    system_path = _existing(base, entry.get("system"), f"{where}: system")
+    system_path = _existing(base, entry.get("system"), f"{where}: system", allow_outside, folder=True)
     swaps = {
-        k: _existing(base, v, f"{where}: fmus.{k}") for k, v in _table(entry.get("fmus", {}), f"{where}: fmus").items()
+        k: _existing(base, v, f"{where}: fmus.{k}", allow_outside)
+        for k, v in _table(entry.get("fmus", {}), f"{where}: fmus").items()
     }
     parameters = {
         k: {
@@ -356,7 +388,7 @@ def _variant(entry: Mapping[str, Any], base: Path, blobs: dict[str, bytes | Path
         for k, values in _table(entry.get("parameters", {}), f"{where}: parameters").items()
     }
     try:
-        with open_system(system_path) as system:
+        with open_system(system_path, allow_outside) as system:
             known = [e.name for e in system.elements]
             for element in list(swaps) + list(parameters):
                 if element not in known:
@@ -393,11 +425,12 @@ def _variant(entry: Mapping[str, Any], base: Path, blobs: dict[str, bytes | Path
         raise CampaignError(f"{where}: {error}") from None
 
 
-def read_campaign(path: str | Path) -> Campaign:
-    """Read and check a campaign file; CampaignError names the file, the entry and the key of the first problem."""
+def read_campaign(path: str | Path, allow_outside: bool = False) -> Campaign:
+    """Read and check a campaign file; CampaignError names the file, the entry and the key of the first problem.
+    Files (drives, systems, FMUs, a system's FMUs) must lie inside the campaign's folder unless `allow_outside`."""
     path = Path(path).resolve()
     try:
-        text = path.read_bytes()
+        text = file_bytes(path, MAX_CAMPAIGN_BYTES)
         raw = tomllib.loads(text.decode("utf-8"))
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
         raise CampaignError(f"{path}: cannot read the campaign: {error}") from None
@@ -410,15 +443,18 @@ def read_campaign(path: str | Path) -> Campaign:
     entries = raw.get("variants")
     if not isinstance(entries, list) or not entries:
         raise CampaignError(f"{where}: give at least one [[variants]] entry")
+    if len(entries) > MAX_CASES:
+        raise CampaignError(f"{where}: {len(entries)} variants, more than the {MAX_CASES} cases a campaign may have")
     variants = [
-        _variant(_table(e, f"{where}: variants[{i}]"), base, blobs, f"{where}: variants[{i}]")
+        _variant(_table(e, f"{where}: variants[{i}]"), base, blobs, f"{where}: variants[{i}]", allow_outside)
         for i, e in enumerate(entries)
     ]
     names = [v.name for v in variants]
-    twice = sorted({n for n in names if names.count(n) > 1})
+    twice = sorted(n for n, count in Counter(names).items() if count > 1)
     if twice:
         raise CampaignError(f"{where}: variant name(s) used twice: {', '.join(map(repr, twice))}")
-    events = _events(raw.get("events"), _table(raw.get("drive", {}), f"{where}: [drive]"), base, blobs, where)
+    defaults = _table(raw.get("drive", {}), f"{where}: [drive]")
+    events = _events(raw.get("events"), defaults, base, blobs, where, allow_outside, len(variants))
     description = raw.get("description", "")
     name = raw.get("name", path.stem)
     if not isinstance(name, str) or not isinstance(description, str):

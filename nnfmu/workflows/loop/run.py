@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nnfmu.atomic import replace_dir, staging_dir
+from nnfmu.atomic import staging_dir
 from nnfmu.component import same_period
 from nnfmu.cosim.replay import replay_fmu
 from nnfmu.data import DataError, Measurement, check_measurement, load_measurement
@@ -25,7 +25,7 @@ from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.models.features import FeatureSpec
 from nnfmu.models.trained import TrainedModel
-from nnfmu.out_paths import check_output_dir, mark_output_dir
+from nnfmu.out_paths import check_output_dir, replace_output_dir
 from nnfmu.validate import ValidationSettings, channel_metrics
 from nnfmu.workflows.loop.blocks import RecordBlocks, part_measurement, plan_blocks
 from nnfmu.workflows.loop.errors import LoopError
@@ -134,7 +134,7 @@ def run_loop(
     or files nnfmu did not write there as a loop result; nothing is written then."""
     model_path = Path(model_path)
     inputs = [model_path] if isinstance(data, Measurement) else [model_path, Path(data)]
-    out_dir = check_output_dir(out_dir, "loop", inputs)
+    out_dir = check_output_dir(out_dir, "loop", inputs, replaces=True)
     try:
         model, component = read_step_graph(model_path)
     except ExportError as error:
@@ -248,8 +248,7 @@ def run_loop(
             diagnoses=diagnoses,
         )
         write_loop_report(staging, report, m, rows, first_prediction, predicted, steps)
-        mark_output_dir(staging, "loop")
-        replace_dir(staging, out_dir)
+        replace_output_dir(staging, out_dir, "loop")
     finally:
         if staging.exists():
             shutil.rmtree(staging)

@@ -18,9 +18,10 @@ from nnfmu.workflows.vehicle_binding import vehicle_binding
 PSD_BAND = (0.5, 40.0)  # [Hz] where the PSD difference is read: the rig controller's band
 
 
-def replay_system(ssd: Path, drive: Measurement, step: float) -> Measurement:
-    """Every output of the system co-simulated on `drive` at the communication `step` [s] (master defaults)."""
-    with open_system(ssd) as system:
+def replay_system(ssd: Path, drive: Measurement, step: float, allow_outside: bool = False) -> Measurement:
+    """Every output of the system co-simulated on `drive` at the communication `step` [s] (master defaults); its
+    FMUs may lie outside its folder if `allow_outside`."""
+    with open_system(ssd, allow_outside) as system:
         return cosimulate(system, drive, CosimSettings(step=step), binding=vehicle_binding(system)).measurement
 
 

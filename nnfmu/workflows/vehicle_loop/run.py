@@ -15,13 +15,13 @@ from pathlib import Path
 
 import numpy as np
 
-from nnfmu.atomic import replace_dir, staging_dir
+from nnfmu.atomic import staging_dir
 from nnfmu.data import DataError, Measurement, load_measurement
 from nnfmu.data.drive_files import RPC_SUFFIXES, read_drive
 from nnfmu.diagnosis import Diagnosis
 from nnfmu.fmu.errors import FmuBuildError
 from nnfmu.fmu.factory import load_onnx
-from nnfmu.out_paths import check_output_dir, mark_output_dir
+from nnfmu.out_paths import check_output_dir, replace_output_dir
 from nnfmu.workflows.vehicle_loop.attribution import (
     SENSOR_OFFSET,
     Attribution,
@@ -282,14 +282,14 @@ def _run_vehicle_loop(
 ) -> VehicleLoopReport:
     """`run_vehicle_loop` with the elements' step graphs read into `graphs`."""
     inputs = [Path(p) for p in (measured, system, drive) if not isinstance(p, Measurement)]
-    out_dir = check_output_dir(out_dir, "vehicle-loop", inputs)
-    car = read_virtual_car(system, graphs, models, log)
+    out_dir = check_output_dir(out_dir, "vehicle-loop", inputs, replaces=True)
+    car = read_virtual_car(system, graphs, models, log, settings.allow_outside)
     _check_step_graphs(car)
     m = _load(measured, "measurement", _read_record)
     d = _load(drive, "drive", read_drive)
     _check_time_axes(m, d)
     log(f"replaying {car.name} on {d.source}")
-    base = replay_system(car.ssd, d, settings.step)
+    base = replay_system(car.ssd, d, settings.step, settings.allow_outside)
     recorded = [c for c in m.names if f"derived:{c}" not in m.notes and not c.startswith("actuator_")]
     channels = [c for c in recorded if c in base.channels]
     ignored = [c for c in recorded if c not in channels]
@@ -401,8 +401,7 @@ def _run_vehicle_loop(
             untested=untested,
         )
         write_vehicle_report(staging, report, record, virtual, after_result, corrected)
-        mark_output_dir(staging, "vehicle-loop")
-        replace_dir(staging, out_dir)
+        replace_output_dir(staging, out_dir, "vehicle-loop")
     finally:
         if staging.exists():
             shutil.rmtree(staging)

@@ -32,7 +32,8 @@ class VehicleLoopSettings:
     (component, effect) pairs and sensor offsets named. `in_situ`: the component loop's settings on a damper's
     in-situ record (damper force and displacement measured). `budget`: the largest NRMSE [1] a channel may keep for
     an unexplained residual to be called consistent with the co-simulation error budget (the networks' own error and
-    the coupling stay within a few per cent on the road test)."""
+    the coupling stay within a few per cent on the road test). `allow_outside`: the system's FMUs may lie outside its
+    folder (`open_system`)."""
 
     step: float = 1e-3
     settle: float = 1.5
@@ -42,6 +43,7 @@ class VehicleLoopSettings:
     max_effects: int = 3
     budget: float = 0.25
     in_situ: LoopSettings = field(default_factory=_in_situ_loop)
+    allow_outside: bool = False
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.step) and self.step > 0):

@@ -40,13 +40,18 @@ class VirtualCar:
 
 
 def read_virtual_car(
-    ssd: str | Path, graphs: Path, models: Mapping[str, str | Path] | None = None, log: Callable[[str], None] = print
+    ssd: str | Path,
+    graphs: Path,
+    models: Mapping[str, str | Path] | None = None,
+    log: Callable[[str], None] = print,
+    allow_outside: bool = False,
 ) -> VirtualCar:
     """The virtual car of `ssd`, each element's step graph read from its FMU into `graphs/<element>.onnx` (module
     docstring); `models` maps element names to ONNX step graphs that override them. VehicleLoopError for a system
-    without a vehicle element, a given graph that is not its FMU's network, or an FMU whose graph was altered."""
+    without a vehicle element, a given graph that is not its FMU's network, or an FMU whose graph was altered;
+    SspError for one with FMUs outside its folder unless `allow_outside`."""
     models = {k: Path(v) for k, v in (models or {}).items()}
-    with open_system(ssd) as system:
+    with open_system(ssd, allow_outside) as system:
         binding = vehicle_binding(system)
         if not any(n.startswith("actuator_") for n in binding.inputs):
             raise VehicleLoopError(f"{ssd}: no element with a four-poster's actuator inputs (a vehicle FMU)")

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import os
+import re
+import shutil
+import tempfile
 from pathlib import Path
 
 import pyarrow.parquet as pq
@@ -37,7 +41,22 @@ def campaign_text(
 
 
 def write_campaign(folder: Path, text: str) -> Path:
+    """`folder/campaign.toml` with `text`; the test fixtures' files it names by absolute path (the quarter car's
+    folder, built once per session) are linked into `folder` and named relative to it, as a campaign must keep its
+    files inside its folder unless allowed otherwise."""
     folder.mkdir(parents=True, exist_ok=True)
+    temp = Path(tempfile.gettempdir()).resolve()
+    named = {Path(p).parent for p in re.findall(r'"(/[^"]+)"', text) if temp in Path(p).resolve().parents}
+    for i, source in enumerate(sorted(named)):
+        local = folder / f"inputs-{i}"
+        local.mkdir(exist_ok=True)
+        for f in source.iterdir():
+            if f.is_file() and not (local / f.name).exists():
+                try:
+                    os.link(f, local / f.name)
+                except OSError:
+                    shutil.copyfile(f, local / f.name)
+        text = text.replace(f'"{source}/', f'"{local.name}/')
     path = folder / "campaign.toml"
     path.write_text(text, encoding="utf-8")
     return path

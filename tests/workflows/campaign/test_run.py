@@ -133,7 +133,7 @@ def test_changed_inputs_rerun_only_their_cases_and_failed_cases_rerun_on_request
     path = write_campaign(tmp_path, campaign_text(quarter_car, events=2, variants=("linear", "unstable")))
     first = run_campaign(path, tmp_path / "out", workers=0)
     assert (first.ok, first.failed) == (2, 2)
-    path.write_text(campaign_text(quarter_car, events=2, variants=("linear", "unstable", "firm")))
+    write_campaign(tmp_path, campaign_text(quarter_car, events=2, variants=("linear", "unstable", "firm")))
     grown = run_campaign(path, tmp_path / "out", workers=0)
     assert (grown.skipped, grown.ok, grown.failed) == (4, 4, 2)
     retried = run_campaign(path, tmp_path / "out", workers=0, retry_failed=True)

@@ -3,6 +3,7 @@ content of their inputs."""
 
 from __future__ import annotations
 
+import os
 import shutil
 from pathlib import Path
 
@@ -123,3 +124,87 @@ def test_a_campaign_nested_too_deeply_is_refused_naming_the_file(tmp_path):
     path.write_text("name = " + "[" * 100_000 + "\n", encoding="utf-8")
     with pytest.raises(CampaignError, match=r"deep\.toml.*nested too deeply"):
         read_campaign(path)
+
+
+def _outside_fmu(quarter_car, tmp_path: Path) -> Path:
+    """A working damper FMU two folders above the campaign's (`tmp_path/a/b/campaign.toml`)."""
+    evil = tmp_path / "evil.fmu"
+    shutil.copyfile(quarter_car["firm"], evil)
+    return evil
+
+
+@pytest.mark.parametrize(
+    "change, words",
+    [
+        (
+            lambda text, qc: text + '[[events]]\nname = "secret"\ndrive = "/etc/passwd"\n',
+            ["event 'secret'", "/etc/passwd"],
+        ),
+        (
+            lambda text, qc: text.replace(f'damper = "{qc["firm"]}"', 'damper = "../../evil.fmu"'),
+            ["variant 'firm'", "fmus.damper", "evil.fmu"],
+        ),
+        (lambda text, qc: text + '[[events]]\nname = "link"\ndrive = "link.csv"\n', ["event 'link'", "link.csv"]),
+    ],
+    ids=["absolute drive", "variant FMU two folders up", "link leading out"],
+)
+def test_a_path_outside_the_campaign_folder_is_refused_unless_allowed(quarter_car, tmp_path, change, words):
+    _outside_fmu(quarter_car, tmp_path)
+    (tmp_path / "outside.csv").write_text("time [s],actuator_fl_displacement [m]\n0,0\n0.001,0\n")
+    (tmp_path / "a" / "b").mkdir(parents=True)
+    (tmp_path / "a" / "b" / "link.csv").symlink_to(tmp_path / "outside.csv")
+    path = write_campaign(tmp_path / "a" / "b", change(campaign_text(quarter_car), quarter_car))
+    with pytest.raises(CampaignError) as caught:
+        read_campaign(path)
+    for word in words + ["outside", "--allow-outside"]:
+        assert word in str(caught.value), caught.value
+    assert read_campaign(path, allow_outside=True).variants  # the opt-in reads it
+
+
+def test_a_campaign_with_every_file_inside_its_folder_needs_no_opt_in(quarter_car, tmp_path):
+    shutil.copyfile(quarter_car["firm"], tmp_path / "firm.fmu")
+    text = campaign_text(quarter_car).replace(f'damper = "{quarter_car["firm"]}"', 'damper = "firm.fmu"')
+    campaign = read_campaign(write_campaign(tmp_path, text))
+    assert [v.name for v in campaign.variants] == ["linear", "firm"]
+
+
+def test_a_campaign_past_the_case_limit_is_refused_before_any_case_is_made(quarter_car, tmp_path):
+    import time
+
+    from nnfmu.workflows.campaign.spec import MAX_CASES
+
+    text = campaign_text(quarter_car).replace("repeats = 3", "repeats = 1000000000")
+    started = time.monotonic()
+    with pytest.raises(CampaignError, match=rf"event 'C-20'.*1000000000.*{MAX_CASES}"):
+        read_campaign(write_campaign(tmp_path / "a", text))
+    text = campaign_text(quarter_car).replace("repeats = 3", f"repeats = {MAX_CASES // 2 + 1}")  # x 2 variants
+    with pytest.raises(CampaignError, match=rf"{MAX_CASES}"):
+        read_campaign(write_campaign(tmp_path / "b", text))
+    assert time.monotonic() - started < 5
+
+
+def test_twenty_thousand_repeats_are_read_in_linear_time(quarter_car, tmp_path):
+    """Each repeat's name was checked against every other (20 000 repeats: 15 s); now a count per name."""
+    import time
+
+    campaign = read_campaign(write_campaign(tmp_path / "small", campaign_text(quarter_car, events=2000)))
+    started = time.monotonic()
+    read_campaign(write_campaign(tmp_path / "small", campaign_text(quarter_car, events=2000)))
+    small = time.monotonic() - started
+    started = time.monotonic()
+    large = read_campaign(write_campaign(tmp_path / "large", campaign_text(quarter_car, events=20000)))
+    ten_times = time.monotonic() - started
+    assert len(campaign.events) == 2000 and len(large.events) == 20000
+    assert ten_times < 25 * small + 1.0, (small, ten_times)  # linear: ~10x (quadratic: ~100x)
+
+
+@pytest.mark.parametrize("device", ["/dev/zero", "fifo"])
+def test_a_drive_that_is_not_a_regular_file_is_refused_before_hashing(quarter_car, tmp_path, device):
+    if device == "fifo":
+        os.mkfifo(tmp_path / "drive.csv")
+        drive = "drive.csv"
+    else:
+        drive = device
+    extra = f'[[events]]\nname = "endless"\ndrive = "{drive}"'
+    with pytest.raises(CampaignError, match="event 'endless'.*not a regular file"):
+        read_campaign(write_campaign(tmp_path, campaign_text(quarter_car, extra_events=extra)), allow_outside=True)

@@ -27,7 +27,7 @@ from nnfmu.export import export_onnx, run_step_graph
 from nnfmu.models import Architecture, TrainSettings, get_preset, train_model
 from nnfmu.models.features import Difference, FeatureSpec, SmoothSign
 from nnfmu.models.retrain import Retrained
-from nnfmu.out_paths import MARKER
+from nnfmu.out_paths import replace_output_dir
 from nnfmu.workflows.loop import LoopError, LoopReport, LoopSettings, run_loop, training_part
 from nnfmu.workflows.loop import trials as trials_module
 from nnfmu.workflows.loop.trials import (
@@ -409,9 +409,10 @@ def test_bad_input_is_refused_and_nothing_is_written(models, tmp_path, spoil, me
 
 def test_a_failed_run_leaves_an_earlier_result_untouched(models, tmp_path):
     out = tmp_path / "loop"
-    out.mkdir()
-    (out / "report.json").write_text("earlier")
-    (out / MARKER).write_text("loop\n")  # an earlier loop result, which a successful run would replace
+    earlier = tmp_path / "staged"
+    earlier.mkdir()
+    (earlier / "report.json").write_text("earlier")
+    replace_output_dir(earlier, out, "loop")  # an earlier loop result, which a successful run would replace
     with pytest.raises(LoopError, match="not in the data"):
         run_loop(without(record(FULL), "velocity"), first_model(FULL, "history", str(models)), "force", out, SETTINGS)
     assert (out / "report.json").read_text() == "earlier"
