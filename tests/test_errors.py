@@ -18,6 +18,8 @@ NOT_NNFMU_ERRORS = {
     "nnfmu.cosim.master._Diverged",
     # A warning, issued with warnings.warn and printed by the CLI as a `warning:` line, never raised.
     "nnfmu.fmu.errors.PlatformSkippedWarning",
+    # The same for a co-simulation: inputs held over the step, an output recorded in a unit it did not declare.
+    "nnfmu.cosim.master.CosimWarning",
 }
 
 
