@@ -130,7 +130,7 @@ def test_libcosim_refuses_an_fmi3_fmu_before_loading_it(tmp_path: Path) -> None:
 
     onnx_path = tmp_path / "damper3.onnx"
     onnx.save(damper_graph(), str(onnx_path))
-    damper3 = build_fmu(onnx_path, BuildOptions(out=tmp_path / "damper3.fmu", fmi_version=3))
+    damper3 = build_fmu(onnx_path, BuildOptions(out=tmp_path / "fmi3" / "fmu" / "damper3.fmu", fmi_version=3))
     ssd = write_vendor_system(tmp_path / "fmi3", damper_fmu=damper3)
     settings = CosimSettings(step=1e-3, scheme="jacobi", extrapolation="none", refresh=False)
     with pytest.raises(CosimError, match=r"element 'damper' \(damper3\.fmu\) is an FMI 3\.0 FMU; libcosim runs FMI 2"):

@@ -103,6 +103,7 @@ def _step_graph(element: str, fmu: Path, given: Path | None, graphs: Path, notes
             )
         return found
     if given is not None:
+        _readable(element, given)
         try:
             check_same_graph(given, record, fmu)
         except StepGraphError as err:
