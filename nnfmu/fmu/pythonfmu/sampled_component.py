@@ -135,9 +135,8 @@ class SampledComponent:
         self._t_start: float | None = None  # set by `start`, else by the first step
         self._time = 0.0
         self._sample = -1  # index of the latest evaluated sample; -1 before initialisation ends
-        self._evaluated_at = (
-            0.0  # [s] since the start, when the outputs were last evaluated (the filter runs from there)
-        )
+        # [s] since the start, when the outputs were last evaluated (the output filter runs from there)
+        self._evaluated_at = 0.0
         # [s] the step sizes summed since the start, and what the sum lost (Kahan): samples are counted against it,
         # never against the absolute time, so a large start time (1e300 s) loses none; it also says where between
         # two samples a communication point falls
