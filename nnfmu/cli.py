@@ -254,7 +254,7 @@ def train(
     channel_map: Optional[list[str]] = typer.Option(None, "--map", help=MAP_HELP),
     moving_mass: Optional[str] = typer.Option(
         None,
-        help="Dyno mass [kg] between load cell and actuator (rod, piston, fixture): subtracted from the force as m·a before training, as a dyno's mass compensation does; 0: none; auto: estimated from the record and subtracted; default: for damper-spline and damper-hysteresis estimated and reported (a warning where it matters), not subtracted (docs/moving-mass.md).",
+        help="Dyno mass [kg] between load cell and actuator (rod, piston, fixture): subtracted from the force as m·a before training, as a dyno's mass compensation does; 0: none (the force trained as measured); auto or default: for damper-spline and damper-hysteresis estimated from the record, reported, and subtracted where its 95 % interval excludes 0 kg (docs/moving-mass.md); other presets: nothing subtracted unless a mass is given.",
     ),
     input_cutoff: Optional[float] = typer.Option(
         None,

@@ -20,9 +20,9 @@ friction; seed 3) the fit without the widening gives -0.006 ± 0.004 kg without 
 -0.028 ± 0.010 kg at the rig's default noise (10 N, 2 mm/s rms), and 1.98 ± 0.02 kg for a 2 kg fixture; BIAS
 covers that shift.
 
-The estimate says how much of the force is m·a: `MassEstimate.share`, the m·a rms over the force rms. Above
-MATTERS (1 %) with an interval that excludes 0 the mass matters for a vehicle: a network trained on the raw force
-adds it to the car's unsprung mass a second time (2 kg on a passenger damper's dyno record: 4-5 % of the force rms).
+The estimate says how much of the force is m·a: `MassEstimate.share`, the m·a rms over the force rms. Where the
+interval excludes 0 the mass is there to take out (`MassEstimate.found`): a network trained on the raw force adds it
+to the car's unsprung mass a second time (2 kg on a passenger damper's dyno record: 4-5 % of the force rms).
 """
 
 from __future__ import annotations
@@ -45,7 +45,6 @@ TOLERANCE = 1e-4  # kg
 BLOCKS = 10  # parts of the record for the jackknife
 Z95 = 1.959964  # two-sided 95 % normal quantile
 BIAS = 0.03  # kg added to the interval's half-width for the bias the transducers' noise leaves (docstring)
-MATTERS = 0.01  # m·a rms over force rms above which the mass matters for a vehicle
 
 
 @dataclass(frozen=True)
@@ -60,9 +59,9 @@ class MassEstimate:
     acceleration: str
 
     @property
-    def matters(self) -> bool:
-        """True when m·a is more than MATTERS of the force rms and the interval excludes zero."""
-        return self.share > MATTERS and self.mass - self.half_width > 0.0
+    def found(self) -> bool:
+        """True when the 95 % interval excludes 0 kg: a mass to take out of the force."""
+        return self.mass - self.half_width > 0.0
 
     def describe(self) -> str:
         """One line for a `note:`."""

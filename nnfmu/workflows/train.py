@@ -36,7 +36,8 @@ class TrainRequest:
     adam or lbfgs; channel_map: (file channel, nnfmu name) pairs passed to `load_measurement`; moving_mass [kg]: the
     dyno's mass between load cell and actuator, subtracted from the force as m·a before training (`nnfmu.data.inertia`;
     0: none; "auto": estimated from the record (`nnfmu.data.moving_mass`) and subtracted where its interval excludes
-    0; None: for a passive damper estimated and reported, with a warning where it matters, not subtracted);
+    0, refused for presets other than the passive dampers'; None: for a passive damper as "auto", a record the
+    estimate cannot read trained as measured with a note; other presets nothing subtracted);
     input_cutoff [Hz]: the inputs' zero-phase low-pass before the features (`TrainSettings.input_cutoff`; 0: none;
     None: the preset's).
     """
@@ -139,9 +140,15 @@ def _load(
         )
     notes = measurement.notes | {"moving_mass": estimate.describe()}
     measurement = replace(measurement, notes=notes)
+    if estimate.found:
+        compensated = compensate_inertia(measurement, estimate.mass, output)
+        if mass is None:
+            default = "; the default for a passive damper's record: --moving-mass 0 trains the force as measured"
+            compensated = replace(
+                compensated, notes=compensated.notes | {"inertia": compensated.notes["inertia"] + default}
+            )
+        return compensated, estimate.mass, []
     if mass == "auto":
-        if estimate.mass - estimate.half_width > 0.0:
-            return compensate_inertia(measurement, estimate.mass, output), estimate.mass, []
         return (
             measurement,
             0.0,
@@ -150,18 +157,7 @@ def _load(
                 f"exclude 0 kg; {output} left as measured"
             ],
         )
-    if not estimate.matters:
-        return measurement, 0.0, []
-    return (
-        measurement,
-        0.0,
-        [
-            f"{output} holds m·a of an estimated {estimate.mass:.3g} ± {estimate.half_width:.2g} kg moving mass "
-            f"({estimate.share:.1%} of its rms): a network trained on it adds that mass to the car's unsprung mass a "
-            f"second time; train with --moving-mass auto (or the dyno's mass in kg) to take it out, --moving-mass 0 "
-            f"if the force is compensated already"
-        ],
-    )
+    return measurement, 0.0, []
 
 
 def train_from_file(
