@@ -132,3 +132,18 @@ def test_band_and_tolerance_texts() -> None:
         parse_band("40")
     with pytest.raises(IterateError, match=r"--tolerance item 'a=b'"):
         parse_tolerance("a=b")
+
+
+def test_the_command_reports_a_bad_option_as_one_error_line(tmp_path) -> None:
+    from typer.testing import CliRunner
+
+    from nnfmu.cli import app
+
+    args = ["iterate", str(tmp_path / "road.csv"), "--system", str(tmp_path / "car"), "--out", str(tmp_path / "out")]
+    result = CliRunner().invoke(app, [*args, "--band", "0.5-40"])
+    assert result.exit_code == 2
+    assert result.output.strip() == "error: --band '0.5-40': give LO:HI in Hz, e.g. 0.1:100"
+    result = CliRunner().invoke(app, [*args, "--acceleration-limit", "-1"])
+    assert result.exit_code == 2
+    assert "actuator acceleration limit = -1.0 m/s^2 must be a positive number" in result.output
+    assert not (tmp_path / "out").exists()

@@ -138,6 +138,12 @@ def _choose_channels(target: Measurement, outputs: Measurement, settings: Iterat
             f"{target.source}: no channel of the target is an output of the system {system} (target: "
             f"{', '.join(recorded)}; outputs: {', '.join(outputs.names)})"
         )
+    unknown = [name for name in settings.tolerances if name not in chosen]
+    if unknown:
+        raise IterateError(
+            f"--tolerance names channel(s) {', '.join(map(repr, unknown))} that are not targets "
+            f"(targets: {', '.join(chosen)})"
+        )
     for name in chosen:
         if target.units.get(name, "") != outputs.units.get(name, ""):
             raise IterateError(
