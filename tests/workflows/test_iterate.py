@@ -22,9 +22,9 @@ from nnfmu.workflows.iterate import IterateError, IterateSettings, run_iterate
 from nnfmu.workflows.iterate.signals import band_filter, fade_weights
 
 H = 1e-3  # [s] sample period of the records, the vehicle and the co-simulation step
-DURATION = 12.0  # [s] of road record
+DURATION = 8.0  # [s] of road record
 TARGETS = ("spindle_acceleration", "body_acceleration", "damper_displacement")
-SETTINGS = IterateSettings(noise_duration=30.0, resolution=0.25, band=(0.3, 100.0))
+SETTINGS = IterateSettings(noise_duration=20.0, resolution=0.25, band=(0.3, 100.0))
 PARAMS = DEFAULTS_DIR / "midsize_sedan_quarter_car_fl.toml"
 
 
@@ -122,7 +122,7 @@ def test_tight_actuator_limits_are_never_exceeded(cars: dict[str, Path], tmp_pat
     from nnfmu.workflows.iterate import ActuatorLimits
 
     limits = ActuatorLimits(stroke=0.02, velocity=0.3, acceleration=40.0)  # below what the road needs
-    settings = IterateSettings(noise_duration=30.0, resolution=0.25, band=(0.3, 100.0), iterations=3, limits=limits)
+    settings = IterateSettings(noise_duration=20.0, resolution=0.25, band=(0.3, 100.0), iterations=3, limits=limits)
     result = run_iterate(tmp_path / "road.csv", cars["linear"], tmp_path / "out", settings)
     assert not result.converged
     x = read_drive(result.files["drive"])["actuator_fl_displacement"]
