@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 from nnfmu.data import Measurement
 from nnfmu.validate.spectra import welch_psd
@@ -125,6 +126,7 @@ def _figures(
             marker="o",
             label=name,
         )
+    axes.xaxis.set_major_locator(MaxNLocator(integer=True))
     axes.set_xlabel("iteration [1]")
     axes.set_ylabel("NRMSE [1]")
     axes.set_title("error per iteration", parse_math=False)
