@@ -24,7 +24,7 @@ from nnfmu.workflows.iterate.signals import band_filter, fade_weights
 H = 1e-3  # [s] sample period of the records, the vehicle and the co-simulation step
 DURATION = 8.0  # [s] of road record
 TARGETS = ("spindle_acceleration", "body_acceleration", "damper_displacement")
-SETTINGS = IterateSettings(noise_duration=20.0, resolution=0.25, band=(0.3, 100.0))
+SETTINGS = IterateSettings(noise_duration=20.0, resolution=0.25, band=(0.3, 100.0), rpc=True)
 PARAMS = DEFAULTS_DIR / "midsize_sedan_quarter_car_fl.toml"
 
 
@@ -91,6 +91,10 @@ def test_iteration_recovers_the_road_responses_and_the_drive_in_band(
     assert len(result.outcome.iterations) <= SETTINGS.iterations
     drive = read_drive(result.files["drive"])  # exactly what `nnfmu cosim --drive` reads
     assert set(drive.names) == {"actuator_fl_displacement", "actuator_fl_velocity"}
+    rpc = read_drive(result.files["drive_rpc"])  # the same drive as RPC III (int16: within half a count)
+    for channel in drive.names:
+        count = np.max(np.abs(drive[channel])) / 32752
+        np.testing.assert_allclose(rpc[channel], drive[channel], rtol=0, atol=0.6 * count)
     replay = run_cosim(cars[model], result.files["drive"], CosimSettings(step=H)).measurement
     n = min(len(replay.time), len(road.time))
     for channel in TARGETS:
