@@ -79,7 +79,6 @@ class SystemPlant:
         self.displacements = list(displacements)
         self.pool = InstancePool()
         self.channels: list[str] = []
-        self.runs = 0
 
     def drive(self, x: np.ndarray) -> Measurement:
         """Drive record of displacements `x` (n, m) [m] with their velocities [m/s], time from 0."""
@@ -102,7 +101,6 @@ class SystemPlant:
             pool=self.pool,
             binding=self.binding,
         ).measurement
-        self.runs += 1
         t = drive.time
         return Measurement.uniform(
             0.0,
