@@ -686,6 +686,65 @@ def loop(
     typer.echo(f"ONNX: {report.onnx}\nFMU: {report.fmu}\nreport: {out / 'report.html'}")
 
 
+@app.command()
+def iterate(
+    target: Path = typer.Argument(
+        ..., help="Road record to reproduce (CSV with `name [unit]` headers, MDF4 or RPC III): system output channels."
+    ),
+    system: Path = typer.Option(..., help="SSP system of the virtual car (SystemStructure.ssd, its folder or .ssp)."),
+    out: Path = typer.Option(..., "--out", "-o", help="Folder for drive.csv, report.json and report.html."),
+    channels: Optional[list[str]] = typer.Option(
+        None, help="Target channels to match, comma-separated (default: every target channel the system outputs)."
+    ),
+    iterations: int = typer.Option(10, help="Most drives played (1 to 100)."),
+    gain: float = typer.Option(0.8, help="Gain g of drive_k+1 = drive_k + g H^-1 (target - response_k) [1]."),
+    band: str = typer.Option("0.1:100", help="Frequency band LO:HI [Hz] the drive is corrected in."),
+    tolerance: str = typer.Option(
+        "0.05", help="NRMSE [1] every channel must reach, optionally CHANNEL=NRMSE items after it (0.05,a=0.08)."
+    ),
+    noise_level: float = typer.Option(0.1, help="RMS post velocity [m/s] of the identification noise."),
+    noise_duration: float = typer.Option(60.0, help="Length [s] of the identification noise run."),
+    reestimate: int = typer.Option(2, help="Re-estimate the FRF from the noise and the last N iterations (0: never)."),
+    stroke_limit: float = typer.Option(0.125, help="Actuator stroke limit: peak |displacement| from rest [m]."),
+    velocity_limit: float = typer.Option(2.5, help="Actuator velocity limit [m/s]."),
+    acceleration_limit: float = typer.Option(400.0, help="Actuator acceleration limit [m/s^2]."),
+    step: float = typer.Option(1e-3, help="Communication step of the co-simulations [s]."),
+    rpc: bool = typer.Option(False, help="Also write the drive as RPC III (drive.drv)."),
+    allow_outside: bool = typer.Option(False, help=ALLOW_OUTSIDE_HELP),
+) -> None:
+    """Iterate a four-poster drive file on the virtual car until its responses match a road record (noise
+    identification, regularised inverse FRF, corrections per iteration within the actuator limits)."""
+    from nnfmu.workflows.iterate import (
+        ActuatorLimits,
+        IterateSettings,
+        parse_band,
+        parse_tolerance,
+        run_iterate,
+    )
+
+    try:
+        common, per_channel = parse_tolerance(tolerance)
+        settings = IterateSettings(
+            channels=tuple(_split(channels)) or None,
+            iterations=iterations,
+            gain=gain,
+            band=parse_band(band),
+            tolerance=common,
+            tolerances=per_channel,
+            noise_level=noise_level,
+            noise_duration=noise_duration,
+            reestimate=reestimate,
+            limits=ActuatorLimits(stroke_limit, velocity_limit, acceleration_limit),
+            step=step,
+            rpc=rpc,
+            allow_outside=allow_outside,
+        )
+        result = run_iterate(target, system, out, settings, log=typer.echo)
+    except NnfmuError as error:
+        _fail(error)
+    typer.echo(f"report: {result.files['html']}")
+
+
 @app.command("loop-vehicle")
 def loop_vehicle(
     measured: Path = typer.Argument(

@@ -33,6 +33,10 @@ COMMANDS = {
     ),
     "data check": (["data", "check", "{tmp}/d.csv"], ("nnfmu.workflows.data_check", "check_data_file")),
     "build": (["build", "{tmp}/m.onnx", "--out", "{tmp}/m.fmu"], ("nnfmu.workflows.fmu_build", "build_fmu")),
+    "iterate": (
+        ["iterate", "{tmp}/road.csv", "--system", "{tmp}/system", "--out", "{tmp}/out"],
+        ("nnfmu.workflows.iterate", "run_iterate"),
+    ),
 }
 
 
