@@ -42,17 +42,21 @@ def compile_shared_library(target: Target, sources: list[Path], include_dir: Pat
     if result.returncode != 0 or not output.is_file():
         log = (result.stderr or result.stdout).strip()
         raise CompilerError(
-            f"the {target.name} C compiler ({target.label}) failed (exit {result.returncode}) on "
+            f"the {target.name} C compiler failed ({target.label}, exit {result.returncode}) on "
             f"{' '.join(command)}:\n{log[-4000:]}"
         )
     return command
 
 
 def compile_all(builds: list[tuple[Target, Path]], sources: list[Path], include_dir: Path) -> None:
-    """Compile `sources` once per (target, output library), at most one compiler per CPU at a time; the first
-    failure in the order given is raised (CompilerError) after every compiler has finished."""
+    """Compile `sources` once per (target, output library), at most one compiler per CPU at a time. The first failure
+    in the order given is raised (CompilerError) once the compilers running then have finished; queued ones never
+    start."""
     workers = max(1, min(len(builds), os.cpu_count() or 1))
-    with ThreadPoolExecutor(max_workers=workers, thread_name_prefix="nnfmu-cc") as pool:
+    pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="nnfmu-cc")
+    try:
         futures = [pool.submit(compile_shared_library, t, sources, include_dir, out) for t, out in builds]
-    for future in futures:
-        future.result()
+        for future in futures:
+            future.result()
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
