@@ -80,6 +80,7 @@ def test_the_toolchain_prefers_mingw_for_windows_and_zig_for_the_linux_baseline(
 
 def test_without_zig_a_default_build_names_what_it_left_out_and_all_is_refused(monkeypatch):
     monkeypatch.setattr(toolchain, "ZIG_MODULE", NO_ZIG)
+    monkeypatch.delenv(toolchain.PLATFORMS_VARIABLE, raising=False)  # the default choice (tests/conftest.py sets it)
     targets, warning = toolchain.select_targets(None)
     host = toolchain.host_platform_of().name
     assert [t.name for t in targets] == [host] + (["x86_64-windows"] if MINGW else [])
@@ -92,9 +93,19 @@ def test_without_zig_a_default_build_names_what_it_left_out_and_all_is_refused(m
         assert toolchain.select_targets(None) == (toolchain.select_targets(("host",))[0], None)
 
 
+def test_nnfmu_platforms_is_the_default_choice(monkeypatch):
+    host = toolchain.host_platform_of().name
+    monkeypatch.setenv(toolchain.PLATFORMS_VARIABLE, " host, ")
+    assert [t.name for t in toolchain.select_targets(None)[0]] == [host]
+    assert [t.name for t in toolchain.select_targets(("x86_64-linux",))[0]] == ["x86_64-linux"]  # named ones win
+    monkeypatch.setenv(toolchain.PLATFORMS_VARIABLE, "armv7-linux")
+    with pytest.raises(CompilerError, match=r"\$NNFMU_PLATFORMS: unknown platform 'armv7-linux'"):
+        toolchain.select_targets(None)
+
+
 def test_platform_names_are_checked_before_anything_is_built(delay_onnx, tmp_path):
     for bad in (("armv7-linux",), ()):
-        with pytest.raises(NnfmuError, match="choose from host, all, or x86_64-linux"):
+        with pytest.raises(NnfmuError, match="--platforms: .*choose from host, all, or x86_64-linux"):
             build_fmu(delay_onnx, BuildOptions(out=tmp_path / "x.fmu", platforms=bad))
     assert list(tmp_path.iterdir()) == []
 

@@ -43,6 +43,7 @@ NO_ZIG = "nnfmu_test_no_zig"  # a module name that is not installed: the toolcha
 def _without_cross_compilers(monkeypatch: pytest.MonkeyPatch) -> None:
     """Neither MinGW-w64 nor Zig found: what a machine without the apt package and the cross extra has."""
     monkeypatch.delenv("CC_WIN64", raising=False)
+    monkeypatch.delenv(toolchain.PLATFORMS_VARIABLE, raising=False)  # the default choice (tests/conftest.py sets it)
     monkeypatch.setattr(toolchain, "WIN64_COMPILER", "x86_64-w64-mingw32-gcc-not-installed")
     monkeypatch.setattr(toolchain, "ZIG_MODULE", NO_ZIG)
 

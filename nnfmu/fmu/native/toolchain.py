@@ -38,6 +38,8 @@ GLIBC_BASELINE = "2.17"
 MACOS_BASELINE = "11.0"  # Big Sur: the first macOS on Apple silicon
 CROSS_HINT = "pip install 'nnfmu[cross]' (the Zig toolchain)"
 WIN64_HINT = "for x86_64-windows also: apt-get install gcc-mingw-w64-x86-64, or set CC_WIN64"
+# The default choice of platforms where none are named, as `--platforms` takes them (unset: every buildable one).
+PLATFORMS_VARIABLE = "NNFMU_PLATFORMS"
 # Set by `host_binaries_only`: a default build (no platforms named) builds the host's binary alone.
 _HOST_ONLY: ContextVar[bool] = ContextVar("nnfmu_host_binaries_only", default=False)
 
@@ -162,7 +164,7 @@ def platform_names() -> str:
     )
 
 
-def _named(platforms: tuple[str, ...]) -> list[Platform]:
+def _named(platforms: tuple[str, ...], asked: str) -> list[Platform]:
     chosen: list[Platform] = []
     for name in platforms:
         if name == "all":
@@ -172,9 +174,9 @@ def _named(platforms: tuple[str, ...]) -> list[Platform]:
         elif name in BY_NAME:
             chosen.append(BY_NAME[name])
         else:
-            raise CompilerError(f"unknown platform {name!r}; choose from {platform_names()}")
+            raise CompilerError(f"{asked}: unknown platform {name!r}; choose from {platform_names()}")
     if not chosen:
-        raise CompilerError(f"no platform given; choose from {platform_names()}")
+        raise CompilerError(f"{asked}: no platform given; choose from {platform_names()}")
     return list(dict.fromkeys(chosen))
 
 
@@ -192,12 +194,16 @@ def host_binaries_only() -> Iterator[None]:
 def select_targets(platforms: tuple[str, ...] | None) -> tuple[list[Target], str | None]:
     """The targets to build and a warning naming the platforms left out and why (or None).
 
-    `platforms` None: every platform a compiler here builds, the rest named in the warning with how to get their
-    compiler (the host's alone inside `host_binaries_only`). Named platforms (FMI 3 tuples, FMI 2 folder names,
-    `host`, `all`): exactly those, else CompilerError naming each platform without a compiler."""
+    `platforms` None: those `$NNFMU_PLATFORMS` names where it is set (the host's alone inside `host_binaries_only`),
+    else every platform a compiler here builds, the rest named in the warning with how to get their compiler. Named
+    platforms (FMI 3 tuples, FMI 2 folder names, `host`, `all`): exactly those, else CompilerError naming each
+    platform without a compiler."""
+    asked = "--platforms"
     if platforms is None and _HOST_ONLY.get():
         platforms = ("host",)
-    wanted = list(PLATFORMS) if platforms is None else _named(platforms)
+    elif platforms is None and os.environ.get(PLATFORMS_VARIABLE, "").strip():
+        platforms, asked = tuple(os.environ[PLATFORMS_VARIABLE].split(",")), f"${PLATFORMS_VARIABLE}"
+    wanted = list(PLATFORMS) if platforms is None else _named(tuple(n.strip() for n in platforms if n.strip()), asked)
     targets, missing = [], []
     for target in wanted:
         found = candidates(target)
@@ -207,7 +213,7 @@ def select_targets(platforms: tuple[str, ...] | None) -> tuple[list[Target], str
             missing.append(target)
     if platforms is not None and missing:
         raise CompilerError(
-            f"--platforms {','.join(platforms)}: no compiler here builds {', '.join(p.name for p in missing)} "
+            f"{asked} {','.join(platforms)}: no compiler here builds {', '.join(p.name for p in missing)} "
             f"({_hint(missing)})"
         )
     if not targets:
