@@ -102,6 +102,7 @@ def host_platform_of() -> Platform:
 
 
 def _host_command() -> tuple[str, ...] | None:
+    """`$CC` (split like a shell word list, so `CC="gcc -m64"` works), else the first of cc, gcc, clang on PATH."""
     configured = os.environ.get("CC", "").strip()
     if configured:
         return tuple(shlex.split(configured))
@@ -119,6 +120,7 @@ def host_target() -> Target:
 
 
 def _zig_target(target: Platform) -> Target | None:
+    """Zig for `target` when the `ziglang` package is installed (the cross extra), else None."""
     if importlib.util.find_spec(ZIG_MODULE) is None:
         return None
     version = importlib.metadata.version(ZIG_MODULE)
@@ -129,6 +131,7 @@ def _zig_target(target: Platform) -> Target | None:
 
 
 def _mingw_target(target: Platform) -> Target | None:
+    """MinGW-w64 for 64-bit Windows: `$CC_WIN64`, else `x86_64-w64-mingw32-gcc` on PATH; None if neither."""
     configured = os.environ.get("CC_WIN64", "").strip()
     command = tuple(shlex.split(configured)) if configured else (shutil.which(WIN64_COMPILER),)
     if command[0] is None:
@@ -165,6 +168,8 @@ def platform_names() -> str:
 
 
 def _named(platforms: tuple[str, ...], asked: str) -> list[Platform]:
+    """The platforms `platforms` names (`host`, `all`, FMI 3 tuples, FMI 2 folders), each once; CompilerError naming
+    `asked` (the option or variable they came from) on an unknown name or none."""
     chosen: list[Platform] = []
     for name in platforms:
         if name == "all":
