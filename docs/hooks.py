@@ -27,6 +27,7 @@ NAV: tuple[tuple[str, str], ...] = (
     ("Networks", "networks.md"),
     ("Building FMUs", "building-fmus.md"),
     ("FMU semantics", "fmu.md"),
+    ("FMU platforms", "platforms.md"),
     ("Vehicle and road test", "vehicle.md"),
     ("Semi-active closed loop", "skyhook.md"),
     ("Campaigns", "campaigns.md"),

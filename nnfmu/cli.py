@@ -70,8 +70,9 @@ ALLOW_OUTSIDE_HELP = (
     "native code, so this is asked for explicitly."
 )
 PLATFORMS_HELP = (
-    "Binaries of the native backend, comma-separated: linux64, win64 (default: linux64, plus win64 when "
-    "the MinGW-w64 cross compiler x86_64-w64-mingw32-gcc is installed)."
+    "Binaries of the native backend, comma-separated: host, all, or FMI platforms x86_64-linux (linux64), "
+    "aarch64-linux, x86_64-windows (win64), x86_64-darwin (darwin64), aarch64-darwin (default: every platform "
+    "a compiler here builds; pip install 'nnfmu[cross]' brings Zig, which builds them all)."
 )
 
 
@@ -97,7 +98,7 @@ def _split(items: Optional[list[str]]) -> list[str]:
 
 
 def _platforms(items: Optional[list[str]]) -> Optional[tuple[str, ...]]:
-    """`--platforms linux64,win64` as a tuple; None (the default choice) when not given."""
+    """`--platforms host` or `--platforms x86_64-linux,win64` as a tuple; None (the default choice) when not given."""
     return tuple(_split(items)) if items else None
 
 
@@ -417,7 +418,16 @@ def build(
     except NnfmuError as error:
         _fail(error)
     typer.echo(f"FMU: {path}")
+    _echo_binaries(path)
     _echo_reference_results(path)
+
+
+def _echo_binaries(fmu: Path) -> None:
+    """Say which platforms' binaries the FMU carries (those left out were named in a warning line)."""
+    from nnfmu.workflows.fmu_build import binary_folders
+
+    folders = binary_folders(fmu)
+    typer.echo(f"binaries: {', '.join(folders) or 'none'}")
 
 
 def _echo_reference_results(fmu: Path) -> None:
@@ -500,6 +510,7 @@ def vehicle_build(
     except NnfmuError as error:
         _fail(error)
     typer.echo(f"FMU: {path}")
+    _echo_binaries(path)
 
 
 @controller_app.command("build")
@@ -536,6 +547,7 @@ def controller_build(
     except NnfmuError as error:
         _fail(error)
     typer.echo(f"FMU: {path}")
+    _echo_binaries(path)
 
 
 @app.command()

@@ -29,7 +29,10 @@ def test_controller_build_writes_the_skyhook_fmu(tmp_path: Path, args: list[str]
     out = tmp_path / "skyhook.fmu"
     result = runner.invoke(app, ["controller", "build", "skyhook", "--out", str(out), "--c-sky", "5000", *args])
     assert result.exit_code == 0, result.output
-    assert result.output.strip() == f"FMU: {out}"
+    said, binaries = result.output.strip().splitlines()
+    assert said == f"FMU: {out}"
+    host = "linux64" if "--fmi" not in args else "x86_64-linux"
+    assert binaries.startswith("binaries: ") and host in binaries.removeprefix("binaries: ").split(", ")
     variables = _variables(out)
     assert variables["body_velocity"] == ("input", "m/s") and variables["damper_velocity"] == ("input", "m/s")
     assert variables[port[0]] == ("output", port[1])

@@ -98,7 +98,8 @@ def library() -> CDLL | None:
     global _LIBRARY
     if _LIBRARY is None:
         from nnfmu.fmu.errors import CompilerError
-        from nnfmu.fmu.native.compiler import compile_shared_library, host_target
+        from nnfmu.fmu.native.compiler import compile_shared_library
+        from nnfmu.fmu.native.toolchain import host_target
 
         try:
             target = host_target()

@@ -24,8 +24,8 @@ class BuildOptions:
     """What to build: `out` is the `.fmu` path (None: `exported/<ONNX file name>.fmu` from `build_fmu`,
     `exported/<model identifier>.fmu` for a graph built in memory), `name` overrides the component name,
     `filter_cutoff` [Hz] the start value of the output low-pass (None: the component's own, 0 = off), `platforms` the
-    binaries of the native backend (None: this machine's, plus win64 when its cross compiler is installed; names as
-    `nnfmu build --platforms` takes them, e.g. ("linux64", "win64"))."""
+    binaries of the native backend (None: every platform a compiler here builds; names as `nnfmu build --platforms`
+    takes them, e.g. ("host",), ("all",) or ("x86_64-linux", "win64"): docs/platforms.md)."""
 
     out: Path | None = None
     backend: Backend = "native"

@@ -1,4 +1,5 @@
-"""Zip an FMU folder into a `.fmu` file atomically: a failed build never leaves a partial `.fmu` behind."""
+"""Zip an FMU folder into a `.fmu` file atomically (a failed build never leaves a partial `.fmu` behind), and say
+which platforms' binaries a `.fmu` carries."""
 
 from __future__ import annotations
 
@@ -22,3 +23,11 @@ def package_fmu(tree: Path, target: Path) -> Path:
                 info.external_attr = 0o644 << 16
                 archive.writestr(info, path.read_bytes())
     return target
+
+
+def binary_folders(fmu: Path) -> list[str]:
+    """The `binaries/` subfolders of the FMU `fmu` that hold a shared library, in archive order."""
+    with zipfile.ZipFile(fmu) as archive:
+        names = archive.namelist()
+    parts = (n.split("/") for n in names)
+    return list(dict.fromkeys(p[1] for p in parts if len(p) == 3 and p[0] == "binaries" and p[1] and p[2]))

@@ -377,7 +377,7 @@ def run_demo(
     mark_output_dir(out, "demo")
     clock = StageClock(log)
     try:
-        with host_binaries_only() if settings.quick else nullcontext():  # quick: no win64 cross builds
+        with host_binaries_only() if settings.quick else nullcontext():  # quick: no cross builds
             clock.log(settings.announcement)
             with clock.stage("component networks"):
                 report, results = _components(out, settings, clock)

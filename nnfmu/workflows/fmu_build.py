@@ -5,8 +5,9 @@ from __future__ import annotations
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.check import check_fmu, report_lines
 from nnfmu.fmu.errors import PlatformSkippedWarning
-from nnfmu.fmu.native.compiler import host_binaries_only
+from nnfmu.fmu.native.toolchain import host_binaries_only
 from nnfmu.fmu.options import BuildOptions
+from nnfmu.fmu.package import binary_folders
 from nnfmu.fmu.reference_results import has_reference_results
 from nnfmu.fmu.step_graph import GRAPH_MEMBER
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
@@ -16,6 +17,7 @@ __all__ = [
     "BuildOptions",
     "PlatformSkippedWarning",
     "VehicleBuildSettings",
+    "binary_folders",
     "build_fmu",
     "build_vehicle_fmu",
     "check_fmu",

@@ -29,12 +29,18 @@ def generic_onnx(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture(scope="session")
 def delay_fmus(tmp_path_factory: pytest.TempPathFactory, delay_onnx: Path) -> dict[int, Path]:
-    """The damper graph built as a native FMU for FMI 2 and FMI 3 (built once per session)."""
+    """The damper graph built as a native FMU for FMI 2 and FMI 3 (built once per session), for every platform a
+    compiler here builds (what a default build carries without `$NNFMU_PLATFORMS`, tests/conftest.py)."""
     from nnfmu.fmu.build import build_fmu
+    from nnfmu.fmu.native import toolchain
     from nnfmu.fmu.options import BuildOptions
 
+    every = tuple(p.name for p in toolchain.PLATFORMS if toolchain.candidates(p))
     out = tmp_path_factory.mktemp("fmus")
-    return {v: build_fmu(delay_onnx, BuildOptions(out=out / f"damper{v}.fmu", fmi_version=v)) for v in (2, 3)}
+    return {
+        v: build_fmu(delay_onnx, BuildOptions(out=out / f"damper{v}.fmu", fmi_version=v, platforms=every))
+        for v in (2, 3)
+    }
 
 
 @pytest.fixture(scope="session")

@@ -40,7 +40,7 @@ def _vector_graph(n: int) -> onnx.ModelProto:
 
 def _python_side_build_seconds(model: onnx.ModelProto, folder: Path, monkeypatch: pytest.MonkeyPatch) -> float:
     """Seconds `build_fmu` takes with the C compiler left out (its time is gcc's, not nnfmu's)."""
-    monkeypatch.setattr(native_build, "compile_shared_library", lambda *args, **kwargs: None)
+    monkeypatch.setattr(native_build, "compile_all", lambda *args, **kwargs: None)
     path = folder / "vector.onnx"
     onnx.save(model, str(path))
     start = time.perf_counter()
@@ -83,7 +83,7 @@ def test_one_port_over_the_limit_is_refused_and_the_limit_itself_is_not():
 
 
 def test_a_3000_node_chain_builds_without_recursion_error(tmp_path, monkeypatch):
-    monkeypatch.setattr(native_build, "compile_shared_library", lambda *args, **kwargs: None)  # the walks are Python
+    monkeypatch.setattr(native_build, "compile_all", lambda *args, **kwargs: None)  # the walks are Python
     n = 3000
     names = ["x", *[f"t{i}" for i in range(1, n)], "y"]
     nodes = [

@@ -21,7 +21,7 @@ from exported_networks import FORCE, T, export_network, random_model, signals
 from fmpy.fmi1 import FMICallException
 
 from nnfmu.fmu.build import build_fmu
-from nnfmu.fmu.native.compiler import host_target
+from nnfmu.fmu.native.toolchain import host_target
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.models.features import Difference, Highpass, Lowpass, LowpassSquare, SmoothSign, Stop, Tap
 

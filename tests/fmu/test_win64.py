@@ -12,19 +12,16 @@ import os
 import shutil
 import subprocess
 import zipfile
-from pathlib import Path
 
-import numpy as np
 import pytest
-from fmpy import read_model_description
+from platform_drivers import assert_same_outputs, build_driver, counts
 
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.errors import CompilerError, PlatformSkippedWarning
-from nnfmu.fmu.native import compiler
-from nnfmu.fmu.native.backend import fmi_headers_dir
+from nnfmu.fmu.native import toolchain
 from nnfmu.fmu.options import BuildOptions
 
-MINGW = shutil.which(compiler.WIN64_COMPILER)
+MINGW = shutil.which(toolchain.WIN64_COMPILER)
 MINGW_OBJDUMP = shutil.which("x86_64-w64-mingw32-objdump")
 WINE = next(
     (
@@ -36,52 +33,19 @@ WINE = next(
 )
 needs_mingw = pytest.mark.skipif(
     MINGW is None,
-    reason=f"{compiler.WIN64_COMPILER} not installed (Debian: gcc-mingw-w64-x86-64): no win64 binary to test",
+    reason=f"{toolchain.WIN64_COMPILER} not installed (Debian: gcc-mingw-w64-x86-64): no win64 binary to test",
 )
 needs_wine = pytest.mark.skipif(WINE is None, reason="wine not installed (Debian: wine64 wine): cannot run win64 code")
 FOLDERS = {2: ("linux64", "win64"), 3: ("x86_64-linux", "x86_64-windows")}
-# The brief's bound, relative to each output's largest magnitude over the run. msvcrt's tanh and glibc's differ in
-# the last bit for some arguments: measured 1.6e-16 and 2.9e-16 of the peak (8.5e-15 of a value near a zero crossing).
-RELATIVE = 1e-15
+NO_ZIG = "nnfmu_test_no_zig"  # a module name that is not installed: the toolchain then finds no Zig
 
 
-def _counts(path: Path) -> tuple[str, str, int, int]:
-    md = read_model_description(str(path))
-    n_in = sum(v.causality == "input" for v in md.modelVariables)
-    n_out = sum(v.causality == "output" and v.type in ("Real", "Float64") for v in md.modelVariables)
-    return md.coSimulation.modelIdentifier, md.guid, n_in, n_out
-
-
-def _driver(cc: str, fmi: int, target: Path, extra: list[str]) -> Path:
-    source = Path(__file__).with_name(f"fmi{fmi}_driver.c")
-    subprocess.run(
-        [
-            cc,
-            "-std=c99",
-            "-O2",
-            "-Wall",
-            "-Wextra",
-            "-Werror",
-            *extra,
-            f"-I{fmi_headers_dir()}",
-            "-o",
-            str(target),
-            str(source),
-            "-lm",
-        ],
-        check=True,
-        capture_output=True,
-        text=True,
-    )
-    return target
-
-
-def _outputs(stdout: str) -> list[tuple[str, int, list[float]]]:
-    rows = []
-    for line in stdout.splitlines():
-        tag, k, *values = line.split()
-        rows.append((tag, int(k), [float(v) for v in values]))
-    return rows
+def _without_cross_compilers(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Neither MinGW-w64 nor Zig found: what a machine without the apt package and the cross extra has."""
+    monkeypatch.delenv("CC_WIN64", raising=False)
+    monkeypatch.delenv(toolchain.PLATFORMS_VARIABLE, raising=False)  # the default choice (tests/conftest.py sets it)
+    monkeypatch.setattr(toolchain, "WIN64_COMPILER", "x86_64-w64-mingw32-gcc-not-installed")
+    monkeypatch.setattr(toolchain, "ZIG_MODULE", NO_ZIG)
 
 
 @pytest.fixture(scope="module")
@@ -102,7 +66,7 @@ def wine_env(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
 @needs_mingw
 @pytest.mark.parametrize("fmi", [2, 3])
 def test_default_build_carries_both_binaries_and_the_dll_exports_only_fmi_functions(delay_fmus, tmp_path, fmi):
-    identifier, *_ = _counts(delay_fmus[fmi])
+    identifier, *_ = counts(delay_fmus[fmi])
     linux, windows = FOLDERS[fmi]
     with zipfile.ZipFile(delay_fmus[fmi]) as archive:
         names = set(archive.namelist())
@@ -124,14 +88,14 @@ def test_default_build_carries_both_binaries_and_the_dll_exports_only_fmi_functi
 @needs_wine
 @pytest.mark.parametrize("fmi", [2, 3])
 def test_win64_binary_under_wine_gives_the_linux64_outputs(delay_fmus, tmp_path, wine_env, fmi):
-    identifier, token, n_in, n_out = _counts(delay_fmus[fmi])
+    identifier, token, n_in, n_out = counts(delay_fmus[fmi])
     linux, windows = FOLDERS[fmi]
     with zipfile.ZipFile(delay_fmus[fmi]) as archive:
         (tmp_path / "fmu.so").write_bytes(archive.read(f"binaries/{linux}/{identifier}.so"))
         (tmp_path / "fmu.dll").write_bytes(archive.read(f"binaries/{windows}/{identifier}.dll"))
     args = [token, str(n_in), str(n_out)]
-    native = _driver("gcc", fmi, tmp_path / "driver", [])
-    _driver(MINGW, fmi, tmp_path / "driver.exe", ["-D__USE_MINGW_ANSI_STDIO=1", "-static"])
+    native = build_driver(["gcc"], fmi, tmp_path / "driver", [])
+    build_driver([MINGW], fmi, tmp_path / "driver.exe", ["-D__USE_MINGW_ANSI_STDIO=1", "-static"])
     on_linux = subprocess.run(
         [str(native), str(tmp_path / "fmu.so"), *args], capture_output=True, text=True, timeout=120
     )
@@ -142,37 +106,27 @@ def test_win64_binary_under_wine_gives_the_linux64_outputs(delay_fmus, tmp_path,
     for run in (on_linux, on_wine):
         assert run.returncode == 0, run.stderr[-3000:]
         assert "0 unexpected statuses" in run.stderr
-    expected, got = _outputs(on_linux.stdout), _outputs(on_wine.stdout.replace("\r", ""))
-    # 2001 rows of outputs (initialisation, 2000 steps) and 4 of directional derivatives
-    assert len(expected) == 2005 and [row[:2] for row in got] == [row[:2] for row in expected]
-    assert sum(row[0] == "derivative" for row in expected) == 4
-    want = np.array([row[2] for row in expected])
-    have = np.array([row[2] for row in got])
-    assert want.shape == have.shape == (2005, n_out)
-    relative = np.max(np.abs(have - want), axis=0) / np.max(np.abs(want), axis=0)
-    assert np.all(relative <= RELATIVE), f"win64 vs linux64, largest difference / peak per output: {relative}"
+    assert_same_outputs(on_linux.stdout, on_wine.stdout, n_out, "win64 vs linux64")
 
 
-def test_missing_cross_compiler_warns_once_and_still_builds_linux64(delay_onnx, tmp_path, monkeypatch):
-    monkeypatch.delenv("CC_WIN64", raising=False)
-    monkeypatch.setattr(compiler, "WIN64_COMPILER", "x86_64-w64-mingw32-gcc-not-installed")
-    with pytest.warns(PlatformSkippedWarning, match="x86_64-w64-mingw32-gcc.*gcc-mingw-w64-x86-64") as caught:
+def test_missing_cross_compilers_warn_once_and_still_build_linux64(delay_onnx, tmp_path, monkeypatch):
+    _without_cross_compilers(monkeypatch)
+    with pytest.warns(PlatformSkippedWarning, match="x86_64-windows.*nnfmu.cross.*gcc-mingw-w64-x86-64") as caught:
         path = build_fmu(delay_onnx, BuildOptions(out=tmp_path / "linux.fmu"))
     assert len(caught) == 1
     binaries = [n for n in zipfile.ZipFile(path).namelist() if n.startswith("binaries/")]
     assert binaries == ["binaries/linux64/damper.so"]
 
 
-def test_asking_for_win64_without_the_cross_compiler_fails_naming_it(delay_onnx, tmp_path, monkeypatch):
-    monkeypatch.delenv("CC_WIN64", raising=False)
-    monkeypatch.setattr(compiler, "WIN64_COMPILER", "x86_64-w64-mingw32-gcc-not-installed")
-    with pytest.raises(CompilerError, match="x86_64-w64-mingw32-gcc"):
+def test_asking_for_win64_without_the_cross_compilers_fails_naming_it(delay_onnx, tmp_path, monkeypatch):
+    _without_cross_compilers(monkeypatch)
+    with pytest.raises(CompilerError, match="x86_64-windows.*gcc-mingw-w64-x86-64"):
         build_fmu(delay_onnx, BuildOptions(out=tmp_path / "both.fmu", platforms=("linux64", "win64")))
     assert not (tmp_path / "both.fmu").exists()
 
 
 def test_unknown_platform_and_platforms_for_pythonfmu_are_refused(delay_onnx, tmp_path):
-    with pytest.raises(CompilerError, match="'win32'.*linux64, win64"):
+    with pytest.raises(CompilerError, match="'win32'.*x86_64-linux .linux64.*x86_64-windows .win64."):
         build_fmu(delay_onnx, BuildOptions(out=tmp_path / "x.fmu", platforms=("win32",)))
     with pytest.raises(Exception, match="native backend"):
         BuildOptions(backend="pythonfmu", platforms=("win64",))
@@ -196,14 +150,14 @@ def test_cli_says_in_one_warning_line_that_win64_was_left_out(delay_onnx, tmp_pa
 
     from nnfmu.cli import app
 
-    monkeypatch.delenv("CC_WIN64", raising=False)
-    monkeypatch.setattr(compiler, "WIN64_COMPILER", "x86_64-w64-mingw32-gcc-not-installed")
+    _without_cross_compilers(monkeypatch)
     result = CliRunner().invoke(app, ["build", str(delay_onnx), "--out", str(tmp_path / "d.fmu")])
     assert result.exit_code == 0, result.output
     warnings = [line for line in result.output.splitlines() if line.startswith("warning:")]
     assert len(warnings) == 1 and "apt-get install gcc-mingw-w64-x86-64" in warnings[0]
+    assert "binaries: linux64" in result.output.splitlines()
     refused = CliRunner().invoke(
         app, ["build", str(delay_onnx), "--out", str(tmp_path / "e.fmu"), "--platforms", "linux64,win64"]
     )
-    assert refused.exit_code == 2 and "x86_64-w64-mingw32-gcc" in refused.output
+    assert refused.exit_code == 2 and "x86_64-windows" in refused.output and "nnfmu[cross]" in refused.output
     assert not (tmp_path / "e.fmu").exists()

@@ -1,7 +1,7 @@
 """The native backend of the FMU factory: generated C for the graph + the fixed FMI glue from `templates/`, compiled.
 
-FMU layout: `modelDescription.xml`, `binaries/<platform>/<identifier>.so|.dll` (this machine's, and win64 when the
-MinGW-w64 cross compiler is installed or asked for), `sources/` (glue, config.h, graph.c/.h, FMI headers copied from
+FMU layout: `modelDescription.xml`, `binaries/<platform>/<identifier>.so|.dll|.dylib` (every platform a compiler
+here builds, or those asked for: `toolchain.py`), `sources/` (glue, config.h, graph.c/.h, FMI headers copied from
 the installed fmpy, buildDescription.xml) and, when the graph carries a reference stimulus, reference results under
 `extra/org.fmi-standard.fmi-ls-ref/`. Nothing of Python, onnxruntime or torch is needed to run it.
 """
@@ -16,8 +16,9 @@ from nnfmu.fmu.errors import FmuBuildError, PlatformSkippedWarning
 from nnfmu.fmu.factory import BuildPlan
 from nnfmu.fmu.model_description import instantiation_token, render_build_description, render_model_description
 from nnfmu.fmu.native.codegen import UnsupportedGraphError, generate_c
-from nnfmu.fmu.native.compiler import compile_shared_library, select_targets
+from nnfmu.fmu.native.compiler import compile_all
 from nnfmu.fmu.native.config import GraphLayout, port_map, render_config
+from nnfmu.fmu.native.toolchain import select_targets
 from nnfmu.resources import templates_dir
 
 GLUE_HEADERS = ("nn_fmu.h",)
@@ -73,6 +74,5 @@ def write_native(plan: BuildPlan, tree: Path) -> None:
         render_build_description(identifier, source_files(fmi)), encoding="utf-8"
     )
     (tree / "modelDescription.xml").write_text(render_model_description(view), encoding="utf-8")
-    for platform in platforms:
-        binary = tree / "binaries" / platform.folder(fmi) / f"{identifier}{platform.suffix}"
-        compile_shared_library(platform, [sources / s for s in source_files(fmi)], sources, binary)
+    builds = [(t, tree / "binaries" / t.folder(fmi) / f"{identifier}{t.suffix}") for t in platforms]
+    compile_all(builds, [sources / s for s in source_files(fmi)], sources)

@@ -25,8 +25,8 @@ class VehicleBuildSettings:
     quarter-car file; `components` maps a component name ('damper', 'damper_fl', 'bushing_fl_front', ...) to
     'external' (force input port, the default), 'stabilised' (force input port with the reference element's change
     over a step applied, for stiff components) or 'reference' (built-in element), `sample_period` [s] of the FMU's
-    samples, FMI version, backend and the native backend's `platforms` (None: this machine's plus win64 when its
-    cross compiler is installed). `corner` (fl, fr, rl, rr) is the quarter car's: None takes a quarter-car file's
+    samples, FMI version, backend and the native backend's `platforms` (None: every platform a compiler here
+    builds, docs/platforms.md). `corner` (fl, fr, rl, rr) is the quarter car's: None takes a quarter-car file's
     own corner, or fl of a full-vehicle file. `stabilisers` replaces a stabilised force port's reference element
     (input port name -> (stiffness, damping): N/m and N.s/m, or N.m/rad and N.m.s/rad); the element the vehicle
     keeps over a step should match the component's stiffness over a step, or the deviation it holds carries the
