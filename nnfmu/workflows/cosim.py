@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import warnings
 
 from nnfmu.atomic import write_text_atomic
 from nnfmu.cosim.master import CosimSettings, CosimWarning, Progress, cosimulate
@@ -12,6 +13,7 @@ from nnfmu.cosim.ssp import open_system
 from nnfmu.cosim.step_study import DEFAULT_TARGET, StepStudy, step_study, study_lines
 from nnfmu.data.drive_files import read_drive
 from nnfmu.errors import SettingsError
+from nnfmu.workflows.training_range import training_range_lines
 from nnfmu.workflows.vehicle_binding import vehicle_binding
 
 __all__ = ["DEFAULT_TARGET", "CosimSettings", "CosimWarning", "run_cosim", "run_step_study", "study_lines"]
@@ -30,19 +32,21 @@ def run_cosim(
 ) -> CosimResult:
     """Co-simulate the system (.ssd, folder or .ssp) on the drive file with `master` (fmpy, this package's master, or
     libcosim, the cross-check); write the result to `out_path` when given. The system's FMUs may lie outside its
-    folder only if `allow_outside`."""
+    folder only if `allow_outside`. A network input the run drove outside its training envelope is a
+    `CosimWarning` (`training_range_lines`)."""
     if master not in MASTERS:
         raise SettingsError(f"unknown master {master!r}; use {' or '.join(MASTERS)}")
     drive = read_drive(drive_path)
-    if master == "libcosim":
-        from nnfmu.cosim.libcosim_runner import run_libcosim
+    with open_system(ssd_path, allow_outside) as system:
+        binding = vehicle_binding(system)
+        if master == "libcosim":
+            from nnfmu.cosim.libcosim_runner import run_libcosim
 
-        with open_system(ssd_path, allow_outside) as system:
-            binding = vehicle_binding(system)
-        result = run_libcosim(ssd_path, drive, settings, binding, allow_outside)
-    else:
-        with open_system(ssd_path, allow_outside) as system:
-            result = cosimulate(system, drive, settings, progress, binding=vehicle_binding(system))
+            result = run_libcosim(ssd_path, drive, settings, binding, allow_outside)
+        else:
+            result = cosimulate(system, drive, settings, progress, binding=binding)
+        for line in training_range_lines(system, binding, result.measurement):
+            warnings.warn(line, CosimWarning, stacklevel=2)
     if out_path is not None:
         save_result(result, out_path)
     return result

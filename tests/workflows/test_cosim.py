@@ -3,15 +3,17 @@
 from __future__ import annotations
 
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "cosim"))  # the hand-made quarter car of the master's tests
-from cosim_system_helpers import build, damper_graph, drive, write_system  # noqa: E402
+from cosim_system_helpers import DAMPING, build, damper_graph, drive, write_system  # noqa: E402
 
-from nnfmu.cosim.master import CosimSettings  # noqa: E402
+from nnfmu.cosim.linear_damper import linear_damper_graph  # noqa: E402
+from nnfmu.cosim.master import CosimSettings, CosimWarning  # noqa: E402
 from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd  # noqa: E402
 from nnfmu.data import load_measurement  # noqa: E402
 from nnfmu.data.drive_files import write_drive  # noqa: E402
@@ -58,3 +60,22 @@ def test_a_system_without_a_vehicle_falls_back_on_the_masters_default(system: Pa
     with open_system(system) as structure:
         binding = vehicle_binding(structure)
     assert binding.element == "vehicle" and set(binding.inputs) == set(DRIVE.names)
+
+
+def test_a_network_driven_past_its_training_envelope_is_named_with_its_range(tmp_path: Path) -> None:
+    drive_file = write_drive(DRIVE, tmp_path / "drive.csv")
+    inside = write_system(tmp_path / "inside", 1e-3, build(linear_damper_graph(DAMPING), tmp_path / "c1", "damper"))
+    narrow = linear_damper_graph(DAMPING, velocity_range=(-0.05, 0.05))  # the drive's damper motion goes further
+    outside = write_system(tmp_path / "outside", 1e-3, build(narrow, tmp_path / "c2", "damper"))
+    settings = CosimSettings(step=1e-3, stop_time=1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CosimWarning)
+        plain = run_cosim(inside, drive_file, settings)  # no envelope known: nothing to say
+    with pytest.warns(CosimWarning) as caught:
+        result = run_cosim(outside, drive_file, settings)
+    said = [str(w.message) for w in caught if "training envelope" in str(w.message)]
+    velocity = result.measurement["damper_velocity"]
+    assert len(said) == 1, said
+    assert f"element 'damper': input 'velocity' reached {velocity.min():.4g} to {velocity.max():.4g} m/s" in said[0]
+    assert "[-0.05, 0.05] m/s" in said[0] and f"{np.mean(np.abs(velocity) > 0.05):.2%} of the run" in said[0]
+    np.testing.assert_array_equal(result.measurement["damper_force"], plain.measurement["damper_force"])

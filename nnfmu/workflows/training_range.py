@@ -1,0 +1,63 @@
+"""Did a co-simulation drive a network outside what it was trained on? One warning line per network input whose
+signal left the training envelope its FMU carries (the step graph inside the FMU, `nnfmu.fmu.step_graph`).
+
+A network's error in a car is its error on the car's motion: where a pothole drives a damper past the dyno
+program's peak velocity the network extrapolates, and that share of the run is where the vehicle result is worst.
+The user learns it from the run itself, before blaming the coupling or the step.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import onnx
+
+from nnfmu.component import Component
+from nnfmu.cosim.binding import DriveBinding
+from nnfmu.cosim.ssp import SystemStructure
+from nnfmu.data import Measurement
+from nnfmu.fmu.step_graph import StepGraphError, read_fmu_graph
+from nnfmu.workflows.roadtest.envelope import excursion
+
+
+def _carried_component(system: SystemStructure, element: str) -> Component | None:
+    """The component description of the step graph `element`'s FMU carries; None for an FMU without one."""
+    try:
+        found = read_fmu_graph(system.fmu_path(element))
+    except StepGraphError:
+        return None  # an altered or unreadable graph: the run used the FMU's own binary, nothing to compare
+    return None if found is None else Component.from_onnx(onnx.load_from_string(found[0]))
+
+
+def _channel(binding: DriveBinding, element: str, connector: str) -> str:
+    """The result channel an output is recorded under (the driven element's by name, the others' element_output)."""
+    return connector if element == binding.element else f"{element}_{connector}"
+
+
+def training_range_lines(system: SystemStructure, binding: DriveBinding, result: Measurement) -> list[str]:
+    """A line per network input whose signal in `result` left its training envelope: the range reached, how far
+    past the envelope, on what share of the run and from when."""
+    lines = []
+    feeds = {(c.end_element, c.end_connector): (c.start_element, c.start_connector) for c in system.connections}
+    for element in system.elements:
+        component = _carried_component(system, element.name)
+        if component is None:
+            continue
+        for port in component.inputs:
+            source = feeds.get((element.name, port.name))
+            channel = None if source is None else _channel(binding, *source)
+            if channel is None or channel not in result.channels or (port.min is None and port.max is None):
+                continue
+            signal = result[channel]
+            used = excursion("cosim", element.name, port, signal)
+            if used.share_outside == 0.0:
+                continue
+            outside = (signal < used.envelope_min) | (signal > used.envelope_max)
+            first = float(result.time[np.flatnonzero(outside)[0]])
+            lines.append(
+                f"element {element.name!r}: input {port.name!r} reached {used.signal_min:.4g} to "
+                f"{used.signal_max:.4g} {port.unit}, {used.range_used:.2f}x its training envelope "
+                f"[{used.envelope_min:.4g}, {used.envelope_max:.4g}] {port.unit}, on {used.share_outside:.2%} of the "
+                f"run (first at {first:.4g} s): the network extrapolates there and the result is least trustworthy "
+                f"there; train on a record that covers the range"
+            )
+    return lines
