@@ -16,6 +16,7 @@ from nnfmu.diagnosis.ranking import (
     GainTest,
     cross_fit_errors,
     extend_base,
+    family_threshold,
     fold_mask,
     gain_test,
     rank_effects,
@@ -24,7 +25,7 @@ from nnfmu.diagnosis.ranking import (
 from nnfmu.diagnosis.residual_tests import ResidualTest, residual_tests
 from nnfmu.diagnosis.settings import DiagnosisSettings
 from nnfmu.diagnosis.signals import EffectSignals, build_signals
-from nnfmu.diagnosis.stop_reading import keep_reading, read_stops
+from nnfmu.diagnosis.stop_reading import keep_reading, play_support, read_stops
 
 STOPS = {name for name, effect in EFFECTS.items() if isinstance(effect, StopFamily)}
 
@@ -133,7 +134,11 @@ def diagnose(
     tested = {name: np.asarray(measurement.channels[name], dtype=float) for name in (*inputs, *others)}
     tests = residual_tests(residual, tested, settings)
     recalibrated = cross_fit_errors(residual, base, fold_mask(len(residual), settings.blocks))
-    reading = read_stops(signals, recalibrated, settings) if signals.has("displacement") else None
+    reading = None
+    if signals.has("displacement"):
+        threshold = family_threshold(settings.alpha, sum(not f.missing(signals) for f in families))
+        support = play_support(signals, residual, base, families, settings)
+        reading = read_stops(signals, recalibrated, settings, support, threshold)
     if reading is not None:
         families = keep_reading(families, reading)
     ranking = effect_evidence(rank_effects(signals, families, base, settings), settings.alpha)
