@@ -76,6 +76,7 @@ def test_the_road_test_tables_say_not_meaningful_for_damage_and_amplitude(tmp_pa
     assert budget["damage_ratio"] is None and budget["not_meaningful"]["damage_ratio"].startswith(NOT_MEANINGFUL)
     summary = {
         "system": "full-vehicle",
+        "verdicts": [],
         "thesis_table": [row],
         "budget": [budget],
         "envelope": [],

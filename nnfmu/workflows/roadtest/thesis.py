@@ -13,6 +13,7 @@ import numpy as np
 from nnfmu.validate import ChannelComparison
 from nnfmu.validate.meaningful import frequency_reason
 from nnfmu.validate.summary import json_float
+from nnfmu.validate.verdict import Target, verdict
 
 AMPLITUDE_FREQUENCY = 1.0  # [Hz] where the thesis read its amplitude ratio
 
@@ -72,3 +73,16 @@ def thesis_row(c: ChannelComparison, model: str) -> ThesisRow:
         nrmse=m.nrmse,
         not_meaningful={k: v for k, v in reasons.items() if v is not None},
     )
+
+
+def model_verdicts(rows: list[ThesisRow], target: Target) -> list[str]:
+    """One line per model (in table order): its worst channel's NRMSE against the monolithic reference, judged
+    against `target`."""
+    models = list(dict.fromkeys(r.model for r in rows))
+    lines = []
+    for model in models:
+        own = [r for r in rows if r.model == model]
+        worst = max(own, key=lambda r: r.nrmse if np.isfinite(r.nrmse) else -1.0)
+        which = "worst channel " if len(own) > 1 else ""
+        lines.append(verdict(f"{model}: {which}{worst.channel} [{worst.unit}]", worst.nrmse, target))
+    return lines
