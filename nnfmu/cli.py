@@ -685,7 +685,8 @@ def loop(
     typer.echo(report.summary)
     typer.echo(f"effects added: {', '.join(report.effects_added) or 'none'}")
     for key in ("nrmse", "r2", "peak_error", "pseudo_damage_ratio"):
-        typer.echo(f"  {key}: {report.error_before[key]:.4g} -> {report.error_after[key]:.4g}")
+        values = [report.error_before[key], report.error_after[key]]
+        typer.echo(f"  {key}: " + " -> ".join("not meaningful" if v is None else f"{v:.4g}" for v in values))
     for note in report.notes:
         typer.echo(f"  note: {note}")
     typer.echo(f"ONNX: {report.onnx}\nFMU: {report.fmu}\nreport: {out / 'report.html'}")

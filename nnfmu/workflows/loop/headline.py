@@ -27,8 +27,8 @@ def headline(
     output: str,
     iterations: Sequence[Iteration],
     last: Diagnosis,
-    before: float,
-    after: float,
+    before: float | None,
+    after: float | None,
     target: Target,
 ) -> str:
     """What was missing, how much it explained, the test-part NRMSE before -> after against `target`, and what the

@@ -23,8 +23,8 @@ class Iteration:
     extension: str
     reason: str
     features_added: tuple[str, ...]
-    error_before: dict[str, float]
-    error_after: dict[str, float]
+    error_before: dict[str, float | None]
+    error_after: dict[str, float | None]
     diagnosis_nrmse_before: float
     diagnosis_nrmse_after: float
     accepted: bool
@@ -83,8 +83,8 @@ class LoopReport:
     blocks: dict[str, list[list[float]]]
     effects_added: list[str]
     iterations: list[Iteration]
-    error_before: dict[str, float]
-    error_after: dict[str, float]
+    error_before: dict[str, float | None]
+    error_after: dict[str, float | None]
     onnx: Path
     fmu: Path
     consistent_with_noise: bool

@@ -69,9 +69,11 @@ def _check(m: Measurement, model: TrainedModel, model_path: Path, output: str, s
         )
 
 
-def _errors(predicted: np.ndarray, measured: np.ndarray, rows: np.ndarray, slope: float) -> dict[str, float]:
-    """nrmse, r2, peak_error and pseudo_damage_ratio of `predicted` on `rows`."""
-    return {k: float(v) for k, v in channel_metrics(predicted[rows], measured[rows], slope).error_summary().items()}
+def _errors(predicted: np.ndarray, measured: np.ndarray, rows: np.ndarray, slope: float) -> dict[str, float | None]:
+    """nrmse, r2, peak_error and pseudo_damage_ratio of `predicted` on `rows` (None where not meaningful: a test part
+    too short for a damage ratio, `nnfmu.validate.meaningful`)."""
+    summary = channel_metrics(predicted[rows], measured[rows], slope).error_summary()
+    return {k: _number(v) for k, v in summary.items()}
 
 
 def _number(x: float | None) -> float | None:
