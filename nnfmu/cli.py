@@ -679,20 +679,26 @@ def loop(
         ..., "--out", "-o", help="Folder for every iteration's ONNX and FMU, report.json and report.html."
     ),
     max_effects: int = typer.Option(3, help="Most effects to add."),
+    target_nrmse: Optional[float] = typer.Option(
+        None, "--target-nrmse", help="Test-part NRMSE [%] the report's headline judges the final model by; default 5 %."
+    ),
 ) -> None:
     """Replay the model's FMU on measured data, trace the residual to missing physical effects, add them, report."""
     from nnfmu.workflows.loop.run import run_loop
     from nnfmu.workflows.loop.settings import LoopSettings
+    from nnfmu.workflows.validation import Target
 
     try:
+        target = Target() if target_nrmse is None else Target(target_nrmse / 100, "--target-nrmse")
         with _warnings_as_lines():
-            report = run_loop(data, model, output, out, LoopSettings(max_effects=max_effects))
+            report = run_loop(data, model, output, out, LoopSettings(max_effects=max_effects, target=target))
     except NnfmuError as error:
         _fail(error)
     typer.echo(report.summary)
     typer.echo(f"effects added: {', '.join(report.effects_added) or 'none'}")
     for key in ("nrmse", "r2", "peak_error", "pseudo_damage_ratio"):
-        typer.echo(f"  {key}: {report.error_before[key]:.4g} -> {report.error_after[key]:.4g}")
+        values = [report.error_before[key], report.error_after[key]]
+        typer.echo(f"  {key}: " + " -> ".join("not meaningful" if v is None else f"{v:.4g}" for v in values))
     for note in report.notes:
         typer.echo(f"  note: {note}")
     typer.echo(f"ONNX: {report.onnx}\nFMU: {report.fmu}\nreport: {out / 'report.html'}")
@@ -954,9 +960,12 @@ def validate(
         5.0, "--window-length", help="Time-history plot length around the global peak [s]."
     ),
     window: Optional[str] = typer.Option(None, "--window", help="Fixed time-history window START,END [s], e.g. 30,35."),
+    target_nrmse: Optional[float] = typer.Option(
+        None, "--target-nrmse", help="NRMSE [%] the report's verdict judges each channel by; default 5 %."
+    ),
 ) -> None:
     """Compare a result with a reference: NRMSE, R², peaks, mean shift, RMS, PSD and rainflow pseudo-damage."""
-    from nnfmu.workflows.validation import ValidationSettings, validate_files
+    from nnfmu.workflows.validation import Target, ValidationSettings, validate_files
 
     try:
         settings = ValidationSettings(
@@ -967,15 +976,18 @@ def validate(
             window_length=window_length,
             window=_window(window),
         )
-        report = validate_files(result, reference, _split(channels) or None, out, settings)
+        target = Target() if target_nrmse is None else Target(target_nrmse / 100, "--target-nrmse")
+        report = validate_files(result, reference, _split(channels) or None, out, settings, target)
     except NnfmuError as error:
         _fail(error)
     for c in report.comparisons:
         m = c.metrics
+        damage = m.not_meaningful.get("pseudo_damage_ratio") or f"{m.pseudo_damage_ratio:.4g}"
         typer.echo(
             f"{c.name} [{c.unit}]: NRMSE {m.nrmse:.4g}, R2 {m.r2:.4g}, peak error {m.peak_error:+.3g}, "
-            f"pseudo-damage ratio {m.pseudo_damage_ratio:.4g} (m = {c.basquin_slope:g})"
+            f"pseudo-damage ratio {damage} (m = {c.basquin_slope:g})"
         )
+    typer.echo(f"verdict: {report.verdict}")
     typer.echo(f"report: {report.index_html}")
 
 

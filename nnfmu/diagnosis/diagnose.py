@@ -24,7 +24,7 @@ from nnfmu.diagnosis.ranking import (
 from nnfmu.diagnosis.residual_tests import ResidualTest, residual_tests
 from nnfmu.diagnosis.settings import DiagnosisSettings
 from nnfmu.diagnosis.signals import EffectSignals, build_signals
-from nnfmu.diagnosis.stop_reading import keep_reading, read_stops
+from nnfmu.diagnosis.stop_reading import keep_reading, read_stops, supported
 
 STOPS = {name for name, effect in EFFECTS.items() if isinstance(effect, StopFamily)}
 
@@ -134,9 +134,18 @@ def diagnose(
     tests = residual_tests(residual, tested, settings)
     recalibrated = cross_fit_errors(residual, base, fold_mask(len(residual), settings.blocks))
     reading = read_stops(signals, recalibrated, settings) if signals.has("displacement") else None
+    asked = families
     if reading is not None:
         families = keep_reading(families, reading)
     ranking = effect_evidence(rank_effects(signals, families, base, settings), settings.alpha)
+    if reading is not None:  # play only where its stop family is significant in the ranking
+        stops = [e for e in ranking if e.name == reading.effect]
+        reading = supported(
+            reading, bool(stops and stops[0].significant), stops[0].additional_explained_variance if stops else None
+        )
+        if reading.effect is None and keep_reading(asked, reading) != asked:
+            kept = [e for e in ranking if e.name not in STOPS]
+            ranking = [replace(e, rank=k) for k, e in enumerate(kept, start=1)]
     if reading is not None:  # the stop family's evidence says which physics its shape shows, and why
         ranking = [replace(e, evidence=f"{e.evidence}; {reading.text}") if e.name in STOPS else e for e in ranking]
     tests_pass = all(t.p_value >= settings.alpha / len(tests) for t in tests)

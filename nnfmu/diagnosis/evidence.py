@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 from nnfmu.diagnosis.ranking import GainTest, RankedFamily, family_threshold
 from nnfmu.diagnosis.residual_tests import ResidualTest
-from nnfmu.diagnosis.stop_reading import StopReading
+from nnfmu.diagnosis.stop_reading import StopReading, p_words
 
 
 def _finite(x: float | None) -> float | None:
@@ -25,10 +25,6 @@ def p_value_text(p: float | None) -> str:
     if p is None or not math.isfinite(p):
         return "–"
     return f"< {P_VALUE_FLOOR:g}" if p < P_VALUE_FLOOR else f"{p:.2g}"
-
-
-def _p(p: float) -> str:
-    return f"p = {p:.2g}" if p >= 1e-12 else "p < 1e-12"
 
 
 @dataclass(frozen=True)
@@ -75,7 +71,7 @@ def _evidence_text(item: RankedFamily, threshold: float) -> str:
     given = "beyond the recalibrated model" + (f" and {', '.join(item.given)}" if item.given else "")
     text = (
         f"explains {alone.explained:.1%} of the residual variance out of sample alone, {extra.explained:.1%} "
-        f"{given} ({_p(extra.p_value)}, Diebold-Mariano on held-out errors, effective sample size "
+        f"{given} ({p_words(extra.p_value)}, Diebold-Mariano on held-out errors, effective sample size "
         f"{extra.effective_samples:.0f}); "
     )
     text += "significant" if item.selected else f"not significant at the family-wise threshold {threshold:.2g}"

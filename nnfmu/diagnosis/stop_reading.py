@@ -13,10 +13,18 @@ largest fraction: the range the stop bank covers). With slopes sigma_j between n
 index is max over k of (sigma_k - min_{j<k} sigma_j) / sigma_k, over the bins whose slope reaches a quarter of the
 steepest (a re-engagement, not the noise of a saturated tail): how far the slope had fallen before it rose again,
 as a share of the re-engaging slope. 0 or below: the slope only falls (elastic-plastic); 1: it fell to zero (a flat
-dead zone); above 1: the force even went back inside the gap. At or above DEAD_ZONE the family reads as play.
+dead zone); above 1: the force even went back inside the gap. At or above DEAD_ZONE the shape is a dead zone's.
 Measured: 20 s random rig records with a seal's pre-sliding stiffness -0.19 to 0.15, behind a 0.5 mm mount clearance
 5.7-6.1 (seeds 1-3, tests/diagnosis/test_stop_reading.py); the shipped slice of the measured BRFD friction damper
 with backlash 2.7 (a velocity-only least-squares model) and 5.4 (the loop test's velocity-only network).
+
+A fall and rise after reversals is not yet a dead zone: a model that lags the force after a reversal (a short
+training, a missing valve lag) leaves it as well (the quick demo's damper without play: index 5.4). So play is named
+only when the stop operators are also significant in the ranking (they explain a significant share of the residual
+beyond the recalibration and the effects selected before them, family-wise; `supported`): the quick demo's were not
+(2.3 %), a damper behind a mount clearance's and the BRFD damper's were, ranked first. Otherwise the reading is
+"unsupported": it names neither play nor pre-sliding friction, and the stop family leaves the ranking unless it alone
+was asked for.
 """
 
 from __future__ import annotations
@@ -37,13 +45,14 @@ MIN_BIN = 10  # samples a travel bin needs for its mean to count
 
 @dataclass(frozen=True)
 class StopReading:
-    """The dead-zone index (None: too few reversals to tell), the shape it reads ("dead_zone" or
-    "elastic_plastic"), the effect named for it, the travel bins' centres [m] and the signed residual's mean level
-    in each [output unit] (NaN where too few samples), and the reading in words."""
+    """The dead-zone index (None: too few reversals to tell), the shape it reads ("dead_zone", "elastic_plastic",
+    or "unsupported": a dead zone's shape or too few reversals whose stop family was not significant in the
+    ranking), the effect named for it (None when unsupported), the travel bins' centres [m] and the signed
+    residual's mean level in each [output unit] (NaN where too few samples), and the reading in words."""
 
     index: float | None
     shape: str
-    effect: str
+    effect: str | None
     travel: tuple[float, ...]
     level: tuple[float, ...]
     text: str
@@ -96,10 +105,15 @@ def dead_zone_index(travel: np.ndarray, level: np.ndarray) -> float | None:
     return float(max(values, default=0.0))
 
 
+def p_words(p: float) -> str:
+    """A p-value in a sentence: `p = 3.2e-05`, or `p < 1e-12` where the normal tail is only rounding."""
+    return f"p = {p:.2g}" if p >= 1e-12 else "p < 1e-12"
+
+
 def read_stops(signals: EffectSignals, errors: np.ndarray, settings: DiagnosisSettings) -> StopReading:
     """Read the shape after reversals of `errors` (the residual's held-out errors beyond the recalibration) as play
     (`backlash`) or pre-sliding seal friction (`presliding_friction`); too few reversals to tell keep the name
-    `backlash`."""
+    `backlash`. Play still needs the ranking's support (`supported`)."""
     travel, level = travel_levels(signals, errors, settings)
     index = dead_zone_index(travel, level)
     names = {"dead_zone": "backlash", "elastic_plastic": "presliding_friction"}
@@ -131,9 +145,25 @@ def read_stops(signals: EffectSignals, errors: np.ndarray, settings: DiagnosisSe
     )
 
 
+def supported(reading: StopReading, significant: bool, explained: float | None) -> StopReading:
+    """`reading` as it is when it names no play or its stop family was `significant` in the ranking (explaining
+    `explained` of the residual variance beyond the effects selected before it); else "unsupported", naming nothing."""
+    if reading.shape != "dead_zone" or significant:
+        return reading
+    seen = "too few reversals to tell" if reading.index is None else f"dead-zone index {reading.index:.2f}"
+    share = "nothing" if explained is None else f"only {explained:.1%} of the residual variance"
+    text = (
+        f"stop operators of displacement: a dead zone's shape after reversals ({seen}), but they explain {share} "
+        "beyond the effects above, not significantly: no play is named (a force lagging after reversals leaves "
+        "such a shape too), nor pre-sliding friction"
+    )
+    return StopReading(reading.index, "unsupported", None, reading.travel, reading.level, text)
+
+
 def keep_reading(families: list[Effect], reading: StopReading) -> list[Effect]:
-    """`families` with only the stop family the reading names, when more than one is asked for (one set of columns
-    is ranked once, under the name of what it shows); a single one asked for is kept as asked."""
+    """`families` with only the stop family the reading names (none when it names none), when more than one is asked
+    for (one set of columns is ranked once, under the name of what it shows); a single one asked for is kept as
+    asked."""
     stops = [f for f in families if isinstance(f, StopFamily)]
     if len(stops) < 2:
         return families

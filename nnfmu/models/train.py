@@ -17,7 +17,7 @@ from nnfmu.data.measurement import Measurement
 from nnfmu.errors import SettingsError
 from nnfmu.models.features import FeatureSpec
 from nnfmu.models.lm import LMSettings, fit_lm
-from nnfmu.models.metrics import SplitMetrics, max_abs_weight, split_metrics, weight_warning
+from nnfmu.models.metrics import SplitMetrics, max_abs_weight, network_warning, split_metrics
 from nnfmu.models.networks import MLP, GRUNet
 from nnfmu.models.scaling import MinMaxScaler
 from nnfmu.models.splits import SplitFractions, Splits, contiguous_splits
@@ -392,7 +392,7 @@ def train_model(
     network, history, trials, hidden = fit_best(data, architecture, settings, progress)
     metrics = evaluate(network, data)
     train_part = data.splits.index("train")
-    warnings = [w for w in [weight_warning(max_abs_weight(network))] if w]
+    warnings = [w for w in [network_warning(network, data.x)] if w]
     n_in = data.x.shape[1]
     model = trained_model(
         spec,

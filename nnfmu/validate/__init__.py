@@ -25,8 +25,10 @@ from nnfmu.validate.metrics import (
 from nnfmu.validate.report import write_report
 from nnfmu.validate.spectra import Spectrum, welch_psd
 from nnfmu.validate.summary import ChannelMetrics, channel_metrics
+from nnfmu.validate.verdict import DEFAULT_TARGET_NRMSE, Target, verdict
 
 __all__ = [
+    "DEFAULT_TARGET_NRMSE",
     "DEFINITIONS",
     "ChannelComparison",
     "ChannelMetrics",
@@ -34,6 +36,7 @@ __all__ = [
     "ValidationError",
     "ValidationReport",
     "ValidationSettings",
+    "Target",
     "channel_metrics",
     "common_channels",
     "compare",
@@ -50,6 +53,7 @@ __all__ = [
     "rms_ratio",
     "valley_ratio",
     "validate_files",
+    "verdict",
     "welch_psd",
     "write_report",
 ]

@@ -11,16 +11,19 @@ from pathlib import Path
 from nnfmu.data import load_measurement
 from nnfmu.out_paths import check_output_dir, mark_output_dir
 from nnfmu.validate.compare import ChannelComparison, ValidationSettings, common_channels, compare
-from nnfmu.validate.report import SUMMARY_FILE, write_report
+from nnfmu.validate.report import SUMMARY_FILE, report_verdict, write_report
+from nnfmu.validate.verdict import Target
 
 
 @dataclass(frozen=True)
 class ValidationReport:
-    """What `validate_files` produced: the comparisons and the report's `index.html` and `summary.json`."""
+    """What `validate_files` produced: the comparisons, the report's `index.html` and `summary.json`, and its verdict
+    line."""
 
     comparisons: list[ChannelComparison]
     index_html: Path
     summary_json: Path
+    verdict: str = ""
 
 
 def settings_context(settings: ValidationSettings) -> dict[str, str]:
@@ -44,10 +47,12 @@ def validate_files(
     channels: Sequence[str] | None,
     out_dir: str | os.PathLike[str],
     settings: ValidationSettings | None = None,
+    target: Target = Target(),
 ) -> ValidationReport:
     """Compare `channels` (default: every channel both files hold) of a result CSV/MDF4 with a reference and write
-    the report into `out_dir`. Bad files, missing channels and unit mismatches raise `DataError` naming them; an
-    `out_dir` that is a file, holds an input or files nnfmu did not write as a report raises OutputPathError."""
+    the report into `out_dir`, its verdict against `target`. Bad files, missing channels and unit mismatches raise
+    `DataError` naming them; an `out_dir` that is a file, holds an input or files nnfmu did not write as a report
+    raises OutputPathError."""
     settings = settings or ValidationSettings()
     out_dir = check_output_dir(out_dir, "validate", [result_path, reference_path])
     result = load_measurement(result_path)
@@ -61,6 +66,11 @@ def validate_files(
         **settings_context(settings),
     }
     title = f"Validation of {Path(result_path).name} against {Path(reference_path).name}"
-    index = write_report(comparisons, out_dir, title, context)
+    index = write_report(comparisons, out_dir, title, context, target)
     mark_output_dir(out_dir, "validate")
-    return ValidationReport(comparisons=comparisons, index_html=index, summary_json=index.parent / SUMMARY_FILE)
+    return ValidationReport(
+        comparisons=comparisons,
+        index_html=index,
+        summary_json=index.parent / SUMMARY_FILE,
+        verdict=report_verdict(comparisons, target),
+    )

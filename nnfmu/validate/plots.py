@@ -6,6 +6,7 @@ labels with math parsing off, so a name holding `$` or `\\` is printed as it is.
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -14,9 +15,19 @@ from matplotlib.figure import Figure
 
 from nnfmu.validate.compare import ChannelComparison
 from nnfmu.validate.damage import rainflow_cycles
+from nnfmu.validate.meaningful import NOT_MEANINGFUL
 
 RESULT_STYLE = {"color": "tab:red", "label": "result", "linewidth": 1.0}
 REFERENCE_STYLE = {"color": "black", "label": "reference", "linewidth": 1.0}
+FIGURE_WIDTH = 8.0  # [in] at 100 dpi
+# Characters of a title line: the default 12 pt title font averages ~7.5 px a character, 800 px hold ~100; 70 leaves
+# room for wide letters (a longer title was clipped at both ends, issue 31).
+TITLE_CHARS = 70
+
+
+def fit_title(title: str) -> str:
+    """`title` wrapped into lines of at most TITLE_CHARS characters (at spaces, else inside a long word)."""
+    return "\n".join(textwrap.wrap(title, TITLE_CHARS, break_long_words=True, break_on_hyphens=False)) or title
 
 
 def axis_label(name: str, unit: str) -> str:
@@ -33,11 +44,12 @@ def psd_unit(unit: str) -> str:
 
 
 def new_axes(title: str, height: float = 4.0):
-    """A figure with one grid-lined axes, drawn off-screen (Agg); `title` is shown literally (no math text)."""
-    figure = Figure(figsize=(8.0, height), dpi=100, layout="constrained")
+    """A figure with one grid-lined axes, drawn off-screen (Agg); `title` is shown literally (no math text), wrapped
+    to the figure's width."""
+    figure = Figure(figsize=(FIGURE_WIDTH, height), dpi=100, layout="constrained")
     FigureCanvasAgg(figure)
     axes = figure.add_subplot()
-    axes.set_title(title, parse_math=False)
+    axes.set_title(fit_title(title), parse_math=False)
     axes.grid(True, alpha=0.3)
     return figure, axes
 
@@ -80,9 +92,11 @@ def _exceedance(signal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def plot_rainflow(c: ChannelComparison, path: Path) -> Path:
     """Cumulative rainflow cycle count exceeding each range (log-log), the load spectrum behind the damage ratio."""
+    ratio = c.metrics.pseudo_damage_ratio
     figure, axes = new_axes(
-        f"{c.name}: rainflow range exceedance (pseudo-damage ratio "
-        f"{c.metrics.pseudo_damage_ratio:.3g}, m = {c.basquin_slope:g})"
+        f"{c.name}: rainflow exceedance; pseudo-damage ratio "
+        + (f"{ratio:.3g}" if np.isfinite(ratio) else NOT_MEANINGFUL)
+        + f" (m = {c.basquin_slope:g})"
     )
     any_cycles = False
     for signal, style in ((c.reference, REFERENCE_STYLE), (c.result, RESULT_STYLE)):

@@ -17,12 +17,14 @@ from pathlib import Path
 from typing import Any
 
 import jinja2
+import numpy as np
 
 import nnfmu
 from nnfmu.validate.compare import ChannelComparison
 from nnfmu.validate.metrics import DEFINITIONS
 from nnfmu.validate.plots import plot_channel
 from nnfmu.validate.summary import json_float
+from nnfmu.validate.verdict import Target, verdict
 
 TEMPLATE = "report.html.j2"
 SUMMARY_FILE = "summary.json"
@@ -50,13 +52,31 @@ def channel_summary(c: ChannelComparison, plots: Mapping[str, str]) -> dict[str,
     }
 
 
+def report_verdict(comparisons: Sequence[ChannelComparison], target: Target) -> str:
+    """The report's one line: its worst channel's NRMSE against `target`, and how many channels pass."""
+    worst = max(comparisons, key=lambda c: c.metrics.nrmse if np.isfinite(c.metrics.nrmse) else -1.0)
+    passed = sum(bool(c.metrics.nrmse <= target.nrmse) for c in comparisons)
+    which = "worst channel " if len(comparisons) > 1 else ""
+    return (
+        f"{verdict(f'{which}{worst.name} [{worst.unit}]', worst.metrics.nrmse, target)}; {passed} of "
+        f"{len(comparisons)} channel{'s' if len(comparisons) > 1 else ''} within"
+    )
+
+
 def summary_document(
-    comparisons: Sequence[ChannelComparison], title: str, context: Mapping[str, str], plots: Sequence[Mapping[str, str]]
+    comparisons: Sequence[ChannelComparison],
+    title: str,
+    context: Mapping[str, str],
+    plots: Sequence[Mapping[str, str]],
+    target: Target = Target(),
 ) -> dict[str, Any]:
-    """The whole `summary.json` content: title, context, metric definitions and every channel."""
+    """The whole `summary.json` content: title, verdict against `target`, context, metric definitions and every
+    channel."""
     return {
         "title": title,
         "nnfmu_version": nnfmu.__version__,
+        "verdict": report_verdict(comparisons, target),
+        "target": {"nrmse": target.nrmse, "source": target.source},
         "context": dict(context),
         "definitions": dict(DEFINITIONS),
         "channels": [channel_summary(c, p) for c, p in zip(comparisons, plots)],
@@ -85,8 +105,10 @@ def write_report(
     out_dir: str | os.PathLike[str],
     title: str,
     context: Mapping[str, str] | None = None,
+    target: Target = Target(),
 ) -> Path:
-    """Write plots, `summary.json` and `index.html` for `comparisons` into `out_dir`; returns the index.html path."""
+    """Write plots, `summary.json` and `index.html` for `comparisons` into `out_dir`, judged against `target`; returns
+    the index.html path."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     stage = Path(tempfile.mkdtemp(prefix=".report.", dir=out_dir))
@@ -95,7 +117,7 @@ def write_report(
         for index, c in enumerate(comparisons):
             paths = plot_channel(c, stage, file_stem(index, c.name))
             plots.append({kind: path.name for kind, path in paths.items()})
-        summary = summary_document(comparisons, title, context or {}, plots)
+        summary = summary_document(comparisons, title, context or {}, plots, target)
         (stage / SUMMARY_FILE).write_text(json.dumps(summary, indent=2, allow_nan=False), encoding="utf-8")
         (stage / INDEX_FILE).write_text(render_html(summary), encoding="utf-8")
         for name in [p for channel in plots for p in channel.values()] + [SUMMARY_FILE, INDEX_FILE]:

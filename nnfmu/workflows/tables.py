@@ -78,7 +78,7 @@ def component_table(models: Sequence[ModelRow]) -> Table:
     return table
 
 
-def loop_table(effects: Sequence[str], before: Mapping[str, float], after: Mapping[str, float]) -> Table:
+def loop_table(effects: Sequence[str], before: Mapping[str, float | None], after: Mapping[str, float | None]) -> Table:
     """The loop's held-out error before and after the effects it added."""
     table = Table(
         title=f"effects added: {', '.join(effects) or 'none'}",
@@ -92,8 +92,13 @@ def loop_table(effects: Sequence[str], before: Mapping[str, float], after: Mappi
     table.add_row("NRMSE [%]", _per_cent(before["nrmse"]), _per_cent(after["nrmse"]))
     table.add_row("R²", f"{before['r2']:.4f}", f"{after['r2']:.4f}")
     table.add_row("peak error [%]", f"{100 * before['peak_error']:+.1f}", f"{100 * after['peak_error']:+.1f}")
-    table.add_row("pseudo-damage ratio", f"{before['pseudo_damage_ratio']:.3f}", f"{after['pseudo_damage_ratio']:.3f}")
+    table.add_row("pseudo-damage ratio", _ratio(before["pseudo_damage_ratio"]), _ratio(after["pseudo_damage_ratio"]))
     return table
+
+
+def _ratio(value: float | None) -> str:
+    """A ratio to three decimals, or why there is none (a record too short for it)."""
+    return "not meaningful" if value is None else f"{value:.3f}"
 
 
 def stage_table(seconds: Mapping[str, float], total: float) -> Table:

@@ -2,6 +2,6 @@
 
 from __future__ import annotations
 
-from nnfmu.validate import ValidationSettings, validate_files
+from nnfmu.validate import Target, ValidationSettings, validate_files
 
-__all__ = ["ValidationSettings", "validate_files"]
+__all__ = ["Target", "ValidationSettings", "validate_files"]

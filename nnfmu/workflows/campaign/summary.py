@@ -83,6 +83,25 @@ def digest(table: pa.Table, reference: str) -> Digest:
     return Digest(channels, variants, reference, dict(programme), worst, failures)
 
 
+def verdict(d: Digest) -> str:
+    """The summary's one line: the largest programme damage ratio of any variant against the campaign's reference
+    variant (what a campaign is run for: does a variant load a channel more than the reference?)."""
+    ratios = [
+        (ratio, variant, channel, unit)
+        for channel, unit in d.channels
+        for variant, ratio in d.programme[channel].items()
+        if variant != d.reference and np.isfinite(ratio)
+    ]
+    if not ratios:
+        return f"no variant besides the reference {d.reference} has a damage ratio to judge"
+    ratio, variant, channel, unit = max(ratios)
+    change = "more" if ratio > 1 else "less"
+    return (
+        f"worst: {variant} on {channel} [{unit}], programme damage ratio {ratio:.3g} — {abs(ratio - 1):.0%} {change} "
+        f"damage than the reference variant {d.reference} (the campaign's reference, ratio 1)"
+    )
+
+
 def _plain(text: str) -> str:
     """`text` for a tick or legend label, shown as it is (a `$` would start matplotlib's math text there)."""
     return text.replace("$", r"\$")
@@ -146,7 +165,9 @@ def write_summary(out: Path, table: pa.Table, reference: str, context: dict[str,
     environment = jinja2.Environment(
         loader=jinja2.PackageLoader("nnfmu.workflows.campaign", "."), autoescape=True, undefined=jinja2.StrictUndefined
     )
-    html = environment.get_template(TEMPLATE).render(d=d, ratio_plot=RATIO_PLOT, worst_plot=WORST_PLOT, **context)
+    html = environment.get_template(TEMPLATE).render(
+        d=d, verdict=verdict(d), ratio_plot=RATIO_PLOT, worst_plot=WORST_PLOT, **context
+    )
     path = out / SUMMARY
     write_text_atomic(path, html)
     return path

@@ -23,8 +23,8 @@ class Iteration:
     extension: str
     reason: str
     features_added: tuple[str, ...]
-    error_before: dict[str, float]
-    error_after: dict[str, float]
+    error_before: dict[str, float | None]
+    error_after: dict[str, float | None]
     diagnosis_nrmse_before: float
     diagnosis_nrmse_after: float
     accepted: bool
@@ -73,7 +73,9 @@ class Iteration:
 @dataclass
 class LoopReport:
     """The whole loop: effects added in order, every iteration, the overall test error before and after, the final
-    model's files, the diagnoses (first and last) and notes (effects that could not be added, and why)."""
+    model's files, the diagnoses (first and last) and notes (effects that could not be added, and why). `summary`:
+    the headline in an engineer's words with its verdict against the target NRMSE (`target`: value [1] and source);
+    `details`: the same outcome in the diagnosis's terms (effect and test names)."""
 
     data: str
     model: str
@@ -81,8 +83,8 @@ class LoopReport:
     blocks: dict[str, list[list[float]]]
     effects_added: list[str]
     iterations: list[Iteration]
-    error_before: dict[str, float]
-    error_after: dict[str, float]
+    error_before: dict[str, float | None]
+    error_after: dict[str, float | None]
     onnx: Path
     fmu: Path
     consistent_with_noise: bool
@@ -90,6 +92,8 @@ class LoopReport:
     notes: list[str]
     missing_measurements: list[str]
     diagnoses: list[Diagnosis] = field(default_factory=list)
+    details: str = ""
+    target: dict[str, Any] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -109,6 +113,8 @@ class LoopReport:
             "fmu": str(self.fmu),
             "consistent_with_noise": self.consistent_with_noise,
             "summary": self.summary,
+            "target": dict(self.target),
+            "details": self.details,
             "notes": list(self.notes),
             "missing_measurements": list(self.missing_measurements),
             "diagnoses": [d.to_dict() for d in self.diagnoses],

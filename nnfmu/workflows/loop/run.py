@@ -29,6 +29,7 @@ from nnfmu.out_paths import check_output_dir, replace_output_dir
 from nnfmu.validate import ValidationSettings, channel_metrics
 from nnfmu.workflows.loop.blocks import RecordBlocks, part_measurement, plan_blocks
 from nnfmu.workflows.loop.errors import LoopError
+from nnfmu.workflows.loop.headline import headline
 from nnfmu.workflows.loop.report import write_loop_report
 from nnfmu.workflows.loop.results import Iteration, LoopReport
 from nnfmu.workflows.loop.settings import LoopSettings
@@ -68,9 +69,11 @@ def _check(m: Measurement, model: TrainedModel, model_path: Path, output: str, s
         )
 
 
-def _errors(predicted: np.ndarray, measured: np.ndarray, rows: np.ndarray, slope: float) -> dict[str, float]:
-    """nrmse, r2, peak_error and pseudo_damage_ratio of `predicted` on `rows`."""
-    return {k: float(v) for k, v in channel_metrics(predicted[rows], measured[rows], slope).error_summary().items()}
+def _errors(predicted: np.ndarray, measured: np.ndarray, rows: np.ndarray, slope: float) -> dict[str, float | None]:
+    """nrmse, r2, peak_error and pseudo_damage_ratio of `predicted` on `rows` (None where not meaningful: a test part
+    too short for a damage ratio, `nnfmu.validate.meaningful`)."""
+    summary = channel_metrics(predicted[rows], measured[rows], slope).error_summary()
+    return {k: _number(v) for k, v in summary.items()}
 
 
 def _number(x: float | None) -> float | None:
@@ -230,6 +233,9 @@ def run_loop(
             added.extend(ext.effect.split("+"))
             model, predicted, onnx_path, fmu_path = retrained.model, new_predicted, new_onnx, new_fmu
         last = diagnoses[-1]
+        error_before = _errors(first_prediction, measured, rows["test"], slope)
+        error_after = _errors(predicted, measured, rows["test"], slope)
+        target = settings.target
         report = LoopReport(
             data=m.source,
             model=str(model_path),
@@ -237,15 +243,17 @@ def run_loop(
             blocks=blocks.describe(m.time),
             effects_added=added,
             iterations=iterations,
-            error_before=_errors(first_prediction, measured, rows["test"], slope),
-            error_after=_errors(predicted, measured, rows["test"], slope),
+            error_before=error_before,
+            error_after=error_after,
             onnx=stage.final(onnx_path),
             fmu=stage.final(fmu_path),
             consistent_with_noise=last.consistent_with_noise,
-            summary=_summary(added, last),
+            summary=headline(output, iterations, last, error_before["nrmse"], error_after["nrmse"], target),
             notes=notes,
             missing_measurements=sorted({note for dg in diagnoses for note in dg.missing_measurements}),
             diagnoses=diagnoses,
+            details=_summary(added, last),
+            target={"nrmse": target.nrmse, "source": target.source},
         )
         write_loop_report(staging, report, m, rows, first_prediction, predicted, steps)
         replace_output_dir(staging, out_dir, "loop")
@@ -256,6 +264,6 @@ def run_loop(
 
 
 def _summary(added: list[str], last: Diagnosis) -> str:
-    """The outcome in one sentence."""
+    """The outcome in the diagnosis's terms (effect and test names): the report's details."""
     found = f"added {', '.join(added)}" if added else "added nothing"
     return f"{found}; final diagnosis: {last.summary}"

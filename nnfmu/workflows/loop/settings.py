@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 from nnfmu.diagnosis import DiagnosisSettings
 from nnfmu.models.retrain import RetrainSettings
+from nnfmu.validate.verdict import Target
 from nnfmu.workflows.loop.errors import LoopError
 
 
@@ -31,10 +32,12 @@ class LoopSettings:
     (see `trials._candidates`). `min_explained`: an effect is added only when it explains at least this fraction
     of the residual variance (beyond the effects ranked above it; alone, for a simpler rival): with tens of
     thousands of samples a network's own approximation error makes tiny effects statistically significant, and the
-    loop adds what matters, not what is merely detectable. `backend`/`fmi_version`: the FMUs built.
+    loop adds what matters, not what is merely detectable. `backend`/`fmi_version`: the FMUs built. `target`: the
+    test-part NRMSE the report's headline judges the final model by (`nnfmu.validate.verdict`; 5 % by default).
     """
 
     max_effects: int = 3
+    target: Target = field(default_factory=Target)
     segments: int = 5
     fit_fraction: float = 0.6
     validation_fraction: float = 0.1

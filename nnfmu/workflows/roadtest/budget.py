@@ -13,7 +13,7 @@ Per system, channel and damper model, against the monolithic reference (truth ph
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 
 from nnfmu.validate import ChannelComparison
 from nnfmu.validate.summary import json_float
@@ -21,7 +21,8 @@ from nnfmu.validate.summary import json_float
 
 @dataclass(frozen=True)
 class BudgetRow:
-    """One channel of one system and damper model; NRMSE [1] against the reference, damage ratio [1]."""
+    """One channel of one system and damper model; NRMSE [1] against the reference, damage ratio [1] (NaN, null in
+    JSON, when the record is too short for it: `not_meaningful` says why)."""
 
     system: str
     channel: str
@@ -31,6 +32,7 @@ class BudgetRow:
     nrmse_network: float
     nrmse_coupling: float
     damage_ratio: float
+    not_meaningful: dict[str, str] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, object]:
         return {k: (json_float(v) if isinstance(v, float) else v) for k, v in asdict(self).items()}
@@ -56,6 +58,9 @@ def budget_rows(
             nrmse_network=network[c.name].metrics.nrmse,
             nrmse_coupling=by_name[c.name].metrics.nrmse,
             damage_ratio=c.metrics.pseudo_damage_ratio,
+            not_meaningful={"damage_ratio": c.metrics.not_meaningful["pseudo_damage_ratio"]}
+            if "pseudo_damage_ratio" in c.metrics.not_meaningful
+            else {},
         )
         for c in total
     ]

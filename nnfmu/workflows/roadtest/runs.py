@@ -30,7 +30,7 @@ from nnfmu.cosim.ssp import open_system
 from nnfmu.data import Measurement, save_measurement
 from nnfmu.data.drive_files import write_drive
 from nnfmu.fmu.step_graph import load_fmu_graph
-from nnfmu.validate import ChannelComparison, ValidationSettings, compare, write_report
+from nnfmu.validate import ChannelComparison, Target, ValidationSettings, compare, write_report
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.workflows.roadtest.budget import BudgetRow, budget_rows
 from nnfmu.workflows.roadtest.envelope import Excursion, excursion
@@ -49,7 +49,7 @@ from nnfmu.workflows.roadtest.systems import (
     vehicle_components,
     write_system,
 )
-from nnfmu.workflows.roadtest.thesis import ThesisRow, thesis_row
+from nnfmu.workflows.roadtest.thesis import ThesisRow, model_verdicts, thesis_row
 from nnfmu.workflows.roadtest.truth_reference import Reference, monolithic_reference
 from nnfmu.workflows.vehicle_binding import vehicle_binding
 
@@ -107,7 +107,8 @@ class RoadTestSettings:
     [Hz]); the reference's RK4 step [s]; the time-history plot `window` [s] (the thesis's 30-35 s), used when the
     drive covers it; `fade_in` [s]: the drive rises from rest over its first seconds (`DriveSettings.fade_in`), as
     the car starts at rest: the road's height at t = 0 kicked the LCA and its bushing networks out of their training
-    envelope, which locked vehicle-trained bushing networks into a 125 Hz oscillation for the whole drive."""
+    envelope, which locked vehicle-trained bushing networks into a 125 Hz oscillation for the whole drive. `target`:
+    the NRMSE each system report's verdict judges each damper model's worst channel by (5 % by default)."""
 
     quarter_car: SystemRun | None = SystemRun(50.0)
     full_vehicle: SystemRun | None = SystemRun(50.0)
@@ -118,6 +119,7 @@ class RoadTestSettings:
     reference_step: float = 1e-4
     window: tuple[float, float] = (30.0, 35.0)
     fade_in: float = 0.5
+    target: Target = Target()
 
     def runs(self) -> dict[str, SystemRun]:
         chosen = {"quarter-car": self.quarter_car, "full-vehicle": self.full_vehicle}
@@ -137,10 +139,13 @@ class SystemResult:
     excursions: list[Excursion]
     seconds: dict[str, float]
     duration: float
+    target: Target = Target()
 
     def to_dict(self) -> dict[str, object]:
         return {
             "system": self.system,
+            "verdicts": model_verdicts(self.rows, self.target),
+            "target": {"nrmse": self.target.nrmse, "source": self.target.source},
             "ssds": {k: str(v) for k, v in self.ssds.items()},
             "report": str(self.report),
             "duration_s": self.duration,
@@ -360,10 +365,13 @@ def _run_system(
             report_dir / model.replace(" ", "-"),
             f"{system}: {model} vs the monolithic reference",
             {"system": system, "drive": drive.source},
+            settings.target,
         )
         for model, chosen in comparisons.items()
     }
-    outcome = SystemResult(system, ssds, report_dir / "index.html", rows, budget, excursions, seconds, run.duration)
+    outcome = SystemResult(
+        system, ssds, report_dir / "index.html", rows, budget, excursions, seconds, run.duration, settings.target
+    )
     write_system_report(outcome.to_dict(), _context(system, run, settings, drive), model_reports, outcome.report)
     return outcome
 
