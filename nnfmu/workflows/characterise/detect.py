@@ -49,6 +49,14 @@ def _crossings(position: np.ndarray, level: float) -> list[int]:
     return found
 
 
+def _instant(time: np.ndarray, position: np.ndarray, i: int) -> float:
+    """The time of the zero crossing between samples i-1 (<= 0) and i (> 0), linearly interpolated."""
+    if i == 0:
+        return float(time[0])
+    x0, x1 = position[i - 1], position[i]
+    return float(time[i - 1] + (time[i] - time[i - 1]) * (-x0) / (x1 - x0))
+
+
 def _agree(a: float, b: float, tolerance: float) -> bool:
     return abs(a - b) <= tolerance * max(abs(a), abs(b))
 
@@ -60,8 +68,10 @@ def find_sine_tests(time: np.ndarray, position: np.ndarray) -> list[SineSegment]
     if reach == 0:
         return []
     edges = _crossings(position, HYSTERESIS * reach)
+    instants = [_instant(time, position, i) for i in edges]
     cycles = [
-        (a, b, time[b] - time[a], 0.5 * (position[a:b].max() - position[a:b].min())) for a, b in zip(edges, edges[1:])
+        (a, b, tb - ta, 0.5 * (position[a:b].max() - position[a:b].min()))
+        for a, b, ta, tb in zip(edges, edges[1:], instants, instants[1:])
     ]
     runs: list[list[tuple]] = []
     for cycle in cycles:

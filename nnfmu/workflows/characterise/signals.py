@@ -27,8 +27,13 @@ class SineTest:
         return 2 * math.pi * self.frequency * self.amplitude
 
     def samples(self, period: float) -> int:
-        """Samples of the whole test at `period` [s]."""
-        return int(round((self.settle_cycles + 1) / (self.frequency * period)))
+        """Samples of the whole test at `period` [s]: the settling cycles, then the measured cycle with the sample
+        that closes it."""
+        return self.settled_samples(period) + self.cycle_samples(period) + 1
+
+    def settled_samples(self, period: float) -> int:
+        """The first sample of the measured cycle: the first at or after the settling cycles' end."""
+        return math.ceil(self.settle_cycles / (self.frequency * period) - 1e-9)
 
     def cycle_samples(self, period: float) -> int:
         """Samples of the measured (last) cycle at `period` [s]."""
@@ -84,5 +89,5 @@ def sine_motion(test: SineTest, period: float) -> TestMotion:
         position=a * w * s,
         rate=a * (dw * s + w * omega * c),
         acceleration=a * (ddw * s + 2 * dw * omega * c - w * omega**2 * s),
-        measured=slice(max(0, n - test.cycle_samples(period) - 1), n),
+        measured=slice(test.settled_samples(period), n),
     )

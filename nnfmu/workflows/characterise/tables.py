@@ -158,7 +158,7 @@ def loop_rows(result: BushingResult, measured: MeasuredBushing | None = None) ->
 def _cell(value: float | str | None) -> str:
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return ""
-    return value if isinstance(value, str) else f"{float(value):.9g}"
+    return value if isinstance(value, str) else f"{float(value):.12g}"
 
 
 def csv_text(rows: Sequence[Row]) -> str:
