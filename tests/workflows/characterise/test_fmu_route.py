@@ -16,7 +16,9 @@ from typer.testing import CliRunner
 from nnfmu.cli import app
 from nnfmu.component import Component, Port
 from nnfmu.data import Measurement
-from nnfmu.data.rigs import BushingChannelTruth, BushingParams, DamperDyno, DamperParams, DamperTruth
+from nnfmu.data.rigs import BushingChannelTruth, BushingParams, BushingRig, DamperDyno, DamperParams, DamperTruth
+from nnfmu.data.rigs.bushing_rig import UNITS as BUSHING_UNITS
+from nnfmu.data.rigs.bushing_rig import run_bushing_rig
 from nnfmu.data.rigs.damper_rig import run_damper_dyno
 from nnfmu.data.save import save_measurement
 from nnfmu.export.graph import GraphBuilder
@@ -182,3 +184,23 @@ def test_a_model_that_is_neither_is_refused_naming_the_file(tmp_path: Path) -> N
     result = CliRunner().invoke(app, ["characterise", str(path), "--out", str(tmp_path / "out")])
     assert result.exit_code == 2
     assert "error:" in result.output and "other.onnx: neither a damper" in result.output
+
+
+def test_a_bushing_rigs_sine_record_beside_the_truth_bushing(models: dict[str, Path], tmp_path: Path) -> None:
+    """The rig's dynamic-stiffness series of the same law: found per level, within 0.5 % and 0.1 deg of the FMU."""
+    rig = BushingRig(sine_frequencies=(2.0, 10.0), sine_amplitudes=(0.5, 1.0))
+    time, channels, _ = run_bushing_rig(
+        BushingParams(), ("viscoelastic", "friction"), rig, 1 / T, 12000, "sine", 1.0, 3
+    )
+    record = tmp_path / "rig.csv"
+    save_measurement(Measurement(time, channels, {k: BUSHING_UNITS[k] for k in channels}), record)
+    characterise(models["bushing"], tmp_path / "out", measured=record, log=print)
+    rows = _rows(tmp_path / "out" / "dynamic_stiffness.csv")
+    found = [(float(r["frequency [Hz]"]), float(r["amplitude [m]"])) for r in rows]
+    assert [f for f, _ in found] == pytest.approx([2.0, 2.0, 10.0, 10.0], rel=1e-3)
+    assert [a for _, a in found] == pytest.approx([1.25e-3, 2.5e-3, 1.25e-3, 2.5e-3], rel=1e-3)
+    for row in rows:
+        assert abs(float(row["stiffness_deviation [%]"])) < 0.5
+        assert abs(float(row["loss_angle_deviation [deg]"])) < 0.1
+    loop = _rows(tmp_path / "out" / "quasi_static_loop.csv")
+    assert {"measured_axial_displacement [m]", "measured_axial_force [N]"} <= set(loop[0])
