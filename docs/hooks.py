@@ -31,6 +31,7 @@ NAV: tuple[tuple[str, str], ...] = (
     ("Semi-active closed loop", "skyhook.md"),
     ("Campaigns", "campaigns.md"),
     ("Closing the loop", "loop.md"),
+    ("Component reports", "characterise.md"),
     ("Real data", "real-data.md"),
     ("Command reference", "cli.md"),
     ("Benchmark results", "results.md"),

@@ -38,6 +38,19 @@ def first_harmonic(time: np.ndarray, y: np.ndarray, frequency: float) -> Harmoni
     return Harmonic(float(mean), complex(a, b))
 
 
+def _quadratic(time: np.ndarray, y: np.ndarray, instants: np.ndarray) -> np.ndarray:
+    """`y` at `instants` by the parabola through the three samples around each (a linear interpolation would cut
+    the force's rounded peak by up to (ωT)²/8, 0.3 % at 24 Hz and 1 kHz)."""
+    j = np.clip(np.searchsorted(time, instants), 1, len(time) - 2)
+    t0, t1, t2 = time[j - 1], time[j], time[j + 1]
+    y0, y1, y2 = y[j - 1], y[j], y[j + 1]
+    return (
+        y0 * (instants - t1) * (instants - t2) / ((t0 - t1) * (t0 - t2))
+        + y1 * (instants - t0) * (instants - t2) / ((t1 - t0) * (t1 - t2))
+        + y2 * (instants - t0) * (instants - t1) / ((t2 - t0) * (t2 - t1))
+    )
+
+
 @dataclass(frozen=True)
 class DamperPoint:
     """One point of the characteristic: the test (peak velocity [m/s], amplitude [m], frequency [Hz], command) and
@@ -55,8 +68,8 @@ def damper_point(
     time: np.ndarray, position: np.ndarray, force: np.ndarray, frequency: float, command: float | None = None
 ) -> DamperPoint:
     """The characteristic point of a sine test's cycles: the displacement's first harmonic gives amplitude and phase,
-    the force is interpolated at every instant of peak rebound (phase 0 of x = X·sin(ωt + φ)) and jounce (phase π)
-    velocity inside the samples and averaged."""
+    the force is interpolated (quadratically) at every instant of peak rebound (phase 0 of x = X·sin(ωt + φ)) and
+    jounce (phase π) velocity inside the samples and averaged."""
     fit = first_harmonic(time, position, frequency)
     omega = 2 * math.pi * frequency
     phase = math.atan2(fit.phasor.imag, fit.phasor.real)
@@ -67,7 +80,7 @@ def damper_point(
         instants = (2 * math.pi * np.arange(first, last + 1) + target - phase) / omega
         if instants.size == 0:
             raise CharacteriseError(f"a {frequency:g} Hz test of {time[-1] - time[0]:g} s holds no peak velocity")
-        forces.append(float(np.mean(np.interp(instants, time, force))))
+        forces.append(float(np.mean(_quadratic(time, force, instants))))
     return DamperPoint(omega * fit.amplitude, fit.amplitude, frequency, command, forces[0], forces[1])
 
 

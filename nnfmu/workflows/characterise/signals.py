@@ -36,8 +36,9 @@ class SineTest:
         return math.ceil(self.settle_cycles / (self.frequency * period) - 1e-9)
 
     def cycle_samples(self, period: float) -> int:
-        """Samples of the measured (last) cycle at `period` [s]."""
-        return int(round(1 / (self.frequency * period)))
+        """Sample steps of the measured (last) cycle at `period` [s]: a whole period or just over it, so the read
+        cycle holds both peak velocities whatever the period's fraction of a sample."""
+        return math.ceil(1 / (self.frequency * period) - 1e-9)
 
 
 @dataclass(frozen=True)

@@ -83,3 +83,19 @@ def test_sine_tests_are_found_in_a_lab_schedule_and_the_random_part_is_left_out(
     ]
     assert all(s.cycles >= 3 for s in found)
     assert find_sine_tests(time[12000:], x[12000:]) == []  # the random drive alone
+
+
+@pytest.mark.parametrize("stroke", [0.025, 0.01, 0.0173])
+def test_every_read_cycle_holds_both_peak_velocities(stroke: float) -> None:
+    """Whatever fraction of a sample the period ends on, the read cycle starts after the ramp and holds both peaks."""
+    settings = DamperTestSettings(stroke=stroke, settle_cycles=1)
+    for test in damper_tests(settings, [None]):
+        motion = sine_motion(test, T)
+        m = motion.measured
+        assert motion.time[m][0] >= test.settle_cycles / test.frequency - 1e-12
+        force = np.where(motion.rate > 0, 2000.0 * motion.rate, 700.0 * motion.rate)
+        point = damper_point(motion.time[m], motion.position[m], force[m], test.frequency)
+        assert point.peak_velocity == pytest.approx(test.peak_rate, rel=1e-9)
+        # the parabola through three samples: 2e-5 at most where a sample spans 0.15 rad (1.5 m/s on ±10 mm)
+        assert point.rebound_force == pytest.approx(2000.0 * test.peak_rate, rel=3e-5)
+        assert point.jounce_force == pytest.approx(-700.0 * test.peak_rate, rel=3e-5)
