@@ -204,3 +204,38 @@ def test_a_bushing_rigs_sine_record_beside_the_truth_bushing(models: dict[str, P
         assert abs(float(row["loss_angle_deviation [deg]"])) < 0.1
     loop = _rows(tmp_path / "out" / "quasi_static_loop.csv")
     assert {"measured_axial_displacement [m]", "measured_axial_force [N]"} <= set(loop[0])
+
+
+def test_a_semi_active_damper_gets_a_family_of_curves_per_command(tmp_path: Path) -> None:
+    """force = (c0 + c1·voltage)·velocity, its voltage input trained over 0-5 V: five levels by default."""
+    graph = GraphBuilder(reserved=["velocity", "voltage", "force"])
+    gain = graph.node(
+        "Add",
+        [
+            graph.constant("c0", np.array([1000.0])),
+            graph.node("Mul", ["voltage", graph.constant("c1", np.array([400.0]))], "slope"),
+        ],
+        "damping",
+    )
+    graph.output(graph.node("Mul", ["velocity", gain], "product"), "force")
+    model = graph.model("mr", "(c0 + c1 u) v", [("velocity", 1), ("voltage", 1)], [("force", 1)])
+    Component(
+        "mr",
+        [Port("velocity", "m/s"), Port("voltage", "V", min=0.0, max=5.0)],
+        [Port("force", "N")],
+        sample_period=T,
+    ).attach_to(model)
+    path = tmp_path / "mr.onnx"
+    onnx.save(model, str(path))
+    settings = CharacteriseSettings(damper=DamperTestSettings(peak_velocities=(0.3, 1.0), stroke=0.02, settle_cycles=1))
+    characterise(path, tmp_path / "out", settings=settings, log=print)
+    rows = _rows(tmp_path / "out" / "characteristic.csv")
+    assert [float(r["voltage [V]"]) for r in rows] == [0.0, 0.0, 1.25, 1.25, 2.5, 2.5, 3.75, 3.75, 5.0, 5.0]
+    for row in rows:
+        c = 1000.0 + 400.0 * float(row["voltage [V]"])
+        v = float(row["peak_velocity [m/s]"])
+        assert float(row["rebound_force [N]"]) == pytest.approx(c * v, rel=1e-4)
+        assert float(row["jounce_force [N]"]) == pytest.approx(-c * v, rel=1e-4)
+    assert len(_rows(tmp_path / "out" / "gas_friction.csv")) == 5
+    html = (tmp_path / "out" / "index.html").read_text(encoding="utf-8")
+    assert html.count("work_0") >= 10  # a force-displacement and a force-velocity diagram per level
