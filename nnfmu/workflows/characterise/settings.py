@@ -20,6 +20,7 @@ VEHICLE_RANGE: dict[str, float] = dict(BushingRig().vehicle_range)
 MAX_SETTLE_CYCLES = 50
 MIN_SAMPLES_PER_CYCLE = 8  # a first-harmonic fit needs the cycle resolved
 MAX_TEST_SAMPLES = 20_000_000  # all tests together, checked before the first runs
+MAX_TESTS = 2000  # test points together (each opens the FMU once)
 MAX_COMMAND_LEVELS = 20
 
 

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nnfmu.errors import SettingsError
-from nnfmu.workflows.characterise.settings import MAX_TEST_SAMPLES, MIN_SAMPLES_PER_CYCLE
+from nnfmu.workflows.characterise.settings import MAX_TEST_SAMPLES, MAX_TESTS, MIN_SAMPLES_PER_CYCLE
 
 
 @dataclass(frozen=True)
@@ -55,7 +55,10 @@ class TestMotion:
 
 def check_tests(tests: list[SineTest], period: float, what: str) -> None:
     """SettingsError before any test runs when one is not resolved at `period` [s] (fewer than
-    MIN_SAMPLES_PER_CYCLE samples a cycle) or all together exceed MAX_TEST_SAMPLES."""
+    MIN_SAMPLES_PER_CYCLE samples a cycle), or there are more than MAX_TESTS tests, or all together exceed
+    MAX_TEST_SAMPLES."""
+    if len(tests) > MAX_TESTS:
+        raise SettingsError(f"{what}: {len(tests)} test points, more than {MAX_TESTS}; test fewer")
     for test in tests:
         if test.cycle_samples(period) < MIN_SAMPLES_PER_CYCLE:
             raise SettingsError(

@@ -11,11 +11,12 @@ import pytest
 
 from nnfmu.data.rigs import DamperParams, DamperTruth
 from nnfmu.data.rigs.excitation import Motion, SineLevel, SpectrumShape, random_motion, sine_series
+from nnfmu.errors import SettingsError
 from nnfmu.workflows.characterise.analysis import damper_point, first_harmonic, stiffness_point
 from nnfmu.workflows.characterise.damper import damper_tests, read_damper
 from nnfmu.workflows.characterise.detect import find_sine_tests
 from nnfmu.workflows.characterise.settings import DamperTestSettings
-from nnfmu.workflows.characterise.signals import SineTest, sine_motion
+from nnfmu.workflows.characterise.signals import SineTest, check_tests, sine_motion
 from nnfmu.workflows.characterise.truth import damper_truth_runs
 
 T = 1e-3
@@ -99,3 +100,14 @@ def test_every_read_cycle_holds_both_peak_velocities(stroke: float) -> None:
         # the parabola through three samples: 2e-5 at most where a sample spans 0.15 rad (1.5 m/s on ±10 mm)
         assert point.rebound_force == pytest.approx(2000.0 * test.peak_rate, rel=3e-5)
         assert point.jounce_force == pytest.approx(-700.0 * test.peak_rate, rel=3e-5)
+
+
+def test_tests_are_bounded_before_any_runs() -> None:
+    with pytest.raises(SettingsError, match="100 Hz leaves 5 samples a cycle"):
+        check_tests([SineTest(1e-3, 100.0, 1)], 0.002, "x.onnx")
+    with pytest.raises(SettingsError, match="more than 20000000"):
+        check_tests([SineTest(1e-3, 1e-4, 2)], 1e-3, "x.onnx")
+    with pytest.raises(SettingsError, match="2001 test points"):
+        check_tests([SineTest(1e-3, 10.0, 1)] * 2001, 1e-3, "x.onnx")
+    with pytest.raises(SettingsError, match="peak velocities: -0.1 m/s"):
+        DamperTestSettings(peak_velocities=(0.1, -0.1))
