@@ -60,15 +60,15 @@ def model_under_test(path: str | Path) -> Iterator[ModelUnderTest]:
     if suffix not in (".onnx", ".fmu"):
         raise CharacteriseError(f"{path}: give an ONNX step graph (.onnx) or an FMU (.fmu)")
     with tempfile.TemporaryDirectory(prefix="nnfmu-characterise-") as folder:
+        try:
+            component = Component.from_onnx(load_onnx(path)) if suffix == ".onnx" else _component_of_fmu(path)
+        except ValueError as err:  # a malformed or too new component description
+            raise CharacteriseError(f"{path}: cannot read the component description: {err}") from err
+        kind = component_kind(component, str(path))  # refused before an ONNX is built
+        fmu = path
         if suffix == ".onnx":
-            component = Component.from_onnx(load_onnx(path))
-            kind = component_kind(component, str(path))  # refused before a build
             with host_binaries_only():
                 fmu = build_fmu(path, BuildOptions(out=Path(folder) / f"{path.stem}.fmu"))
-        else:
-            fmu = path
-            component = _component_of_fmu(path)
-            kind = component_kind(component, str(path))
         yield ModelUnderTest(fmu, path, component, kind, component.sample_period or DEFAULT_PERIOD)
 
 
