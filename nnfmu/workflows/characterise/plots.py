@@ -6,6 +6,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
+from matplotlib.ticker import NullFormatter, ScalarFormatter
+
 from nnfmu.validate.plots import axis_label, new_axes
 from nnfmu.workflows.characterise.analysis import DamperPoint, StiffnessPoint
 from nnfmu.workflows.characterise.kind import BushingChannelPorts
@@ -22,7 +24,21 @@ def _levels(points: Sequence[DamperPoint]) -> list:
 
 
 def _level_label(level: float | None, command: str | None, unit: str) -> str:
-    return "model" if level is None else f"{command} {level:.3g} {unit}"
+    return "" if level is None else f"{command} {level:.3g} {unit}: "
+
+
+def amplitude_groups(amplitudes: Sequence[float], tolerance: float = 0.02) -> list[int]:
+    """A group number per amplitude: amplitudes within `tolerance` (relative) of a group's first share it, so the
+    tests a record holds at one nominal amplitude form one line."""
+    firsts: list[float] = []
+    groups = []
+    for a in amplitudes:
+        found = next((i for i, f in enumerate(firsts) if abs(a - f) <= tolerance * max(abs(a), abs(f))), None)
+        if found is None:
+            firsts.append(a)
+            found = len(firsts) - 1
+        groups.append(found)
+    return groups
 
 
 def characteristic_plot(
@@ -38,12 +54,12 @@ def characteristic_plot(
         chosen = [p for p in points if p.command == level]
         v = [p.peak_velocity for p in chosen]
         label = _level_label(level, command, unit)
-        axes.plot(v, [p.rebound_force for p in chosen], "-s", color=f"C{i}", label=f"{label}: rebound")
-        axes.plot(v, [p.jounce_force for p in chosen], "--v", color=f"C{i}", label=f"{label}: jounce")
+        axes.plot(v, [p.rebound_force for p in chosen], "-s", color=f"C{i}", label=f"{label}rebound")
+        axes.plot(v, [p.jounce_force for p in chosen], "--v", color=f"C{i}", label=f"{label}jounce")
         if measured is not None:
             mine = [m for m, p in zip(measured, points) if p.command == level]
             mv = [m.peak_velocity for m in mine]
-            axes.plot(mv, [m.rebound_force for m in mine], "o", mfc="none", color=f"C{i}", label=f"{label}: measured")
+            axes.plot(mv, [m.rebound_force for m in mine], "o", mfc="none", color=f"C{i}", label=f"{label}measured")
             axes.plot(mv, [m.jounce_force for m in mine], "o", mfc="none", color=f"C{i}")
     axes.axhline(0.0, color="black", linewidth=0.5)
     axes.set_xlabel("peak velocity [m/s]")
@@ -83,20 +99,23 @@ def stiffness_plots(
     stem: Path,
 ) -> dict[str, str]:
     """|K*| and loss angle against frequency (log axis), a line per amplitude; measured points as circles."""
-    groups = list(dict.fromkeys(f"{p.amplitude:.2g}" for p in points))  # measured amplitudes differ a little
+    groups = amplitude_groups([p.amplitude for p in points])
+    frequencies = sorted({round(p.frequency, 6) for p in points})
     names = {}
     for key, label in (("dynamic_stiffness", f"|K*| [{channel.stiffness_unit}]"), ("loss_angle", "loss angle [deg]")):
         figure, axes = new_axes(f"{channel.key}: {'dynamic stiffness' if key == 'dynamic_stiffness' else 'loss angle'}")
-        for i, group in enumerate(groups):
-            idx = sorted(
-                (j for j, p in enumerate(points) if f"{p.amplitude:.2g}" == group), key=lambda j: points[j].frequency
-            )
+        for group in sorted(set(groups)):
+            idx = sorted((j for j, g in enumerate(groups) if g == group), key=lambda j: points[j].frequency)
             f = [points[j].frequency for j in idx]
-            text = f"{group} {channel.position_unit}"
-            axes.plot(f, [getattr(points[j], key) for j in idx], "-s", color=f"C{i}", label=text)
+            amplitude = sum(points[j].amplitude for j in idx) / len(idx)
+            text = f"{amplitude:.3g} {channel.position_unit}"
+            axes.plot(f, [getattr(points[j], key) for j in idx], "-s", color=f"C{group % 10}", label=text)
             if measured is not None:
-                axes.plot(f, [getattr(measured[j], key) for j in idx], "o", mfc="none", color=f"C{i}")
+                axes.plot(f, [getattr(measured[j], key) for j in idx], "o", mfc="none", color=f"C{group % 10}")
         axes.set_xscale("log")
+        axes.set_xticks(frequencies)
+        axes.xaxis.set_major_formatter(ScalarFormatter())
+        axes.xaxis.set_minor_formatter(NullFormatter())
         axes.set_xlabel("frequency [Hz]")
         axes.set_ylabel(label)
         axes.legend(fontsize="small", title="amplitude (measured: circles)" if measured is not None else "amplitude")

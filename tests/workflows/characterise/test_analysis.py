@@ -15,6 +15,7 @@ from nnfmu.errors import SettingsError
 from nnfmu.workflows.characterise.analysis import damper_point, first_harmonic, stiffness_point
 from nnfmu.workflows.characterise.damper import damper_tests, read_damper
 from nnfmu.workflows.characterise.detect import find_sine_tests
+from nnfmu.workflows.characterise.plots import amplitude_groups
 from nnfmu.workflows.characterise.settings import DamperTestSettings
 from nnfmu.workflows.characterise.signals import SineTest, check_tests, sine_motion
 from nnfmu.workflows.characterise.truth import damper_truth_runs
@@ -111,3 +112,7 @@ def test_tests_are_bounded_before_any_runs() -> None:
         check_tests([SineTest(1e-3, 10.0, 1)] * 2001, 1e-3, "x.onnx")
     with pytest.raises(SettingsError, match="peak velocities: -0.1 m/s"):
         DamperTestSettings(peak_velocities=(0.1, -0.1))
+
+
+def test_a_records_amplitudes_group_by_their_nominal_level() -> None:
+    assert amplitude_groups([1.2499e-3, 2.5e-3, 1.25003e-3, 2.4999e-3, 0.6e-3]) == [0, 1, 0, 1, 2]
