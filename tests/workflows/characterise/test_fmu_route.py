@@ -227,10 +227,10 @@ def test_a_semi_active_damper_gets_a_family_of_curves_per_command(tmp_path: Path
     ).attach_to(model)
     path = tmp_path / "mr.onnx"
     onnx.save(model, str(path))
-    settings = CharacteriseSettings(damper=DamperTestSettings(peak_velocities=(0.3, 1.0), stroke=0.02, settle_cycles=1))
+    settings = CharacteriseSettings(damper=DamperTestSettings(peak_velocities=(1.0,), stroke=0.02, settle_cycles=1))
     characterise(path, tmp_path / "out", settings=settings, log=print)
     rows = _rows(tmp_path / "out" / "characteristic.csv")
-    assert [float(r["voltage [V]"]) for r in rows] == [0.0, 0.0, 1.25, 1.25, 2.5, 2.5, 3.75, 3.75, 5.0, 5.0]
+    assert [float(r["voltage [V]"]) for r in rows] == [0.0, 1.25, 2.5, 3.75, 5.0]
     for row in rows:
         c = 1000.0 + 400.0 * float(row["voltage [V]"])
         v = float(row["peak_velocity [m/s]"])
@@ -238,4 +238,4 @@ def test_a_semi_active_damper_gets_a_family_of_curves_per_command(tmp_path: Path
         assert float(row["jounce_force [N]"]) == pytest.approx(-c * v, rel=1e-4)
     assert len(_rows(tmp_path / "out" / "gas_friction.csv")) == 5
     html = (tmp_path / "out" / "index.html").read_text(encoding="utf-8")
-    assert html.count("work_0") >= 10  # a force-displacement and a force-velocity diagram per level
+    assert html.count("work_0") >= 10  # a force-displacement and a force-velocity diagram per level (5 x 2 images)
