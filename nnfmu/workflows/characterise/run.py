@@ -66,7 +66,7 @@ def _damper(
         "Characteristic diagram",
         [
             f"Force at peak rebound velocity (positive) and at peak jounce velocity (negative) per test: {how}; "
-            f"{s.settle_cycles} cycle(s) settling (the first ramped in), then the measured cycle."
+            f"{s.settle_cycles} cycle(s) settling (the first ramped in), then the read cycle."
             + (" Deviation = model − measured." if measured else "")
         ],
         [
@@ -88,7 +88,7 @@ def _damper(
     work = Section(
         "Work diagrams",
         [
-            "Force against displacement and velocity over each test's measured cycle"
+            "Force against displacement and velocity over each test's read cycle"
             + (" (measured: the record's last full cycle of that test, dashed)." if measured else ".")
         ],
     )
@@ -107,7 +107,7 @@ def _damper(
             folder / f"work_{i:02d}",
         )
         work.images.extend(names.values())
-    notes = [f"skipped in the record: {s}" for s in measured.skipped] if measured else []
+    notes = [f"skipped in the record: {why}" for why in measured.skipped] if measured else []
     lines = [
         f"{p.peak_velocity:6.3f} m/s: rebound {p.rebound_force:9.1f} N, jounce {p.jounce_force:9.1f} N"
         + (f" (command {p.command:.3g} {unit})" if p.command is not None else "")
@@ -135,9 +135,10 @@ def _bushing(
     stiffness = Section(
         "Dynamic stiffness and loss angle",
         [
-            f"Per channel (the others at rest): {how}; {s.settle_cycles} cycle(s) settling, then the measured "
-            "cycle. |K*| and the loss angle are the ratio of the first-harmonic phasors of force and deflection "
-            "(least squares on sin and cos)." + (" Deviation = model − measured." if measured else "")
+            f"Per channel (the others at rest): {how}; {s.settle_cycles} cycle(s) settling, then the read "
+            "cycle. |K*| and the loss angle are the modulus and angle of K*, the ratio of the first-harmonic "
+            "phasors of force and deflection (least squares on sin and cos)."
+            + (" Deviation = model − measured." if measured else "")
         ],
         tables={"dynamic_stiffness.csv": stiffness_rows(result.channels, result.points, measured)},
     )
