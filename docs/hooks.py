@@ -33,6 +33,7 @@ NAV: tuple[tuple[str, str], ...] = (
     ("Campaigns", "campaigns.md"),
     ("Closing the loop", "loop.md"),
     ("Drive-file iteration", "iterate.md"),
+    ("Component reports", "characterise.md"),
     ("Real data", "real-data.md"),
     ("Command reference", "cli.md"),
     ("Benchmark results", "results.md"),

@@ -763,6 +763,82 @@ def iterate(
     typer.echo(f"report: {result.files['html']}")
 
 
+def _float_list(items: Optional[list[str]], option: str) -> Optional[tuple[float, ...]]:
+    """Repeated or comma-separated numbers; None when the option is not given."""
+    if not items:
+        return None
+    try:
+        return tuple(float(v) for v in _split(items))
+    except ValueError:
+        raise typer.BadParameter(f"{option}: give numbers, e.g. 0.1,0.5,1.0") from None
+
+
+@app.command()
+def characterise(
+    model: Path = typer.Argument(..., help="The damper's or bushing's model: an nnfmu ONNX step graph or FMU."),
+    out: Path = typer.Option(
+        ..., "--out", "-o", help="Report folder: CSV tables, PNG figures, summary.json and index.html."
+    ),
+    measured: Optional[Path] = typer.Option(
+        None,
+        "--measured",
+        help="A record holding the same sine tests (a lab schedule's sine series, or a separate characteristic "
+        "record): its tables go beside the model's, with the deviation per test point.",
+    ),
+    velocities: Optional[list[str]] = typer.Option(
+        None, "--velocities", help="Damper: peak velocities [m/s], comma-separated (default 0.05 to 1.5)."
+    ),
+    stroke: float = typer.Option(0.025, "--stroke", help="Damper: stroke amplitude [m] of every test."),
+    commands: Optional[list[str]] = typer.Option(
+        None,
+        "--commands",
+        help="Semi-active damper: command levels in the command's unit, voltage [V] or current [A] (default: 5 "
+        "across its training envelope).",
+    ),
+    frequencies: Optional[list[str]] = typer.Option(
+        None, "--frequencies", help="Bushing: test frequencies [Hz] (default 1,2,5,10,20,50,100)."
+    ),
+    amplitudes: Optional[list[str]] = typer.Option(
+        None,
+        "--amplitudes",
+        help="Bushing: amplitudes as fractions [1] of each channel's vehicle range (default 0.25,0.5,1).",
+    ),
+    settle_cycles: Optional[int] = typer.Option(
+        None, "--settle-cycles", help="Cycles run before the measured one (default: damper 2, bushing 3)."
+    ),
+) -> None:
+    """Run a damper's characteristic test or a bushing's dynamic-stiffness tests on the model through its FMU."""
+    from nnfmu.workflows.characterise import (
+        BushingTestSettings,
+        CharacteriseSettings,
+        DamperTestSettings,
+    )
+    from nnfmu.workflows.characterise import (
+        characterise as run_characterise,
+    )
+
+    damper: dict[str, object] = {"stroke": stroke}
+    bushing: dict[str, object] = {}
+    for key, value, target in (
+        ("peak_velocities", _float_list(velocities, "--velocities"), damper),
+        ("commands", _float_list(commands, "--commands"), damper),
+        ("frequencies", _float_list(frequencies, "--frequencies"), bushing),
+        ("amplitude_fractions", _float_list(amplitudes, "--amplitudes"), bushing),
+    ):
+        if value is not None:
+            target[key] = value
+    if settle_cycles is not None:
+        damper["settle_cycles"] = bushing["settle_cycles"] = settle_cycles
+    try:
+        settings = CharacteriseSettings(DamperTestSettings(**damper), BushingTestSettings(**bushing))  # type: ignore[arg-type]
+        report = run_characterise(model, out, measured, settings, log=typer.echo)
+    except NnfmuError as error:
+        _fail(error)
+    for line in report.lines:
+        typer.echo(f"  {line}")
+    typer.echo(f"report: {report.index}")
+
+
 @app.command("loop-vehicle")
 def loop_vehicle(
     measured: Path = typer.Argument(

@@ -1,0 +1,184 @@
+"""Benchmark of `nnfmu characterise` on trained networks against the rigs' truth physics; the last stdout line is JSON.
+
+The demo's damper-hysteresis and bushing-axial-force networks are trained on the simulated lab records (damper dyno:
+70 s, sine series then random stroke, default effects hysteresis, seal friction, inertia, the dyno's 2 kg moving
+mass taken out as `nnfmu demo` does; bushing rig: 60 s random drive, viscoelastic and friction; seed 0, realistic
+noise), `--quick` as `nnfmu demo --quick` trains them (one start, the thesis's hidden size, 8 Levenberg-Marquardt
+epochs). Each network is then characterised through its FMU at the standard tests, and the same tests are run on
+the truth law directly (10 integration steps per sample; the damper's without its inertia, which the network was
+trained without). Per test point: the deviation from the truth, beside the network's own error (test-split NRMSE and
+RMS error of the output). The damper is also characterised beside its lab record's sine series (`--measured`).
+
+Usage: python bench/characterise.py [--quick] [--out FILE]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from nnfmu.data import load_measurement
+from nnfmu.data.inertia import compensate_inertia
+from nnfmu.data.rigs import (
+    DEFAULT_EFFECTS,
+    BushingChannelTruth,
+    BushingParams,
+    DamperParams,
+    DamperTruth,
+    RigOptions,
+    write_rig,
+)
+from nnfmu.models import get_preset
+from nnfmu.workflows.characterise import CharacteriseSettings, characterise
+from nnfmu.workflows.characterise.bushing import channel_plan, read_channel
+from nnfmu.workflows.characterise.damper import damper_tests, read_damper
+from nnfmu.workflows.characterise.kind import BushingChannelPorts
+from nnfmu.workflows.characterise.truth import bushing_truth_runs, damper_truth_runs
+from nnfmu.workflows.train import TrainRequest, train_from_file
+
+T = 1e-3
+QUICK_EPOCHS = 8  # nnfmu demo --quick
+
+
+def _request(preset: str, quick: bool, moving_mass: float) -> TrainRequest:
+    if quick:
+        hidden = get_preset(preset).architecture.hidden[:1]
+        return TrainRequest(preset, restarts=1, max_epochs=QUICK_EPOCHS, hidden=hidden, moving_mass=moving_mass)
+    return TrainRequest(preset, moving_mass=moving_mass)
+
+
+def _train(kind: str, preset: str, quick: bool, folder: Path, moving_mass: float = 0.0) -> tuple[Path, Path, dict]:
+    """The lab record of `kind`, the trained network's ONNX and its own error."""
+    data, _truth = write_rig(kind, folder / f"{kind}_lab.csv", RigOptions(seed=0))
+    started = time.perf_counter()
+    outcome = train_from_file(data, _request(preset, quick, moving_mass), folder / f"{preset}.onnx")
+    model = outcome.model
+    output = model.spec.output
+    measured = load_measurement(data)
+    if moving_mass:
+        measured = compensate_inertia(measured, moving_mass, output)
+    prediction = model.predict({c: measured[c] for c in model.spec.channels})
+    target = np.asarray(measured[output])
+    error = {
+        "preset": preset,
+        "train_seconds": round(time.perf_counter() - started, 1),
+        "test_split_nrmse": model.metrics["test"]["nrmse"],
+        "lab_record_rms_error": float(np.sqrt(np.mean((prediction - target) ** 2))),  # noisy record, whole
+        "output_unit": model.units[output],
+    }
+    return data, outcome.path, error
+
+
+def bench_damper(quick: bool, folder: Path) -> dict:
+    mass = DamperParams().moving_mass
+    data, onnx_path, own = _train("damper", "damper-hysteresis", quick, folder, mass)
+    settings = CharacteriseSettings()
+    characterise(onnx_path, folder / "damper_report", settings=settings, log=lambda _: None)
+    rows = _csv(folder / "damper_report" / "characteristic.csv")
+    effects = tuple(e for e in DEFAULT_EFFECTS["damper"] if e != "inertia")
+    tests = damper_tests(settings.damper, [None])
+    truth = read_damper(damper_truth_runs(DamperTruth(DamperParams(), effects), tests, T))
+    points = []
+    for row, p in zip(rows, truth.points, strict=True):
+        points.append(
+            {
+                "peak_velocity_m/s": round(p.peak_velocity, 4),
+                "rebound_N": {"model": row["rebound_force [N]"], "truth": p.rebound_force},
+                "jounce_N": {"model": row["jounce_force [N]"], "truth": p.jounce_force},
+                "rebound_deviation_N": row["rebound_force [N]"] - p.rebound_force,
+                "jounce_deviation_N": row["jounce_force [N]"] - p.jounce_force,
+                "rebound_deviation_%": 100 * (row["rebound_force [N]"] - p.rebound_force) / abs(p.rebound_force),
+                "jounce_deviation_%": 100 * (row["jounce_force [N]"] - p.jounce_force) / abs(p.jounce_force),
+            }
+        )
+    (gas,) = _csv(folder / "damper_report" / "gas_friction.csv")
+    characterise(onnx_path, folder / "damper_measured", data, settings, log=lambda _: None)
+    measured = [
+        {
+            "peak_velocity_m/s": round(r["measured_peak_velocity [m/s]"], 4),
+            "rebound_deviation_N": r["rebound_deviation [N]"],
+            "jounce_deviation_N": r["jounce_deviation [N]"],
+        }
+        for r in _csv(folder / "damper_measured" / "characteristic.csv")
+    ]
+    return {
+        "network": own,
+        "stroke_amplitude_m": settings.damper.stroke,
+        "truth_effects": list(effects),
+        "points_vs_truth": points,
+        "gas_force_N": {"model": gas["gas_force [N]"], "truth": truth.gas_friction[None].gas_force},
+        "friction_N": {"model": gas["friction [N]"], "truth": truth.gas_friction[None].friction},
+        "points_vs_lab_sine_series": measured,
+    }
+
+
+def bench_bushing(quick: bool, folder: Path) -> dict:
+    _data, onnx_path, own = _train("bushing", "bushing-axial-force", quick, folder)
+    settings = CharacteriseSettings()
+    characterise(onnx_path, folder / "bushing_report", settings=settings, log=lambda _: None)
+    rows = _csv(folder / "bushing_report" / "dynamic_stiffness.csv")
+    channel = BushingChannelPorts("axial", "axial_displacement", "axial_velocity", "axial_force", "m", "N")
+    plan = channel_plan(channel, settings.bushing)
+    truth = read_channel("axial", bushing_truth_runs(BushingChannelTruth(BushingParams().axial), plan.stiffness, T))
+    points = []
+    for row, p in zip(rows, truth, strict=True):
+        model_k = row["dynamic_stiffness [N/m]"]
+        points.append(
+            {
+                "frequency_Hz": p.frequency,
+                "amplitude_m": p.amplitude,
+                "dynamic_stiffness_N/m": {"model": model_k, "truth": p.dynamic_stiffness},
+                "loss_angle_deg": {"model": row["loss_angle [deg]"], "truth": p.loss_angle},
+                "stiffness_deviation_%": 100 * (model_k - p.dynamic_stiffness) / p.dynamic_stiffness,
+                "loss_angle_deviation_deg": row["loss_angle [deg]"] - p.loss_angle,
+            }
+        )
+    return {"network": own, "channel": "axial", "points_vs_truth": points}
+
+
+def _csv(path: Path) -> list[dict]:
+    """A report table with its numbers as floats."""
+    import csv
+
+    def value(text: str):
+        try:
+            return float(text)
+        except ValueError:
+            return text
+
+    with path.open(encoding="utf-8") as stream:
+        return [{k: value(v) for k, v in row.items()} for row in csv.DictReader(stream)]
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="train as nnfmu demo --quick does")
+    parser.add_argument("--out", type=Path, help="also write the JSON document here")
+    args = parser.parse_args(argv)
+    started = time.perf_counter()
+    with tempfile.TemporaryDirectory(prefix="nnfmu_characterise_") as tmp:
+        damper = bench_damper(args.quick, Path(tmp))
+        bushing = bench_bushing(args.quick, Path(tmp))
+    document = {
+        "benchmark": "nnfmu characterise on trained networks against the rigs' truth physics",
+        "machine": {"python": platform.python_version(), "platform": platform.platform()},
+        "training": "quick (nnfmu demo --quick)" if args.quick else "preset defaults (nnfmu demo)",
+        "damper": damper,
+        "bushing": bushing,
+        "seconds": round(time.perf_counter() - started, 1),
+    }
+    text = json.dumps(document)
+    if args.out:
+        args.out.write_text(text + "\n", encoding="utf-8")
+    print(text)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,219 @@
+"""`nnfmu characterise`: a damper's or bushing's standard tests run on the model through its FMU at default
+parameters, and on a measurement when given, written as CSV tables and an HTML report with the deviation per test
+point. Everything is written into a staging folder beside `--out`, which replaces it only when complete."""
+
+from __future__ import annotations
+
+import os
+import shutil
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from nnfmu.atomic import staging_dir
+from nnfmu.data import load_measurement
+from nnfmu.data.measurement import Measurement
+from nnfmu.out_paths import check_output_dir, replace_output_dir
+from nnfmu.workflows.characterise.bushing import channel_plan, characterise_bushing
+from nnfmu.workflows.characterise.damper import characterise_damper, command_levels, damper_tests
+from nnfmu.workflows.characterise.kind import BushingPorts, DamperPorts
+from nnfmu.workflows.characterise.measured import Cycle, measured_bushing, measured_damper
+from nnfmu.workflows.characterise.model import ModelUnderTest, model_under_test
+from nnfmu.workflows.characterise.plots import characteristic_plot, loop_plot, stiffness_plots, work_diagram_plots
+from nnfmu.workflows.characterise.report import INDEX_FILE, Section, write_report
+from nnfmu.workflows.characterise.settings import VEHICLE_RANGE, CharacteriseSettings
+from nnfmu.workflows.characterise.tables import (
+    characteristic_rows,
+    gas_friction_rows,
+    loop_rows,
+    model_cycles,
+    stiffness_rows,
+    work_diagram_rows,
+)
+
+KIND = "characterise"  # the output folder's marker
+Log = Callable[[str], None]
+
+
+@dataclass(frozen=True)
+class CharacteriseReport:
+    """What a run wrote: the component kind, the report's index.html, and the headline rows for the terminal."""
+
+    kind: str
+    index: Path
+    lines: list[str]
+
+
+def _damper(
+    model: ModelUnderTest, ports: DamperPorts, record: Measurement | None, settings: CharacteriseSettings, folder: Path
+) -> tuple[list[Section], list[str], list[str]]:
+    s = settings.damper
+    command, unit = ports.command, ports.command_unit
+    label = f"{command} [{unit}]" if command else None
+    measured = measured_damper(record, ports, s.settle_cycles) if record is not None else None
+    tests = (
+        measured.tests if measured else damper_tests(s, command_levels(s, ports, model.component, str(model.source)))
+    )
+    result = characterise_damper(model, tests, s.temperature)
+    cycles = model_cycles(result)
+    rows = characteristic_rows(result, label, measured)
+    how = (
+        f"sine tests found in {record.source}, run on the model at their amplitude, frequency and command"
+        if measured and record is not None
+        else f"sine of ±{s.stroke:g} m stroke amplitude per peak velocity"
+    )
+    main = Section(
+        "Characteristic diagram",
+        [
+            f"Force at peak rebound velocity (positive) and at peak jounce velocity (negative) per test: {how}; "
+            f"{s.settle_cycles} cycle(s) settling (the first ramped in), then the read cycle."
+            + (" Deviation = model − measured." if measured else "")
+        ],
+        [
+            characteristic_plot(
+                result.points, measured.points if measured else None, command, unit, folder / "characteristic.png"
+            )
+        ],
+        {"characteristic.csv": rows},
+    )
+    gas = Section(
+        "Gas force and friction",
+        [
+            "Read from each command level's slowest test: the force of the samples moving at 20-60 % of its peak "
+            "speed, fitted per direction by a line in velocity plus a term in displacement, meets zero speed at "
+            "friction − gas force (rebound) and −friction − gas force (jounce)."
+        ],
+        tables={"gas_friction.csv": gas_friction_rows(result.gas_friction, label, measured)},
+    )
+    work = Section(
+        "Work diagrams",
+        [
+            "Force against displacement and velocity over each test's read cycle"
+            + (" (measured: the record's last full cycle of that test, dashed)." if measured else ".")
+        ],
+    )
+    tables = {"work_diagrams.csv": work_diagram_rows(result.points, cycles, label)}
+    if measured:
+        tables["measured_work_diagrams.csv"] = work_diagram_rows(measured.points, measured.cycles, label, "measured_")
+    work.tables = tables
+    for i, level in enumerate(dict.fromkeys(p.command for p in result.points)):
+        idx = [j for j, p in enumerate(result.points) if p.command == level]
+        title = "model" if level is None else f"{command} {level:.3g} {unit}"
+        names = work_diagram_plots(
+            [result.points[j] for j in idx],
+            [cycles[j] for j in idx],
+            [measured.cycles[j] for j in idx] if measured else None,
+            title,
+            folder / f"work_{i:02d}",
+        )
+        work.images.extend(names.values())
+    notes = [f"skipped in the record: {why}" for why in measured.skipped] if measured else []
+    lines = [
+        f"{p.peak_velocity:6.3f} m/s: rebound {p.rebound_force:9.1f} N, jounce {p.jounce_force:9.1f} N"
+        + (f" (command {p.command:.3g} {unit})" if p.command is not None else "")
+        for p in result.points
+    ]
+    return [main, gas, work], notes, lines
+
+
+def _bushing(
+    model: ModelUnderTest, ports: BushingPorts, record: Measurement | None, settings: CharacteriseSettings, folder: Path
+) -> tuple[list[Section], list[str], list[str]]:
+    s = settings.bushing
+    measured = measured_bushing(record, ports, s.settle_cycles) if record is not None else None
+    plans = [channel_plan(ch, s) for ch in ports.channels]
+    if measured:
+        plans = [type(p)(p.channel, measured.tests[p.channel.key], measured.loops[p.channel.key][0]) for p in plans]
+    result = characterise_bushing(model, plans)
+    ranges = ", ".join(f"{ch.key} {VEHICLE_RANGE[ch.key]:g} {ch.position_unit}" for ch in ports.channels)
+    how = (
+        f"the sine tests found in {record.source}, run on the model at their amplitude and frequency"
+        if measured and record is not None
+        else f"every frequency at amplitudes {', '.join(f'{a:g}' for a in s.amplitude_fractions)} of the channel's "
+        f"vehicle range ({ranges})"
+    )
+    stiffness = Section(
+        "Dynamic stiffness and loss angle",
+        [
+            f"Per channel (the others at rest): {how}; {s.settle_cycles} cycle(s) settling, then the read "
+            "cycle. |K*| and the loss angle are the modulus and angle of K*, the ratio of the first-harmonic "
+            "phasors of force and deflection (least squares on sin and cos)."
+            + (" Deviation = model − measured." if measured else "")
+        ],
+        tables={"dynamic_stiffness.csv": stiffness_rows(result.channels, result.points, measured)},
+    )
+    loop = Section(
+        "Quasi-static force-deflection loop",
+        [
+            (
+                "The model at the record's slowest test, beside the record's last cycle of it (dashed)."
+                if measured
+                else f"A sine at {s.quasi_static_frequency:g} Hz at the largest amplitude, after one settling cycle."
+            )
+        ],
+        tables={"quasi_static_loop.csv": loop_rows(result, measured)},
+    )
+    for ch in result.channels:
+        stiffness.images.extend(
+            stiffness_plots(
+                ch, result.points[ch.key], measured.points[ch.key] if measured else None, folder / ch.key
+            ).values()
+        )
+        run = result.loops[ch.key]
+        _t, x, v, f = run.cycle()
+        title = f"force-deflection loop at {run.test.frequency:.3g} Hz"
+        loop.images.append(
+            loop_plot(
+                ch,
+                Cycle(x, v, f),
+                measured.loops[ch.key][1] if measured else None,
+                title,
+                folder / f"{ch.key}_loop.png",
+            )
+        )
+    lines = [
+        f"{p.channel}: {p.frequency:7.3g} Hz, {p.amplitude:.3g}: |K*| {p.dynamic_stiffness:.4g}, loss angle "
+        f"{p.loss_angle:.3g} deg"
+        for ch in result.channels
+        for p in result.points[ch.key]
+    ]
+    return [stiffness, loop], [], lines
+
+
+def characterise(
+    model_path: str | os.PathLike[str],
+    out: str | os.PathLike[str],
+    measured: str | os.PathLike[str] | None = None,
+    settings: CharacteriseSettings | None = None,
+    log: Log = print,
+) -> CharacteriseReport:
+    """Run the standard tests of the model at `model_path` (`.onnx` or `.fmu`) and of the record `measured`, and
+    write the report into `out` (module docstring)."""
+    settings = settings or CharacteriseSettings()
+    inputs = [Path(model_path)] + ([Path(measured)] if measured is not None else [])
+    out_dir = check_output_dir(out, KIND, inputs, replaces=True)
+    record = load_measurement(measured) if measured is not None else None
+    with model_under_test(model_path) as model:
+        kind = "damper" if isinstance(model.kind, DamperPorts) else "bushing"
+        log(f"{model.source}: {kind}, tested through {model.fmu.name} at {model.period:g} s")
+        out_dir.parent.mkdir(parents=True, exist_ok=True)
+        staging = staging_dir(out_dir.parent, f".{out_dir.name}.staging-")
+        try:
+            if isinstance(model.kind, DamperPorts):
+                sections, notes, lines = _damper(model, model.kind, record, settings, staging)
+            else:
+                sections, notes, lines = _bushing(model, model.kind, record, settings, staging)
+            context = {
+                "model": str(model.source),
+                "component": model.component.name,
+                "kind": kind
+                + (f" (semi-active, {model.kind.command})" if getattr(model.kind, "command", None) else ""),
+                "tested through": f"its FMU at default parameters, sample period {model.period:g} s",
+                "measurement": str(record.source) if record is not None else "none",
+            }
+            write_report(staging, f"{kind} characterisation of {model.component.name}", context, notes, sections)
+            replace_output_dir(staging, out_dir, KIND)
+        finally:
+            if staging.exists():
+                shutil.rmtree(staging)
+    return CharacteriseReport(kind, out_dir / INDEX_FILE, lines)
