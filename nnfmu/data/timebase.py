@@ -39,7 +39,7 @@ TIME_JITTER = 1e-3  # sampling jitter a Measurement keeps its stamps for, relati
 CLOCK_SCATTER = 0.05  # scatter about the fitted base accepted at every stamp, relative to the period
 FLOAT_NOISE = 64.0  # float64 rounding accepted at every stamp, in units of epsilon times the largest |stamp|
 RESOLUTION_SIGMAS = 3.0  # standard deviations of the fitted line's own rounding error added to half the resolution
-CHUNK = 1 << 18  # stamps handled at a time (2 MB of float64), so no check holds a temporary of the record's length
+CHUNK = 1 << 16  # stamps handled at a time (512 kB of float64), so no check holds a temporary of the record's length
 
 
 def _spans(n: int) -> Iterator[tuple[int, int]]:
