@@ -10,6 +10,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from nnfmu.errors import OutputPathError
+from nnfmu.stopping import check_stop
 
 
 def _umask() -> int:
@@ -45,7 +46,8 @@ def refuse_special(target: Path, option: str = "output") -> None:
 
 @contextmanager
 def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
-    """Yield a temporary path beside `target`; rename it onto `target` only if the block succeeds."""
+    """Yield a temporary path beside `target`; rename it onto `target` only if the block succeeds and no stop was
+    asked for (`stopping`)."""
     target = Path(target)
     refuse_special(target)
     target.parent.mkdir(parents=True, exist_ok=True)
@@ -55,6 +57,7 @@ def atomic_path(target: str | os.PathLike[str]) -> Iterator[Path]:
     tmp_path.chmod(0o666 & ~_umask())  # mkstemp makes 0600; give the result the mode a plain open() would
     try:
         yield tmp_path
+        check_stop()
         os.replace(tmp_path, target)
     finally:
         if tmp_path.exists():

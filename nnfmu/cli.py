@@ -19,6 +19,7 @@ from typer.core import TyperGroup
 
 from nnfmu.errors import NnfmuError, SettingsError
 from nnfmu.out_paths import check_output_file
+from nnfmu.stopping import clear_stop, request_stop, stop_requested
 
 
 class _Commands(TyperGroup):
@@ -32,7 +33,10 @@ class _Commands(TyperGroup):
 
 
 def _interrupt(signum: int, frame: object) -> None:
-    """Turn SIGTERM into the KeyboardInterrupt of Ctrl-C, so the same cleanup runs (temporary files and folders)."""
+    """Turn SIGTERM (and SIGINT) into the KeyboardInterrupt of Ctrl-C, so the same cleanup runs (temporary files and
+    folders); the request is remembered (`nnfmu.stopping`), so a run whose interrupt a library swallowed still
+    publishes nothing and stops at its next check."""
+    request_stop(f"signal {signum}")
     raise KeyboardInterrupt(f"signal {signum}")
 
 
@@ -42,12 +46,25 @@ class _Nnfmu(typer.Typer):
     and an interrupt anywhere ends in exit status 130."""
 
     def __call__(self, *args: object, **kwargs: object) -> object:
-        if threading.current_thread() is threading.main_thread():
-            signal.signal(signal.SIGTERM, _interrupt)
+        main = threading.current_thread() is threading.main_thread()
+        clear_stop()
+        if main:
+            previous = signal.signal(signal.SIGTERM, _interrupt)
+            if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+                signal.signal(signal.SIGINT, _interrupt)
         try:
             return super().__call__(*args, **kwargs)
         except KeyboardInterrupt:
             raise SystemExit(130) from None
+        except SystemExit as done:
+            if stop_requested() is not None and done.code in (0, None):
+                raise SystemExit(130) from None  # stopped, though a library swallowed the interrupt
+            raise
+        finally:
+            if main:  # the work is over: a signal during interpreter shutdown ends the process at once
+                signal.signal(signal.SIGTERM, previous if callable(previous) else signal.SIG_DFL)
+                if signal.getsignal(signal.SIGINT) is _interrupt:
+                    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 app = _Nnfmu(

@@ -18,6 +18,7 @@ from pathlib import Path
 
 from nnfmu.atomic import refuse_special
 from nnfmu.errors import OutputPathError
+from nnfmu.stopping import check_stop
 
 __all__ = [
     "MARKER",
@@ -236,6 +237,7 @@ def replace_output_dir(staging: Path, out_dir: Path, kind: str) -> None:
     files = [p for p in _entries(staging) if (staging / p).is_file()]
     lines = [kind, LISTED] + [f"{(staging / p).stat().st_size} {_digest(staging / p)} {p.as_posix()}" for p in files]
     (staging / MARKER).write_text("\n".join(lines) + "\n", encoding="utf-8")
+    check_stop()  # a run asked to stop publishes nothing, even where its interrupt was swallowed
     if not out_dir.exists():
         os.replace(staging, out_dir)
         return

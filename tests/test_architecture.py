@@ -11,7 +11,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "nnfmu"
 
 # Floors, lowest first: a module may import its own top-level package and any package on a lower floor.
 FLOORS: tuple[tuple[str, ...], ...] = (
-    ("errors",),
+    ("errors", "stopping"),
     ("atomic", "safe_zip", "resources", "physics", "component"),
     ("out_paths", "reference_stimulus"),
     ("data",),
@@ -27,8 +27,9 @@ FLOORS: tuple[tuple[str, ...], ...] = (
     ("cli",),
 )
 FLOOR = {name: level for level, names in enumerate(FLOORS) for name in names}
-# What the CLI may import besides the workflows floor: the error base it catches and the output-path checks.
-CLI_ALLOWED = {"workflows", "errors", "out_paths"}
+# What the CLI may import besides the workflows floor: the error base it catches, the output-path checks and the
+# stop request its signal handler records.
+CLI_ALLOWED = {"workflows", "errors", "out_paths", "stopping"}
 
 
 def module_name(path: Path) -> str:

@@ -107,3 +107,21 @@ def test_an_unexplained_residual_beyond_the_budget_is_never_called_consistent() 
     words = verdict([], large, large, 0.25)
     assert words.startswith("nothing added; NOT consistent") and "damper_force 149%" in words, words
     assert "body_acceleration" not in words and "budget 25%" in words
+
+
+def test_an_attribution_past_the_memory_limit_is_refused_before_the_sensitivities(
+    quarter_car: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The attribution's designs grow with samples x channels x candidates (a sensor offset per channel: with the
+    square of the channels); a record past the limit is refused after the first replay, before the sensitivity
+    FMUs are built and replayed, naming the sizes (here the limit is lowered to the quarter car's 0.5 MB)."""
+    import nnfmu.workflows.vehicle_loop.run as run
+
+    monkeypatch.setattr(run, "MAX_ATTRIBUTION_BYTES", 100_000)
+    result = loop_vehicle(quarter_car, lab_record(quarter_car, tmp_path / "lab.csv", 0.0), tmp_path / "out")
+    assert result.exit_code == 2, result.output
+    assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
+    assert "sensitivity of the channels" not in result.output
+    for words in ("lab.csv", "1500 samples of 2 channels", "3 candidate", "GiB to attribute"):
+        assert words in result.output, result.output
+    assert not (tmp_path / "out").exists()

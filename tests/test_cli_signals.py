@@ -159,3 +159,64 @@ def test_sigterm_stops_train_at_any_moment_with_130_or_143_and_nothing_left(
     assert process.returncode in (130, -signal.SIGTERM), (process.returncode, err)
     assert not out.exists() and ours(scratch) == []
     assert not out.parent.exists() or list(out.parent.iterdir()) == [], list(out.parent.iterdir())
+
+
+SWALLOWING_BUILD = """
+import os, signal, sys, time
+import nnfmu.workflows.fmu_build as fmu_build
+from nnfmu.cli import app
+
+real = fmu_build.build_fmu
+
+
+def build_in_a_library_that_swallows_interrupts(*args, **kwargs):
+    try:  # a library's bare `except:` around a blocking wait, as third-party code has
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(5)
+    except:  # noqa: E722
+        pass
+    return real(*args, **kwargs)
+
+
+fmu_build.build_fmu = build_in_a_library_that_swallows_interrupts
+sys.argv[0] = "nnfmu"
+app()
+"""
+
+
+def test_sigterm_swallowed_by_a_library_still_stops_the_run_with_nothing_written(tmp_path: Path) -> None:
+    """A SIGTERM whose KeyboardInterrupt a library swallows (a bare `except:`) left the run to finish with exit 0 and
+    a complete result (`loop vehicle` ran on 25 s after a SIGTERM): the request is remembered and nothing is
+    published, exit 130."""
+    model = tmp_path / "damper.onnx"
+    onnx.save(linear_damper_graph(2400.0, name="damper"), model)
+    script = tmp_path / "swallowing.py"
+    script.write_text(SWALLOWING_BUILD, encoding="utf-8")
+    out = tmp_path / "out" / "x.fmu"
+    done = subprocess.run(
+        [sys.executable, str(script), "build", str(model), "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 130, (done.returncode, done.stdout, done.stderr)
+    assert not out.exists()
+    assert not out.parent.exists() or list(out.parent.iterdir()) == [], list(out.parent.iterdir())
+
+
+def test_a_stop_asked_for_keeps_an_atomic_result_from_being_published(tmp_path: Path) -> None:
+    from nnfmu.atomic import atomic_path
+    from nnfmu.stopping import clear_stop, request_stop
+
+    target = tmp_path / "result.txt"
+    request_stop("signal 15")
+    try:
+        with pytest.raises(KeyboardInterrupt, match="signal 15"):
+            with atomic_path(target) as tmp:
+                tmp.write_text("complete", encoding="utf-8")
+    finally:
+        clear_stop()
+    assert list(tmp_path.iterdir()) == []
+    with atomic_path(target) as tmp:  # a new command in the same process publishes again
+        tmp.write_text("complete", encoding="utf-8")
+    assert target.read_text(encoding="utf-8") == "complete"

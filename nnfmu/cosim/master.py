@@ -67,6 +67,7 @@ from nnfmu.cosim.units import PortUnit, input_conversion, table_unit
 from nnfmu.data import Measurement, check_measurement
 from nnfmu.data.units import si_unit_of
 from nnfmu.errors import NnfmuError
+from nnfmu.stopping import check_stop
 
 SCHEMES = ("gauss-seidel", "jacobi")
 ORDERS = ("components-first", "vehicle-first")
@@ -674,6 +675,7 @@ def cosimulate(
                 block = parts.drive.table(t0 + np.arange(first, last + 1) * h)  # drive at t_first .. t_last
                 if loop is not None:
                     for start in range(first, last, every):
+                        check_stop()  # between calls of the C loop, which no signal interrupts
                         stop = min(start + every, last)
                         failure = loop.steps(start, stop, t0, h, block[start - first :], rows[start + 1 : stop + 1])
                         if failure is not None:
@@ -683,6 +685,7 @@ def cosimulate(
                         if progress is not None:
                             progress(stop, n_steps)
                     continue
+                check_stop()
                 for n in range(first, last):
                     t = t0 + n * h
                     taken, converged = parts.step(t, h, n == 0, block[n - first], block[n - first + 1])

@@ -27,13 +27,14 @@ def to_measurement(raw: RawTable, source: str, min_samples: int = 16) -> Measure
     """Convert every channel of a file's table to SI (see `units.to_si`) as a `Measurement` from `source` with at
     least `min_samples` samples, its stamps replaced by their least-squares uniform base where they stray within
     their resolution or a clock's scatter (said in `notes["time"]`; see `timebase`). The channels are taken out of
-    `raw` as they are converted, so that a large table is not held twice."""
+    `raw` as they are converted (its time and resolution too), so that a large table is not held twice."""
     time, _ = to_si(raw.time, raw.time_unit, "time", source)
+    raw.time = time[:0]  # the stamps as stored are not needed any more: not held twice
     check_sample_count(len(time), min_samples, source)
     resolution = None
     if raw.time_resolution is not None:
         scale = float(to_si([1.0], raw.time_unit, "time", source)[0][0])
-        resolution = raw.time_resolution.scaled(scale)
+        resolution, raw.time_resolution = raw.time_resolution.scaled(scale), None
     channels = {}
     units = {}
     for name in list(raw.channels):

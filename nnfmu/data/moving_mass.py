@@ -28,6 +28,7 @@ to the car's unsprung mass a second time (2 kg on a passenger damper's dyno reco
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,6 +46,7 @@ TOLERANCE = 1e-4  # kg
 BLOCKS = 10  # parts of the record for the jackknife
 Z95 = 1.959964  # two-sided 95 % normal quantile
 BIAS = 0.03  # kg added to the interval's half-width for the bias the transducers' noise leaves (docstring)
+ROWS = 1 << 15  # rows of the fit's design built at a time (about 6 MB): its normal equations are summed by parts
 
 
 @dataclass(frozen=True)
@@ -74,33 +76,51 @@ class MassEstimate:
         )
 
 
-def _design(g: np.ndarray, source: str) -> tuple[np.ndarray, np.ndarray]:
-    """Cubic B-spline design matrix of `g` (shape (n, KNOTS + 4)) and its knot vector; DataError if g is constant."""
+Rows = Callable[[int, int], np.ndarray]  # rows lo..hi-1 of a design matrix, built on demand
+
+
+def _knots(g: np.ndarray, source: str) -> np.ndarray:
+    """Knot vector of the cubic B-spline in `g` (KNOTS interior knots at its quantiles); DataError if g is constant."""
     inner = np.unique(np.quantile(g, np.linspace(0.0, 1.0, KNOTS + 2)[1:-1]))
     lo, hi = float(np.min(g)), float(np.max(g))
     if not hi > lo or inner.size < 2:
         raise DataError(f"{source}: the force does not vary enough to fit the valve characteristic")
-    knots = np.r_[[lo] * 4, inner[(inner > lo) & (inner < hi)], [hi] * 4]
-    return BSpline.design_matrix(np.clip(g, lo, hi), knots, 3).toarray(), knots
+    return np.r_[[lo] * 4, inner[(inner > lo) & (inner < hi)], [hi] * 4]
 
 
-def _solve(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Least-squares coefficients of y ~ x by the normal equations of the column-scaled x (x is tall: n >> columns)."""
-    scale = np.linalg.norm(x, axis=0)
+def _basis(g: np.ndarray, knots: np.ndarray) -> np.ndarray:
+    """Cubic B-spline design matrix of `g` on `knots`, shape (len(g), len(knots) - 4)."""
+    return BSpline.design_matrix(np.clip(g, knots[0], knots[-1]), knots, 3).toarray()
+
+
+def _normal_equations(rows: Rows, y: np.ndarray, edges: Sequence[int]) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(x.T x, x.T y) of each part edges[i]..edges[i+1]-1 of the design `rows` and target `y`, summed ROWS rows at
+    a time, so the design (tens of columns of the record's length) is never held whole."""
+    parts = []
+    for first, last in zip(edges[:-1], edges[1:]):
+        gram, moment = 0.0, 0.0
+        for lo in range(first, last, ROWS):
+            hi = min(last, lo + ROWS)
+            x = rows(lo, hi)
+            gram, moment = gram + x.T @ x, moment + x.T @ y[lo:hi]
+        parts.append((gram, moment))
+    return parts
+
+
+def _solve(gram: np.ndarray, moment: np.ndarray) -> np.ndarray:
+    """Least-squares coefficients from the normal equations (x.T x, x.T y) of a tall x, its columns scaled to unit
+    norm first (the Gram's diagonal)."""
+    scale = np.sqrt(np.diag(gram)).copy()
     scale[scale == 0.0] = 1.0
-    scaled = x / scale
-    return np.linalg.lstsq(scaled.T @ scaled, scaled.T @ y, rcond=None)[0] / scale
+    return np.linalg.lstsq(gram / np.outer(scale, scale), moment / scale, rcond=None)[0] / scale
 
 
-def _jackknife(x: np.ndarray, y: np.ndarray, column: int) -> float:
-    """Standard error of coefficient `column` of the least-squares fit y ~ x by a delete-a-block jackknife."""
-    edges = np.linspace(0, y.size, BLOCKS + 1).astype(int)
-    gram, moment = x.T @ x, x.T @ y
-    estimates = []
-    for start, stop in zip(edges[:-1], edges[1:]):
-        part = x[start:stop]
-        coef = np.linalg.lstsq(gram - part.T @ part, moment - part.T @ y[start:stop], rcond=None)[0]
-        estimates.append(coef[column])
+def _jackknife(parts: list[tuple[np.ndarray, np.ndarray]], column: int) -> float:
+    """Standard error of coefficient `column` of the least-squares fit by a delete-a-block jackknife over the
+    blocks' normal equations `parts`."""
+    gram = sum(p[0] for p in parts)
+    moment = sum(p[1] for p in parts)
+    estimates = [np.linalg.lstsq(gram - g, moment - b, rcond=None)[0][column] for g, b in parts]
     spread = np.asarray(estimates)
     return float(np.sqrt((BLOCKS - 1) / BLOCKS * np.sum((spread - spread.mean()) ** 2)))
 
@@ -116,27 +136,36 @@ def estimate_moving_mass(m: Measurement, force: str = "force") -> MassEstimate:
     dt = m.sample_period
     jerk, f_rate = derivative(a, dt, 1), derivative(f, dt, 1)
     s = np.tanh(v / FRICTION_VELOCITY)
-    ones = np.ones_like(f)
+    ones, zeros = np.ones_like(f), np.zeros_like(f)
     # (dG/dθ, dĠ/dθ) for θ = (m, F_c, g_0, g_1): G = F - m·a - F_c·s - g_0 - g_1·x; the friction's own rate is left
     # out of Ġ: it moves only at reversals, where the velocity's noise makes its sign a coin toss
-    partials = ((a, jerk), (s, 0.0 * ones), (ones, 0.0 * ones), (x, v))
+    partials = ((a, jerk), (s, zeros), (ones, zeros), (x, v))
     theta = np.zeros(4)
+    whole = [0, f.size]
     for _ in range(ITERATIONS):
         g = f - theta[0] * a - theta[1] * s - theta[2] - theta[3] * x
         g_rate = f_rate - theta[0] * jerk - theta[3] * v
-        basis, knots = _design(g, m.source)
-        base = np.column_stack([basis, g_rate])
-        coef = _solve(base, v)
-        slope = BSpline(knots, coef[:-1], 3).derivative()(np.clip(g, knots[0], knots[-1]))
-        steps = [-(slope * dg + coef[-1] * dr) for dg, dr in partials]
-        design = np.column_stack([base, *steps])
-        full = _solve(design, v)
-        theta = theta + full[base.shape[1] :]
+        knots = _knots(g, m.source)
+
+        def base(lo: int, hi: int, g: np.ndarray = g, g_rate: np.ndarray = g_rate, knots: np.ndarray = knots):
+            return np.column_stack([_basis(g[lo:hi], knots), g_rate[lo:hi]])
+
+        coef = _solve(*_normal_equations(base, v, whole)[0])
+        slope = BSpline(knots, coef[:-1], 3).derivative()
+
+        def design(lo: int, hi: int, base=base, slope=slope, g=g, knots=knots, rate=coef[-1]) -> np.ndarray:
+            k = slope(np.clip(g[lo:hi], knots[0], knots[-1]))
+            return np.column_stack([base(lo, hi), *(-(k * dg[lo:hi] + rate * dr[lo:hi]) for dg, dr in partials)])
+
+        columns = knots.size - 4 + 1
+        full = _solve(*_normal_equations(design, v, whole)[0])
+        theta = theta + full[columns:]
         if not np.all(np.isfinite(theta)):
             raise DataError(f"{m.source}: the moving-mass fit did not converge")
-        if abs(full[base.shape[1]]) < TOLERANCE:
+        if abs(full[columns]) < TOLERANCE:
             break
-    error = _jackknife(design, v, base.shape[1])
+    edges = np.linspace(0, v.size, BLOCKS + 1).astype(int)
+    error = _jackknife(_normal_equations(design, v, list(edges)), columns)
     rms = float(np.sqrt(np.mean(f**2)))
     share = abs(theta[0]) * float(np.sqrt(np.mean(a**2))) / rms if rms > 0 else 0.0
     stiffness = 1.0 / coef[-1] if coef[-1] > 0 else math.inf

@@ -28,8 +28,8 @@ exactly what the loaders accept.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from collections.abc import Iterable, Iterator, Sequence
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -39,6 +39,17 @@ TIME_JITTER = 1e-3  # sampling jitter a Measurement keeps its stamps for, relati
 CLOCK_SCATTER = 0.05  # scatter about the fitted base accepted at every stamp, relative to the period
 FLOAT_NOISE = 64.0  # float64 rounding accepted at every stamp, in units of epsilon times the largest |stamp|
 RESOLUTION_SIGMAS = 3.0  # standard deviations of the fitted line's own rounding error added to half the resolution
+CHUNK = 1 << 16  # stamps handled at a time (512 kB of float64), so no check holds a temporary of the record's length
+
+
+def _spans(n: int) -> Iterator[tuple[int, int]]:
+    """(lo, hi) of consecutive runs of at most CHUNK of n stamps."""
+    return ((lo, min(n, lo + CHUNK)) for lo in range(0, n, CHUNK))
+
+
+def _largest_magnitude(values: np.ndarray) -> float:
+    """max |values| (0 for none) without a temporary array."""
+    return float(max(-np.min(values), np.max(values))) if values.size else 0.0
 
 
 @dataclass(frozen=True)
@@ -105,40 +116,141 @@ def digits_resolution(digits: tuple[int, int] | None, values: np.ndarray) -> Res
     if digits is None:
         return None
     significant, decimals = digits
-    magnitude = np.abs(np.asarray(values, dtype=float))
-    exponent = np.floor(np.log10(np.where(magnitude > 0, magnitude, 1.0)))
-    by_digits = np.where(magnitude > 0, 10.0 ** (exponent - significant + 1), 0.0)
-    del exponent, magnitude
-    step = np.maximum(10.0**-decimals, by_digits)
-    coarser_by_digits = step.size > 0 and float(np.max(by_digits)) > 10.0**-decimals
+    values = np.asarray(values, dtype=float)
+    step = np.empty(values.size)
+    coarsest = -np.inf  # the largest resolution by digits, computed a chunk at a time
+    for lo, hi in _spans(values.size):
+        magnitude = np.abs(values[lo:hi])
+        exponent = np.floor(np.log10(np.where(magnitude > 0, magnitude, 1.0)))
+        by_digits = np.where(magnitude > 0, 10.0 ** (exponent - significant + 1), 0.0)
+        coarsest = max(coarsest, float(np.max(by_digits)))
+        np.maximum(10.0**-decimals, by_digits, out=step[lo:hi])
+    coarser_by_digits = step.size > 0 and coarsest > 10.0**-decimals
     style = f"{significant} significant digits" if coarser_by_digits else f"{decimals} decimals"
     return Resolution(step=step, format=f"printed to {style}")
 
 
 def float32_resolution(values: np.ndarray) -> Resolution:
     """The resolution of stamps stored as float32: the float32 spacing at each stamp."""
-    spacing = np.spacing(np.abs(np.asarray(values, dtype=np.float32))).astype(np.float64)
+    values = np.asarray(values)
+    spacing = np.empty(values.size)
+    for lo, hi in _spans(values.size):
+        spacing[lo:hi] = np.spacing(np.abs(values[lo:hi].astype(np.float32)))
     return Resolution(step=spacing, format="stored as float32")
+
+
+def _centred(lo: int, hi: int, n: int) -> np.ndarray:
+    """k - (n - 1) / 2 for the stamps k = lo..hi-1 of n: the sample index about the record's centre."""
+    k = np.arange(lo, hi, dtype=float)
+    k -= (n - 1) / 2.0
+    return k
+
+
+@dataclass(frozen=True)
+class _Rounding:
+    """Half of each stamp's resolution `step` plus RESOLUTION_SIGMAS standard deviations of a line fitted by least
+    squares to stamps carrying independent rounding errors, uniform over one resolution step (`variance` step²/12;
+    `sum_k2`: the sum of the squared centred indices), a span of stamps at a time."""
+
+    step: np.ndarray
+    variance: float
+    sum_k2: float
+
+    @classmethod
+    def of(cls, resolution: Resolution) -> "_Rounding":
+        step = resolution.step
+        n = step.size
+        squares, sum_k2 = 0.0, 0.0
+        for lo, hi in _spans(n):
+            part, k = step[lo:hi], _centred(lo, hi, n)
+            squares += float(np.dot(part, part))
+            sum_k2 += float(np.dot(k, k))
+        return cls(step=step, variance=squares / max(n, 1) / 12.0, sum_k2=max(sum_k2, 1.0))
+
+    def at(self, lo: int, hi: int) -> np.ndarray:
+        """The rounding tolerance of stamps lo..hi-1 [s]."""
+        n = self.step.size
+        spread = _centred(lo, hi, n)  # then the line's standard deviation at k, in place
+        np.square(spread, out=spread)
+        spread *= self.variance / self.sum_k2
+        spread += self.variance / max(n, 1)
+        np.sqrt(spread, out=spread)
+        spread *= RESOLUTION_SIGMAS
+        spread += 0.5 * self.step[lo:hi]
+        return spread
+
+
+@dataclass(frozen=True)
+class _Tolerance:
+    """How far each stamp may lie off a uniform base (the module docstring's rule): at least `floor` [s] (a clock's
+    scatter, float64 noise), more where the print `rounding` says so; a span of stamps at a time."""
+
+    floor: float
+    rounding: _Rounding | None
+
+    def at(self, lo: int, hi: int) -> np.ndarray:
+        """The tolerance of stamps lo..hi-1 [s]."""
+        if self.rounding is None:
+            return np.full(hi - lo, self.floor)
+        tolerance = self.rounding.at(lo, hi)
+        return np.maximum(tolerance, self.floor, out=tolerance)
+
+
+def _tolerance(time: np.ndarray, period: float, resolution: Resolution | None) -> _Tolerance:
+    noise = FLOAT_NOISE * np.finfo(float).eps * _largest_magnitude(time)
+    floor = max(CLOCK_SCATTER * abs(period), noise)
+    return _Tolerance(floor, None if resolution is None else _Rounding.of(resolution))
+
+
+def stamp_tolerance(time: np.ndarray, period: float, resolution: Resolution | None = None) -> np.ndarray:
+    """How far each stamp of `time` [s] may lie off a uniform base of `period` [s]: the module docstring's rule."""
+    time = np.asarray(time, dtype=float)
+    return _tolerance(time, period, resolution).at(0, time.size)
 
 
 @dataclass(frozen=True)
 class UniformFit:
-    """The least-squares base t_k = start + k·period [s] of n stamps, each stamp's deviation from it and tolerance."""
+    """The least-squares base t_k = start + k·period [s] of the n stamps `time`, the largest deviation of a stamp
+    from it (`worst` [s]) and float64 `noise` [s]; each stamp's deviation and tolerance are computed a span at a time
+    (`deviation`, `tolerance`), so a fit holds no array of the record's length beside the stamps."""
 
     start: float
     period: float
-    deviation: np.ndarray
-    tolerance: np.ndarray
     noise: float
+    worst: float
+    time: np.ndarray
+    mean: float  # mean of time - time[0], the line's value at the record's centre
+    limits: _Tolerance
 
     @property
     def exact(self) -> bool:
         """True when every stamp lies within float64 noise of the base (nothing to replace)."""
-        return bool(np.max(np.abs(self.deviation)) <= self.noise)
+        return self.worst <= self.noise
+
+    def deviation(self, lo: int = 0, hi: int | None = None) -> np.ndarray:
+        """How far stamps lo..hi-1 (default: all) lie off the base [s]: t - t_0 - mean - (k - (n-1)/2)·period."""
+        hi = self.time.size if hi is None else hi
+        offset = self.time[lo:hi] - self.time[0]  # relative to the first stamp, as fitted
+        offset -= self.mean
+        k = _centred(lo, hi, self.time.size)
+        k *= self.period
+        offset -= k
+        return offset
+
+    def tolerance(self, lo: int = 0, hi: int | None = None) -> np.ndarray:
+        """How far stamps lo..hi-1 (default: all) may lie off the base [s]."""
+        return self.limits.at(lo, self.time.size if hi is None else hi)
+
+    def last(self) -> float:
+        """The base's last stamp [s]."""
+        return self.start + (self.time.size - 1) * self.period
 
     def times(self) -> np.ndarray:
         """The fitted base itself, shape (n,)."""
-        return self.start + np.arange(self.deviation.size) * self.period
+        base = np.arange(self.time.size, dtype=float)
+        base *= self.period
+        base += self.start
+        return base
 
 
 def _g(value: float) -> str:
@@ -146,92 +258,77 @@ def _g(value: float) -> str:
     return f"{float(value):.10g}"
 
 
-def _rounding(resolution: Resolution) -> np.ndarray:
-    """Half of each stamp's resolution plus RESOLUTION_SIGMAS standard deviations of a line fitted by least squares
-    to stamps carrying independent rounding errors, uniform over one resolution step (variance step²/12)."""
-    step = resolution.step
-    n = step.size
-    variance = float(np.dot(step, step)) / max(n, 1) / 12.0
-    spread = np.arange(n, dtype=float)  # k, then the line's standard deviation at k, in place (one array of n)
-    spread -= (n - 1) / 2.0
-    sum_k2 = max(float(np.dot(spread, spread)), 1.0)
-    np.square(spread, out=spread)
-    spread *= variance / sum_k2
-    spread += variance / max(n, 1)
-    np.sqrt(spread, out=spread)
-    spread *= RESOLUTION_SIGMAS
-    spread += 0.5 * step
-    return spread
-
-
-def stamp_tolerance(time: np.ndarray, period: float, resolution: Resolution | None = None) -> np.ndarray:
-    """How far each stamp of `time` [s] may lie off a uniform base of `period` [s]: the module docstring's rule."""
-    time = np.asarray(time, dtype=float)
-    noise = FLOAT_NOISE * np.finfo(float).eps * float(np.max(np.abs(time), initial=0.0))
-    floor = max(CLOCK_SCATTER * abs(period), noise)
-    if resolution is None:
-        return np.full(time.size, floor)
-    tolerance = _rounding(resolution)
-    return np.maximum(tolerance, floor, out=tolerance)
-
-
 def fit_uniform(time: np.ndarray, resolution: Resolution | None = None) -> UniformFit:
-    """Fit t_k = start + k·period to `time` (shape (n,), n >= 2, in s) by least squares; tolerances as documented."""
+    """Fit t_k = start + k·period to `time` (shape (n,), n >= 2, in s) by least squares; tolerances as documented.
+    The sums run a chunk of stamps at a time, relative to the first stamp (well conditioned)."""
     time = np.asarray(time, dtype=float)
     n = time.size
-    k = np.arange(n, dtype=float)
-    k -= (n - 1) / 2.0
-    offset = time - time[0]  # fitting relative to the first stamp keeps the sums well conditioned
-    mean = float(np.mean(offset))
-    offset -= mean
-    period = float(np.dot(k, offset) / np.dot(k, k))
-    k *= period
-    offset -= k  # the deviation, in place: offset - mean - k * period
-    deviation = offset
-    del k
-    noise = FLOAT_NOISE * np.finfo(float).eps * float(np.max(np.abs(time)))
-    tolerance = stamp_tolerance(time, period, resolution)
-    start = float(time[0] + mean - period * (n - 1) / 2.0)
-    return UniformFit(start=start, period=period, deviation=deviation, tolerance=tolerance, noise=noise)
+    first = time[0]
+    total = 0.0
+    for lo, hi in _spans(n):
+        total += float(np.sum(time[lo:hi] - first))
+    mean = total / n
+    along, sum_k2 = 0.0, 0.0
+    for lo, hi in _spans(n):
+        offset, k = time[lo:hi] - first, _centred(lo, hi, n)
+        offset -= mean
+        along += float(np.dot(k, offset))
+        sum_k2 += float(np.dot(k, k))
+    period = along / sum_k2
+    noise = FLOAT_NOISE * np.finfo(float).eps * _largest_magnitude(time)
+    start = float(first + mean - period * (n - 1) / 2.0)
+    fit = UniformFit(start, period, noise, 0.0, time, mean, _tolerance(time, period, resolution))
+    return replace(fit, worst=max(float(np.max(np.abs(fit.deviation(lo, hi)))) for lo, hi in _spans(n)))
 
 
 def _tolerance_text(fit: UniformFit, row: int, resolution: Resolution | None) -> str:
     """Which tolerance applies at one stamp, for an error message."""
     jitter = f"{CLOCK_SCATTER:g} of the period (a clock's scatter)"
-    if resolution is None:
+    if resolution is None or fit.limits.rounding is None:
         return jitter
     return (
-        f"the larger of {jitter} and {_g(_rounding(resolution)[row])} s for the stamp's "
+        f"the larger of {jitter} and {_g(fit.limits.rounding.at(row, row + 1)[0])} s for the stamp's "
         f"resolution {_g(resolution.step[row])} s ({resolution.format})"
     )
+
+
+def _refuse_not_finite_or_increasing(time: np.ndarray, where: str) -> None:
+    """DataError naming `where` and the first stamp that is not finite, else the first that does not increase;
+    a chunk of stamps at a time."""
+    for lo, hi in _spans(time.size):
+        bad = np.flatnonzero(~np.isfinite(time[lo:hi]))
+        if bad.size:
+            row = lo + int(bad[0])
+            raise DataError(f"{where}: time is {_g(time[row])} at sample {row}")
+    for lo, hi in _spans(time.size - 1):
+        bad = np.flatnonzero(np.diff(time[lo : hi + 1]) <= 0)  # the steps into stamps lo+1..hi
+        if bad.size:
+            row = lo + int(bad[0]) + 1
+            raise DataError(
+                f"{where}: time does not increase at sample {row}: t = {_g(time[row - 1])} s then {_g(time[row])} s"
+            )
 
 
 def check_uniform(time: np.ndarray, where: str, resolution: Resolution | None = None) -> UniformFit | None:
     """Raise DataError naming `where` and the sample unless `time` [s] is finite, increases and is uniform within
     tolerance.
 
-    Returns the fit (None for fewer than two stamps).
+    Returns the fit (None for fewer than two stamps). An accepted record is checked a chunk of stamps at a time; only
+    a refusal looks at all stamps at once, to name the one at fault.
     """
     time = np.asarray(time, dtype=float)
-    not_finite = np.flatnonzero(~np.isfinite(time))
-    if not_finite.size:
-        row = int(not_finite[0])
-        raise DataError(f"{where}: time is {_g(time[row])} at sample {row}")
+    _refuse_not_finite_or_increasing(time, where)
     if time.size < 2:
         return None
-    steps = np.diff(time)
-    not_increasing = np.flatnonzero(steps <= 0)
-    if not_increasing.size:
-        row = int(not_increasing[0]) + 1
-        raise DataError(
-            f"{where}: time does not increase at sample {row}: t = {_g(time[row - 1])} s then {_g(time[row])} s"
-        )
     fit = fit_uniform(time, resolution)
-    if np.all(np.abs(fit.deviation) <= fit.tolerance):
+    off = sum(
+        int(np.count_nonzero(np.abs(fit.deviation(lo, hi)) > fit.tolerance(lo, hi))) for lo, hi in _spans(time.size)
+    )
+    if not off:
         return fit
-    off = np.abs(fit.deviation) > fit.tolerance
+    deviation, tolerance, steps = fit.deviation(), fit.tolerance(), np.diff(time)
     median = float(np.median(steps))
-    jumps = np.flatnonzero(np.abs(steps - median) > fit.tolerance[1:] + fit.tolerance[:-1])
+    jumps = np.flatnonzero(np.abs(steps - median) > tolerance[1:] + tolerance[:-1])
     if jumps.size:
         row = int(jumps[0]) + 1
         raise DataError(
@@ -239,28 +336,34 @@ def check_uniform(time: np.ndarray, where: str, resolution: Resolution | None = 
             f"previous sample is {_g(steps[row - 1])} s, the period {_g(median)} s (each stamp may be off by "
             f"{_tolerance_text(fit, row, resolution)})"
         )
-    row = int(np.argmax(np.abs(fit.deviation) / fit.tolerance))
+    row = int(np.argmax(np.abs(deviation) / tolerance))
     raise DataError(
         f"{where}: time is not uniformly sampled at sample {row} (t = {_g(time[row])} s): the stamp lies "
-        f"{fit.deviation[row]:.3g} s off the least-squares uniform base t = {_g(fit.start)} s + k * "
+        f"{deviation[row]:.3g} s off the least-squares uniform base t = {_g(fit.start)} s + k * "
         f"{_g(fit.period)} s, "
-        f"farther than {_tolerance_text(fit, row, resolution)}; {int(off.sum())} of {time.size} stamps lie beyond "
+        f"farther than {_tolerance_text(fit, row, resolution)}; {off} of {time.size} stamps lie beyond "
         f"their tolerance (a sampling clock that drifts, or stamps out of line)"
     )
 
 
 def _note(fit: UniformFit, resolution: Resolution | None) -> str:
     """One line: how far the stamps strayed, which tolerance covered it, and the base the record now uses."""
-    worst = float(np.max(np.abs(fit.deviation)))
-    resolved = resolution is not None and bool(
-        np.all(np.abs(fit.deviation) <= np.maximum(_rounding(resolution), fit.noise))
+    worst = fit.worst
+    rounding = fit.limits.rounding
+    resolved = (
+        resolution is not None
+        and rounding is not None
+        and all(
+            bool(np.all(np.abs(fit.deviation(lo, hi)) <= np.maximum(rounding.at(lo, hi), fit.noise)))
+            for lo, hi in _spans(fit.time.size)
+        )
     )
     if resolved:
         why = f"within their resolution ({resolution.format}; {_g(resolution.step[-1])} s at the last stamp)"
     elif worst <= TIME_JITTER * fit.period:
         why = f"within the sampling jitter of {TIME_JITTER:g} of the period"
     else:
-        last = float(np.spacing(np.float32(abs(fit.times()[-1]))))
+        last = float(np.spacing(np.float32(abs(fit.last()))))
         explains = f"their resolution ({resolution.format})" if resolution is not None else "sampling jitter"
         why = (
             f"more than {explains} explains but within the {CLOCK_SCATTER:g} of the period nnfmu accepts as a "
@@ -289,6 +392,6 @@ def measurement_axis(time: np.ndarray, where: str) -> tuple[np.ndarray, str | No
     """A `Measurement`'s axis: `time` [s] itself and None when every stamp lies within TIME_JITTER of the period of
     its fitted base, else the base and a one-line note; DataError naming `where` as `check_uniform` raises it."""
     fit = check_uniform(time, where)
-    if fit is None or float(np.max(np.abs(fit.deviation))) <= max(TIME_JITTER * fit.period, fit.noise):
+    if fit is None or fit.worst <= max(TIME_JITTER * fit.period, fit.noise):
         return time, None
     return fit.times(), _note(fit, None)

@@ -16,6 +16,7 @@ from torch.nn.utils import parameters_to_vector, vector_to_parameters
 
 from nnfmu.models.networks import MLP
 from nnfmu.models.stopping import FitHistory, TrainingLog
+from nnfmu.stopping import check_stop
 
 
 @dataclass(frozen=True)
@@ -74,6 +75,7 @@ def fit_lm(
     mu = settings.mu
     reason = "max_epochs"
     for epoch in range(1, settings.max_epochs + 1):
+        check_stop()
         weights = parameters_to_vector(params).detach()
         output, jacobian = mlp_jacobian(network, x)
         residual = output - y

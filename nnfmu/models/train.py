@@ -23,6 +23,7 @@ from nnfmu.models.scaling import MinMaxScaler
 from nnfmu.models.splits import SplitFractions, Splits, contiguous_splits
 from nnfmu.models.stopping import FitHistory, TrainingLog
 from nnfmu.models.trained import TrainedModel, trained_model
+from nnfmu.stopping import check_stop
 
 NetworkKind = Literal["mlp", "gru"]
 Optimizer = Literal["auto", "lm", "adam", "lbfgs"]
@@ -216,6 +217,7 @@ def _fit_mlp_gradient(
         optimiser = torch.optim.Adam(network.parameters(), lr=settings.learning_rate)
     reason = "max_epochs"
     for epoch in range(1, settings.max_epochs + 1):
+        check_stop()
         if method == "lbfgs":
 
             def closure() -> torch.Tensor:
@@ -284,6 +286,7 @@ def _fit_gru(
     batch = settings.sequences_per_batch
     reason = "max_epochs"
     for epoch in range(1, settings.max_epochs + 1):
+        check_stop()
         order = torch.randperm(len(x_train), generator=generator)
         total = 0.0
         for start in range(0, len(order), batch):

@@ -20,6 +20,7 @@ import jinja2
 import numpy as np
 
 import nnfmu
+from nnfmu.stopping import check_stop
 from nnfmu.validate.compare import ChannelComparison
 from nnfmu.validate.metrics import DEFINITIONS
 from nnfmu.validate.plots import plot_channel
@@ -120,6 +121,7 @@ def write_report(
         summary = summary_document(comparisons, title, context or {}, plots, target)
         (stage / SUMMARY_FILE).write_text(json.dumps(summary, indent=2, allow_nan=False), encoding="utf-8")
         (stage / INDEX_FILE).write_text(render_html(summary), encoding="utf-8")
+        check_stop()
         for name in [p for channel in plots for p in channel.values()] + [SUMMARY_FILE, INDEX_FILE]:
             os.replace(stage / name, out_dir / name)
     finally:

@@ -22,6 +22,7 @@ from nnfmu.diagnosis import Diagnosis
 from nnfmu.fmu.errors import FmuBuildError
 from nnfmu.fmu.factory import load_onnx
 from nnfmu.out_paths import check_output_dir, replace_output_dir
+from nnfmu.stopping import check_stop
 from nnfmu.workflows.vehicle_loop.attribution import (
     SENSOR_OFFSET,
     Attribution,
@@ -47,6 +48,8 @@ from nnfmu.workflows.vehicle_loop.settings import VehicleLoopError, VehicleLoopS
 from nnfmu.workflows.vehicle_loop.system_files import VirtualCar, read_virtual_car, swapped_system
 
 Log = Callable[[str], None]
+MAX_ATTRIBUTION_BYTES = 2 * 1024**3  # the attribution's designs and their copies, checked before the sensitivities
+ATTRIBUTION_COPIES = 4  # copies of a named candidate's columns held at once: the base, its held-out halves, a fit
 BUDGET = (
     "consistent with the co-simulation error budget: no component effect or sensor offset explains a significant "
     "share of the residual, which is left to the networks' own error and the coupling"
@@ -311,6 +314,7 @@ def _run_vehicle_loop(
         raise VehicleLoopError(f"{m.source}: channel(s) {', '.join(flat)} do not vary; nothing to compare")
     residual = np.column_stack([(record[c] - virtual[c]) / s for c, s in zip(channels, scale)])
     candidates, untestable = _candidates(car, channels, base)
+    _check_attribution_size(m.source, len(virtual.time), channels, len(candidates), settings.max_effects)
     retrainable = {e: path is not None and trained_network(path) for e, path in car.onnx.items()}
     out_dir.parent.mkdir(parents=True, exist_ok=True)
     staging = staging_dir(out_dir.parent, f".{out_dir.name}.staging-")
@@ -322,6 +326,7 @@ def _run_vehicle_loop(
         sensitivities = Sensitivities(car, staging / "sensitivity", replay, virtual, channels)
         columns: dict[str, list[np.ndarray]] = {}
         for key, c in candidates.items():
+            check_stop()
             if c.effect == SENSOR_OFFSET:
                 column = np.zeros_like(residual)
                 column[:, channels.index(c.channel)] = 1.0
@@ -406,6 +411,20 @@ def _run_vehicle_loop(
         if staging.exists():
             shutil.rmtree(staging)
     return report
+
+
+def _check_attribution_size(source: str, samples: int, channels: list[str], candidates: int, most: int) -> None:
+    """Refuse, before any sensitivity is replayed, a record whose attribution would not fit MAX_ATTRIBUTION_BYTES:
+    every candidate's design holds a column of samples x channels values per term (a sensor offset per channel makes
+    that grow with the square of the channels), and forward selection copies the named ones' columns a few times
+    (ATTRIBUTION_COPIES per candidate it may name, `most`, and the one it tests)."""
+    size = (candidates + ATTRIBUTION_COPIES * (most + 2)) * samples * len(channels) * 8
+    if size > MAX_ATTRIBUTION_BYTES:
+        raise VehicleLoopError(
+            f"{source}: {samples} samples of {len(channels)} channels with {candidates} candidate effects and offsets "
+            f"need about {size / 1024**3:.3g} GiB to attribute, more than the limit of "
+            f"{MAX_ATTRIBUTION_BYTES / 1024**3:g} GiB; give a shorter record or fewer channels"
+        )
 
 
 def _check_step_graphs(car: VirtualCar) -> None:

@@ -1,0 +1,34 @@
+"""A stop asked for by a signal, remembered for the whole run.
+
+The command line turns SIGTERM (and Ctrl-C) into a KeyboardInterrupt at once, and also records the request here:
+code between the signal and nnfmu may swallow that exception (a library's bare `except:`, a ctypes callback, a
+thread pool, interpreter shutdown), and a run that carried on would publish a complete result with exit status 0.
+nnfmu checks the request before it publishes anything (`atomic`, `out_paths`) and between the blocks of its long
+loops (co-simulation, training), so a stopped run ends with KeyboardInterrupt however the first one was lost.
+"""
+
+from __future__ import annotations
+
+_requested: list[str] = []  # the reason of the first stop asked for (empty: none)
+
+
+def request_stop(reason: str) -> None:
+    """Remember that the run was asked to stop (`reason`, e.g. "signal 15")."""
+    if not _requested:
+        _requested.append(reason)
+
+
+def clear_stop() -> None:
+    """Forget a stop asked for (a new command starts in the same process)."""
+    _requested.clear()
+
+
+def stop_requested() -> str | None:
+    """The reason of the stop asked for, or None."""
+    return _requested[0] if _requested else None
+
+
+def check_stop() -> None:
+    """Raise KeyboardInterrupt if a stop was asked for, however the first interrupt was handled."""
+    if _requested:
+        raise KeyboardInterrupt(f"{_requested[0]} (stop asked for earlier)")
