@@ -17,7 +17,7 @@ from nnfmu.cosim.slave import FmuSlave
 from nnfmu.data.measurement import Measurement
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.factory import load_onnx
-from nnfmu.fmu.native.compiler import host_binaries_only
+from nnfmu.fmu.native.toolchain import host_binaries_only
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.fmu.step_graph import read_fmu_graph
 from nnfmu.workflows.characterise.kind import BushingPorts, CharacteriseError, DamperPorts, component_kind

@@ -23,7 +23,7 @@ from nnfmu.data.rigs.damper_rig import run_damper_dyno
 from nnfmu.data.save import save_measurement
 from nnfmu.export.graph import GraphBuilder
 from nnfmu.fmu.build import build_fmu_from_model
-from nnfmu.fmu.native.compiler import host_binaries_only
+from nnfmu.fmu.native.toolchain import host_binaries_only
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.workflows.characterise import (
     BushingTestSettings,
