@@ -28,7 +28,7 @@ from pathlib import Path
 
 from nnfmu.atomic import write_text_atomic
 from nnfmu.cosim.replay import replay_fmu
-from nnfmu.data import load_measurement
+from nnfmu.data import load_measurement, save_measurement
 from nnfmu.data.drive_files import write_drive
 from nnfmu.data.inertia import compensate_inertia
 from nnfmu.data.measurement import Measurement
@@ -42,6 +42,7 @@ from nnfmu.out_paths import check_output_dir, mark_output_dir
 from nnfmu.validate import ValidationSettings, compare, write_report
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.workflows.fmu_build import host_binaries_only
+from nnfmu.workflows.iterate import IterateResult, IterateSettings, run_iterate
 from nnfmu.workflows.loop import LoopReport, run_loop
 from nnfmu.workflows.loop.blocks import training_part
 from nnfmu.workflows.loop.settings import LoopSettings
@@ -173,6 +174,19 @@ class DemoSettings:
             return VehicleLoopSettings(in_situ=self.loop)
         return VehicleLoopSettings()
 
+    @property
+    def iterate_duration(self) -> float:
+        """Length [s] of the road record the drive-iteration stage reproduces (quick: the 2 s quarter-car run)."""
+        return 2.0 if self.quick else 20.0
+
+    @property
+    def iterate(self) -> IterateSettings:
+        """The drive iteration's settings; quick: two iterations on a short identification with coarse FRF lines and
+        short fades (a smoke run, not iteration results)."""
+        if self.quick:
+            return IterateSettings(iterations=2, noise_duration=5.0, resolution=1.0, fade=0.25, band=(1.0, 100.0))
+        return IterateSettings()
+
     def request(self, preset: str, rig: str) -> TrainRequest:
         mass = MOVING_MASS_BY_RIG.get(rig, 0.0)
         if self.quick:  # one start, one hidden size (the thesis's), a few epochs
@@ -207,6 +221,7 @@ class DemoSummary:
     road_test: dict[str, Path]
     loop: LoopReport
     vehicle_loop: VehicleLoopReport
+    iteration: IterateResult
     vehicle_bushings: VehicleBushingModels | None = None
     vehicle_dampers: VehicleDamperModels | None = None
     stage_seconds: dict[str, float] = field(default_factory=dict)  # wall time of each stage, in run order
@@ -283,6 +298,37 @@ def thesis_residual(
             )
     log(f"vehicle loop: {report.summary}; report {out / 'loop' / 'report.html'}")
     return report
+
+
+ITERATED = ("spindle_acceleration", "body_acceleration", "damper_displacement")  # the road record's sensors
+
+
+def iterate_road_drive(
+    road: RoadTestResult, out: Path, settings: DemoSettings, log: Callable[[str], None]
+) -> IterateResult:
+    """The lab's drive-file iteration on the virtual car: the road test's quarter-car truth reference (the car on
+    its components' physics) stands in for a road measurement of ITERATED, and the four-poster drive that makes the
+    car with the hysteresis damper network reproduce it is iterated (`nnfmu iterate`, docs/iterate.md)."""
+    reference = load_measurement(road.out / "results" / "quarter-car" / "reference.csv")
+    end = int((reference.time <= reference.time[0] + settings.iterate_duration + 1e-9).sum())
+    record = reference.slice(0, end)
+    road_record = Measurement(
+        time=record.time - record.time[0],
+        channels={c: record[c] for c in ITERATED},
+        units={c: record.units[c] for c in ITERATED},
+        source=f"road record: {', '.join(ITERATED)} of {reference.source}",
+    )
+    out.mkdir(parents=True, exist_ok=True)
+    target = save_measurement(road_record, out / "road.csv")
+    result = run_iterate(target, road.ssd("quarter-car", "damper-hysteresis"), out / "drive", settings.iterate, log)
+    best = result.outcome.iterations[result.outcome.best]
+    worst = max(best.metrics[c]["nrmse"] for c in result.channels)
+    state = "converged" if result.converged else "not converged"
+    log(
+        f"drive iteration: {len(result.outcome.iterations)} iterations ({state}), worst channel NRMSE "
+        f"{worst:.1%}; drive {result.files['drive']}, report {result.files['html']}"
+    )
+    return result
 
 
 def _origin(
@@ -370,8 +416,8 @@ def run_demo(
     out: str | Path, settings: DemoSettings = DemoSettings(), log: Callable[[str], None] = print
 ) -> DemoSummary:
     """Run every stage into `out` (rig/, models/, fmu/, report/, vehicle_bushing/, vehicle_damper/, road_test/, loop/,
-    vehicle_loop/, summary.json); every line logged carries the elapsed time, a stage quiet for 10 s says so, and
-    the summary holds each stage's time. Returns what it measured."""
+    vehicle_loop/, iterate/, summary.json); every line logged carries the elapsed time, a stage quiet for 10 s says
+    so, and the summary holds each stage's time. Returns what it measured."""
     out = check_output_dir(out, "demo")
     out.mkdir(parents=True, exist_ok=True)
     mark_output_dir(out, "demo")
@@ -413,6 +459,8 @@ def run_demo(
                 loop = close_the_loop(out, settings, clock.log, clock.progress)
             with clock.stage("vehicle loop"):
                 vehicle_loop = thesis_residual(road, out / "vehicle_loop", settings, clock.log)
+            with clock.stage("drive iteration"):
+                iteration = iterate_road_drive(road, out / "iterate", settings, clock.log)
         seconds = clock.elapsed()
     finally:
         clock.close()
@@ -424,6 +472,7 @@ def run_demo(
         road_test=road.reports(),
         loop=loop,
         vehicle_loop=vehicle_loop,
+        iteration=iteration,
         vehicle_bushings=vehicle_bushings,
         vehicle_dampers=vehicle_dampers,
         stage_seconds=dict(clock.seconds),
@@ -453,6 +502,12 @@ def run_demo(
                     "effects_added": loop.effects_added,
                     "error_before": loop.error_before,
                     "error_after": loop.error_after,
+                },
+                "iterate": {
+                    "report": str(iteration.files["report"]),
+                    "drive": str(iteration.files["drive"]),
+                    "converged": iteration.converged,
+                    "iterations": len(iteration.outcome.iterations),
                 },
                 "vehicle_loop": {
                     "report": str(out / "vehicle_loop" / "loop" / "report.json"),

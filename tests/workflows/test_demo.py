@@ -17,7 +17,7 @@ def test_quick_demo_runs_every_stage(tmp_path: Path) -> None:
     # it says what it is at the start, stamps every line with the elapsed time and times every stage
     assert lines[0].startswith("[0:00] quick run:") and all(line.startswith("[") for line in lines)
     stages = ["component networks", "vehicle-derived bushing networks", "vehicle-derived damper networks"]
-    stages += ["road test", "component loop", "vehicle loop"]
+    stages += ["road test", "component loop", "vehicle loop", "drive iteration"]
     assert list(summary.stage_seconds) == stages and all(s > 0 for s in summary.stage_seconds.values())
     assert sum(summary.stage_seconds.values()) <= summary.seconds
     presets = [p for group in PRESETS_BY_RIG.values() for p in group]
@@ -39,6 +39,13 @@ def test_quick_demo_runs_every_stage(tmp_path: Path) -> None:
     assert summary.vehicle_dampers is not None and dampers["trained_on"] == str(summary.vehicle_dampers.rig)
     assert dampers["source_reference"] == bushings["source_reference"]
     assert all(Path(path).is_file() and "vehicle_damper" in path for path in dampers["models"].values())
+    # the lab's drive iteration on the virtual car: the drive written is what nnfmu cosim reads, and the iterations
+    # bring the car's responses towards the road record (the truth reference's sensors)
+    iterate = written["iterate"]
+    assert Path(iterate["drive"]).is_file() and Path(iterate["report"]).is_file()
+    runs = summary.iteration.outcome.iterations
+    worst = [max(run.metrics[c]["nrmse"] for c in summary.iteration.channels) for run in runs]
+    assert len(runs) == iterate["iterations"] >= 2 and min(worst[1:]) < worst[0], worst
     road = json.loads(Path(written["road_test"]["summary"]).read_text())
     quarter = road["systems"][0]
     assert quarter["system"] == "quarter-car"
