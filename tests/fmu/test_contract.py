@@ -128,6 +128,7 @@ def test_at_default_parameters_the_fmu_is_its_graph(combo, built, master, refere
     )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("h_over_t", "cutoff"), [(1.0, 100.0), (2.5, 100.0), (2.5, 0.0)])
 def test_10000_steps_match_onnxruntime_across_a_serialised_rollback(combo, built, master, h_over_t, cutoff):
     """10 000 random steps (with the thesis's 100 Hz filter, or none); midway the state is saved (through serialising
