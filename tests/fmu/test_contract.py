@@ -89,7 +89,11 @@ def built(tmp_path_factory: pytest.TempPathFactory):
     return build
 
 
-@pytest.fixture(params=COMBOS, ids=COMBO_IDS)
+# The pythonfmu backend (a Python slave behind pythonfmu's C wrapper) takes several times the native backend's time per
+# step: its half of the contract suite is `slow`, left out of the day-to-day run (docs/development.md).
+@pytest.fixture(
+    params=[pytest.param(c, marks=pytest.mark.slow) if c[0] == "pythonfmu" else c for c in COMBOS], ids=COMBO_IDS
+)
 def combo(request: pytest.FixtureRequest) -> tuple[str, int]:
     return request.param
 
