@@ -168,6 +168,7 @@ def test_10000_steps_match_onnxruntime_across_a_serialised_rollback(combo, built
     assert ref.samples - 1 == round(10_000 * h_over_t)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("ratio", [2.5, 0.4, 3.0])
 @pytest.mark.parametrize(("cutoff", "gain"), [(0.0, 2.0), (50.0, 1.5)])
 def test_communication_step_other_than_the_sample_period(combo, built, master, ratio, cutoff, gain):
@@ -187,6 +188,7 @@ def test_communication_step_other_than_the_sample_period(combo, built, master, r
         assert m.fmu.doStep(n * h, h) == (False, False, False, pytest.approx((n + 1) * h, rel=1e-15))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("start", [0.25, 10.0])
 def test_samples_count_from_the_start_time_and_a_gap_in_time_is_refused(combo, built, master, reference, start):
     backend, fmi = combo
