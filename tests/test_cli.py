@@ -48,6 +48,7 @@ def test_data_check_lists_channels_and_names_missing_ones(dyno: Path) -> None:
     assert missing.exit_code == 2 and "temperature" in missing.output
 
 
+@pytest.mark.slow
 def test_train_build_and_validate_chain(dyno: Path, tmp_path: Path) -> None:
     onnx_path = tmp_path / "damper.onnx"
     trained = invoke(

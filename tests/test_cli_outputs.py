@@ -185,6 +185,7 @@ def test_a_fifo_or_device_as_the_output_file_is_refused_and_kept(work: Path, tmp
     assert all(p.name.startswith(("pipe", "null")) for p in tmp_path.iterdir()), list(tmp_path.iterdir())
 
 
+@pytest.mark.slow
 def test_a_loop_rerun_keeps_the_users_files_in_its_folder_and_a_copied_marker_deletes_nothing(
     work: Path, tmp_path: Path
 ) -> None:

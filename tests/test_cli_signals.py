@@ -61,6 +61,7 @@ def test_sigterm_during_a_build_leaves_no_temporaries(tmp_path: Path) -> None:
     assert not out.parent.exists() or list(out.parent.iterdir()) == [], list(out.parent.iterdir())
 
 
+@pytest.mark.slow
 def test_sigterm_during_a_loop_leaves_no_staging_folder(tmp_path: Path) -> None:
     data, model = tmp_path / "dyno.csv", tmp_path / "model.onnx"
     made = runner.invoke(app, ["rig", "damper", "--out", str(data), "--duration", "20", "--excitation", "random"])

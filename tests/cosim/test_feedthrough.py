@@ -118,6 +118,7 @@ def trapezoidal(h: float) -> np.ndarray:
     return np.array(forces)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("refresh", [True, False])
 def test_iterating_the_default_converges_to_the_trapezoidal_exchange(systems, refresh: bool) -> None:
     """The fixed point of a step is the implicit trapezoidal exchange, with and without the refresh (a repeat once

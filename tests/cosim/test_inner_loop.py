@@ -66,6 +66,7 @@ def run(ssd: Path, loop: str, **settings: object):
         )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("settings", SCHEMES, ids=lambda s: ",".join(f"{k}={v}" for k, v in s.items()) or "default")
 @pytest.mark.parametrize("which", ["interpolating", "sampled"])
 def test_the_compiled_loop_gives_the_python_loops_numbers(request, which: str, settings: dict) -> None:

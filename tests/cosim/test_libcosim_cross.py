@@ -49,6 +49,7 @@ def test_libcosim_runner_refuses_other_schemes(systems: dict[float, Path]) -> No
         run_libcosim(systems[1e-3], DRIVE, CosimSettings(step=1.0000005e-3, stop_time=0.2000001, **LIBCOSIM))
 
 
+@pytest.mark.slow
 def test_libcosim_equals_fmpy_with_the_vehicle_packages_quarter_car(tmp_path: Path) -> None:
     """The vehicle package's quarter-car FMU samples every 0.1 ms, so each 2 ms step evaluates 20 samples."""
     vehicle_build = pytest.importorskip("nnfmu.vehicle.fmu.vehicle_fmu")

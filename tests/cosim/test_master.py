@@ -75,6 +75,7 @@ def test_iterative_coupling_is_ten_times_better_than_gauss_seidel_at_1ms(errors:
     assert errors["iterative"][1] * 10 < errors["gauss-seidel"][1]
 
 
+@pytest.mark.slow
 def test_jacobi_iterations_reach_the_same_fixed_point(systems: dict[float, Path]) -> None:
     gauss_seidel = _error(systems, 1e-3, CosimSettings(step=1e-3, iterations=30, tolerance=1e-12, **BASIC))
     jacobi = _error(
@@ -186,6 +187,7 @@ def test_a_hand_written_ssd_runs_like_the_generated_one(systems: dict[float, Pat
     np.testing.assert_array_equal(result["shock_force"], expected["damper_force"])
 
 
+@pytest.mark.slow
 def test_fmi3_fmus_co_simulate_like_fmi2(systems: dict[float, Path], tmp_path: Path) -> None:
     """The same system built as FMI 3 FMUs gives the FMI 2 result, iterative coupling (get/set state) included."""
     open_loop, _ = quarter_cars()

@@ -112,6 +112,7 @@ def _train(path: Path, onnx: Path) -> str:
     return trained.output
 
 
+@pytest.mark.slow
 def test_data_check_and_train_run_on_the_export_as_it_comes(files: dict[str, Path], tmp_path: Path) -> None:
     path = files["mts"]
     checked = runner.invoke(app, ["data", "check", str(path), "--require", "velocity"])
@@ -121,6 +122,7 @@ def test_data_check_and_train_run_on_the_export_as_it_comes(files: dict[str, Pat
     assert "clock's scatter" in _train(path, tmp_path / "damper.onnx")
 
 
+@pytest.mark.slow
 def test_loop_runs_on_a_float32_export_as_it_comes(tmp_path: Path) -> None:
     """As small as the other loop tests: 29 s of the same clock, from 52 s on (past 64 s float32 resolves 7.6 us)."""
     path = write_mts(tmp_path / "late.dat", start=52.0172, duration=20.0, excitation="random")

@@ -410,6 +410,7 @@ def test_a_channel_nnfmu_cannot_convert_keeps_its_unit_and_blocks_nothing(tmp_pa
     assert again.units["coil"] == "ohm"
 
 
+@pytest.mark.slow
 def test_reading_a_csv_takes_about_twice_its_columns_in_memory(tmp_path: Path) -> None:
     """The text is parsed a chunk at a time into float64 columns: 400 000 rows of 4 columns (12.8 MB as float64)
     peak below 3 times that (the whole text and a Python string per line took 11 times; 4.2 GB for 10 M rows)."""

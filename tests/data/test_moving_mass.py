@@ -28,6 +28,7 @@ def with_fixture() -> Measurement:
     return _dyno(None)  # the default effects carry the fixture's 2 kg
 
 
+@pytest.mark.slow
 def test_a_two_kg_fixture_is_found_within_ten_percent(with_fixture: Measurement) -> None:
     estimate = estimate_moving_mass(with_fixture)
     truth = DamperParams().moving_mass
@@ -38,12 +39,14 @@ def test_a_two_kg_fixture_is_found_within_ten_percent(with_fixture: Measurement)
     assert "± 0.0" in estimate.describe() and "kg (95 %)" in estimate.describe()
 
 
+@pytest.mark.slow
 def test_no_fixture_gives_zero_within_its_confidence() -> None:
     estimate = estimate_moving_mass(_dyno(WITHOUT_FIXTURE))
     assert abs(estimate.mass) <= estimate.half_width < 0.05, estimate
     assert not estimate.found
 
 
+@pytest.mark.slow
 def test_train_takes_the_mass_out_at_defaults_and_auto_and_keeps_it_at_zero(
     with_fixture: Measurement, tmp_path: Path
 ) -> None:
@@ -65,6 +68,7 @@ def test_train_takes_the_mass_out_at_defaults_and_auto_and_keeps_it_at_zero(
     assert "give a mass in kg (e.g. 2.0) or auto, not 'heavy'" in " ".join(bad.output.replace("│", " ").split())
 
 
+@pytest.mark.slow
 def test_a_record_without_a_fixture_is_trained_as_measured_at_defaults(tmp_path: Path) -> None:
     data = save_measurement(_dyno(WITHOUT_FIXTURE), tmp_path / "dyno.csv")
     tiny = ["--preset", "damper-spline", "--max-epochs", "2", "--restarts", "1", "--hidden", "2"]

@@ -226,6 +226,7 @@ def test_cli_data_check_reads_the_export_and_prints_the_notes(dyno):
     ]
 
 
+@pytest.mark.slow
 def test_cli_train_accepts_the_export_and_prints_the_loader_notes(dyno, tmp_path):
     path, *_ = dyno
     out = tmp_path / "damper.onnx"

@@ -91,6 +91,7 @@ def test_without_hysteresis_the_force_velocity_curve_has_no_loop():
     assert abs(np.trapezoid(force, v)) < 1e-3 * np.ptp(force) * np.ptp(v)
 
 
+@pytest.mark.slow
 def test_rig_integration_matches_an_independent_stiff_solver():
     """The dyno's step (0.5 ms, a ramped sine as the rig drives it) against Radau on `derivatives` at 1e-9."""
     truth = DamperTruth(DamperParams(), ("hysteresis", "temperature"))

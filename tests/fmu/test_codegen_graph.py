@@ -274,6 +274,7 @@ int main(void)
 """
 
 
+@pytest.mark.slow
 @needs_gcc
 @pytest.mark.skipif(shutil.which("valgrind") is None, reason="valgrind not found on PATH")
 def test_mlp_gru_executable_runs_clean_under_valgrind(tmp_path: Path) -> None:

@@ -22,6 +22,8 @@ from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
 
+pytestmark = pytest.mark.slow
+
 FMUTOOL = "from fmu_manipulation_toolbox.cli.fmutool import fmutool; fmutool()"
 
 

@@ -59,6 +59,7 @@ def _container(fmu: Path, folder: Path, outer: int) -> Path:
     return folder / "container.fmu"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("inner,outer", [(3, 3), (3, 2), (2, 3), (2, 2)])
 def test_container_runtime_reproduces_fmpys_direct_run(network_fmus, tmp_path, inner, outer):
     fmu = network_fmus[inner]

@@ -133,6 +133,7 @@ def central_differences(slave, inputs: np.ndarray, eps: float = 1e-6, h: float =
     return np.array(columns).T
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("filtered", [False, True], ids=["unfiltered", "filtered"])
 @pytest.mark.parametrize("network, fmi", BUILDS)
 def test_derivatives_equal_central_differences_of_the_fmus_outputs(fmus, open_fmu, network, fmi, filtered):

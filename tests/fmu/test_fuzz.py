@@ -21,6 +21,8 @@ from fmpy import read_model_description
 
 from nnfmu.fmu.native.backend import fmi_headers_dir
 
+pytestmark = pytest.mark.slow
+
 SANITIZE = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
 SECONDS_PER_RUN = 8.0
 SEED = 1

@@ -17,6 +17,8 @@ from fmpy import read_model_description
 
 from nnfmu.fmu.native.backend import fmi_headers_dir
 
+pytestmark = pytest.mark.slow
+
 BINARY_FOLDER = {2: "linux64", 3: "x86_64-linux"}
 
 

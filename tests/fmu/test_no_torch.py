@@ -5,6 +5,7 @@ import sys
 from pathlib import Path
 
 import onnx
+import pytest
 from native_fmu_helpers import delay_step_graph
 
 # An import hook makes `import torch` fail; then the FMU is built through the CLI and replayed: any torch import on
@@ -34,6 +35,7 @@ assert "torch" not in sys.modules
 """
 
 
+@pytest.mark.slow
 def test_build_and_replay_without_torch(tmp_path: Path) -> None:
     onnx_path = tmp_path / "damper.onnx"
     onnx.save(delay_step_graph(), onnx_path)

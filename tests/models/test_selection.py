@@ -33,6 +33,7 @@ def test_candidates_are_the_direction_kinematics_at_three_delays():
         candidate_taps(m, "axial_force")
 
 
+@pytest.mark.slow
 def test_true_input_ranks_first_and_is_chosen():
     settings = SelectionSettings(hidden=3, max_inputs=3, training=TrainSettings(max_epochs=40, restarts=1))
     result = select_inputs(synthetic(), "force", settings)

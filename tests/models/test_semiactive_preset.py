@@ -56,6 +56,7 @@ def test_training_chooses_the_command_time_constants_by_validation(mr_record, tm
     assert outcome.export.max_relative_error <= 1e-6
 
 
+@pytest.mark.slow
 def test_recurrent_option_trains_a_gru_on_the_command(mr_record, tmp_path):
     request = TrainRequest("damper-semiactive", recurrent=True, hidden=(4,), restarts=1, max_epochs=2)
     outcome = train_from_file(mr_record, request, tmp_path / "mr_gru.onnx")

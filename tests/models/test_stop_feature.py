@@ -75,6 +75,7 @@ def clean_error(model, x: np.ndarray, force: np.ndarray) -> float:
     return float(np.sqrt(np.mean((model.predict({"displacement": x}) - force) ** 2)) / np.std(force))
 
 
+@pytest.mark.slow
 def test_training_on_low_passed_inputs_removes_the_noise_bias_of_a_stop_feature():
     """The stop feature of the noisy position moves with the noise, so a network trained on it is off on the clean
     motion a simulation feeds it; trained on the inputs low-passed above the motion's band it is not."""

@@ -43,6 +43,7 @@ def test_the_seal_is_stiff_after_a_reversal_then_slides_at_the_coulomb_level():
     assert np.any(stuck) and np.any(sliding) and np.allclose(seal[down][sliding], -p.seal_friction)
 
 
+@pytest.mark.slow
 def test_the_exact_steps_match_the_rate_law_integrated_finely():
     truth = DamperTruth(DamperParams(), EFFECTS)
     x, v, a = sine(1e-4)

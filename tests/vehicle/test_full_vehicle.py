@@ -299,6 +299,7 @@ def test_reference_components_remove_their_inputs(params: VehicleParameters) -> 
         build_full_vehicle(params).equilibrium()
 
 
+@pytest.mark.slow
 def test_monolithic_with_linear_laws_equals_the_built_in_model(
     car: LinearVehicle, linear_params: VehicleParameters
 ) -> None:

@@ -24,6 +24,8 @@ from nnfmu.fmu.options import BuildOptions
 from nnfmu.workflows.roadtest.truth_graphs import damper_truth_graph
 from nnfmu.workflows.train import TrainRequest, train_from_file
 
+pytestmark = pytest.mark.slow
+
 T = 1e-3  # the damper FMUs' sample period [s]
 DURATION = 1.5  # s of road, the pothole at 1 s
 REFERENCE_STEP = 2e-4  # RK4 step of the monolithic reference (1.5e-6 relative from the 1e-4 s solution)

@@ -26,6 +26,8 @@ from nnfmu.workflows.controller import (
 from nnfmu.workflows.cosim import run_cosim
 from nnfmu.workflows.vehicle_binding import vehicle_binding
 
+pytestmark = pytest.mark.slow
+
 VOLTAGE = known_command("voltage")  # 0 V soft (1 kN.s/m), 5 V hard (4 kN.s/m) for the analytic damper's defaults
 STEP = 1e-3
 # libcosim's algorithm: Jacobi, nothing estimated or refreshed (tests/cosim/test_libcosim_cross.py)

@@ -6,9 +6,12 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from nnfmu.fmu.check import check_fmu
 from nnfmu.workflows.demo import PRESETS_BY_RIG, UNDECLARED_EFFECTS, DemoSettings, run_demo
+
+pytestmark = pytest.mark.slow
 
 
 def test_quick_demo_runs_every_stage(tmp_path: Path) -> None:

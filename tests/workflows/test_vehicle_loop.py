@@ -23,6 +23,8 @@ from nnfmu.workflows.roadtest.lab_car import LabCar, lab_car_record, write_lab_c
 from nnfmu.workflows.train import TrainRequest, train_from_file
 from nnfmu.workflows.vehicle_loop import VehicleLoopError, VehicleLoopReport, VehicleLoopSettings, run_vehicle_loop
 
+pytestmark = pytest.mark.slow  # a trained damper network and lab-car loops
+
 DURATION = 12.0  # s of lab record
 SETTINGS = VehicleLoopSettings(
     in_situ=LoopSettings(max_effects=1, max_epochs=60, extra_hidden=(0, 4), lm_max_samples=4000, fresh_rival=False)

@@ -16,6 +16,8 @@ from nnfmu.workflows.roadtest.lab_car import LabCar, write_lab_car
 from nnfmu.workflows.roadtest.systems import build_truth_fmus, build_vehicle, write_system
 from nnfmu.workflows.vehicle_loop import VehicleLoopReport, VehicleLoopSettings, run_vehicle_loop
 
+pytestmark = pytest.mark.slow  # full-vehicle lab-car loops
+
 DURATION = 8.0  # s of lab record
 CORNER_CHANNELS = (  # what a front-left LCA bushing moves first: its arm, its corner's strut, wheel and body
     "lca_fl_angle",

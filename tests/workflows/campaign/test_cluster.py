@@ -19,6 +19,8 @@ from campaign_helpers import campaign_text, metrics_of, read_rows, write_campaig
 
 from nnfmu.workflows.campaign import run_campaign
 
+pytestmark = pytest.mark.slow
+
 distributed = pytest.importorskip("distributed")
 SCHEDULER = [sys.executable, "-m", "distributed.cli.dask_scheduler"]  # what `dask scheduler` runs
 WORKER = [sys.executable, "-m", "distributed.cli.dask_worker"]  # what `dask worker` runs

@@ -8,6 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from nnfmu.data.importers import load_brfd_series
 from nnfmu.diagnosis import EFFECTS, DiagnosisSettings
@@ -15,6 +16,8 @@ from nnfmu.export import export_onnx
 from nnfmu.models import Architecture, TrainSettings, train_model
 from nnfmu.models.features import FeatureSpec, SmoothSign, Tap
 from nnfmu.workflows.loop import LoopSettings, part_measurement, plan_blocks, run_loop
+
+pytestmark = pytest.mark.slow
 
 SLICE = Path(__file__).parents[2] / "data" / "brfd"
 RUNS = [SLICE / f"1Hz36lbtension{a}amplitude.json.gz" for a in ("0.5", "1", "1.5")]

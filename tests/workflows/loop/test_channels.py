@@ -9,6 +9,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import RigOptions, simulate_rig
@@ -50,6 +51,7 @@ def first_model(m: Measurement, folder: Path) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_the_loop_adds_the_command_of_an_mr_damper_and_says_so(tmp_path):
     m = record("mr")
     out = tmp_path / "loop"
@@ -64,6 +66,7 @@ def test_the_loop_adds_the_command_of_an_mr_damper_and_says_so(tmp_path):
     assert "input:voltage" in (out / "report.html").read_text()
 
 
+@pytest.mark.slow
 def test_an_unrelated_channel_is_never_added(tmp_path):
     m = record("passive")
     out = tmp_path / "loop"

@@ -131,6 +131,7 @@ def assert_report_is_what_a_plain_master_gets(document: dict, m: Measurement) ->
     assert plain == pytest.approx(document["error_after"]["nrmse"], rel=1e-9)
 
 
+@pytest.mark.slow
 def test_undeclared_gas_force_is_named_and_the_error_falls(models, tmp_path):
     truth = (*FULL, "gas_force")
     out = tmp_path / "loop"
@@ -167,6 +168,7 @@ def test_undeclared_gas_force_is_named_and_the_error_falls(models, tmp_path):
     assert out.stat().st_mode & 0o777 == 0o777 & ~umask  # as mkdir makes it, not the staging folder's 0700
 
 
+@pytest.mark.slow
 def test_undeclared_seal_friction_is_named_and_the_error_falls(models, tmp_path):
     report = loop(FULL, "no_sign", models, tmp_path / "loop")
     assert_named_and_improved(report, {"seal_friction"}, at_most=0.8)
@@ -174,6 +176,7 @@ def test_undeclared_seal_friction_is_named_and_the_error_falls(models, tmp_path)
     assert any(d["kind"] == "smooth_sign" for d in spec["derived"])
 
 
+@pytest.mark.slow
 def test_undeclared_hysteresis_is_named_and_the_error_halves(models, tmp_path):
     """The series compliance makes the force lag the velocity; the static model has no memory to hold the lag."""
     report = loop(("hysteresis", "seal_friction"), "static", models, tmp_path / "loop")
@@ -182,6 +185,7 @@ def test_undeclared_hysteresis_is_named_and_the_error_halves(models, tmp_path):
     assert any(d["kind"] == "lowpass" and d["channel"] == "velocity" for d in spec["derived"])
 
 
+@pytest.mark.slow
 def test_undeclared_inertia_is_named_and_the_error_halves(models, tmp_path):
     report = loop(("seal_friction", "inertia"), "static", models, tmp_path / "loop")
     assert_named_and_improved(report, {"inertia"}, at_most=0.5)
@@ -189,6 +193,7 @@ def test_undeclared_inertia_is_named_and_the_error_halves(models, tmp_path):
     assert {"channel": "velocity", "delays": [0, 1]} in spec["taps"]  # acceleration as a finite difference
 
 
+@pytest.mark.slow
 def test_undeclared_temperature_with_its_channel_adds_the_channel(models, tmp_path):
     truth = (*FULL, "temperature")
     report = loop(truth, "history", models, tmp_path / "loop", duration=HEATING)
@@ -197,6 +202,7 @@ def test_undeclared_temperature_with_its_channel_adds_the_channel(models, tmp_pa
     assert {"channel": "temperature", "delays": [0]} in spec["taps"]
 
 
+@pytest.mark.slow
 def test_temperature_without_its_channel_is_added_as_a_state_and_the_missing_channel_reported(models, tmp_path):
     truth = (*FULL, "temperature")
     report = loop(truth, "history", models, tmp_path / "loop", drop="temperature", duration=HEATING)
@@ -207,12 +213,14 @@ def test_temperature_without_its_channel_is_added_as_a_state_and_the_missing_cha
     assert any("temperature" in note and "would confirm" in note for note in report.missing_measurements)
 
 
+@pytest.mark.slow
 def test_two_undeclared_effects_gas_force_and_temperature_are_both_named(models, tmp_path):
     """Both need an input the velocity-history model lacks (displacement, temperature)."""
     report = loop((*FULL, "gas_force", "temperature"), "history", models, tmp_path / "loop", duration=HEATING)
     assert_named_and_improved(report, {"gas_force", "temperature"})
 
 
+@pytest.mark.slow
 def test_two_undeclared_effects_gas_force_and_seal_friction_are_both_named(models, tmp_path):
     """One needs a new input (displacement), the other a feature of an input the model has (the friction sign)."""
     report = loop((*FULL, "gas_force"), "no_sign", models, tmp_path / "loop")
@@ -366,6 +374,7 @@ def test_two_present_effects_are_offered_together_with_both_features():
     assert _together((seal, evidence, ""), (seal, evidence, SIGNIFICANT), evidence, "", m, rows, SETTINGS) is None
 
 
+@pytest.mark.slow
 def test_a_model_with_only_noise_left_gets_nothing_added(models, tmp_path):
     """The record's force is the model's own output plus white load-cell noise: nothing is missing."""
     motion = record(FULL, seed=3)
@@ -385,6 +394,7 @@ def test_a_model_with_only_noise_left_gets_nothing_added(models, tmp_path):
     assert Path(document["onnx"]) == out / "model_0.onnx" and Path(document["fmu"]).is_file()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("spoil", "message"),
     [
@@ -407,6 +417,7 @@ def test_bad_input_is_refused_and_nothing_is_written(models, tmp_path, spoil, me
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_a_failed_run_leaves_an_earlier_result_untouched(models, tmp_path):
     out = tmp_path / "loop"
     earlier = tmp_path / "staged"

@@ -44,6 +44,7 @@ def _bushing_truths() -> dict[str, BushingChannelTruth]:
     return {key: BushingChannelTruth(getattr(params, key)) for key in BUSHING_CHANNELS}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("effects", [("hysteresis", "seal_friction"), ("hysteresis", "seal_friction", "gas_force")])
 def test_the_damper_graph_solves_the_valve_ode(effects: tuple[str, ...]) -> None:
     """Against a tight adaptive solution of F' = k_s (v - w(F)) with the velocity linear between samples."""
@@ -91,6 +92,7 @@ def test_the_bushing_graph_starts_relaxed_where_it_stands() -> None:
         assert np.max(np.abs(got[channel.force] - want)) <= 1e-9 * np.max(np.abs(want)), key
 
 
+@pytest.mark.slow
 def test_the_native_fmus_are_their_graphs(tmp_path: Path) -> None:
     truth = DamperTruth(DamperParams(), ("hysteresis", "seal_friction"))
     cases = {
