@@ -1,10 +1,12 @@
-"""`nnfmu iterate` on virtual quarter cars: road records made by driving the car with a known drive (never shown to
-the iteration), recovered by iterating through the co-simulation master; a linear car (linear damper built in) and
-a nonlinear one (the parameter file's digressive, asymmetric spline damper built in); bad input refused by name."""
+"""`nnfmu iterate` on virtual cars: road records made by driving the car with a known drive (never shown to the
+iteration), recovered by iterating through the co-simulation master; quarter cars with a linear damper, the parameter
+file's digressive, asymmetric spline damper and a trained damper-hysteresis network FMU, and the full vehicle on four
+posts (twelve targets); bad input refused by name."""
 
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -14,12 +16,15 @@ from nnfmu.cosim.master import CosimSettings, cosimulate
 from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd
 from nnfmu.data import Measurement, save_measurement
 from nnfmu.data.drive_files import read_drive
+from nnfmu.fmu.build import build_fmu
+from nnfmu.fmu.options import BuildOptions
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.vehicle.dynamics.parameters import DEFAULTS_DIR
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
 from nnfmu.workflows.cosim import run_cosim
 from nnfmu.workflows.iterate import IterateError, IterateSettings, run_iterate
 from nnfmu.workflows.iterate.signals import band_filter, fade_weights
+from nnfmu.workflows.roadtest.systems import bushing_elements, damper_elements
 
 H = 1e-3  # [s] sample period of the records, the vehicle and the co-simulation step
 DURATION = 8.0  # [s] of road record
@@ -156,3 +161,74 @@ def test_bad_input_is_refused_naming_the_file_channel_or_value(cars: dict[str, P
     with pytest.raises(IterateError, match=r"band 1:600 Hz: the high edge lies above 500 Hz.*road.csv"):
         run_iterate(target, ssd, tmp_path / "c", IterateSettings(band=(1.0, 600.0)))
     assert not any((tmp_path / name).exists() for name in "abc")
+
+
+WALK_NETWORK = Path(__file__).parents[1] / "models" / "data" / "damper-hysteresis-walk.onnx"  # a trained network
+
+
+@pytest.mark.slow
+def test_a_car_with_a_damper_network_is_iterated_to_its_road_responses(tmp_path: Path) -> None:
+    """The nonlinear car of the issue: the quarter car's damper port closed by a trained damper-hysteresis network
+    FMU (the README walk's network), its road record made with a drive the iteration never sees."""
+    damper = build_fmu(WALK_NETWORK, BuildOptions(out=tmp_path / "parts" / "damper.fmu", platforms=("linux64",)))
+    settings = VehicleBuildSettings(params_path=PARAMS, sample_period=H, platforms=("linux64",))
+    vehicle = build_vehicle_fmu("quarter-car", tmp_path / "parts" / "quarter_car.fmu", settings)
+    system = connect_by_name(
+        "quarter car, damper network", ("vehicle", vehicle), {"damper": damper}, tmp_path / "parts"
+    )
+    ssd = write_ssd(system, tmp_path / "parts" / "SystemStructure.ssd")
+    road = _road_record(ssd, _road_drive(), tmp_path / "road.csv")
+    result = run_iterate(tmp_path / "road.csv", ssd, tmp_path / "out", SETTINGS)
+    assert result.converged and len(result.outcome.iterations) <= SETTINGS.iterations
+    replay = run_cosim(ssd, result.files["drive"], CosimSettings(step=H)).measurement
+    n = min(len(replay.time), len(road.time))
+    for channel in TARGETS:
+        assert _nrmse(replay[channel][:n], road[channel][:n]) < 0.05, channel
+
+
+@pytest.mark.slow
+def test_the_full_vehicle_is_iterated_with_four_actuators_to_twelve_targets(tmp_path: Path) -> None:
+    """MIMO: the full vehicle on its four posts (components built in), twelve targets (each corner's spindle and body
+    acceleration and damper stroke) from a four-post road drive the iteration never sees."""
+    corners = ("fl", "fr", "rl", "rr")
+    targets = tuple(
+        name
+        for c in corners
+        for name in (f"spindle_{c}_acceleration", f"body_acceleration_{c}", f"damper_{c}_displacement")
+    )
+    built_in = {name: "reference" for name in damper_elements("full-vehicle") + bushing_elements("full-vehicle")}
+    settings = VehicleBuildSettings(components=built_in, sample_period=H, platforms=("linux64",))
+    vehicle = build_vehicle_fmu("full-vehicle", tmp_path / "car" / "full_vehicle.fmu", settings)
+    ssd = write_ssd(
+        connect_by_name("full vehicle", ("vehicle", vehicle), {}, tmp_path / "car"),
+        tmp_path / "car" / "SystemStructure.ssd",
+    )
+    road = generate_drive(DriveSettings(duration=DURATION, seed=7))
+    fade = fade_weights(len(road.time), H, 0.5)
+    channels, units = {}, {}
+    for c in corners:
+        x = road[f"actuator_{c}_displacement"] * fade
+        channels |= {f"actuator_{c}_displacement": x, f"actuator_{c}_velocity": np.gradient(x, H)}
+        units |= {f"actuator_{c}_displacement": "m", f"actuator_{c}_velocity": "m/s"}
+    known = Measurement(time=road.time, channels=channels, units=units, source="known four-post drive")
+    with open_system(ssd) as structure:
+        response = cosimulate(structure, known, CosimSettings(step=H, stop_time=float(known.time[-1]))).measurement
+    save_measurement(
+        Measurement(
+            time=response.time,
+            channels={c: response[c] for c in targets},
+            units={c: response.units[c] for c in targets},
+            source="road",
+        ),
+        tmp_path / "road.csv",
+    )
+    result = run_iterate(tmp_path / "road.csv", ssd, tmp_path / "out", replace(SETTINGS, iterations=15))
+    assert result.converged and len(result.outcome.iterations) <= 15
+    drive = read_drive(result.files["drive"])
+    assert {f"actuator_{c}_displacement" for c in corners} <= set(drive.names)
+    replay = run_cosim(ssd, result.files["drive"], CosimSettings(step=H)).measurement
+    n = min(len(replay.time), len(response.time))
+    best = result.outcome.iterations[result.outcome.best]
+    for channel in targets:
+        assert _nrmse(replay[channel][:n], response[channel][:n]) < 0.10, channel
+        assert 0.8 <= best.metrics[channel]["pseudo_damage_ratio"] <= 1.25, channel
