@@ -139,7 +139,13 @@ def test_road_test_writes_reports_and_finite_thesis_metrics(road: RoadTestResult
         )
         for row in system["thesis_table"]:
             for key in keys:
-                assert row[key] is not None and math.isfinite(row[key]), (system["system"], row["channel"], key)
+                where = (system["system"], row["channel"], key)
+                if key in row["not_meaningful"]:  # a metric the record is too short for: null, and why
+                    assert row[key] is None and "too short" in row["not_meaningful"][key], where
+                    continue
+                assert row[key] is not None and math.isfinite(row[key]), where
+        if system["system"] == "quarter-car":  # 2 s hold four periods of 2 Hz, not of 1 Hz
+            assert all("amplitude_ratio_1hz" in row["not_meaningful"] for row in system["thesis_table"])
         for ssd in system["ssds"].values():
             with open_system(ssd):
                 pass
@@ -159,7 +165,11 @@ def test_the_error_budget_has_every_channel_and_the_coupling_costs_little(road: 
         ]
         for row in system["budget"]:
             for key in ("nrmse_total", "nrmse_network", "nrmse_coupling", "damage_ratio"):
-                assert row[key] is not None and math.isfinite(row[key]), (system["system"], row["channel"], key)
+                where = (system["system"], row["channel"], key)
+                if key in row["not_meaningful"]:  # too few rainflow cycles in a short run: null, and why
+                    assert row[key] is None and "too short" in row["not_meaningful"][key], where
+                    continue
+                assert row[key] is not None and math.isfinite(row[key]), where
     quarter = {(r["channel"], r["model"]): r for r in written["systems"][0]["budget"]}
     for channel in ("damper_force", "damper_velocity", "body_acceleration", "spindle_acceleration"):
         row = quarter[(channel, "damper-hysteresis")]
