@@ -8,10 +8,13 @@ win64 (LoadLibrary of the .dll, run by wine). Both must pass every status check 
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import shutil
 import subprocess
+import sys
 import zipfile
+from pathlib import Path
 
 import pytest
 from platform_drivers import assert_same_outputs, build_driver, counts
@@ -107,6 +110,49 @@ def test_win64_binary_under_wine_gives_the_linux64_outputs(delay_fmus, tmp_path,
         assert run.returncode == 0, run.stderr[-3000:]
         assert "0 unexpected statuses" in run.stderr
     assert_same_outputs(on_linux.stdout, on_wine.stdout, n_out, "win64 vs linux64")
+
+
+def _zig_windows_runtime_built() -> bool:
+    """Zig is installed and has compiled its MinGW-w64 runtime into its cache (its first x86_64-windows build: about
+    10 minutes on 2 cores, too long for the suite; `python -m ziglang cc -target x86_64-windows-gnu -shared` once)."""
+    if importlib.util.find_spec(toolchain.ZIG_MODULE) is None:
+        return False
+    cache = Path(os.environ.get("ZIG_GLOBAL_CACHE_DIR", Path.home() / ".cache" / "zig"))
+    return any((cache / "o").glob("*/libmingw32.lib"))
+
+
+@needs_wine
+@pytest.mark.slow
+@pytest.mark.skipif(not _zig_windows_runtime_built(), reason="Zig's Windows runtime is not compiled in its cache here")
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_zig_built_win64_binary_under_wine_gives_the_linux64_outputs(delay_onnx, tmp_path, wine_env, monkeypatch, fmi):
+    """What a machine with the pip extra alone (no MinGW) ships for Windows: Zig's DLL, run by a Zig-built driver."""
+    monkeypatch.setattr(toolchain, "WIN64_COMPILER", "x86_64-w64-mingw32-gcc-not-installed")
+    monkeypatch.delenv("CC_WIN64", raising=False)
+    (windows_target,) = [p for p in toolchain.PLATFORMS if p.name == "x86_64-windows"]
+    assert [t.label.split()[0] for t in toolchain.candidates(windows_target)] == ["Zig"]
+    built = build_fmu(
+        delay_onnx, BuildOptions(out=tmp_path / "zig.fmu", fmi_version=fmi, platforms=("host", "x86_64-windows"))
+    )
+    identifier, token, n_in, n_out = counts(built)
+    linux, windows = FOLDERS[fmi]
+    with zipfile.ZipFile(built) as archive:
+        (tmp_path / "fmu.so").write_bytes(archive.read(f"binaries/{linux}/{identifier}.so"))
+        (tmp_path / "fmu.dll").write_bytes(archive.read(f"binaries/{windows}/{identifier}.dll"))
+    args = [token, str(n_in), str(n_out)]
+    native = build_driver(["gcc"], fmi, tmp_path / "driver", [])
+    zig = [sys.executable, "-m", toolchain.ZIG_MODULE, "cc", "-target", windows_target.zig_target]
+    build_driver(zig, fmi, tmp_path / "driver.exe", ["-D__USE_MINGW_ANSI_STDIO=1"])
+    on_linux = subprocess.run(
+        [str(native), str(tmp_path / "fmu.so"), *args], capture_output=True, text=True, timeout=120
+    )
+    on_wine = subprocess.run(
+        [WINE, "driver.exe", "fmu.dll", *args], cwd=tmp_path, env=wine_env, capture_output=True, text=True, timeout=300
+    )
+    for run in (on_linux, on_wine):
+        assert run.returncode == 0, run.stderr[-3000:]
+        assert "0 unexpected statuses" in run.stderr
+    assert_same_outputs(on_linux.stdout, on_wine.stdout, n_out, "Zig win64 vs linux64")
 
 
 def test_missing_cross_compilers_warn_once_and_still_build_linux64(delay_onnx, tmp_path, monkeypatch):
