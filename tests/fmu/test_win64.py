@@ -137,6 +137,8 @@ def test_zig_built_win64_binary_under_wine_gives_the_linux64_outputs(delay_onnx,
     identifier, token, n_in, n_out = counts(built)
     linux, windows = FOLDERS[fmi]
     with zipfile.ZipFile(built) as archive:
+        binaries = sorted(n for n in archive.namelist() if n.startswith("binaries/"))
+        assert binaries == [f"binaries/{linux}/{identifier}.so", f"binaries/{windows}/{identifier}.dll"]  # no .pdb/.lib
         (tmp_path / "fmu.so").write_bytes(archive.read(f"binaries/{linux}/{identifier}.so"))
         (tmp_path / "fmu.dll").write_bytes(archive.read(f"binaries/{windows}/{identifier}.dll"))
     args = [token, str(n_in), str(n_out)]

@@ -9,7 +9,9 @@ compiled in its own cache (`~/.cache/zig`), so a rebuild of unchanged sources ta
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
+import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -21,22 +23,35 @@ COMPILE_TIMEOUT_S = 300
 
 
 def compile_shared_library(target: Target, sources: list[Path], include_dir: Path, output: Path) -> list[str]:
-    """Compile `sources` into `target`'s shared library `output`; return the command line used. Raises CompilerError."""
+    """Compile `sources` into `target`'s shared library `output`, nothing else beside it (a linker's by-products, such
+    as Zig's `.pdb` and import `.lib` on Windows, stay in a scratch folder); return the command line used. Raises
+    CompilerError."""
     output.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix=f"nnfmu-cc-{target.name}-") as scratch:
+        built = Path(scratch) / output.name
+        command = _compile(target, sources, include_dir, built, Path(scratch))
+        shutil.move(built, output)
+    return command
+
+
+def _compile(target: Target, sources: list[Path], include_dir: Path, output: Path, cwd: Path) -> list[str]:
+    """Run `target`'s compiler on `sources` into `output`, in `cwd`; the command line used. Raises CompilerError."""
     # A dylib's install name is the path it was linked at unless set: the FMU's own name instead of a build folder.
     install_name = (f"-Wl,-install_name,@rpath/{output.name}",) if target.suffix == ".dylib" else ()
     command = [
         *target.compiler,
         *target.flags,
         *install_name,
-        f"-I{include_dir}",
+        f"-I{include_dir.resolve()}",
         "-o",
         str(output),
-        *(str(s) for s in sources),
+        *(str(s.resolve()) for s in sources),
         *LIBRARIES,
     ]
     try:
-        result = subprocess.run(command, capture_output=True, text=True, timeout=COMPILE_TIMEOUT_S, check=False)
+        result = subprocess.run(
+            command, capture_output=True, text=True, timeout=COMPILE_TIMEOUT_S, check=False, cwd=cwd
+        )
     except (OSError, subprocess.TimeoutExpired) as err:
         raise CompilerError(f"cannot run the {target.name} C compiler {command[0]!r}: {err}") from err
     if result.returncode != 0 or not output.is_file():
