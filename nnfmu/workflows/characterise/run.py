@@ -73,7 +73,9 @@ def _damper(
             characteristic_plot(
                 result.points, measured.points if measured else None, command, unit, folder / "characteristic.png"
             )
-        ],
+        ]
+        if settings.figures
+        else [],
         {"characteristic.csv": rows},
     )
     gas = Section(
@@ -96,7 +98,7 @@ def _damper(
     if measured:
         tables["measured_work_diagrams.csv"] = work_diagram_rows(measured.points, measured.cycles, label, "measured_")
     work.tables = tables
-    for i, level in enumerate(dict.fromkeys(p.command for p in result.points)):
+    for i, level in enumerate(dict.fromkeys(p.command for p in result.points) if settings.figures else ()):
         idx = [j for j, p in enumerate(result.points) if p.command == level]
         title = "model" if level is None else f"{command} {level:.3g} {unit}"
         names = work_diagram_plots(
@@ -153,7 +155,7 @@ def _bushing(
         ],
         tables={"quasi_static_loop.csv": loop_rows(result, measured)},
     )
-    for ch in result.channels:
+    for ch in result.channels if settings.figures else ():
         stiffness.images.extend(
             stiffness_plots(
                 ch, result.points[ch.key], measured.points[ch.key] if measured else None, folder / ch.key
@@ -211,6 +213,8 @@ def characterise(
                 "tested through": f"its FMU at default parameters, sample period {model.period:g} s",
                 "measurement": str(record.source) if record is not None else "none",
             }
+            if not settings.figures:
+                notes.append("figures: not drawn (a quick run); the tables hold every test point")
             write_report(staging, f"{kind} characterisation of {model.component.name}", context, notes, sections)
             replace_output_dir(staging, out_dir, KIND)
         finally:
