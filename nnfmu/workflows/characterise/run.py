@@ -23,8 +23,10 @@ from nnfmu.workflows.characterise.plots import characteristic_plot, loop_plot, s
 from nnfmu.workflows.characterise.report import INDEX_FILE, Section, write_report
 from nnfmu.workflows.characterise.settings import VEHICLE_RANGE, CharacteriseSettings
 from nnfmu.workflows.characterise.tables import (
+    Row,
     characteristic_rows,
     gas_friction_rows,
+    largest_deviation,
     loop_rows,
     model_cycles,
     stiffness_rows,
@@ -42,6 +44,13 @@ class CharacteriseReport:
     kind: str
     index: Path
     lines: list[str]
+
+
+def _largest(rows: list[Row], columns: tuple[str, ...], where: tuple[str, ...]) -> list[str]:
+    """The headline of a table with a measurement beside: each deviation column's largest value and where it was
+    read; nothing without a measurement."""
+    found = [text for column in columns if (text := largest_deviation(rows, column, where)) is not None]
+    return [f"Largest deviation per column: {'; '.join(found)}."] if found else []
 
 
 def _damper(
@@ -67,7 +76,17 @@ def _damper(
         [
             f"Force at peak rebound velocity (positive) and at peak jounce velocity (negative) per test: {how}; "
             f"{s.settle_cycles} cycle(s) settling (the first ramped in), then the read cycle."
-            + (" Deviation = model − measured." if measured else "")
+            + (" Deviation = model − measured." if measured else ""),
+            *_largest(
+                rows,
+                (
+                    "rebound_deviation [N]",
+                    "rebound_deviation_relative [%]",
+                    "jounce_deviation [N]",
+                    "jounce_deviation_relative [%]",
+                ),
+                (label, "peak_velocity [m/s]") if label else ("peak_velocity [m/s]",),
+            ),
         ],
         [
             characteristic_plot(
@@ -134,15 +153,21 @@ def _bushing(
         else f"every frequency at amplitudes {', '.join(f'{a:g}' for a in s.amplitude_fractions)} of the channel's "
         f"vehicle range ({ranges})"
     )
+    rows = stiffness_rows(result.channels, result.points, measured)
     stiffness = Section(
         "Dynamic stiffness and loss angle",
         [
             f"Per channel (the others at rest): {how}; {s.settle_cycles} cycle(s) settling, then the read "
             "cycle. |K*| and the loss angle are the modulus and angle of K*, the ratio of the first-harmonic "
             "phasors of force and deflection (least squares on sin and cos)."
-            + (" Deviation = model − measured." if measured else "")
+            + (" Deviation = model − measured." if measured else ""),
+            *_largest(
+                rows,
+                ("stiffness_deviation [%]", "loss_angle_deviation [deg]"),
+                ("channel", "frequency [Hz]", "amplitude [m]", "amplitude [rad]"),
+            ),
         ],
-        tables={"dynamic_stiffness.csv": stiffness_rows(result.channels, result.points, measured)},
+        tables={"dynamic_stiffness.csv": rows},
     )
     loop = Section(
         "Quasi-static force-deflection loop",
