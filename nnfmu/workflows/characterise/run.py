@@ -4,6 +4,7 @@ point. Everything is written into a staging folder beside `--out`, which replace
 
 from __future__ import annotations
 
+import math
 import os
 import shutil
 from collections.abc import Callable
@@ -16,6 +17,7 @@ from nnfmu.data.measurement import Measurement
 from nnfmu.out_paths import check_output_dir, replace_output_dir
 from nnfmu.workflows.characterise.bushing import channel_plan, characterise_bushing
 from nnfmu.workflows.characterise.damper import characterise_damper, command_levels, damper_tests
+from nnfmu.workflows.characterise.envelope import INSIDE, envelope_note
 from nnfmu.workflows.characterise.kind import BushingPorts, DamperPorts
 from nnfmu.workflows.characterise.measured import Cycle, measured_bushing, measured_damper
 from nnfmu.workflows.characterise.model import ModelUnderTest, model_under_test
@@ -53,6 +55,17 @@ def _largest(rows: list[Row], columns: tuple[str, ...], where: tuple[str, ...]) 
     return [f"Largest deviation per column: {'; '.join(found)}."] if found else []
 
 
+def _envelope_line(rows: list[Row]) -> list[str]:
+    """How many test points drive the network beyond its training envelope (its answer there is extrapolation)."""
+    outside = sum(row["training_envelope"] != INSIDE for row in rows)
+    if not outside:
+        return ["Every test point lies inside the network's training envelope (column training envelope)."]
+    return [
+        f"{outside} of {len(rows)} test points drive an input beyond the network's training envelope (column "
+        "training envelope): its answer there is extrapolation, not what its rig data held."
+    ]
+
+
 def _damper(
     model: ModelUnderTest, ports: DamperPorts, record: Measurement | None, settings: CharacteriseSettings, folder: Path
 ) -> tuple[list[Section], list[str], list[str]]:
@@ -66,6 +79,9 @@ def _damper(
     result = characterise_damper(model, tests, s.temperature)
     cycles = model_cycles(result)
     rows = characteristic_rows(result, label, measured)
+    rates = {"velocity": "peak_velocity [m/s]", "displacement": "amplitude [m]"}
+    for row in rows:
+        row["training_envelope"] = envelope_note(model.component, {k: float(row[c] or 0.0) for k, c in rates.items()})
     how = (
         f"sine tests found in {record.source}, run on the model at their amplitude, frequency and command"
         if measured and record is not None
@@ -87,6 +103,7 @@ def _damper(
                 ),
                 (label, "peak_velocity [m/s]") if label else ("peak_velocity [m/s]",),
             ),
+            *_envelope_line(rows),
         ],
         [
             characteristic_plot(
@@ -154,6 +171,10 @@ def _bushing(
         f"vehicle range ({ranges})"
     )
     rows = stiffness_rows(result.channels, result.points, measured)
+    points = [(ch, p) for ch in result.channels for p in result.points[ch.key]]  # the rows' order
+    for row, (ch, p) in zip(rows, points, strict=True):
+        peaks = {ch.position: p.amplitude} | ({ch.rate: 2 * math.pi * p.frequency * p.amplitude} if ch.rate else {})
+        row["training_envelope"] = envelope_note(model.component, peaks)
     stiffness = Section(
         "Dynamic stiffness and loss angle",
         [
@@ -166,6 +187,7 @@ def _bushing(
                 ("stiffness_deviation [%]", "loss_angle_deviation [deg]"),
                 ("channel", "frequency [Hz]", "amplitude [m]", "amplitude [rad]"),
             ),
+            *_envelope_line(rows),
         ],
         tables={"dynamic_stiffness.csv": rows},
     )
