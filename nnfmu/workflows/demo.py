@@ -41,6 +41,7 @@ from nnfmu.models.train import Progress
 from nnfmu.out_paths import check_output_dir, mark_output_dir
 from nnfmu.validate import ValidationSettings, compare, write_report
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.workflows.characterise.settings import QUICK_SETTINGS as QUICK_CHARACTERISE
 from nnfmu.workflows.fmu_build import host_binaries_only
 from nnfmu.workflows.iterate import IterateResult, IterateSettings, run_iterate
 from nnfmu.workflows.loop import LoopReport, run_loop
@@ -121,13 +122,15 @@ class DemoSettings:
     def road_test(self) -> RoadTestSettings:
         """Quick: a 2 s quarter car with two compared channels and a 0.3 s full vehicle with one (smoke runs of every
         road-test stage; the full vehicle's metrics are not meaningful that short, and each compared channel costs
-        three report plots per damper model, a third of the quick run's time). Full: the thesis's 50 s drive for
-        both systems, as `bench/road_test.py` runs it."""
+        three report plots per damper model, a third of the quick run's time), each network FMU characterised on a
+        short series without figures. Full: the thesis's 50 s drive for both systems, as `bench/road_test.py` runs
+        it, and the standard characterisations."""
         if self.quick:
             return RoadTestSettings(
                 quarter_car=SystemRun(2.0, channels=("damper_force", "damper_displacement")),
                 full_vehicle=SystemRun(0.3, channels=("damper_fl_force",)),
                 seed=self.seed,
+                characterise=QUICK_CHARACTERISE,
             )
         return RoadTestSettings(quarter_car=SystemRun(50.0), full_vehicle=SystemRun(50.0), seed=self.seed)
 
@@ -147,10 +150,16 @@ class DemoSettings:
 
     @property
     def loop(self) -> LoopSettings:
-        """The loop stage's settings; quick: one effect, a short retraining of the copied network alone (a smoke run,
-        not the loop's results)."""
+        """The loop stage's settings; quick: one effect, a short retraining of the copied network alone, a short
+        characterisation without figures (a smoke run, not the loop's results)."""
         if self.quick:
-            return LoopSettings(max_effects=1, max_epochs=QUICK_LOOP_EPOCHS, extra_hidden=(0,), fresh_rival=False)
+            return LoopSettings(
+                max_effects=1,
+                max_epochs=QUICK_LOOP_EPOCHS,
+                extra_hidden=(0,),
+                fresh_rival=False,
+                characterise=QUICK_CHARACTERISE,
+            )
         return LoopSettings()
 
     @property

@@ -4,6 +4,7 @@ point. Everything is written into a staging folder beside `--out`, which replace
 
 from __future__ import annotations
 
+import math
 import os
 import shutil
 from collections.abc import Callable
@@ -16,6 +17,7 @@ from nnfmu.data.measurement import Measurement
 from nnfmu.out_paths import check_output_dir, replace_output_dir
 from nnfmu.workflows.characterise.bushing import channel_plan, characterise_bushing
 from nnfmu.workflows.characterise.damper import characterise_damper, command_levels, damper_tests
+from nnfmu.workflows.characterise.envelope import INSIDE, envelope_note
 from nnfmu.workflows.characterise.kind import BushingPorts, DamperPorts
 from nnfmu.workflows.characterise.measured import Cycle, measured_bushing, measured_damper
 from nnfmu.workflows.characterise.model import ModelUnderTest, model_under_test
@@ -23,8 +25,10 @@ from nnfmu.workflows.characterise.plots import characteristic_plot, loop_plot, s
 from nnfmu.workflows.characterise.report import INDEX_FILE, Section, write_report
 from nnfmu.workflows.characterise.settings import VEHICLE_RANGE, CharacteriseSettings
 from nnfmu.workflows.characterise.tables import (
+    Row,
     characteristic_rows,
     gas_friction_rows,
+    largest_deviation,
     loop_rows,
     model_cycles,
     stiffness_rows,
@@ -44,6 +48,24 @@ class CharacteriseReport:
     lines: list[str]
 
 
+def _largest(rows: list[Row], columns: tuple[str, ...], where: tuple[str, ...]) -> list[str]:
+    """The headline of a table with a measurement beside: each deviation column's largest value and where it was
+    read; nothing without a measurement."""
+    found = [text for column in columns if (text := largest_deviation(rows, column, where)) is not None]
+    return [f"Largest deviation per column: {'; '.join(found)}."] if found else []
+
+
+def _envelope_line(rows: list[Row]) -> list[str]:
+    """How many test points drive the network beyond its training envelope (its answer there is extrapolation)."""
+    outside = sum(row["training_envelope"] != INSIDE for row in rows)
+    if not outside:
+        return ["Every test point lies inside the network's training envelope (column training envelope)."]
+    return [
+        f"{outside} of {len(rows)} test points drive an input beyond the network's training envelope (column "
+        "training envelope): its answer there is extrapolation, not what its rig data held."
+    ]
+
+
 def _damper(
     model: ModelUnderTest, ports: DamperPorts, record: Measurement | None, settings: CharacteriseSettings, folder: Path
 ) -> tuple[list[Section], list[str], list[str]]:
@@ -57,6 +79,9 @@ def _damper(
     result = characterise_damper(model, tests, s.temperature)
     cycles = model_cycles(result)
     rows = characteristic_rows(result, label, measured)
+    rates = {"velocity": "peak_velocity [m/s]", "displacement": "amplitude [m]"}
+    for row in rows:
+        row["training_envelope"] = envelope_note(model.component, {k: float(row[c] or 0.0) for k, c in rates.items()})
     how = (
         f"sine tests found in {record.source}, run on the model at their amplitude, frequency and command"
         if measured and record is not None
@@ -67,13 +92,26 @@ def _damper(
         [
             f"Force at peak rebound velocity (positive) and at peak jounce velocity (negative) per test: {how}; "
             f"{s.settle_cycles} cycle(s) settling (the first ramped in), then the read cycle."
-            + (" Deviation = model − measured." if measured else "")
+            + (" Deviation = model − measured." if measured else ""),
+            *_largest(
+                rows,
+                (
+                    "rebound_deviation [N]",
+                    "rebound_deviation_relative [%]",
+                    "jounce_deviation [N]",
+                    "jounce_deviation_relative [%]",
+                ),
+                (label, "peak_velocity [m/s]") if label else ("peak_velocity [m/s]",),
+            ),
+            *_envelope_line(rows),
         ],
         [
             characteristic_plot(
                 result.points, measured.points if measured else None, command, unit, folder / "characteristic.png"
             )
-        ],
+        ]
+        if settings.figures
+        else [],
         {"characteristic.csv": rows},
     )
     gas = Section(
@@ -96,7 +134,7 @@ def _damper(
     if measured:
         tables["measured_work_diagrams.csv"] = work_diagram_rows(measured.points, measured.cycles, label, "measured_")
     work.tables = tables
-    for i, level in enumerate(dict.fromkeys(p.command for p in result.points)):
+    for i, level in enumerate(dict.fromkeys(p.command for p in result.points) if settings.figures else ()):
         idx = [j for j, p in enumerate(result.points) if p.command == level]
         title = "model" if level is None else f"{command} {level:.3g} {unit}"
         names = work_diagram_plots(
@@ -132,15 +170,26 @@ def _bushing(
         else f"every frequency at amplitudes {', '.join(f'{a:g}' for a in s.amplitude_fractions)} of the channel's "
         f"vehicle range ({ranges})"
     )
+    rows = stiffness_rows(result.channels, result.points, measured)
+    points = [(ch, p) for ch in result.channels for p in result.points[ch.key]]  # the rows' order
+    for row, (ch, p) in zip(rows, points, strict=True):
+        peaks = {ch.position: p.amplitude} | ({ch.rate: 2 * math.pi * p.frequency * p.amplitude} if ch.rate else {})
+        row["training_envelope"] = envelope_note(model.component, peaks)
     stiffness = Section(
         "Dynamic stiffness and loss angle",
         [
             f"Per channel (the others at rest): {how}; {s.settle_cycles} cycle(s) settling, then the read "
             "cycle. |K*| and the loss angle are the modulus and angle of K*, the ratio of the first-harmonic "
             "phasors of force and deflection (least squares on sin and cos)."
-            + (" Deviation = model − measured." if measured else "")
+            + (" Deviation = model − measured." if measured else ""),
+            *_largest(
+                rows,
+                ("stiffness_deviation [%]", "loss_angle_deviation [deg]"),
+                ("channel", "frequency [Hz]", "amplitude [m]", "amplitude [rad]"),
+            ),
+            *_envelope_line(rows),
         ],
-        tables={"dynamic_stiffness.csv": stiffness_rows(result.channels, result.points, measured)},
+        tables={"dynamic_stiffness.csv": rows},
     )
     loop = Section(
         "Quasi-static force-deflection loop",
@@ -153,7 +202,7 @@ def _bushing(
         ],
         tables={"quasi_static_loop.csv": loop_rows(result, measured)},
     )
-    for ch in result.channels:
+    for ch in result.channels if settings.figures else ():
         stiffness.images.extend(
             stiffness_plots(
                 ch, result.points[ch.key], measured.points[ch.key] if measured else None, folder / ch.key
@@ -211,6 +260,8 @@ def characterise(
                 "tested through": f"its FMU at default parameters, sample period {model.period:g} s",
                 "measurement": str(record.source) if record is not None else "none",
             }
+            if not settings.figures:
+                notes.append("figures: not drawn (a quick run); the tables hold every test point")
             write_report(staging, f"{kind} characterisation of {model.component.name}", context, notes, sections)
             replace_output_dir(staging, out_dir, KIND)
         finally:

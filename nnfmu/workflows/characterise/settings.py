@@ -91,7 +91,20 @@ class BushingTestSettings:
 
 @dataclass(frozen=True)
 class CharacteriseSettings:
-    """Both kinds' test settings; the model's kind picks one."""
+    """Both kinds' test settings; the model's kind picks one. `figures`: draw the PNG figures (off: the tables
+    alone, for a smoke run whose time matters; each figure costs about 0.3 s of CPU)."""
 
     damper: DamperTestSettings = field(default_factory=DamperTestSettings)
     bushing: BushingTestSettings = field(default_factory=BushingTestSettings)
+    figures: bool = True
+
+
+# The tests of a smoke run that links a characterisation from its report (`nnfmu demo --quick`): three peak
+# velocities (the slowest still reads gas force and friction), the bushing at its full vehicle range at 1 and 10 Hz,
+# the quasi-static loop at 0.5 Hz, tables without figures (the road test's three network FMUs took 8 s of CPU with
+# figures, 15 of them).
+QUICK_SETTINGS = CharacteriseSettings(
+    DamperTestSettings(peak_velocities=(0.1, 0.5, 1.0)),
+    BushingTestSettings(frequencies=(1.0, 10.0), amplitude_fractions=(1.0,), quasi_static_frequency=0.5),
+    figures=False,
+)

@@ -178,3 +178,26 @@ def write_csv(path: Path, rows: Sequence[Row]) -> Path:
     """Write `rows` to `path` (inside a staging folder: the result is moved into place as a whole)."""
     path.write_text(csv_text(rows), encoding="utf-8")
     return path
+
+
+def _finite(row: Row, column: str) -> float | None:
+    value = row.get(column)
+    return float(value) if isinstance(value, float) and math.isfinite(value) else None
+
+
+def largest_deviation(rows: Sequence[Row], column: str, where: Sequence[str]) -> str | None:
+    """The report's headline of one deviation column: its value of largest magnitude (with unit) and the test point
+    it was read at (`where`: the columns naming it, `name [unit]` or text); None when no row has one."""
+    found = [(abs(v), r, v) for r in rows if (v := _finite(r, column)) is not None]
+    if not found:
+        return None
+    _, row, value = max(found, key=lambda f: f[0])
+    parts = []
+    for w in where:
+        number = _finite(row, w)
+        if number is not None:
+            parts.append(f"{number:.3g} {w.partition(' [')[2].rstrip(']')}")
+        elif isinstance(row.get(w), str):
+            parts.append(str(row[w]))
+    name, _, unit = column.partition(" [")
+    return f"{name.replace('_', ' ')} {value:+.3g} {unit.rstrip(']')} at {', '.join(parts)}"

@@ -75,7 +75,8 @@ class LoopReport:
     """The whole loop: effects added in order, every iteration, the overall test error before and after, the final
     model's files, the diagnoses (first and last) and notes (effects that could not be added, and why). `summary`:
     the headline in an engineer's words with its verdict against the target NRMSE (`target`: value [1] and source);
-    `details`: the same outcome in the diagnosis's terms (effect and test names)."""
+    `details`: the same outcome in the diagnosis's terms (effect and test names); `characterisations`: per model
+    ("first", "final") the link to its characterisation report relative to the loop's folder, or why it has none."""
 
     data: str
     model: str
@@ -94,6 +95,7 @@ class LoopReport:
     diagnoses: list[Diagnosis] = field(default_factory=list)
     details: str = ""
     target: dict[str, Any] = field(default_factory=dict)
+    characterisations: dict[str, dict[str, str | None]] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -118,4 +120,5 @@ class LoopReport:
             "notes": list(self.notes),
             "missing_measurements": list(self.missing_measurements),
             "diagnoses": [d.to_dict() for d in self.diagnoses],
+            "characterisations": self.characterisations,
         }

@@ -27,6 +27,7 @@ from nnfmu.models.features import FeatureSpec
 from nnfmu.models.trained import TrainedModel
 from nnfmu.out_paths import check_output_dir, replace_output_dir
 from nnfmu.validate import ValidationSettings, channel_metrics
+from nnfmu.workflows.characterise.linked import characterise_models
 from nnfmu.workflows.loop.blocks import RecordBlocks, part_measurement, plan_blocks
 from nnfmu.workflows.loop.errors import LoopError
 from nnfmu.workflows.loop.headline import headline
@@ -233,6 +234,7 @@ def run_loop(
             added.extend(ext.effect.split("+"))
             model, predicted, onnx_path, fmu_path = retrained.model, new_predicted, new_onnx, new_fmu
         last = diagnoses[-1]
+        characterisations = _characterise(staging, fmu_path, settings)
         error_before = _errors(first_prediction, measured, rows["test"], slope)
         error_after = _errors(predicted, measured, rows["test"], slope)
         target = settings.target
@@ -254,6 +256,7 @@ def run_loop(
             diagnoses=diagnoses,
             details=_summary(added, last),
             target={"nrmse": target.nrmse, "source": target.source},
+            characterisations=characterisations,
         )
         write_loop_report(staging, report, m, rows, first_prediction, predicted, steps)
         replace_output_dir(staging, out_dir, "loop")
@@ -261,6 +264,17 @@ def run_loop(
         if staging.exists():
             shutil.rmtree(staging)
     return report
+
+
+def _characterise(staging: Path, final_fmu: Path, settings: LoopSettings) -> dict[str, dict[str, str | None]]:
+    """The first and the final model's FMUs characterised into `staging`/characterise/ (the final one only when
+    the loop changed the model): per model the link from report.html, or why it has none."""
+    if settings.characterise is None:
+        return {}
+    first = staging / "model_0.fmu"
+    models = {"first": first} | ({"final": final_fmu} if final_fmu != first else {})
+    found = characterise_models(models, staging / "characterise", settings.characterise)
+    return {label: {"link": c.link(staging / "report.html"), "reason": c.reason} for label, c in found.items()}
 
 
 def _summary(added: list[str], last: Diagnosis) -> str:

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from nnfmu.diagnosis import DiagnosisSettings
 from nnfmu.models.retrain import RetrainSettings
 from nnfmu.validate.verdict import Target
+from nnfmu.workflows.characterise.settings import CharacteriseSettings
 from nnfmu.workflows.loop.errors import LoopError
 
 
@@ -34,6 +35,8 @@ class LoopSettings:
     thousands of samples a network's own approximation error makes tiny effects statistically significant, and the
     loop adds what matters, not what is merely detectable. `backend`/`fmi_version`: the FMUs built. `target`: the
     test-part NRMSE the report's headline judges the final model by (`nnfmu.validate.verdict`; 5 % by default).
+    `characterise`: the standard component tests the first and the final model's FMUs are characterised with into
+    `characterise/first` and `characterise/final`, which the report links to (None: none).
     """
 
     max_effects: int = 3
@@ -72,6 +75,7 @@ class LoopSettings:
     min_explained: float = 0.05
     backend: str = "native"
     fmi_version: int = 2
+    characterise: CharacteriseSettings | None = CharacteriseSettings()
 
     def __post_init__(self) -> None:
         if isinstance(self.max_effects, bool) or not isinstance(self.max_effects, int) or self.max_effects < 0:

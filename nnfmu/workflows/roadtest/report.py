@@ -14,6 +14,7 @@ from typing import Any
 import jinja2
 
 from nnfmu.atomic import write_text_atomic
+from nnfmu.workflows.characterise.linked import LinkedCharacterisation
 
 TEMPLATE = "road_test_report.html.j2"
 
@@ -23,9 +24,14 @@ def _number(value: float | None) -> str:
 
 
 def write_system_report(
-    summary: Mapping[str, Any], context: Mapping[str, str], model_reports: Mapping[str, Path], path: Path
+    summary: Mapping[str, Any],
+    context: Mapping[str, str],
+    model_reports: Mapping[str, Path],
+    path: Path,
+    characterisations: Mapping[str, LinkedCharacterisation] | None = None,
 ) -> Path:
-    """Render `summary` (a `SystemResult.to_dict()`) with `context` lines and links to `model_reports` into `path`."""
+    """Render `summary` (a `SystemResult.to_dict()`) with `context` lines and links to `model_reports` and to each
+    network's `characterisations` (or why it has none) into `path`."""
     environment = jinja2.Environment(
         loader=jinja2.FileSystemLoader(Path(__file__).resolve().parent),
         autoescape=True,
@@ -35,6 +41,12 @@ def write_system_report(
     )
     environment.filters["number"] = _number
     links = {model: os.path.relpath(report, path.parent) for model, report in model_reports.items()}
-    html = environment.get_template(TEMPLATE).render(summary=summary, context=context, links=links)
+    characterised = {
+        network: {"link": found.link(path), "reason": found.reason}
+        for network, found in (characterisations or {}).items()
+    }
+    html = environment.get_template(TEMPLATE).render(
+        summary=summary, context=context, links=links, characterisations=characterised
+    )
     write_text_atomic(path, html)
     return path

@@ -32,6 +32,8 @@ from nnfmu.data.drive_files import write_drive
 from nnfmu.fmu.step_graph import load_fmu_graph
 from nnfmu.validate import ChannelComparison, Target, ValidationSettings, compare, write_report
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.workflows.characterise.linked import LinkedCharacterisation, characterise_models
+from nnfmu.workflows.characterise.settings import CharacteriseSettings
 from nnfmu.workflows.roadtest.budget import BudgetRow, budget_rows
 from nnfmu.workflows.roadtest.envelope import Excursion, excursion
 from nnfmu.workflows.roadtest.report import write_system_report
@@ -80,6 +82,7 @@ COMPARED = {
         "bushing_fl_front_conical_torque",
     ),
 }
+BUSHING_NETWORK = "lca-bushing"  # the four bushing networks merged into one FMU (`build_component_fmus`)
 TRUTH = "truth physics"  # the co-simulation with the truth laws as FMUs in the networks' place
 Log = Callable[[str], None]
 
@@ -108,7 +111,9 @@ class RoadTestSettings:
     drive covers it; `fade_in` [s]: the drive rises from rest over its first seconds (`DriveSettings.fade_in`), as
     the car starts at rest: the road's height at t = 0 kicked the LCA and its bushing networks out of their training
     envelope, which locked vehicle-trained bushing networks into a 125 Hz oscillation for the whole drive. `target`:
-    the NRMSE each system report's verdict judges each damper model's worst channel by (5 % by default)."""
+    the NRMSE each system report's verdict judges each damper model's worst channel by (5 % by default).
+    `characterise`: the standard tests each network FMU is characterised with into `characterise/<network>/`, which
+    the system reports link to (None: none)."""
 
     quarter_car: SystemRun | None = SystemRun(50.0)
     full_vehicle: SystemRun | None = SystemRun(50.0)
@@ -120,6 +125,7 @@ class RoadTestSettings:
     window: tuple[float, float] = (30.0, 35.0)
     fade_in: float = 0.5
     target: Target = Target()
+    characterise: CharacteriseSettings | None = CharacteriseSettings()
 
     def runs(self) -> dict[str, SystemRun]:
         chosen = {"quarter-car": self.quarter_car, "full-vehicle": self.full_vehicle}
@@ -140,6 +146,7 @@ class SystemResult:
     seconds: dict[str, float]
     duration: float
     target: Target = Target()
+    characterisations: dict[str, LinkedCharacterisation] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, object]:
         return {
@@ -153,6 +160,7 @@ class SystemResult:
             "thesis_table": [r.to_dict() for r in self.rows],
             "budget": [r.to_dict() for r in self.budget],
             "envelope": [e.to_dict() for e in self.excursions],
+            "characterisations": {k: v.describe() for k, v in self.characterisations.items()},
         }
 
 
@@ -287,9 +295,10 @@ def _run_system(
     settings: RoadTestSettings,
     out: Path,
     log: Log,
+    characterised: Mapping[str, LinkedCharacterisation],
 ) -> SystemResult:
     """One system: FMUs and SSDs, reference, both damper networks and the truth physics co-simulated and compared,
-    the error budget, the envelope checks, the report."""
+    the error budget, the envelope checks, the report (linking the characterisations of the system's networks)."""
     drive = _stretch(drive, run.duration)
     bushings = bool(bushing_elements(system))
     stabilisers = (
@@ -369,11 +378,40 @@ def _run_system(
         )
         for model, chosen in comparisons.items()
     }
+    networks = [*DAMPER_MODELS, *([BUSHING_NETWORK] if bushings else [])]
     outcome = SystemResult(
-        system, ssds, report_dir / "index.html", rows, budget, excursions, seconds, run.duration, settings.target
+        system,
+        ssds,
+        report_dir / "index.html",
+        rows,
+        budget,
+        excursions,
+        seconds,
+        run.duration,
+        settings.target,
+        {k: characterised[k] for k in networks if k in characterised},
     )
-    write_system_report(outcome.to_dict(), _context(system, run, settings, drive), model_reports, outcome.report)
+    write_system_report(
+        outcome.to_dict(),
+        _context(system, run, settings, drive),
+        model_reports,
+        outcome.report,
+        outcome.characterisations,
+    )
     return outcome
+
+
+def _characterise(
+    fmus: ComponentFmus, folder: Path, settings: CharacteriseSettings | None, log: Log
+) -> dict[str, LinkedCharacterisation]:
+    """Each network FMU's standard tests into `folder`/<network> (none when `settings` is None)."""
+    if settings is None:
+        return {}
+    networks = {**fmus.dampers, **({BUSHING_NETWORK: fmus.bushing} if fmus.bushing is not None else {})}
+    started = time.perf_counter()
+    found = characterise_models(networks, folder, settings, log)
+    log(f"characterised {len(networks)} network FMU(s) in {time.perf_counter() - started:.1f} s")
+    return found
 
 
 def _context(system: str, run: SystemRun, settings: RoadTestSettings, drive: Measurement) -> dict[str, str]:
@@ -430,8 +468,10 @@ def run_road_test(
         out / "fmu", period if period is not None else min(r.step for r in runs.values()), "full-vehicle" in runs
     )
     outcome = RoadTestResult(out=out, drive=drive_path)
+    characterised = _characterise(fmus, out / "characterise", settings.characterise, log)
     for system, run in runs.items():
-        outcome.systems.append(_run_system(system, run, models, fmus, truth, drive, settings, out, log))
+        system_run = _run_system(system, run, models, fmus, truth, drive, settings, out, log, characterised)
+        outcome.systems.append(system_run)
     outcome.seconds = time.perf_counter() - started
     outcome.summary = out / "road_test.json"
     write_text_atomic(

@@ -159,7 +159,10 @@ def test_the_cli_puts_the_measured_characteristic_beside_the_model(models: dict[
             float(row["rebound_force [N]"]) - float(row["measured_rebound_force [N]"]), abs=1e-6
         )
     html = (out / "index.html").read_text(encoding="utf-8")
-    assert "measured_rebound_force [N]" in html and "characteristic.png" in html
+    # the deviation columns shown (headers break at spaces to fit a 1280 px page) and the headline above them
+    assert "<th>measured rebound force [N]</th>" in html and "<th>rebound deviation [N]</th>" in html
+    assert "Largest deviation per column: rebound deviation " in html and "characteristic.png" in html
+    assert "<th>training envelope</th>" in html
     assert (out / "measured_work_diagrams.csv").is_file()
 
 

@@ -20,6 +20,7 @@ from nnfmu.fmu.options import BuildOptions
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.vehicle.dynamics import LinearLaw, MonolithicSettings, simulate_monolithic
 from nnfmu.vehicle.fmu import VehicleBuildSettings, vehicle_model
+from nnfmu.workflows.characterise.settings import QUICK_SETTINGS
 from nnfmu.workflows.roadtest import (
     BUSHING_MODELS,
     DAMPER_MODELS,
@@ -76,8 +77,12 @@ def trained(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
 @pytest.fixture(scope="module")
 def road(trained: dict[str, Path], tmp_path_factory: pytest.TempPathFactory) -> RoadTestResult:
     """A short road test of both systems (the quarter car's default channels; the full vehicle a fraction of a second,
-    `FULL_VEHICLE_CHANNELS`)."""
-    settings = RoadTestSettings(quarter_car=SystemRun(2.0), full_vehicle=SystemRun(0.3, channels=FULL_VEHICLE_CHANNELS))
+    `FULL_VEHICLE_CHANNELS`), each network FMU characterised on the quick series."""
+    settings = RoadTestSettings(
+        quarter_car=SystemRun(2.0),
+        full_vehicle=SystemRun(0.3, channels=FULL_VEHICLE_CHANNELS),
+        characterise=QUICK_SETTINGS,
+    )
     return run_road_test(tmp_path_factory.mktemp("road"), trained, settings, log=lambda _: None)
 
 
@@ -150,6 +155,25 @@ def test_road_test_writes_reports_and_finite_thesis_metrics(road: RoadTestResult
             with open_system(ssd):
                 pass
         assert all(e["share_outside"] is not None for e in system["envelope"])
+
+
+@pytest.mark.slow
+def test_each_system_report_links_the_characterisation_of_its_networks(road: RoadTestResult) -> None:
+    """The quarter car's report links its two damper networks', the full vehicle's those and the merged bushing's;
+    every link resolves to a characterisation report of the right kind."""
+    expected = {"quarter-car": set(DAMPER_MODELS), "full-vehicle": {*DAMPER_MODELS, "lca-bushing"}}
+    for system in road.systems:
+        assert set(system.characterisations) == expected[system.system]
+        html = system.report.read_text(encoding="utf-8")
+        for network, found in system.characterisations.items():
+            link = found.link(system.report)
+            assert link == f"../../characterise/{network}/index.html"
+            assert f'<a href="{link}">{network}: characterisation report</a>' in html
+            kind = "bushing" if network == "lca-bushing" else "damper"
+            assert f"{kind} characterisation of" in (system.report.parent / link).read_text(encoding="utf-8")
+    bushing = road.out / "characterise" / "lca-bushing" / "dynamic_stiffness.csv"
+    channels = {line.split(",")[0] for line in bushing.read_text(encoding="utf-8").splitlines()[1:]}
+    assert channels == {"axial", "radial", "axial_rotation", "conical_rotation"}
 
 
 @pytest.mark.slow
