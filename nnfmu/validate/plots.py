@@ -20,6 +20,15 @@ from nnfmu.validate.meaningful import NOT_MEANINGFUL
 RESULT_STYLE = {"color": "tab:red", "label": "result", "linewidth": 1.0}
 REFERENCE_STYLE = {"color": "black", "label": "reference", "linewidth": 1.0}
 FIGURE_WIDTH = 8.0  # [in] at 100 dpi
+FIGURE_DPI = 100
+# Fixed margins [in] of the channel plots, wide enough for a 7-character tick label ("-250000") and a unit-carrying
+# axis label: constrained layout measured every tick label twice, 20-30 % of a plot's CPU time (bench/plots.py).
+# The top margin grows by a line height per title line.
+MARGINS = {"left": 1.0, "right": 0.2, "bottom": 0.55, "top": 0.15}
+TITLE_LINE = 0.22  # [in] a 12 pt title line and its spacing
+# A line drawn with more points than this is reduced to its min/max envelope per pixel column (`envelope`): the
+# pixels show the same trace, peaks included, at a fraction of the drawing cost.
+MAX_LINE_POINTS = 2 * int(FIGURE_WIDTH * FIGURE_DPI)
 # Characters of a title line: the default 12 pt title font averages ~7.5 px a character, 800 px hold ~100; 70 leaves
 # room for wide letters (a longer title was clipped at both ends, issue 31).
 TITLE_CHARS = 70
@@ -43,15 +52,42 @@ def psd_unit(unit: str) -> str:
     return f"{base}^2/Hz"
 
 
-def new_axes(title: str, height: float = 4.0):
+def new_axes(title: str, height: float = 4.0, fixed_margins: bool = False):
     """A figure with one grid-lined axes, drawn off-screen (Agg); `title` is shown literally (no math text), wrapped
-    to the figure's width."""
-    figure = Figure(figsize=(FIGURE_WIDTH, height), dpi=100, layout="constrained")
+    to the figure's width. Laid out by matplotlib's constrained layout, or with `fixed_margins` by `MARGINS` (for
+    plots whose labels are known to fit them: the channel plots below)."""
+    figure = Figure(figsize=(FIGURE_WIDTH, height), dpi=FIGURE_DPI, layout=None if fixed_margins else "constrained")
     FigureCanvasAgg(figure)
     axes = figure.add_subplot()
-    axes.set_title(fit_title(title), parse_math=False)
+    wrapped = fit_title(title)
+    axes.set_title(wrapped, parse_math=False)
     axes.grid(True, alpha=0.3)
+    if fixed_margins:
+        top = MARGINS["top"] + TITLE_LINE * (wrapped.count("\n") + 1)
+        figure.subplots_adjust(
+            left=MARGINS["left"] / FIGURE_WIDTH,
+            right=1.0 - MARGINS["right"] / FIGURE_WIDTH,
+            bottom=MARGINS["bottom"] / height,
+            top=1.0 - top / height,
+        )
     return figure, axes
+
+
+def envelope(x: np.ndarray, y: np.ndarray, max_points: int = MAX_LINE_POINTS) -> tuple[np.ndarray, np.ndarray]:
+    """`(x, y)` with at most `max_points` points (and the two ends): beyond that, each run of samples as wide as
+    two drawn points keeps its minimum and its maximum in time order, so the drawn line keeps every peak."""
+    n = len(y)
+    if n <= max_points:
+        return x, y
+    run = -(-2 * n // max_points)  # samples per run: ceil(n / (max_points / 2))
+    whole = n // run * run
+    starts = np.arange(0, whole, run)
+    blocks = y[:whole].reshape(-1, run)
+    picks = [starts + blocks.argmin(axis=1), starts + blocks.argmax(axis=1), [0, n - 1]]
+    if whole < n:
+        picks.append(whole + np.array([np.argmin(y[whole:]), np.argmax(y[whole:])]))
+    keep = np.unique(np.concatenate(picks))
+    return x[keep], y[keep]
 
 
 def _save(figure: Figure, path: Path) -> Path:
@@ -61,10 +97,10 @@ def _save(figure: Figure, path: Path) -> Path:
 
 def plot_time_window(c: ChannelComparison, path: Path) -> Path:
     """Result over reference inside the comparison's window (the span around the global peak)."""
-    figure, axes = new_axes(f"{c.name}: {c.window[0]:g} to {c.window[1]:g} s")
+    figure, axes = new_axes(f"{c.name}: {c.window[0]:g} to {c.window[1]:g} s", fixed_margins=True)
     inside = (c.time >= c.window[0]) & (c.time <= c.window[1])
-    axes.plot(c.time[inside], c.reference[inside], **REFERENCE_STYLE)
-    axes.plot(c.time[inside], c.result[inside], **RESULT_STYLE)
+    axes.plot(*envelope(c.time[inside], c.reference[inside]), **REFERENCE_STYLE)
+    axes.plot(*envelope(c.time[inside], c.result[inside]), **RESULT_STYLE)
     axes.set_xlabel("time [s]")
     axes.set_ylabel(axis_label(c.name, c.unit), parse_math=False)
     axes.legend()
@@ -73,7 +109,7 @@ def plot_time_window(c: ChannelComparison, path: Path) -> Path:
 
 def plot_psd(c: ChannelComparison, path: Path) -> Path:
     """Welch PSDs of result and reference, log density axis where any density is positive."""
-    figure, axes = new_axes(f"{c.name}: power spectral density")
+    figure, axes = new_axes(f"{c.name}: power spectral density", fixed_margins=True)
     axes.plot(c.psd_reference.frequency, c.psd_reference.density, **REFERENCE_STYLE)
     axes.plot(c.psd_result.frequency, c.psd_result.density, **RESULT_STYLE)
     if np.any(c.psd_reference.density > 0) or np.any(c.psd_result.density > 0):
@@ -96,7 +132,8 @@ def plot_rainflow(c: ChannelComparison, path: Path) -> Path:
     figure, axes = new_axes(
         f"{c.name}: rainflow exceedance; pseudo-damage ratio "
         + (f"{ratio:.3g}" if np.isfinite(ratio) else NOT_MEANINGFUL)
-        + f" (m = {c.basquin_slope:g})"
+        + f" (m = {c.basquin_slope:g})",
+        fixed_margins=True,
     )
     any_cycles = False
     for signal, style in ((c.reference, REFERENCE_STYLE), (c.result, RESULT_STYLE)):
