@@ -305,7 +305,8 @@ def _run(folder: str, experiment: Experiment, archive: _Archive, tolerance: floa
     try:
         md = read_model_description(folder)
     except Exception as error:  # fmpy raises plain exceptions for malformed XML and missing attributes
-        raise CheckError(f"{archive.path}: cannot read its {MODEL_DESCRIPTION}: {error}") from None
+        said = "; ".join(map(str, getattr(error, "problems", None) or [error]))  # fmpy's schema problems: one line
+        raise CheckError(f"{archive.path}: cannot read its {MODEL_DESCRIPTION}: {' '.join(said.split())}") from None
     names = {v.name for v in md.modelVariables}
     header, reference = _table(archive, experiment.references, "references")
     unknown = [n for n in header[1:] if n not in names]

@@ -300,3 +300,21 @@ def test_a_default_experiment_step_past_the_limit_is_refused(network, tmp_path):
     hostile = _replace(network["fmi2"], files, tmp_path / "d.fmu")
     with pytest.raises(CheckError, match=r"steps of 1e-12 s.*more than the 1000000"):
         check_fmu(hostile)
+
+
+def test_a_model_description_failing_its_schema_is_one_line_naming_the_attribute(network, tmp_path):
+    """fmpy's schema problems were printed below a first line naming nothing ('Failed to validate
+    modelDescription.xml:'): the problems now stand in the one error line (a default stop time of 'nan' here)."""
+    with zipfile.ZipFile(network["fmi2"]) as archive:
+        description = archive.read("modelDescription.xml").decode()
+    hostile = _replace(
+        network["fmi2"],
+        {"modelDescription.xml": description.replace("<DefaultExperiment", '<DefaultExperiment stopTime="nan"')},
+        tmp_path / "nan.fmu",
+    )
+    with pytest.raises(CheckError) as caught:
+        check_fmu(hostile)
+    message = str(caught.value)
+    assert "\n" not in message, message
+    for words in ("nan.fmu", "modelDescription.xml", "DefaultExperiment", "stopTime", "'nan'"):
+        assert words in message, message
