@@ -77,7 +77,7 @@ def nnfmu(*args: object, timeout: float = 120, cwd: Path | None = None, **popen)
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
-        cwd=cwd,
+        cwd=cwd or ENV["PYTHONPATH"],  # `python -m` puts its folder first on sys.path: the code under test's
         env=popen.pop("env", ENV),
         start_new_session=True,
         **popen,
@@ -392,7 +392,9 @@ def campaign_up_fmu(fx: Fixtures) -> tuple[str, str]:
     return (ESCAPE if verdict == "unclear error" else verdict), detail
 
 
-def _ssd_sources(fx: Fixtures, name: str, source: Callable[[Path, str], str]) -> tuple[str, str]:
+def _ssd_sources(
+    fx: Fixtures, name: str, source: Callable[[Path, str], str], words: tuple[str, ...] = ("outside", "--allow-outside")
+) -> tuple[str, str]:
     folder = fx.fresh(name)
     (folder / "fmus").mkdir()
     (folder / "sys").mkdir()
@@ -408,7 +410,31 @@ def _ssd_sources(fx: Fixtures, name: str, source: Callable[[Path, str], str]) ->
     ran = nnfmu("cosim", ssd, "--drive", fx.made["qc_drive"], "--out", folder / "r.csv")
     if ran.code == 0:
         return ESCAPE, "exit 0: FMUs outside the system's folder were run"
-    verdict, detail = judge(ran, "outside", "--allow-outside")
+    verdict, detail = judge(ran, *words)
+    return (ESCAPE if verdict == "unclear error" else verdict), detail
+
+
+@attack("escape", ".ssd with file:// URI FMU sources")
+def ssd_uri(fx: Fixtures) -> tuple[str, str]:
+    """Read as a path below the system's folder ('sys/file:/...'), which holds no such FMU: refused, nothing loaded."""
+    return _ssd_sources(fx, "ssd-uri", lambda folder, name: f"file://{folder / 'fmus' / name}", ("not found",))
+
+
+@attack("escape", "campaign system inside its folder naming an FMU two folders up")
+def campaign_ssd_up(fx: Fixtures) -> tuple[str, str]:
+    top = fx.fresh("campaign-ssd-up")
+    shutil.copy(fx.made["qc_linear"], top / fx.made["qc_linear"].name)
+    folder = top / "a" / "b"
+    folder.mkdir(parents=True)
+    path = campaign(fx, folder, GENERATED.format(n=1))
+    ssd = folder / "sys" / "SystemStructure.ssd"
+    name = fx.made["qc_linear"].name
+    ssd.write_text(ssd.read_text(encoding="utf-8").replace(f'source="{name}"', f'source="../../../{name}"'))
+    (folder / "sys" / name).unlink()
+    ran = nnfmu("batch", path, "--out", folder / "out", "--workers", "0")
+    if ran.code == 0:
+        return ESCAPE, "exit 0: the system's FMU two folders up was run"
+    verdict, detail = judge(ran, name, "outside")
     return (ESCAPE if verdict == "unclear error" else verdict), detail
 
 
@@ -423,6 +449,48 @@ def ssd_absolute(fx: Fixtures) -> tuple[str, str]:
 
 
 # ------------------------------------------------------------------------------------------------------------- hangs
+
+
+def _capped() -> None:
+    """A 6 GiB address-space cap for a child that might read without end (a link to /dev/zero)."""
+    import resource
+
+    resource.setrlimit(resource.RLIMIT_AS, (6 << 30, 6 << 30))
+
+
+INPUT_COMMANDS = {
+    "check FMU": (".fmu", lambda fx, x, d: ("check", x)),
+    "build ONNX": (".onnx", lambda fx, x, d: ("build", x, "--out", d / "o.fmu")),
+    "data check": (".csv", lambda fx, x, d: ("data", "check", x)),
+    "cosim --drive": (".csv", lambda fx, x, d: ("cosim", fx.made["qc_system"], "--drive", x, "--out", d / "r.csv")),
+    "cosim system .ssd": (".ssd", lambda fx, x, d: ("cosim", x, "--drive", fx.made["qc_drive"], "--out", d / "r.csv")),
+    "vehicle --params": (
+        ".toml",
+        lambda fx, x, d: ("vehicle", "build", "quarter-car", "--params", x, "--out", d / "c.fmu"),
+    ),
+    "validate": (".csv", lambda fx, x, d: ("validate", x, fx.made["dyno"], "--out", d / "v")),
+}
+
+
+def _special_input(fx: Fixtures, command: str, kind: str) -> tuple[str, str]:
+    """An input that is a FIFO (nobody writes: an open waits for ever) or a link to /dev/zero (never ends)."""
+    suffix, args = INPUT_COMMANDS[command]
+    folder = fx.fresh(re.sub(r"\W+", "-", f"input-{kind}-{command}"))
+    node = folder / f"input{suffix}"
+    if kind == "FIFO":
+        os.mkfifo(node)
+    else:
+        node.symlink_to("/dev/zero")
+    ran = nnfmu(*args(fx, node, folder), timeout=150, preexec_fn=_capped)
+    if ran.code is not None and ran.code < 0:
+        return HANG, f"killed by signal {-ran.code} (the 6 GiB memory cap?) after {ran.seconds:.0f} s"
+    verdict, detail = judge(ran, str(node), "not a regular file")
+    return verdict, f"{detail} ({ran.seconds:.0f} s)"
+
+
+for _command in INPUT_COMMANDS:
+    for _kind in ("FIFO", "link to /dev/zero"):
+        attack("hang", f"input {_kind}: {_command}")(lambda fx, c=_command, k=_kind: _special_input(fx, c, k))
 
 
 @attack("hang", "batch repeats = 1e9")
@@ -442,7 +510,8 @@ def repeats_20000(fx: Fixtures) -> tuple[str, str]:
     process = subprocess.Popen(
         [sys.executable, "-m", "nnfmu.cli", "batch", str(campaign(fx, folder, GENERATED.format(n=20000))), "--out",
          str(out), "--workers", "0"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV, start_new_session=True,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV, cwd=ENV["PYTHONPATH"],
+        start_new_session=True,
     )  # fmt: skip
     first = None
     while time.monotonic() - started < 90 and process.poll() is None:
@@ -497,11 +566,11 @@ def dask_worker_dies(fx: Fixtures) -> tuple[str, str]:
     log = (folder / "dask.log").open("w")
     scheduler = subprocess.Popen(
         ["dask", "scheduler", "--host", "127.0.0.1", "--port", str(port), "--dashboard-address", ":0"],
-        stdout=log, stderr=log, env=ENV, start_new_session=True,
+        stdout=log, stderr=log, env=ENV, cwd=ENV["PYTHONPATH"], start_new_session=True,
     )  # fmt: skip
     worker = subprocess.Popen(
         ["dask", "worker", address, "--nworkers", "1", "--nthreads", "1", "--no-dashboard"],
-        stdout=log, stderr=log, env=ENV, start_new_session=True,
+        stdout=log, stderr=log, env=ENV, cwd=ENV["PYTHONPATH"], start_new_session=True,
     )  # fmt: skip
     try:
         time.sleep(8)
@@ -509,7 +578,8 @@ def dask_worker_dies(fx: Fixtures) -> tuple[str, str]:
         process = subprocess.Popen(
             [sys.executable, "-m", "nnfmu.cli", "batch", str(path), "--out", str(folder / "out"), "--scheduler",
              address],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV, start_new_session=True,
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV, cwd=ENV["PYTHONPATH"],
+        start_new_session=True,
         )  # fmt: skip
         while time.monotonic() - started < 60 and process.poll() is None:
             if (folder / "out" / "parts").is_dir() and any((folder / "out" / "parts").glob("*.parquet")):
@@ -663,6 +733,20 @@ def loop_vehicle_other_graph(fx: Fixtures) -> tuple[str, str]:
             return WRONG, "exit 0 and no word that the network beside the FMU was ignored"
         return HELD, next(line for line in ran.text.splitlines() if "ignored" in line)[:300]
     return verdict, detail
+
+
+@attack("data loss", "loop vehicle re-run into its own folder with a user file added")
+def loop_vehicle_rerun(fx: Fixtures) -> tuple[str, str]:
+    folder = fx.fresh("lv-rerun")
+    record = _lab_record(fx, folder / "lab.csv", 0.0)
+    out = folder / "out"
+    must(_loop_vehicle(fx, fx.made["lv_system"], record, out), "loop vehicle")
+    (out / "precious_notes.txt").write_text("my notes")
+    ran = _loop_vehicle(fx, fx.made["lv_system"], record, out)
+    if not (out / "precious_notes.txt").is_file():
+        return LOSS, f"the user's file is gone after the re-run (exit {ran.code})"
+    verdict, detail = judge(ran, ok_allowed=True)
+    return verdict, f"user file kept; {detail}"
 
 
 @attack("wrong with OK", "loop vehicle: lab record whose time starts at 3 s")
@@ -910,6 +994,7 @@ def _sigterm_train(fx: Fixtures, name: str, moment: str, ignore: bool = False) -
     process = subprocess.Popen(
         _train_args(fx, out),
         env=dict(ENV, TMPDIR=str(scratch)),
+        cwd=ENV["PYTHONPATH"],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -931,7 +1016,8 @@ def _sigterm_train(fx: Fixtures, name: str, moment: str, ignore: bool = False) -
     except subprocess.TimeoutExpired:
         os.killpg(process.pid, signal.SIGKILL)
         return HANG, f"SIGTERM at {at:.1f} s ignored for 120 s"
-    left = [str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_file()]
+    # onnxruntime keeps a session id in TMPDIR/.ses on import (tests/test_cli_signals.py): not nnfmu's
+    left = [str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_file() and p.name != ".ses"]
     if "Traceback" in err:
         return TRACE, err.strip().splitlines()[-1]
     if process.returncode not in (130, -signal.SIGTERM):
@@ -962,7 +1048,12 @@ def _peak(command: list[str], timeout: float) -> tuple[Ran, float | None, float 
     started = time.monotonic()
     try:
         done = subprocess.run(
-            ["nice", "/usr/bin/time", "-v", *command], capture_output=True, text=True, env=ENV, timeout=timeout
+            ["nice", "/usr/bin/time", "-v", *command],
+            capture_output=True,
+            text=True,
+            env=ENV,
+            cwd=ENV["PYTHONPATH"],
+            timeout=timeout,
         )
     except subprocess.TimeoutExpired:
         return Ran(None, "", "", time.monotonic() - started), None, None
@@ -1068,8 +1159,11 @@ def main() -> None:
     parser.add_argument("--no-memory", action="store_true", help="leave out the (slow) memory attack")
     parser.add_argument("--keep", type=Path, help="work in this folder and keep it")
     parser.add_argument("--out", type=Path, default=RESULTS, help="JSON results file")
+    parser.add_argument("--code", type=Path, help="run the nnfmu package found here (an older checkout, say)")
     parser.add_argument("--merge", action="store_true", help="keep the outcomes of other attacks already in --out")
     args = parser.parse_args()
+    if args.code:
+        ENV["PYTHONPATH"] = str(args.code.resolve())
     root = args.keep or Path(tempfile.mkdtemp(prefix="nnfmu-hostile-"))
     root.mkdir(parents=True, exist_ok=True)
     chosen = [
