@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import os
-import stat
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
 from nnfmu.errors import OutputPathError
+from nnfmu.input_files import special_kind
 from nnfmu.stopping import check_stop
 
 
@@ -31,13 +31,13 @@ def refuse_special(target: Path, option: str = "output") -> None:
     """OutputPathError when `target` exists (links followed) and is not a regular file: a device such as /dev/null,
     a FIFO or a socket would be replaced by the regular file renamed onto its name."""
     try:
-        mode = os.stat(target).st_mode
+        os.stat(target)
     except (FileNotFoundError, NotADirectoryError):
         return
     except OSError as error:
         raise OutputPathError(f"{option} {target}: cannot be checked ({error.strerror})") from None
-    if not stat.S_ISREG(mode) and not stat.S_ISDIR(mode):
-        kind = "a FIFO" if stat.S_ISFIFO(mode) else "a socket" if stat.S_ISSOCK(mode) else "a device"
+    kind = special_kind(target)
+    if kind is not None:
         raise OutputPathError(
             f"{option} {target}: is {kind}, not a regular file; nnfmu writes only new names or regular files "
             f"(writing would replace it), so give another path"

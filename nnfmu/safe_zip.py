@@ -13,6 +13,7 @@ import zipfile
 from pathlib import Path, PurePosixPath
 
 from nnfmu.errors import NnfmuError
+from nnfmu.input_files import not_regular
 
 MAX_TOTAL_BYTES = 256 * 1024 * 1024  # uncompressed size of all members: FMUs of a few MB each fit hundreds of times
 MAX_MEMBERS = 10_000  # an FMU or a system has tens
@@ -62,10 +63,19 @@ def check_members(archive: zipfile.ZipFile, path: Path) -> list[zipfile.ZipInfo]
     return members
 
 
+def open_zip(path: Path) -> zipfile.ZipFile:
+    """The zip archive at `path` opened for reading; ArchiveError when it is no regular file (a FIFO's open waits
+    for ever, /dev/zero is read without end looking for the archive's directory)."""
+    why = not_regular(path)
+    if why:
+        raise ArchiveError(f"{path}: {why}")
+    return zipfile.ZipFile(path)
+
+
 def check_zip(path: Path) -> None:
     """ArchiveError naming the member when the zip archive at `path` (an FMU) holds one that is unsafe to read or
     extract; zipfile's own errors for a file that is no zip archive."""
-    with zipfile.ZipFile(path) as archive:
+    with open_zip(path) as archive:
         check_members(archive, path)
 
 
@@ -73,7 +83,7 @@ def extract_zip(path: Path, folder: Path) -> None:
     """Extract the zip archive at `path` into the empty `folder`; ArchiveError naming the member when one is
     unsafe, before anything is written."""
     root = folder.resolve()
-    with zipfile.ZipFile(path) as archive:
+    with open_zip(path) as archive:
         for member in check_members(archive, path):
             target = (root / member.filename).resolve()
             if root not in target.parents:

@@ -25,6 +25,7 @@ from typing import Any
 from nnfmu.atomic import atomic_path
 from nnfmu.cosim.units import PortUnit, UnitError, input_conversion, port_unit
 from nnfmu.errors import NnfmuError
+from nnfmu.input_files import not_regular
 from nnfmu.safe_zip import ArchiveError, check_zip, confined_source, extract_zip
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
@@ -211,6 +212,9 @@ def _read_element(node: ET.Element, path: Path) -> Element:
 def read_ssd(path: str | os.PathLike[str], base: Path | None = None) -> SystemStructure:
     """Read an `.ssd` file; FMU sources are relative to `base` (default: the file's folder)."""
     path = Path(path)
+    why = not_regular(path)
+    if why:
+        raise SspError(f"{path}: {why}")
     try:
         root = ET.parse(path).getroot()
     except (OSError, ET.ParseError) as error:

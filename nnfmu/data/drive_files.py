@@ -28,6 +28,7 @@ from nnfmu.data.measurement import Measurement
 from nnfmu.data.rpc_header import check_rpc_header, read_rpc_header
 from nnfmu.data.save import save_measurement
 from nnfmu.data.units import to_si
+from nnfmu.input_files import not_regular
 
 MEASUREMENT_SUFFIXES = (".csv", ".mf4", ".mdf")
 RPC_SUFFIXES = (".rsp", ".drv", ".tim", ".rpc")
@@ -141,7 +142,7 @@ def _rpc_channels(m: Measurement, path: Path) -> list[rpc3_file.Channel]:
 
 def _read_rpc(path: Path) -> Measurement:
     if not path.is_file():
-        raise DataError(f"{path}: no such file")
+        raise DataError(f"{path}: {not_regular(Path(path)) or 'no such file'}")
     try:
         check_rpc_header(path, read_rpc_header(path))
         with _quiet_rpc3():

@@ -18,6 +18,7 @@ from nnfmu.data.mts_io import is_mts_export, read_mts
 from nnfmu.data.raw import RawTable
 from nnfmu.data.timebase import uniform_stamps
 from nnfmu.data.units import SI_UNITS, to_si
+from nnfmu.input_files import not_regular
 
 READERS: dict[str, Callable[[Path], RawTable]] = {".csv": read_csv, ".mf4": read_mdf, ".mdf": read_mdf}
 MTS_SUFFIXES = (".dat", ".txt")  # read only as MTS 793 exports; a `.csv` starting `MTS793|` is one too
@@ -56,7 +57,7 @@ def read_table(path: Path, channel_map: Mapping[str, str] | None = None) -> RawT
     if suffix not in known:
         raise DataError(f"{path}: unknown file type {path.suffix!r}; nnfmu reads {', '.join(known)} (MTS 793 export)")
     if not path.is_file():
-        raise DataError(f"{path}: no such file")
+        raise DataError(f"{path}: {not_regular(Path(path)) or 'no such file'}")
     if is_mts_export(path):
         return read_mts(path, channel_map)
     if suffix in MTS_SUFFIXES:

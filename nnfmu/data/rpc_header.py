@@ -78,6 +78,8 @@ def check_rpc_header(path: Path, header: dict[str, str]) -> None:
         for key in (f"DESC.CHAN_{i}", f"UNITS.CHAN_{i}"):
             if key not in header:
                 raise DataError(f"{path}: RPC III header has no field {key} (CHANNELS = {channels})")
+        if not header[f"DESC.CHAN_{i}"]:
+            raise DataError(f"{path}: RPC III header field DESC.CHAN_{i} is empty: channel {i} needs a name")
 
 
 def _field(path: Path, header: dict[str, str], key: str) -> str:

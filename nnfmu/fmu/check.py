@@ -32,7 +32,7 @@ from fmpy import read_model_description, simulate_fmu
 from nnfmu.errors import NnfmuError
 from nnfmu.fmu.reference_results import EXPERIMENTS_TYPE, LS_FOLDER, MANIFEST
 from nnfmu.fmu.step_graph import StepGraphError, read_fmu_graph
-from nnfmu.safe_zip import ArchiveError, check_members, extract_zip
+from nnfmu.safe_zip import ArchiveError, check_members, extract_zip, open_zip
 
 DEFAULT_TOLERANCE = 1e-6
 CHECKSUMS = {
@@ -146,7 +146,7 @@ class _Archive:
 
     def __init__(self, path: Path) -> None:
         try:
-            with zipfile.ZipFile(path) as archive:
+            with open_zip(path) as archive:
                 members = check_members(archive, path)  # an FMU from elsewhere may be a zip bomb or climb out
                 self.files = {info.filename: archive.read(info) for info in members if not info.is_dir()}
         except ArchiveError as err:
@@ -305,7 +305,8 @@ def _run(folder: str, experiment: Experiment, archive: _Archive, tolerance: floa
     try:
         md = read_model_description(folder)
     except Exception as error:  # fmpy raises plain exceptions for malformed XML and missing attributes
-        raise CheckError(f"{archive.path}: cannot read its {MODEL_DESCRIPTION}: {error}") from None
+        said = "; ".join(map(str, getattr(error, "problems", None) or [error]))  # fmpy's schema problems: one line
+        raise CheckError(f"{archive.path}: cannot read its {MODEL_DESCRIPTION}: {' '.join(said.split())}") from None
     names = {v.name for v in md.modelVariables}
     header, reference = _table(archive, experiment.references, "references")
     unknown = [n for n in header[1:] if n not in names]

@@ -28,6 +28,7 @@ from nnfmu.fmu.package import package_fmu
 from nnfmu.fmu.reference_results import write_reference_results
 from nnfmu.fmu.step_graph import EmbeddedGraph, embedded_graph, write_embedded_graph
 from nnfmu.fmu.variables import FmuVariables, fmu_variables
+from nnfmu.input_files import not_regular
 
 
 @dataclass(frozen=True)
@@ -80,7 +81,7 @@ def default_output(stem: str) -> Path:
 def load_onnx(onnx_path: Path) -> onnx.ModelProto:
     """Read an ONNX file, naming it in the error when it is missing or cannot be read."""
     if not Path(onnx_path).is_file():
-        raise FmuBuildError(f"{onnx_path}: no such ONNX file")
+        raise FmuBuildError(f"{onnx_path}: {not_regular(Path(onnx_path)) or 'no such ONNX file'}")
     try:
         return onnx.load(str(onnx_path))
     except Exception as err:  # onnx raises DecodeError, OSError or its own errors

@@ -1,5 +1,8 @@
 """Drive files on disk: CSV, MDF 4 and RPC III round trips, units, atomic writes and errors naming the file."""
 
+import os
+import re
+
 import numpy as np
 import pytest
 from rpc3 import rpc3 as rpc3_file
@@ -158,6 +161,7 @@ def with_header_field(source, target, key: str, value: bytes):
         ("DATA_TYPE", b"COMPLEX", "DATA_TYPE = 'COMPLEX' is not one of"),
         ("SCALE.CHAN_2", b"big", "SCALE.CHAN_2 = 'big' is not a finite number"),
         ("FRAMES", b"1.5", "FRAMES = '1.5' is not a whole number"),
+        ("DESC.CHAN_1", b"", "DESC.CHAN_1 is empty"),  # was read as a channel named '', refused later unclearly
     ],
 )
 def test_a_bad_rpc_header_field_is_named_with_the_file(tmp_path, drive, key, value, words):
@@ -168,3 +172,18 @@ def test_a_bad_rpc_header_field_is_named_with_the_file(tmp_path, drive, key, val
     with pytest.raises(DataError) as caught:
         read_drive(bad)
     assert str(bad) in str(caught.value) and words in str(caught.value), str(caught.value)
+
+
+@pytest.mark.parametrize("name", ["drive.rsp", "drive.csv"])
+@pytest.mark.parametrize("kind", ["fifo", "device"])
+def test_a_drive_that_is_a_fifo_or_a_device_is_refused_as_such(tmp_path, kind, name):
+    """A FIFO or a link to /dev/zero was refused as 'no such file' (it exists): now named for what it is."""
+    path = tmp_path / name
+    if kind == "fifo":
+        os.mkfifo(path)
+    else:
+        path.symlink_to("/dev/zero")
+    with pytest.raises(
+        DataError, match=rf"{re.escape(name)}: is a {'FIFO' if kind == 'fifo' else 'device'}, not a regular"
+    ):
+        read_drive(path)

@@ -300,3 +300,56 @@ def test_a_default_experiment_step_past_the_limit_is_refused(network, tmp_path):
     hostile = _replace(network["fmi2"], files, tmp_path / "d.fmu")
     with pytest.raises(CheckError, match=r"steps of 1e-12 s.*more than the 1000000"):
         check_fmu(hostile)
+
+
+def test_a_model_description_failing_its_schema_is_one_line_naming_the_attribute(network, tmp_path):
+    """fmpy's schema problems were printed below a first line naming nothing ('Failed to validate
+    modelDescription.xml:'): the problems now stand in the one error line (a default stop time of 'nan' here)."""
+    with zipfile.ZipFile(network["fmi2"]) as archive:
+        description = archive.read("modelDescription.xml").decode()
+    hostile = _replace(
+        network["fmi2"],
+        {"modelDescription.xml": description.replace("<DefaultExperiment", '<DefaultExperiment stopTime="nan"')},
+        tmp_path / "nan.fmu",
+    )
+    with pytest.raises(CheckError) as caught:
+        check_fmu(hostile)
+    message = str(caught.value)
+    assert "\n" not in message, message
+    for words in ("nan.fmu", "modelDescription.xml", "DefaultExperiment", "stopTime", "'nan'"):
+        assert words in message, message
+
+
+@pytest.mark.parametrize("kind", ["FIFO", "device"])
+def test_an_fmu_that_is_a_fifo_or_a_device_is_refused_before_it_is_opened(tmp_path, kind):
+    """`nnfmu check` on a FIFO waited for ever for a writer, and on a link to /dev/zero read without end (killed for
+    its memory): either is refused by name. (Before the fix a writer thread feeds the FIFO garbage after a moment,
+    and a link to /dev/null reads as an empty file: both failed as 'not a readable FMU' instead.)"""
+    import os
+    import threading
+
+    path = tmp_path / "model.fmu"
+    stop = threading.Event()
+    if kind == "FIFO":
+        os.mkfifo(path)
+
+        def feed() -> None:
+            while not stop.wait(0.05):
+                try:
+                    handle = os.open(path, os.O_WRONLY | os.O_NONBLOCK)
+                except OSError:  # no reader yet (ENXIO)
+                    continue
+                os.write(handle, b"not a zip archive")
+                os.close(handle)
+                return
+
+        threading.Thread(target=feed, daemon=True).start()
+    else:
+        path.symlink_to("/dev/null")
+    try:
+        with pytest.raises(
+            CheckError, match=rf"model\.fmu: is a {kind if kind == 'FIFO' else 'device'}, not a regular"
+        ):
+            check_fmu(path)
+    finally:
+        stop.set()

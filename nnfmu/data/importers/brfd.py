@@ -21,6 +21,7 @@ from nnfmu.data.checks import check_measurement
 from nnfmu.data.errors import DataError
 from nnfmu.data.measurement import Measurement
 from nnfmu.data.units import to_si
+from nnfmu.input_files import not_regular
 
 BRFD_LICENCE = (
     'CC BY-SA 4.0. Cite: Coble, Huggins, Cao, Ricles, Downey, "Dataset-Friction-Damper-with-Backlash", 2022 '
@@ -80,7 +81,7 @@ def load_brfd(path: str | os.PathLike[str], min_samples: int = 16) -> Measuremen
     """
     path = Path(path)
     if not path.is_file():
-        raise DataError(f"{path}: no such file")
+        raise DataError(f"{path}: {not_regular(Path(path)) or 'no such file'}")
     content = _read_json(path)
     table = _table(path, content["data"])
     time, _ = to_si(table[:, TIME_COLUMN], str(content.get("time units", "s")), "time", str(path))

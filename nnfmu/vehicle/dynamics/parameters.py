@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from nnfmu.input_files import not_regular
 from nnfmu.vehicle.dynamics.errors import ParameterError
 
 DEFAULTS_DIR = Path(__file__).resolve().parent.parent / "parameters"
@@ -253,6 +254,9 @@ class VehicleParameters:
 def read_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     """The tables of a TOML parameter file; ParameterError naming the file when it is missing or not TOML."""
     path = Path(path)
+    why = not_regular(path)
+    if why:
+        raise ParameterError(f"{path}: {why}")
     try:
         with path.open("rb") as fh:
             return tomllib.load(fh)

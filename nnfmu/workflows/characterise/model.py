@@ -20,6 +20,7 @@ from nnfmu.fmu.factory import load_onnx
 from nnfmu.fmu.native.toolchain import host_binaries_only
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.fmu.step_graph import read_fmu_graph
+from nnfmu.input_files import not_regular
 from nnfmu.workflows.characterise.kind import BushingPorts, CharacteriseError, DamperPorts, component_kind
 from nnfmu.workflows.characterise.signals import SineTest, TestMotion, sine_motion
 
@@ -55,7 +56,7 @@ def model_under_test(path: str | Path) -> Iterator[ModelUnderTest]:
     inside a temporary folder removed afterwards. CharacteriseError naming the file for anything else."""
     path = Path(path)
     if not path.is_file():
-        raise CharacteriseError(f"{path}: no such file")
+        raise CharacteriseError(f"{path}: {not_regular(Path(path)) or 'no such file'}")
     suffix = path.suffix.lower()
     if suffix not in (".onnx", ".fmu"):
         raise CharacteriseError(f"{path}: give an ONNX step graph (.onnx) or an FMU (.fmu)")
