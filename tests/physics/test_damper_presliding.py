@@ -46,10 +46,12 @@ def test_the_seal_is_stiff_after_a_reversal_then_slides_at_the_coulomb_level():
 @pytest.mark.slow
 def test_the_exact_steps_match_the_rate_law_integrated_finely():
     truth = DamperTruth(DamperParams(), EFFECTS)
-    x, v, a = sine(1e-4)
+    # one period of the 2 Hz sine: a start from rest and both reversals (stuck, then sliding each way); the fine
+    # Euler steps are a Python loop, 1 s of them took 28 s of the suite
+    x, v, a = sine(1e-4, seconds=0.5)
     _, states = truth.simulate(1e-4, x, v, a)
     fine = 1e-6
-    xf, vf, _ = sine(fine)
+    xf, vf, _ = sine(fine, seconds=0.5)
     seal, trace = 0.0, []
     for k, rate in enumerate(vf):
         if k % 100 == 0:
