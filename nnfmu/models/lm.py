@@ -7,7 +7,8 @@ mu shrinks tenfold after a step that lowers the training loss and grows tenfold 
 By default the fit is separable (variable projection, Golub & Pereyra; Kaufman's Jacobian; Sjöberg & Viberg 1997 for
 neural nets): the output layer is linear in its weights, so for every hidden layer it is solved exactly by linear
 least squares and LM steps the hidden weights only, on the Jacobian projected off the output layer's basis. On the
-damper dyno's record this reaches in 50-100 epochs the validation error plain LM reaches in 300-500.
+damper dyno's record (4-12-1, one seed) it reached in 50 epochs the validation MSE the joint step reached in 200, and
+after 100 a lower one than the joint step's after 300.
 """
 
 from __future__ import annotations
