@@ -153,7 +153,7 @@ def test_inertia_adds_mass_times_acceleration():
     np.testing.assert_allclose(on - off, params.moving_mass * a, atol=1e-9)
 
 
-def test_lab_run_records_the_standard_velocities_and_temperature():
+def test_lab_run_records_the_standard_and_high_speed_velocities_and_temperature():
     run = simulate_rig("damper", RigOptions(duration=40.0, effects=("temperature",)))
     m = run.measurement
     assert set(m.names) == {"displacement", "velocity", "force", "temperature"}
@@ -161,8 +161,10 @@ def test_lab_run_records_the_standard_velocities_and_temperature():
     assert m.sample_period == pytest.approx(1e-3)
     assert len(m) == 40000
     levels = run.truth["excitation"]["parts"][0]["levels"]
-    assert [lv["peak_rate"] for lv in levels] == pytest.approx([0.05, 0.1, 0.2, 0.3, 0.4, 0.6, 0.8, 1.0, 1.2, 1.5])
-    assert np.max(np.abs(m["velocity"])) == pytest.approx(1.5, abs=0.02)
+    standard = [0.05, 0.1, 0.2, 0.3, 0.4, 0.6, 0.8, 1.0, 1.2, 1.5]
+    assert [lv["peak_rate"] for lv in levels] == pytest.approx(standard + [2.0, 2.5, 3.0])  # a pothole's 2-3 m/s
+    assert max(lv["amplitude"] for lv in levels) <= 0.025 + 1e-12  # the high speeds by frequency, not by stroke
+    assert np.max(np.abs(m["velocity"])) == pytest.approx(3.0, abs=0.02)
     assert m["temperature"][-500:].mean() > m["temperature"][:500].mean() + 2
 
 

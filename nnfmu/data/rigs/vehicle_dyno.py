@@ -1,6 +1,6 @@
 """A damper dyno run whose random part follows the car's damper strokes (the thesis's rig data design for dampers).
 
-The record keeps the lab schedule's sine series (the characteristic up to 1.5 m/s at standard peak velocities) and
+The record keeps the lab schedule's sine series (the characteristic at standard peak velocities up to 3 m/s) and
 replaces its band-limited random part, flat in velocity over 1-20 Hz, by a stroke derived from the dampers of a
 vehicle result (`design_damper_drive`: spectrum following the simulated strokes up to the dyno's 100 Hz, excursions
 and peak rate over the simulated ones by a margin, about the simulated working point). The dyno's own transducers
