@@ -281,7 +281,7 @@ def train(
 ) -> None:
     """Train a component network on rig data and export it as a verified ONNX step graph."""
     from rich.console import Console
-    from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
+    from rich.progress import Progress
     from rich.table import Table
     from rich.text import Text
 
@@ -308,10 +308,7 @@ def train(
     )
     console = Console(markup=False)  # feature and channel names carry brackets: velocity[k]
     try:
-        # Elapsed time, not an estimate of the rest: early stopping ends fits at unknown epochs, so a remaining time
-        # would jump; the description names the fit, its epoch and its training and validation errors instead.
-        columns = (TextColumn("{task.description}"), BarColumn(), TaskProgressColumn(), TimeElapsedColumn())
-        with Progress(*columns, console=console, transient=True) as bar:
+        with Progress(console=console, transient=True) as bar:
             task = bar.add_task("training", total=1.0)
             outcome = train_from_file(
                 data,

@@ -133,9 +133,8 @@ class _Problem:
     validation: torch.Tensor
 
     def fit(self, network: MLP, settings: RetrainSettings, mu: float) -> FitHistory:
-        """Levenberg-Marquardt on the training rows from `network`'s weights, early stopping on the validation rows
-        (trainlm's joint step: a warm start keeps its output layer instead of re-solving it)."""
-        lm = LMSettings(max_epochs=settings.max_epochs, patience=settings.patience, mu=mu, separable=False)
+        """Levenberg-Marquardt on the training rows from `network`'s weights, early stopping on the validation rows."""
+        lm = LMSettings(max_epochs=settings.max_epochs, patience=settings.patience, mu=mu)
         return fit_lm(
             network, (self.x[self.train], self.y[self.train]), (self.x[self.validation], self.y[self.validation]), lm
         )

@@ -4,8 +4,7 @@ early stopping on validation, hidden size fixed or chosen by validation error, m
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, replace
 from typing import Literal
 
@@ -17,7 +16,7 @@ from nnfmu.data.errors import DataError
 from nnfmu.data.measurement import Measurement
 from nnfmu.errors import SettingsError
 from nnfmu.models.features import FeatureSpec
-from nnfmu.models.lm import EpochReport, LMSettings, fit_lm
+from nnfmu.models.lm import LMSettings, fit_lm
 from nnfmu.models.metrics import SplitMetrics, max_abs_weight, network_warning, split_metrics
 from nnfmu.models.networks import MLP, GRUNet
 from nnfmu.models.scaling import MinMaxScaler
@@ -33,11 +32,6 @@ Progress = Callable[[str, float], None]
 
 # Levenberg–Marquardt solves a (weights x weights) system per epoch; above this many weights Adam is cheaper.
 LM_MAX_WEIGHTS = 400
-# torch intra-op threads while fitting: the networks' matrices are small (tens of thousands of rows x tens of
-# columns), so a second thread gains little on idle cores, and on loaded ones every small operation waits for a
-# descheduled thread (OpenMP spinning): 40 LM epochs of the 4-12-1 damper net cost 13.4 s CPU and 179 s wall with 2
-# threads at load 22 on 2 cores, 1.4 s CPU and 27 s wall with 1 (docs/networks.md, "Training time").
-TRAINING_THREADS = 1
 # Hidden units per layer at most: component networks have tens; a batch of activations is samples x hidden floats
 MAX_HIDDEN = 1024
 
@@ -66,12 +60,10 @@ class Architecture:
 class TrainSettings:
     """How to train. `optimizer` "auto" = Levenberg–Marquardt for MLPs up to LM_MAX_WEIGHTS weights, else Adam.
 
-    max_epochs/patience: epoch limit and early-stopping patience on the validation split; min_improvement: relative
-    drop of the validation MSE that resets the patience (smaller gains keep their weights but do not prolong the fit);
-    restarts: seeded random initialisations of the chosen hidden size (each candidate size is first fitted from one),
-    the best validation error kept; hidden_tolerance: "auto" hidden size picks the smallest size whose validation MSE
-    is within (1 + tolerance) of the best; lm_max_samples: LM fits on at most this many training samples (evenly
-    strided); learning_rate/batch_size: Adam (batch_size samples per MLP step);
+    max_epochs/patience: epoch limit and early-stopping patience on the validation split; restarts: seeded random
+    initialisations per hidden size, the best validation error kept; hidden_tolerance: "auto" hidden size picks the
+    smallest size whose validation MSE is within (1 + tolerance) of the best; lm_max_samples: LM fits on at most this
+    many training samples (evenly strided); learning_rate/batch_size: Adam (batch_size samples per MLP step);
     chunk_length/burn_in/sequences_per_batch: GRU training sequences, the samples at their start left out of the loss
     while the hidden state settles, and sequences per Adam step; input_cutoff [Hz]: the input channels low-passed
     with zero phase before the features (`nnfmu.data.denoise`; None: as recorded).
@@ -80,7 +72,6 @@ class TrainSettings:
     optimizer: Optimizer = "auto"
     max_epochs: int = 500
     patience: int = 12
-    min_improvement: float = 1e-3
     restarts: int = 3
     seed: int = 0
     splits: SplitFractions = SplitFractions()
@@ -109,8 +100,6 @@ class TrainSettings:
                 raise SettingsError(f"{name} must be >= 1, got {getattr(self, name)!r}")
         if not 0 <= self.burn_in < self.chunk_length:
             raise SettingsError(f"burn_in must be in [0, chunk_length={self.chunk_length}), got {self.burn_in}")
-        if not 0 <= self.min_improvement < 1:
-            raise SettingsError(f"min_improvement must be in [0, 1), got {self.min_improvement!r}")
         if not (self.hidden_tolerance >= 0 and self.learning_rate > 0):
             raise SettingsError("hidden_tolerance must be >= 0 and learning_rate > 0")
         if self.input_cutoff is not None and not self.input_cutoff > 0:
@@ -208,7 +197,7 @@ def _strided(x: torch.Tensor, y: torch.Tensor, limit: int) -> tuple[torch.Tensor
 
 
 def _fit_mlp_gradient(
-    network: MLP, data: PreparedData, settings: TrainSettings, method: str, on_epoch: EpochReport
+    network: MLP, data: PreparedData, settings: TrainSettings, method: str, on_epoch: Callable[[int, int], None]
 ) -> FitHistory:
     """Adam on shuffled mini-batches, or full-batch L-BFGS, one epoch = one pass / one L-BFGS iteration."""
     x, y = data.rows("train")
@@ -219,9 +208,7 @@ def _fit_mlp_gradient(
         return torch.mean((network(xs)[:, 0] - ys) ** 2)
 
     with torch.no_grad():
-        log = TrainingLog(
-            network, settings.patience, float(mse(x, y)), float(mse(x_val, y_val)), settings.min_improvement
-        )
+        log = TrainingLog(network, settings.patience, float(mse(x, y)), float(mse(x_val, y_val)))
     if method == "lbfgs":
         optimiser: torch.optim.Optimizer = torch.optim.LBFGS(
             network.parameters(), max_iter=1, line_search_fn="strong_wolfe"
@@ -249,7 +236,7 @@ def _fit_mlp_gradient(
                 optimiser.step()
         with torch.no_grad():
             stop = log.record(epoch, float(mse(x, y)), float(mse(x_val, y_val)))
-        on_epoch(epoch, settings.max_epochs, log.train_loss[-1], log.validation_loss[-1])
+        on_epoch(epoch, settings.max_epochs)
         if stop:
             reason = "validation"
             break
@@ -280,7 +267,9 @@ def _chunks(
     return torch.stack(xs), torch.stack(ys)
 
 
-def _fit_gru(network: GRUNet, data: PreparedData, settings: TrainSettings, on_epoch: EpochReport) -> FitHistory:
+def _fit_gru(
+    network: GRUNet, data: PreparedData, settings: TrainSettings, on_epoch: Callable[[int, int], None]
+) -> FitHistory:
     """Adam on overlapping training sequences (truncated back-propagation through time), early stopping on validation
     sequences; losses count only samples after each sequence's burn-in and inside its split."""
     x_train, y_train = _chunks(data.x, data.y, data.splits.train, settings.chunk_length, settings.burn_in)
@@ -292,13 +281,7 @@ def _fit_gru(network: GRUNet, data: PreparedData, settings: TrainSettings, on_ep
         return torch.mean((network(xs)[..., 0][scored] - ys[scored]) ** 2)
 
     with torch.no_grad():
-        log = TrainingLog(
-            network,
-            settings.patience,
-            float(mse(x_train, y_train)),
-            float(mse(x_val, y_val)),
-            settings.min_improvement,
-        )
+        log = TrainingLog(network, settings.patience, float(mse(x_train, y_train)), float(mse(x_val, y_val)))
     optimiser = torch.optim.Adam(network.parameters(), lr=settings.learning_rate)
     batch = settings.sequences_per_batch
     reason = "max_epochs"
@@ -316,7 +299,7 @@ def _fit_gru(network: GRUNet, data: PreparedData, settings: TrainSettings, on_ep
             total += float(loss.detach()) * len(pick)
         with torch.no_grad():
             stop = log.record(epoch, total / len(order), float(mse(x_val, y_val)))
-        on_epoch(epoch, settings.max_epochs, log.train_loss[-1], log.validation_loss[-1])
+        on_epoch(epoch, settings.max_epochs)
         if stop:
             reason = "validation"
             break
@@ -329,7 +312,7 @@ def fit_network(
     hidden: int,
     settings: TrainSettings,
     seed: int,
-    on_epoch: EpochReport = lambda epoch, total, train, validation: None,
+    on_epoch: Callable[[int, int], None] = lambda epoch, total: None,
 ) -> tuple[MLP | GRUNet, FitHistory]:
     """One training run from a seeded random initialisation; the network returned holds its best validation epoch."""
     torch.manual_seed(seed)
@@ -340,9 +323,7 @@ def fit_network(
     if isinstance(network, GRUNet):
         return network, _fit_gru(network, data, run_settings, on_epoch)
     if method == "lm":
-        lm = LMSettings(
-            max_epochs=settings.max_epochs, patience=settings.patience, min_improvement=settings.min_improvement
-        )
+        lm = LMSettings(max_epochs=settings.max_epochs, patience=settings.patience)
         train = _strided(*data.rows("train"), settings.lm_max_samples)
         validation = _strided(*data.rows("validation"), settings.lm_max_samples)
         return network, fit_lm(network, train, validation, lm, on_epoch)
@@ -369,66 +350,35 @@ def evaluate(network: MLP | GRUNet, data: PreparedData) -> dict[str, SplitMetric
 def fit_best(
     data: PreparedData, architecture: Architecture, settings: TrainSettings, progress: Progress | None = None
 ) -> tuple[MLP | GRUNet, FitHistory, list[SizeTrial], int]:
-    """Every hidden size from its first seeded restart; the size chosen by validation error (the smallest within
-    `hidden_tolerance` of the best); then the chosen size's other restarts, the best kept. Returns the chosen network,
-    its history, each size's trial (its best restart) and the size.
+    """Every hidden size x every restart; returns the chosen network, its history, each size's trial and the size."""
+    runs = len(architecture.hidden) * settings.restarts
+    trials: list[SizeTrial] = []
+    kept: dict[int, tuple[MLP | GRUNet, FitHistory]] = {}
+    run = 0
+    for hidden in architecture.hidden:
+        best: tuple[float, int, MLP | GRUNet, FitHistory] | None = None
+        for restart in range(settings.restarts):
+            label = f"{architecture.kind} hidden {hidden}, restart {restart + 1}/{settings.restarts}"
 
-    Restarts only of the chosen size: the sizes' first fits already rank them, and restarts of the others would only
-    cost time (for a fixed size this is every restart of it, as before).
-    """
-    with _torch_threads(TRAINING_THREADS):
-        return _fit_best(data, architecture, settings, progress)
+            def on_epoch(epoch: int, total: int, label: str = label, run: int = run) -> None:
+                if progress is not None:
+                    progress(label, (run + epoch / total) / runs)
 
-
-@contextmanager
-def _torch_threads(count: int) -> Iterator[None]:
-    """torch's intra-op thread count set to `count` inside, restored after."""
-    before = torch.get_num_threads()
-    torch.set_num_threads(count)
-    try:
-        yield
-    finally:
-        torch.set_num_threads(before)
-
-
-def _fit_best(
-    data: PreparedData, architecture: Architecture, settings: TrainSettings, progress: Progress | None
-) -> tuple[MLP | GRUNet, FitHistory, list[SizeTrial], int]:
-    """`fit_best`'s search, run under the caller's thread setting."""
-    sizes = architecture.hidden
-    runs = len(sizes) + settings.restarts - 1
-    fits: dict[int, list[tuple[float, int, MLP | GRUNet, FitHistory]]] = {h: [] for h in sizes}
-
-    def fit(hidden: int, restart: int) -> None:
-        run = sum(len(f) for f in fits.values())
-        label = f"{architecture.kind} hidden {hidden}"
-        if len(sizes) > 1:
-            label += f" (size {sizes.index(hidden) + 1}/{len(sizes)})"
-        label += f", restart {restart + 1}/{settings.restarts}"
-
-        def on_epoch(epoch: int, total: int, train: float, validation: float) -> None:
+            network, history = fit_network(
+                data, architecture.kind, hidden, settings, restart_seed(settings.seed, hidden, restart), on_epoch
+            )
+            loss = history.best_validation_loss
+            if best is None or loss < best[0]:
+                best = (loss, restart, network, history)
+            run += 1
             if progress is not None:
-                what = f"{label}, epoch {epoch}: MSE training {train:.3g}, validation {validation:.3g}"
-                progress(what, (run + epoch / total) / runs)
-
-        network, history = fit_network(
-            data, architecture.kind, hidden, settings, restart_seed(settings.seed, hidden, restart), on_epoch
-        )
-        fits[hidden].append((history.best_validation_loss, restart, network, history))
-        if progress is not None:
-            progress(label, (run + 1) / runs)
-
-    for hidden in sizes:
-        fit(hidden, 0)
-    lowest = min(fits[h][0][0] for h in sizes)
-    chosen = next(h for h in sizes if fits[h][0][0] <= lowest * (1.0 + settings.hidden_tolerance))
-    for restart in range(1, settings.restarts):
-        fit(chosen, restart)
-    trials = []
-    for hidden in sizes:
-        loss, restart, _, _ = min(fits[hidden], key=lambda f: (f[0], f[1]))
-        trials.append(SizeTrial(hidden=hidden, validation_mse=loss, best_restart=restart))
-    _, _, network, history = min(fits[chosen], key=lambda f: (f[0], f[1]))
+                progress(label, run / runs)
+        assert best is not None
+        trials.append(SizeTrial(hidden=hidden, validation_mse=best[0], best_restart=best[1]))
+        kept[hidden] = (best[2], best[3])
+    lowest = min(t.validation_mse for t in trials)
+    chosen = next(t.hidden for t in trials if t.validation_mse <= lowest * (1.0 + settings.hidden_tolerance))
+    network, history = kept[chosen]
     return network, history, trials, chosen
 
 
