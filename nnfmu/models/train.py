@@ -4,7 +4,8 @@ early stopping on validation, hidden size fixed or chosen by validation error, m
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field, replace
 from typing import Literal
 
@@ -32,6 +33,11 @@ Progress = Callable[[str, float], None]
 
 # Levenberg–Marquardt solves a (weights x weights) system per epoch; above this many weights Adam is cheaper.
 LM_MAX_WEIGHTS = 400
+# torch intra-op threads while fitting: the networks' matrices are small (tens of thousands of rows x tens of
+# columns), so a second thread gains little on idle cores, and on loaded ones every small operation waits for a
+# descheduled thread (OpenMP spinning): 40 LM epochs of the 4-12-1 damper net cost 13.4 s CPU and 179 s wall with 2
+# threads at load 22 on 2 cores, 1.4 s CPU and 27 s wall with 1 (measured on branch h/lmtrain, 2026-11-27).
+TRAINING_THREADS = 1
 # Hidden units per layer at most: component networks have tens; a batch of activations is samples x hidden floats
 MAX_HIDDEN = 1024
 
@@ -351,6 +357,25 @@ def fit_best(
     data: PreparedData, architecture: Architecture, settings: TrainSettings, progress: Progress | None = None
 ) -> tuple[MLP | GRUNet, FitHistory, list[SizeTrial], int]:
     """Every hidden size x every restart; returns the chosen network, its history, each size's trial and the size."""
+    with _torch_threads(TRAINING_THREADS):
+        return _fit_best(data, architecture, settings, progress)
+
+
+@contextmanager
+def _torch_threads(count: int) -> Iterator[None]:
+    """torch's intra-op thread count set to `count` inside, restored after."""
+    before = torch.get_num_threads()
+    torch.set_num_threads(count)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(before)
+
+
+def _fit_best(
+    data: PreparedData, architecture: Architecture, settings: TrainSettings, progress: Progress | None
+) -> tuple[MLP | GRUNet, FitHistory, list[SizeTrial], int]:
+    """`fit_best`'s search, run under the caller's thread setting."""
     runs = len(architecture.hidden) * settings.restarts
     trials: list[SizeTrial] = []
     kept: dict[int, tuple[MLP | GRUNet, FitHistory]] = {}
