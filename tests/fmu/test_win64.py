@@ -87,18 +87,19 @@ def test_default_build_carries_both_binaries_and_the_dll_exports_only_fmi_functi
     assert imported == {"KERNEL32.dll", "msvcrt.dll"}  # no MinGW runtime DLL to ship beside it
 
 
-@needs_mingw
-@needs_wine
-@pytest.mark.parametrize("fmi", [2, 3])
-def test_win64_binary_under_wine_gives_the_linux64_outputs(delay_fmus, tmp_path, wine_env, fmi):
-    identifier, token, n_in, n_out = counts(delay_fmus[fmi])
+def _assert_wine_gives_linux_outputs(
+    fmu: Path, fmi: int, driver_compiler: list[str], driver_flags: list[str], tmp_path: Path, wine_env: dict, what: str
+) -> None:
+    """The FMU's Linux .so driven natively and its DLL driven under wine by a driver `driver_compiler` builds: both
+    runs pass every status check and print the same outputs."""
+    identifier, token, n_in, n_out = counts(fmu)
     linux, windows = FOLDERS[fmi]
-    with zipfile.ZipFile(delay_fmus[fmi]) as archive:
+    with zipfile.ZipFile(fmu) as archive:
         (tmp_path / "fmu.so").write_bytes(archive.read(f"binaries/{linux}/{identifier}.so"))
         (tmp_path / "fmu.dll").write_bytes(archive.read(f"binaries/{windows}/{identifier}.dll"))
     args = [token, str(n_in), str(n_out)]
     native = build_driver(["gcc"], fmi, tmp_path / "driver", [])
-    build_driver([MINGW], fmi, tmp_path / "driver.exe", ["-D__USE_MINGW_ANSI_STDIO=1", "-static"])
+    build_driver(driver_compiler, fmi, tmp_path / "driver.exe", driver_flags)
     on_linux = subprocess.run(
         [str(native), str(tmp_path / "fmu.so"), *args], capture_output=True, text=True, timeout=120
     )
@@ -109,7 +110,15 @@ def test_win64_binary_under_wine_gives_the_linux64_outputs(delay_fmus, tmp_path,
     for run in (on_linux, on_wine):
         assert run.returncode == 0, run.stderr[-3000:]
         assert "0 unexpected statuses" in run.stderr
-    assert_same_outputs(on_linux.stdout, on_wine.stdout, n_out, "win64 vs linux64")
+    assert_same_outputs(on_linux.stdout, on_wine.stdout, n_out, what)
+
+
+@needs_mingw
+@needs_wine
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_win64_binary_under_wine_gives_the_linux64_outputs(delay_fmus, tmp_path, wine_env, fmi):
+    flags = ["-D__USE_MINGW_ANSI_STDIO=1", "-static"]
+    _assert_wine_gives_linux_outputs(delay_fmus[fmi], fmi, [MINGW], flags, tmp_path, wine_env, "win64 vs linux64")
 
 
 def _zig_windows_runtime_built() -> bool:
@@ -134,27 +143,14 @@ def test_zig_built_win64_binary_under_wine_gives_the_linux64_outputs(delay_onnx,
     built = build_fmu(
         delay_onnx, BuildOptions(out=tmp_path / "zig.fmu", fmi_version=fmi, platforms=("host", "x86_64-windows"))
     )
-    identifier, token, n_in, n_out = counts(built)
+    identifier = counts(built)[0]
     linux, windows = FOLDERS[fmi]
     with zipfile.ZipFile(built) as archive:
         binaries = sorted(n for n in archive.namelist() if n.startswith("binaries/"))
-        assert binaries == [f"binaries/{linux}/{identifier}.so", f"binaries/{windows}/{identifier}.dll"]  # no .pdb/.lib
-        (tmp_path / "fmu.so").write_bytes(archive.read(f"binaries/{linux}/{identifier}.so"))
-        (tmp_path / "fmu.dll").write_bytes(archive.read(f"binaries/{windows}/{identifier}.dll"))
-    args = [token, str(n_in), str(n_out)]
-    native = build_driver(["gcc"], fmi, tmp_path / "driver", [])
+    assert binaries == [f"binaries/{linux}/{identifier}.so", f"binaries/{windows}/{identifier}.dll"]  # no .pdb/.lib
     zig = [sys.executable, "-m", toolchain.ZIG_MODULE, "cc", "-target", windows_target.zig_target]
-    build_driver(zig, fmi, tmp_path / "driver.exe", ["-D__USE_MINGW_ANSI_STDIO=1"])
-    on_linux = subprocess.run(
-        [str(native), str(tmp_path / "fmu.so"), *args], capture_output=True, text=True, timeout=120
-    )
-    on_wine = subprocess.run(
-        [WINE, "driver.exe", "fmu.dll", *args], cwd=tmp_path, env=wine_env, capture_output=True, text=True, timeout=300
-    )
-    for run in (on_linux, on_wine):
-        assert run.returncode == 0, run.stderr[-3000:]
-        assert "0 unexpected statuses" in run.stderr
-    assert_same_outputs(on_linux.stdout, on_wine.stdout, n_out, "Zig win64 vs linux64")
+    flags = ["-D__USE_MINGW_ANSI_STDIO=1"]
+    _assert_wine_gives_linux_outputs(built, fmi, zig, flags, tmp_path, wine_env, "Zig win64 vs linux64")
 
 
 def test_missing_cross_compilers_warn_once_and_still_build_linux64(delay_onnx, tmp_path, monkeypatch):
