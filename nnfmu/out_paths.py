@@ -18,7 +18,7 @@ from pathlib import Path
 
 from nnfmu.atomic import refuse_special
 from nnfmu.errors import OutputPathError
-from nnfmu.stopping import check_stop
+from nnfmu.stopping import check_stop, interrupts_deferred
 
 __all__ = [
     "MARKER",
@@ -248,10 +248,11 @@ def replace_output_dir(staging: Path, out_dir: Path, kind: str) -> None:
             f"{out_dir / clash[0]}: is not nnfmu's (not listed unchanged in {out_dir / MARKER}) and the new {kind} "
             f"result has a file of that name; move it out of the folder and run again"
         )
-    old = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.old-", dir=out_dir.parent))
-    os.replace(out_dir, old / out_dir.name)
-    os.replace(staging, out_dir)
-    for entry in keep:
-        (out_dir / entry).parent.mkdir(parents=True, exist_ok=True)
-        os.replace(old / out_dir.name / entry, out_dir / entry)
-    shutil.rmtree(old)
+    with interrupts_deferred():  # an interrupt between the renames would leave the old result hidden in .old-
+        old = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.old-", dir=out_dir.parent))
+        os.replace(out_dir, old / out_dir.name)
+        os.replace(staging, out_dir)
+        for entry in keep:
+            (out_dir / entry).parent.mkdir(parents=True, exist_ok=True)
+            os.replace(old / out_dir.name / entry, out_dir / entry)
+        shutil.rmtree(old)

@@ -9,6 +9,12 @@ loops (co-simulation, training), so a stopped run ends with KeyboardInterrupt ho
 
 from __future__ import annotations
 
+import signal
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+_STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 _requested: list[str] = []  # the reason of the first stop asked for (empty: none)
 
 
@@ -32,3 +38,21 @@ def check_stop() -> None:
     """Raise KeyboardInterrupt if a stop was asked for, however the first interrupt was handled."""
     if _requested:
         raise KeyboardInterrupt(f"{_requested[0]} (stop asked for earlier)")
+
+
+@contextmanager
+def interrupts_deferred() -> Iterator[None]:
+    """Hold SIGINT and SIGTERM back for the block and deliver them after it: a temporary made and its cleanup armed
+    inside cannot be split by an interrupt (one between mkdtemp and its `try` left a folder behind)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield  # only the main thread runs Python's signal handlers
+        return
+    held: list[int] = []
+    previous = {number: signal.signal(number, lambda signum, _frame: held.append(signum)) for number in _STOP_SIGNALS}
+    try:
+        yield
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, handler)
+        if held:
+            signal.raise_signal(held[0])  # runs the restored handler now, in this thread

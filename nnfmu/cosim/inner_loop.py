@@ -12,13 +12,14 @@ from __future__ import annotations
 
 import hashlib
 import os
-import tempfile
 from ctypes import CDLL, Structure, byref, c_double, c_int, c_int64, c_void_p, cast
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+
+from nnfmu.atomic import scratch_dir
 
 if TYPE_CHECKING:
     from nnfmu.cosim.master import _Element, _System
@@ -109,7 +110,7 @@ def library() -> CDLL | None:
         path = cache_dir() / f"inner_loop-{key[:16]}{target.suffix}"
         if not path.is_file():
             path.parent.mkdir(parents=True, exist_ok=True)
-            with tempfile.TemporaryDirectory(dir=path.parent, prefix=".build-") as scratch:
+            with scratch_dir(".build-", path.parent) as scratch:
                 built = Path(scratch) / path.name
                 try:
                     compile_shared_library(target, [SOURCE], SOURCE.parent, built)

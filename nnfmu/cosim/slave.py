@@ -20,6 +20,7 @@ from typing import Sequence
 import numpy as np
 
 from nnfmu.cosim.units import PortUnit, port_unit
+from nnfmu.stopping import interrupts_deferred
 
 Messages = list[tuple[int, str, str]]  # (status, category, message) as an FMU logged them
 _FMI2_SINKS: dict[int, Messages] = {}  # an FMI 2 instance's key (its componentEnvironment) -> its messages
@@ -72,8 +73,9 @@ class FmuSlave:
         self.variables = {v.name: v for v in self.description.modelVariables}
         self.messages: Messages = []
         self._key = next(_FMI2_KEYS)  # routes an FMI 2 instance's log messages to `messages`
-        self._unzip_dir = tempfile.mkdtemp(prefix="nnfmu-fmu-")
-        self._cleanup = weakref.finalize(self, _remove_extracted, self._unzip_dir, _FMI2_SINKS, self._key)
+        with interrupts_deferred():  # the folder and its cleanup come together
+            self._unzip_dir = tempfile.mkdtemp(prefix="nnfmu-fmu-")
+            self._cleanup = weakref.finalize(self, _remove_extracted, self._unzip_dir, _FMI2_SINKS, self._key)
         try:
             directory = extract(str(self.path), unzipdir=self._unzip_dir)
             self.sample_period = read_sample_period(Path(directory) / "modelDescription.xml")

@@ -13,7 +13,6 @@ from __future__ import annotations
 import math
 import os
 import shutil
-import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
 from collections.abc import Iterator, Mapping
@@ -22,7 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from nnfmu.atomic import atomic_path
+from nnfmu.atomic import atomic_path, scratch_dir
 from nnfmu.cosim.units import PortUnit, UnitError, input_conversion, port_unit
 from nnfmu.errors import NnfmuError
 from nnfmu.input_files import not_regular
@@ -394,7 +393,7 @@ def open_system(path: str | os.PathLike[str], allow_outside: bool = False) -> It
         check_against_fmus(system)
         yield system
         return
-    with tempfile.TemporaryDirectory(prefix="nnfmu-ssp-") as folder:
+    with scratch_dir("nnfmu-ssp-") as folder:
         try:
             extract_zip(path, Path(folder))
         except ArchiveError as error:

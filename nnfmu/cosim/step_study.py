@@ -16,7 +16,6 @@ finer, so the differences stop shrinking and the observed order falls; the study
 from __future__ import annotations
 
 import math
-import tempfile
 import textwrap
 import time as clock
 import zipfile
@@ -26,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from nnfmu.atomic import scratch_dir
 from nnfmu.cosim.master import CosimError, CosimSettings
 from nnfmu.cosim.results import CosimResult
 from nnfmu.cosim.ssp import SystemStructure
@@ -125,7 +125,7 @@ def sample_periods(system: SystemStructure) -> dict[str, float]:
 
     periods = {}
     for element in system.elements:
-        with zipfile.ZipFile(system.fmu_path(element)) as archive, tempfile.TemporaryDirectory() as folder:
+        with zipfile.ZipFile(system.fmu_path(element)) as archive, scratch_dir("nnfmu-") as folder:
             path = Path(folder) / "modelDescription.xml"
             path.write_bytes(archive.read("modelDescription.xml"))
             period = read_sample_period(path)

@@ -19,7 +19,6 @@ import hashlib
 import io
 import math
 import posixpath
-import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
 from dataclasses import dataclass, field
@@ -29,6 +28,7 @@ from urllib.parse import unquote, urlparse
 import numpy as np
 from fmpy import read_model_description, simulate_fmu
 
+from nnfmu.atomic import scratch_dir
 from nnfmu.errors import NnfmuError
 from nnfmu.fmu.reference_results import EXPERIMENTS_TYPE, LS_FOLDER, MANIFEST
 from nnfmu.fmu.step_graph import StepGraphError, read_fmu_graph
@@ -381,7 +381,7 @@ def check_fmu(path: str | Path, tolerance: float | None = None) -> CheckReport:
     if not experiments:
         raise CheckError(f"{path}: {MANIFEST_PATH} lists no experiment")
     report = CheckReport(path, checksum_errors, step_graph=_step_graph(path, checksum_errors))
-    with tempfile.TemporaryDirectory(prefix="nnfmu-check-") as folder:
+    with scratch_dir("nnfmu-check-") as folder:
         extract_zip(path, Path(folder))  # its members were checked when it was read
         for experiment in experiments:
             report.experiments.append(_run(folder, experiment, archive, tolerance))

@@ -12,13 +12,13 @@ source (the ONNX file, or the in-memory graph); no `.fmu` is written then.
 
 from __future__ import annotations
 
-import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import onnx
 
+from nnfmu.atomic import scratch_dir
 from nnfmu.component import Component
 from nnfmu.fmu.errors import FmuBuildError
 from nnfmu.fmu.model_description import FmuIdentity, ModelDescriptionView, tensor_dependencies
@@ -126,7 +126,7 @@ def plan_build(
 def assemble(plan: BuildPlan, backend: Backend) -> Path:
     """Run `backend` on a temporary FMU folder, add the step graph and the reference results and zip it to
     `plan.target`."""
-    with tempfile.TemporaryDirectory(prefix="nnfmu-build-") as tmp:
+    with scratch_dir("nnfmu-build-") as tmp:
         tree = Path(tmp) / "fmu"
         tree.mkdir()
         backend(plan, tree)

@@ -10,8 +10,6 @@ from __future__ import annotations
 import json
 import os
 import re
-import shutil
-import tempfile
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -20,7 +18,8 @@ import jinja2
 import numpy as np
 
 import nnfmu
-from nnfmu.stopping import check_stop
+from nnfmu.atomic import scratch_dir
+from nnfmu.stopping import check_stop, interrupts_deferred
 from nnfmu.validate.compare import ChannelComparison
 from nnfmu.validate.metrics import DEFINITIONS
 from nnfmu.validate.plots import plot_channel
@@ -112,8 +111,7 @@ def write_report(
     the index.html path."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=".report.", dir=out_dir))
-    try:
+    with scratch_dir(".report.", out_dir) as stage:
         plots = []
         for index, c in enumerate(comparisons):
             paths = plot_channel(c, stage, file_stem(index, c.name))
@@ -122,8 +120,7 @@ def write_report(
         (stage / SUMMARY_FILE).write_text(json.dumps(summary, indent=2, allow_nan=False), encoding="utf-8")
         (stage / INDEX_FILE).write_text(render_html(summary), encoding="utf-8")
         check_stop()
-        for name in [p for channel in plots for p in channel.values()] + [SUMMARY_FILE, INDEX_FILE]:
-            os.replace(stage / name, out_dir / name)
-    finally:
-        shutil.rmtree(stage, ignore_errors=True)
+        with interrupts_deferred():  # the report is published whole or not at all
+            for name in [p for channel in plots for p in channel.values()] + [SUMMARY_FILE, INDEX_FILE]:
+                os.replace(stage / name, out_dir / name)
     return out_dir / INDEX_FILE

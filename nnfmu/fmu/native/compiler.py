@@ -11,10 +11,10 @@ from __future__ import annotations
 import os
 import shutil
 import subprocess
-import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
+from nnfmu.atomic import scratch_dir
 from nnfmu.fmu.errors import CompilerError
 from nnfmu.fmu.native.toolchain import Target
 
@@ -27,7 +27,7 @@ def compile_shared_library(target: Target, sources: list[Path], include_dir: Pat
     as Zig's `.pdb` and import `.lib` on Windows, stay in a scratch folder); return the command line used. Raises
     CompilerError."""
     output.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix=f"nnfmu-cc-{target.name}-") as scratch:
+    with scratch_dir(f"nnfmu-cc-{target.name}-") as scratch:
         built = Path(scratch) / output.name
         command = _compile(target, sources, include_dir, built, Path(scratch))
         shutil.move(built, output)

@@ -29,6 +29,7 @@ from nnfmu.cosim.ssp import Connection, Connector, Element, SystemStructure
 from nnfmu.data import Measurement
 from nnfmu.data.drive_files import read_drive
 from nnfmu.errors import NnfmuError
+from nnfmu.stopping import interrupts_deferred
 from nnfmu.validate.compare import ValidationSettings
 from nnfmu.validate.damage import pseudo_damage
 from nnfmu.validate.metrics import rms
@@ -88,9 +89,10 @@ def _cache_dir() -> Path:
             root = Path(get_worker().local_directory)
         except (ImportError, ValueError):
             pass  # not inside a Dask worker
-        _cache = Path(tempfile.mkdtemp(prefix="nnfmu-campaign-", dir=root))
-        if root is None:
-            atexit.register(shutil.rmtree, _cache, True)
+        with interrupts_deferred():  # the folder and its cleanup come together
+            _cache = Path(tempfile.mkdtemp(prefix="nnfmu-campaign-", dir=root))
+            if root is None:
+                atexit.register(shutil.rmtree, _cache, True)
     return _cache
 
 

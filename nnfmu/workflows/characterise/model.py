@@ -3,7 +3,6 @@ into a temporary folder; its kind read from its `Component`; each test point rep
 
 from __future__ import annotations
 
-import tempfile
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -11,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from nnfmu.atomic import scratch_dir
 from nnfmu.component import Component, Port
 from nnfmu.cosim.replay import replay_fmu
 from nnfmu.cosim.slave import FmuSlave
@@ -60,7 +60,7 @@ def model_under_test(path: str | Path) -> Iterator[ModelUnderTest]:
     suffix = path.suffix.lower()
     if suffix not in (".onnx", ".fmu"):
         raise CharacteriseError(f"{path}: give an ONNX step graph (.onnx) or an FMU (.fmu)")
-    with tempfile.TemporaryDirectory(prefix="nnfmu-characterise-") as folder:
+    with scratch_dir("nnfmu-characterise-") as folder:
         try:
             component = Component.from_onnx(load_onnx(path)) if suffix == ".onnx" else _component_of_fmu(path)
         except ValueError as err:  # a malformed or too new component description

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import math
 import os
-import shutil
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -246,8 +245,7 @@ def characterise(
         kind = "damper" if isinstance(model.kind, DamperPorts) else "bushing"
         log(f"{model.source}: {kind}, tested through {model.fmu.name} at {model.period:g} s")
         out_dir.parent.mkdir(parents=True, exist_ok=True)
-        staging = staging_dir(out_dir.parent, f".{out_dir.name}.staging-")
-        try:
+        with staging_dir(out_dir.parent, f".{out_dir.name}.staging-") as staging:
             if isinstance(model.kind, DamperPorts):
                 sections, notes, lines = _damper(model, model.kind, record, settings, staging)
             else:
@@ -264,7 +262,4 @@ def characterise(
                 notes.append("figures: not drawn (a quick run); the tables hold every test point")
             write_report(staging, f"{kind} characterisation of {model.component.name}", context, notes, sections)
             replace_output_dir(staging, out_dir, KIND)
-        finally:
-            if staging.exists():
-                shutil.rmtree(staging)
     return CharacteriseReport(kind, out_dir / INDEX_FILE, lines)

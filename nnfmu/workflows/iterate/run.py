@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 import os
-import shutil
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -199,16 +198,12 @@ def run_iterate(
     best = outcome.iterations[outcome.best]
     drive = plant.drive(best.drive)
     out.parent.mkdir(parents=True, exist_ok=True)
-    staging = staging_dir(out.parent, f".{out.name}.staging-")
-    try:
+    with staging_dir(out.parent, f".{out.name}.staging-") as staging:
         files = {"drive": write_drive(drive, staging / "drive.csv")}
         if settings.rpc:
             files["drive_rpc"] = write_drive(drive, staging / "drive.drv")
         write_report(staging, outcome, values, dt, channels, displacements, settings, target, system_path)
         replace_output_dir(staging, out, KIND)
-    finally:
-        if staging.exists():
-            shutil.rmtree(staging)
     files = {key: out / path.name for key, path in files.items()} | {
         "report": out / "report.json",
         "html": out / "report.html",

@@ -152,8 +152,7 @@ def run_loop(
     measured = np.asarray(m[output], dtype=float)
     slope = ValidationSettings().slope_for(output)
     out_dir.parent.mkdir(parents=True, exist_ok=True)
-    staging = staging_dir(out_dir.parent, f".{out_dir.name}.staging-")
-    try:
+    with staging_dir(out_dir.parent, f".{out_dir.name}.staging-") as staging:
         stage = _Stage(staging, out_dir, m, blocks, settings, component.name)
         onnx_path = staging / "model_0.onnx"
         shutil.copyfile(model_path, onnx_path)
@@ -260,9 +259,6 @@ def run_loop(
         )
         write_loop_report(staging, report, m, rows, first_prediction, predicted, steps)
         replace_output_dir(staging, out_dir, "loop")
-    finally:
-        if staging.exists():
-            shutil.rmtree(staging)
     return report
 
 

@@ -8,14 +8,13 @@ from __future__ import annotations
 
 import os
 import shutil
-import tempfile
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from nnfmu.atomic import staging_dir
+from nnfmu.atomic import scratch_dir, staging_dir
 from nnfmu.data import DataError, Measurement, load_measurement
 from nnfmu.data.drive_files import RPC_SUFFIXES, read_drive
 from nnfmu.diagnosis import Diagnosis
@@ -261,7 +260,7 @@ def run_vehicle_loop(
     """Close the loop at vehicle level (module docstring); write DIR/report.json, report.html, plots, the fixed
     system (system/SystemStructure.ssd) and its FMUs. Each element's step graph is the one its FMU carries; `models`
     maps elements to ONNX step graphs that override them (`system_files.read_virtual_car`)."""
-    with tempfile.TemporaryDirectory(prefix="nnfmu-step-graphs-") as graphs:
+    with scratch_dir("nnfmu-step-graphs-") as graphs:
         return _run_vehicle_loop(measured, system, drive, out_dir, settings, models, log, Path(graphs))
 
 
@@ -317,8 +316,7 @@ def _run_vehicle_loop(
     _check_attribution_size(m.source, len(virtual.time), channels, len(candidates), settings.max_effects)
     retrainable = {e: path is not None and trained_network(path) for e, path in car.onnx.items()}
     out_dir.parent.mkdir(parents=True, exist_ok=True)
-    staging = staging_dir(out_dir.parent, f".{out_dir.name}.staging-")
-    try:
+    with staging_dir(out_dir.parent, f".{out_dir.name}.staging-") as staging:
 
         def replay(ssd: Path) -> Measurement:
             return on_record(replay_system(ssd, d, settings.step), m, channels, settings.settle)
@@ -407,9 +405,6 @@ def _run_vehicle_loop(
         )
         write_vehicle_report(staging, report, record, virtual, after_result, corrected)
         replace_output_dir(staging, out_dir, "vehicle-loop")
-    finally:
-        if staging.exists():
-            shutil.rmtree(staging)
     return report
 
 
