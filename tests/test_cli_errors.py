@@ -96,3 +96,15 @@ def test_loop_on_a_model_with_malformed_metadata_is_one_error_line(tmp_path: Pat
     assert result.exception is None or isinstance(result.exception, SystemExit), repr(result.exception)
     assert result.output.startswith("error: ") and "odd.onnx: cannot read the component description" in result.output
     assert not (tmp_path / "loop").exists()
+
+
+def test_a_bad_slope_is_named_as_the_help_names_it(tmp_path: Path) -> None:
+    """`--slope 1e308` was refused as "Basquin slope for 'basquin_slope'", a name the command line does not have."""
+    record = tmp_path / "r.csv"
+    record.write_text("time [s],force [N]\n0,1\n0.001,2\n0.002,1\n", encoding="utf-8")
+    done = runner.invoke(app, ["validate", str(record), str(record), "--slope", "1e308", "--out", str(tmp_path / "v")])
+    assert done.exit_code == 2
+    assert "Basquin slope m must be a number in (0, 50], got 1e+308" in done.output
+    assert "basquin_slope" not in done.output
+    help_text = runner.invoke(app, ["validate", "--help"]).output
+    assert "Basquin slope m" in help_text

@@ -13,6 +13,8 @@ from __future__ import annotations
 import math
 import os
 import shutil
+import urllib.parse
+import urllib.request
 import xml.etree.ElementTree as ET
 import zipfile
 from collections.abc import Iterator, Mapping
@@ -98,7 +100,7 @@ class SystemStructure:
 
     def fmu_path(self, element: str | Element) -> Path:
         element = self.element(element) if isinstance(element, str) else element
-        return self.base / element.source
+        return self.base / local_path(element.source, f"system {self.name!r}: element {element.name!r}")
 
 
 def _q(ns: str, tag: str) -> str:
@@ -176,10 +178,26 @@ def _float(text: str, where: str) -> float:
     return value
 
 
+def local_path(source: str, where: str) -> str:
+    """An element's `source` (a URI reference, SSP 1.0 section 5.1) as a file path: a `file:` URI is read as its
+    path, a relative reference or path is kept; other schemes (http:, ...) are refused, nnfmu reads no network."""
+    parsed = urllib.parse.urlsplit(source)
+    if len(parsed.scheme) <= 1:  # no scheme, or a Windows drive letter
+        return source
+    if parsed.scheme.lower() != "file":
+        raise SspError(
+            f"{where}: source {source!r} is a {parsed.scheme}: URI; give a local file (a relative path or a file: URI)"
+        )
+    if parsed.netloc not in ("", "localhost"):
+        raise SspError(f"{where}: source {source!r} names the host {parsed.netloc!r}; give a local file")
+    return urllib.request.url2pathname(parsed.path)
+
+
 def _read_element(node: ET.Element, path: Path) -> Element:
     name = _required(node, "name", f"{path}: ssd:Component")
     where = f"{path}: element {name!r}"
     source = _required(node, "source", where)
+    local_path(source, where)  # a source nnfmu cannot open is refused here, naming the element
     kind = node.get("type", FMU_TYPE)
     if kind != FMU_TYPE:
         raise SspError(f"{where}: type {kind!r}; only FMUs ({FMU_TYPE}) can be co-simulated")

@@ -37,11 +37,12 @@ class ValidationSettings:
     window: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
-        for key, value in {"basquin_slope": self.basquin_slope, **self.slopes}.items():
+        named = {"Basquin slope m": self.basquin_slope} | {
+            f"Basquin slope for {k!r}": v for k, v in self.slopes.items()
+        }
+        for what, value in named.items():
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value <= MAX_SLOPE:
-                raise ValidationError(
-                    f"Basquin slope for {key!r} must be a number in (0, {MAX_SLOPE:g}], got {value!r}"
-                )
+                raise ValidationError(f"{what} must be a number in (0, {MAX_SLOPE:g}], got {value!r}")
         if not (self.fmax > 0 and self.psd_resolution > 0 and self.window_length > 0):
             raise ValidationError(
                 f"fmax, psd_resolution and window_length must be positive, got {self.fmax!r} Hz, "

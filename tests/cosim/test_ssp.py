@@ -274,3 +274,29 @@ def test_a_plain_ssd_loads_fmus_only_from_its_own_folder_unless_allowed(
                 pass
         with open_system(ssd, allow_outside=True) as opened:
             assert opened.fmu_path("damper").resolve() == fmus["damper"]
+
+
+def test_file_uri_sources_open_and_network_sources_are_refused_by_name(
+    systems: dict[float, Path], tmp_path: Path
+) -> None:
+    """An SSD's `source` is a URI reference (SSP 1.0): a `file:` URI (absolute or relative) names the FMU it says,
+    it read "not found" before; an http: source is refused when the file is read, naming element and source."""
+    with open_system(systems[1e-3]) as system:
+        fmus = {e.name: system.fmu_path(e).resolve() for e in system.elements}
+    folder = tmp_path / "my system"
+    folder.mkdir()
+    for name, fmu in fmus.items():
+        os.link(fmu, folder / f"{name} model.fmu")
+    uris = {"damper": (folder / "damper model.fmu").as_uri(), "vehicle": "file:vehicle%20model.fmu"}
+    elements = [replace(e, source=uris[e.name]) for e in system.elements]
+    ssd = write_ssd(replace(system, elements=elements, base=folder), folder / "SystemStructure.ssd")
+    with open_system(ssd) as opened:
+        assert {e.name: opened.fmu_path(e) for e in opened.elements} == {
+            name: folder / f"{name} model.fmu" for name in fmus
+        }
+    remote = write_ssd(
+        replace(system, elements=[replace(e, source=f"https://example.org/{e.name}.fmu") for e in system.elements]),
+        folder / "remote.ssd",
+    )
+    with pytest.raises(SspError, match=r"element 'vehicle': source 'https://example.org/vehicle.fmu' is a https: URI"):
+        read_ssd(remote)

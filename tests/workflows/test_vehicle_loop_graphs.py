@@ -4,6 +4,7 @@ another network beside the FMU ignored, loudly; an FMU without a graph reported 
 from __future__ import annotations
 
 import json
+import os
 import re
 import zipfile
 from pathlib import Path
@@ -77,6 +78,20 @@ def test_a_given_graph_must_be_the_fmus_network(parts, tmp_path: Path) -> None:
     assert same.onnx["damper"] == parts["folder"] / "hyst.onnx"
     with pytest.raises(VehicleLoopError, match=r"--model damper=.*other\.onnx: .* is not the network .* refusing"):
         read_virtual_car(ssd, tmp_path / "g", {"damper": parts["folder"] / "other.onnx"}, log=lambda _: None)
+
+
+def test_a_given_graph_that_is_a_fifo_a_folder_or_missing_is_named_as_such(parts, tmp_path: Path) -> None:
+    """`--model damper=FIFO` read "not found" (no hang): the refusal says what the path is."""
+    ssd = _system(parts, parts["damper"], tmp_path / "a")
+    fifo = tmp_path / "pipe.onnx"
+    os.mkfifo(fifo)
+    for given, why in (
+        (fifo, "is a FIFO, not a regular file"),
+        (tmp_path, "is a folder"),
+        (tmp_path / "x", "not found"),
+    ):
+        with pytest.raises(VehicleLoopError, match=rf"element 'damper' {re.escape(str(given))}: {why}"):
+            read_virtual_car(ssd, tmp_path / "g", {"damper": given}, log=lambda _: None)
 
 
 def test_an_fmu_without_a_graph_takes_a_given_one_unverified_said_so(parts, tmp_path: Path) -> None:

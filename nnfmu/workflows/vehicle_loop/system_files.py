@@ -16,6 +16,7 @@ import onnx
 
 from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd
 from nnfmu.fmu.step_graph import StepGraphError, check_same_graph, extract_fmu_graph
+from nnfmu.input_files import not_regular
 from nnfmu.workflows.vehicle_binding import vehicle_binding
 from nnfmu.workflows.vehicle_loop.settings import VehicleLoopError
 
@@ -87,7 +88,8 @@ def _step_graph(element: str, fmu: Path, given: Path | None, graphs: Path, notes
     """The element's step graph: given (checked against the FMU's record where it has one), else the FMU's own,
     else an ONNX beside an FMU without a record; what cannot be verified or is ignored goes into `notes`."""
     if given is not None and not given.is_file():
-        raise VehicleLoopError(f"ONNX file of element {element!r} not found: {given}")
+        why = not_regular(given) or ("is a folder" if given.is_dir() else "not found")
+        raise VehicleLoopError(f"ONNX file of element {element!r} {given}: {why}")
     try:
         record = extract_fmu_graph(fmu, graphs / f"{element}.onnx")
     except StepGraphError as err:
