@@ -126,6 +126,13 @@ def _number(value: object) -> str:
     return "–" if value is None else str(value)
 
 
+def per_cent(value: object) -> str:
+    """A fraction as per cent for a `[%]` column (`0.02858` -> `2.858`), as the headline and the docs give errors."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return f"{100 * value:.4g}"
+    return "–" if value is None else str(value)
+
+
 def write_loop_report(
     folder: Path,
     report: LoopReport,
@@ -163,6 +170,7 @@ def write_loop_report(
         loader=jinja2.PackageLoader("nnfmu.workflows.loop", "."), autoescape=True, undefined=jinja2.StrictUndefined
     )
     environment.filters["number"] = _number
+    environment.filters["per_cent"] = per_cent
     environment.filters["p_value"] = p_value_text
     html = environment.get_template(TEMPLATE).render(report=document)
     write_text_atomic(folder / "report.html", html)
