@@ -908,7 +908,7 @@ def loop_vehicle(
     for name, pair in report.channels.items():
         before, after = pair["before"], pair["after"]
         typer.echo(
-            f"  {name}: NRMSE {before.nrmse:.4g} -> {after.nrmse:.4g}, mean shift {before.mean_shift:.4g} -> "
+            f"  {name}: NRMSE {100 * before.nrmse:.4g} % -> {100 * after.nrmse:.4g} %, mean shift {before.mean_shift:.4g} -> "
             f"{after.mean_shift:.4g}"
         )
     typer.echo(f"system: {report.fixed_system}\nreport: {out / 'report.html'}")
@@ -1084,7 +1084,7 @@ def validate(
         m = c.metrics
         damage = m.not_meaningful.get("pseudo_damage_ratio") or f"{m.pseudo_damage_ratio:.4g}"
         typer.echo(
-            f"{c.name} [{c.unit}]: NRMSE {m.nrmse:.4g}, R2 {m.r2:.4g}, peak error {m.peak_error:+.3g}, "
+            f"{c.name} [{c.unit}]: NRMSE {100 * m.nrmse:.4g} %, R2 {m.r2:.4g}, peak error {m.peak_error:+.3g}, "
             f"pseudo-damage ratio {damage} (m = {c.basquin_slope:g})"
         )
     typer.echo(f"verdict: {report.verdict}")

@@ -19,6 +19,7 @@ from nnfmu.diagnosis.evidence import p_value_text
 from nnfmu.models.features import FeatureSpec
 from nnfmu.validate import welch_psd
 from nnfmu.validate.plots import axis_label, new_axes, psd_unit
+from nnfmu.validate.verdict import per_cent
 from nnfmu.workflows.loop.results import LoopReport
 
 TEMPLATE = "loop_report.html.j2"
@@ -123,13 +124,6 @@ def plot_residual_psd(
 def _number(value: object) -> str:
     if isinstance(value, (int, float)) and value is not None:
         return f"{value:.4g}"
-    return "–" if value is None else str(value)
-
-
-def per_cent(value: object) -> str:
-    """A fraction as per cent for a `[%]` column (`0.02858` -> `2.858`), as the headline and the docs give errors."""
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        return f"{100 * value:.4g}"
     return "–" if value is None else str(value)
 
 
