@@ -23,7 +23,7 @@ WEIGHT_WARNING = 10.0
 # follows the record has that gain there. So the limit is GAIN_EXCESS times the record's own gain (`data_gain`, a
 # lower bound) where that is more than GAIN_WARNING. Measured on the default dyno record (`nnfmu rig damper`, then
 # `nnfmu train dyno.csv --preset damper-hysteresis`, which picks hidden 12): network gain 11.2, of it 7.8 on the
-# velocity where the force's binned slope is 7.6; record gain 4.8 (ratio 2.3). Four leaves room for other seeds and
+# velocity where the force's binned slope is 7.5; record gain 4.8 (ratio 2.3). Four leaves room for other seeds and
 # sizes; a network whose large weights cancel on collinear inputs exceeds it (tests/models/test_weight_warning.py).
 GAIN_WARNING = 10.0
 GAIN_EXCESS = 4.0
