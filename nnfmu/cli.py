@@ -82,6 +82,13 @@ drive_app = typer.Typer(no_args_is_help=True, help="Drive files for a four-post 
 app.add_typer(drive_app, name="drive")
 controller_app = typer.Typer(no_args_is_help=True, help="Controllers of semi-active dampers, as FMUs.")
 app.add_typer(controller_app, name="controller")
+# `nnfmu loop`'s before -> after lines: (key of the report's errors, label, scale); NRMSE in per cent as the headline.
+LOOP_ERRORS = (
+    ("nrmse", "NRMSE [%]", 100.0),
+    ("r2", "R²", 1.0),
+    ("peak_error", "peak error [SI]", 1.0),
+    ("pseudo_damage_ratio", "pseudo-damage ratio", 1.0),
+)
 ALLOW_OUTSIDE_HELP = (
     "Load FMUs (and, for a campaign, drives and systems) from outside the system's or campaign's folder; an FMU is "
     "native code, so this is asked for explicitly."
@@ -713,9 +720,9 @@ def loop(
         _fail(error)
     typer.echo(report.summary)
     typer.echo(f"effects added: {', '.join(report.effects_added) or 'none'}")
-    for key in ("nrmse", "r2", "peak_error", "pseudo_damage_ratio"):
+    for key, label, scale in LOOP_ERRORS:
         values = [report.error_before[key], report.error_after[key]]
-        typer.echo(f"  {key}: " + " -> ".join("not meaningful" if v is None else f"{v:.4g}" for v in values))
+        typer.echo(f"  {label}: " + " -> ".join("not meaningful" if v is None else f"{scale * v:.4g}" for v in values))
     for note in report.notes:
         typer.echo(f"  note: {note}")
     typer.echo(f"ONNX: {report.onnx}\nFMU: {report.fmu}\nreport: {out / 'report.html'}")
@@ -901,7 +908,7 @@ def loop_vehicle(
     for name, pair in report.channels.items():
         before, after = pair["before"], pair["after"]
         typer.echo(
-            f"  {name}: NRMSE {before.nrmse:.4g} -> {after.nrmse:.4g}, mean shift {before.mean_shift:.4g} -> "
+            f"  {name}: NRMSE {100 * before.nrmse:.4g} % -> {100 * after.nrmse:.4g} %, mean shift {before.mean_shift:.4g} -> "
             f"{after.mean_shift:.4g}"
         )
     typer.echo(f"system: {report.fixed_system}\nreport: {out / 'report.html'}")
@@ -1077,7 +1084,7 @@ def validate(
         m = c.metrics
         damage = m.not_meaningful.get("pseudo_damage_ratio") or f"{m.pseudo_damage_ratio:.4g}"
         typer.echo(
-            f"{c.name} [{c.unit}]: NRMSE {m.nrmse:.4g}, R2 {m.r2:.4g}, peak error {m.peak_error:+.3g}, "
+            f"{c.name} [{c.unit}]: NRMSE {100 * m.nrmse:.4g} %, R2 {m.r2:.4g}, peak error {m.peak_error:+.3g}, "
             f"pseudo-damage ratio {damage} (m = {c.basquin_slope:g})"
         )
     typer.echo(f"verdict: {report.verdict}")

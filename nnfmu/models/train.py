@@ -420,7 +420,7 @@ def train_model(
     network, history, trials, hidden = fit_best(data, architecture, settings, progress)
     metrics = evaluate(network, data)
     train_part = data.splits.index("train")
-    warnings = [w for w in [network_warning(network, data.x)] if w]
+    warnings = [w for w in [network_warning(network, data.x, data.y)] if w]
     n_in = data.x.shape[1]
     model = trained_model(
         spec,

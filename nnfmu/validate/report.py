@@ -24,7 +24,7 @@ from nnfmu.validate.compare import ChannelComparison
 from nnfmu.validate.metrics import DEFINITIONS
 from nnfmu.validate.plots import plot_channel
 from nnfmu.validate.summary import json_float
-from nnfmu.validate.verdict import Target, verdict
+from nnfmu.validate.verdict import Target, per_cent, verdict
 
 TEMPLATE = "report.html.j2"
 SUMMARY_FILE = "summary.json"
@@ -97,6 +97,7 @@ def render_html(summary: Mapping[str, Any]) -> str:
         undefined=jinja2.StrictUndefined,
     )
     environment.filters["number"] = _format_number
+    environment.filters["per_cent"] = per_cent
     return environment.get_template(TEMPLATE).render(summary=summary)
 
 

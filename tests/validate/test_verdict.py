@@ -131,3 +131,6 @@ def test_nnfmu_validate_prints_the_verdict_and_takes_the_target_as_an_option(tmp
     assert "verdict: damper_force [N] NRMSE 3 % — above the 2 % target (--target-nrmse); 0 of 1 channel within" in (
         run.output
     )
+    assert "damper_force [N]: NRMSE 3 %, R2" in run.output  # per cent as the verdict, not 0.03 (issue 31)
+    html = (tmp_path / "r" / "index.html").read_text(encoding="utf-8")
+    assert "<th>NRMSE [%]</th>" in html and "<td>N</td>\n<td>3</td><td>" in html  # after the unit: 3 %, not 0.03

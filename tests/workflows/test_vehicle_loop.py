@@ -70,6 +70,9 @@ def test_a_clean_lab_car_adds_nothing(virtual_car, tmp_path: Path) -> None:
     assert set(written["fmus"]) == {"damper"}
     for name, pair in written["channels"].items():
         assert pair["before"] == pair["after"], name  # nothing changed, nothing moved
+    html = (tmp_path / "out" / "report.html").read_text()
+    nrmse = written["channels"]["damper_force"]["before"]["nrmse"]  # a fraction in report.json, per cent in the table
+    assert "<th>NRMSE [%]</th>" in html and f"<td>{100 * nrmse:.4g} &rarr; {100 * nrmse:.4g}</td>" in html
     assert report.fixes == []
 
 

@@ -14,10 +14,11 @@ from nnfmu.atomic import staging_dir
 from nnfmu.data import load_measurement
 from nnfmu.data.measurement import Measurement
 from nnfmu.out_paths import check_output_dir, replace_output_dir
+from nnfmu.workflows.characterise.analysis import StiffnessPoint
 from nnfmu.workflows.characterise.bushing import channel_plan, characterise_bushing
 from nnfmu.workflows.characterise.damper import characterise_damper, command_levels, damper_tests
 from nnfmu.workflows.characterise.envelope import INSIDE, envelope_note
-from nnfmu.workflows.characterise.kind import BushingPorts, DamperPorts
+from nnfmu.workflows.characterise.kind import BushingChannelPorts, BushingPorts, DamperPorts
 from nnfmu.workflows.characterise.measured import Cycle, measured_bushing, measured_damper
 from nnfmu.workflows.characterise.model import ModelUnderTest, model_under_test
 from nnfmu.workflows.characterise.plots import characteristic_plot, loop_plot, stiffness_plots, work_diagram_plots
@@ -153,6 +154,16 @@ def _damper(
     return [main, gas, work], notes, lines
 
 
+def stiffness_line(channel: BushingChannelPorts, point: StiffnessPoint) -> str:
+    """One dynamic-stiffness point for the terminal, every number with its unit, within 78 columns for nnfmu's
+    channels (indented by 2 on an 80-column terminal): `conical_rotation 5 Hz, 0.04 rad: |K*| 1.234e+04 N.m/rad, loss
+    12.3 deg` (loss: the loss angle)."""
+    return (
+        f"{point.channel} {point.frequency:.3g} Hz, {point.amplitude:.3g} {channel.position_unit}: |K*| "
+        f"{point.dynamic_stiffness:.4g} {channel.stiffness_unit}, loss {point.loss_angle:.3g} deg"
+    )
+
+
 def _bushing(
     model: ModelUnderTest, ports: BushingPorts, record: Measurement | None, settings: CharacteriseSettings, folder: Path
 ) -> tuple[list[Section], list[str], list[str]]:
@@ -219,12 +230,7 @@ def _bushing(
                 folder / f"{ch.key}_loop.png",
             )
         )
-    lines = [
-        f"{p.channel}: {p.frequency:7.3g} Hz, {p.amplitude:.3g}: |K*| {p.dynamic_stiffness:.4g}, loss angle "
-        f"{p.loss_angle:.3g} deg"
-        for ch in result.channels
-        for p in result.points[ch.key]
-    ]
+    lines = [stiffness_line(ch, p) for ch in result.channels for p in result.points[ch.key]]
     return [stiffness, loop], [], lines
 
 

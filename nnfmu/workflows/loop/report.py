@@ -19,6 +19,7 @@ from nnfmu.diagnosis.evidence import p_value_text
 from nnfmu.models.features import FeatureSpec
 from nnfmu.validate import welch_psd
 from nnfmu.validate.plots import axis_label, new_axes, psd_unit
+from nnfmu.validate.verdict import per_cent
 from nnfmu.workflows.loop.results import LoopReport
 
 TEMPLATE = "loop_report.html.j2"
@@ -163,6 +164,7 @@ def write_loop_report(
         loader=jinja2.PackageLoader("nnfmu.workflows.loop", "."), autoescape=True, undefined=jinja2.StrictUndefined
     )
     environment.filters["number"] = _number
+    environment.filters["per_cent"] = per_cent
     environment.filters["p_value"] = p_value_text
     html = environment.get_template(TEMPLATE).render(report=document)
     write_text_atomic(folder / "report.html", html)

@@ -15,6 +15,7 @@ from nnfmu.atomic import write_text_atomic
 from nnfmu.data import Measurement
 from nnfmu.diagnosis.evidence import p_value_text
 from nnfmu.validate.plots import axis_label, new_axes
+from nnfmu.validate.verdict import per_cent
 
 if TYPE_CHECKING:
     from nnfmu.workflows.vehicle_loop.run import VehicleLoopReport
@@ -49,16 +50,16 @@ def plot_channel(
 
 
 def plot_nrmse(report: VehicleLoopReport, path: Path) -> Path:
-    """NRMSE of every channel before and after, bars side by side."""
+    """NRMSE [%] of every channel before and after, bars side by side."""
     names = list(report.channels)
     figure, axes = new_axes("NRMSE per channel, virtual vs lab car", height=max(4.0, 0.3 * len(names)))
     y = np.arange(len(names))
     for shift, when, color in ((-0.2, "before", "tab:blue"), (0.2, "after", "tab:red")):
-        values = [report.channels[n][when].nrmse for n in names]
+        values = [100 * report.channels[n][when].nrmse for n in names]
         axes.barh(y + shift, values, height=0.4, color=color, label=when)
     axes.set_yticks(y, names)
     axes.set_xscale("log")
-    axes.set_xlabel("NRMSE [1]")
+    axes.set_xlabel("NRMSE [%]")
     axes.legend()
     figure.savefig(path, format="png")
     return path
@@ -89,5 +90,6 @@ def write_vehicle_report(
         undefined=jinja2.StrictUndefined,
     )
     environment.filters["number"] = _number
+    environment.filters["per_cent"] = per_cent
     environment.filters["p_value"] = p_value_text
     write_text_atomic(folder / "report.html", environment.get_template(TEMPLATE).render(report=document))

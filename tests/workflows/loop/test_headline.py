@@ -4,6 +4,8 @@ the test error before -> after against the target; the diagnosis's test names on
 from __future__ import annotations
 
 import json
+import re
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -110,3 +112,27 @@ def test_the_report_leads_with_the_headline_and_keeps_test_names_in_the_details(
     document = json.loads((tmp_path / "report.json").read_text(encoding="utf-8"))
     assert document["summary"] == "HEADLINE" and document["details"] == DETAILS
     assert document["target"] == {"nrmse": 0.05, "source": "default"}
+
+
+def test_the_report_tables_give_nrmse_in_per_cent_as_the_headline_does(tmp_path):
+    """Issue 31: the before/after table printed 0.02858 under a headline of 2.86 %."""
+    t = np.arange(4000) * 1e-3
+    velocity = 0.3 * np.sin(2 * np.pi * 2.0 * t)
+    m = Measurement(t, {"velocity": velocity, "force": 2000.0 * velocity}, {"velocity": "m/s", "force": "N"}, "rig")
+    before = {"nrmse": 0.02858, "r2": 0.99, "peak_error": 0.01, "pseudo_damage_ratio": 1.0}
+    after = {**before, "nrmse": 0.02251}
+    kept = replace(iteration(("temperature",), 0.209), error_before=before, error_after=after)
+    kept = replace(kept, diagnosis_nrmse_by_start={"warm": 0.0213, "fresh": 0.0247})
+    report = LoopReport(
+        "rig", "m.onnx", "force", {}, ["temperature"], [kept], before, after, Path("m.onnx"), Path("m.fmu"), False,
+        "HEADLINE", [], [], [diagnosis(())], details=DETAILS, target={"nrmse": 0.05, "source": "default"},
+    )  # fmt: skip
+    rows = {"diagnosis": np.arange(0, 2000), "test": np.arange(2000, 4000)}
+    write_loop_report(tmp_path, report, m, rows, 1.02 * m["force"] + 1.0, 1.01 * m["force"], [])
+    html = (tmp_path / "report.html").read_text(encoding="utf-8")
+    cells = re.findall(r"<t[dh]>([^<]*)</t[dh]>", html)
+    assert "NRMSE [%]" in cells and "test NRMSE before [%]" in cells and "explained variance [%]" in cells
+    assert cells.count("2.858") == 2 and cells.count("2.251") == 2 and "20.9" in cells
+    assert "0.02858" not in html and "0.02251" not in html
+    assert "warm 2.13, fresh 2.47" in html
+    assert json.loads((tmp_path / "report.json").read_text(encoding="utf-8"))["error_before"]["nrmse"] == 0.02858
