@@ -2,14 +2,15 @@
 derivative from its FMU's directional derivatives (nnfmu's stabilised vehicle ports taking the bushing networks'
 local stiffness and damping instead of the elements fitted once).
 
-The convention is by name, so the master needs to know nothing of vehicles: an element V with an input named
-`P_per_D` and an input `use_port_derivatives`, whose input P is fed by output F of a component C and whose output D
-feeds C's input I, gets dP/dD = dF/dI (`fmi2GetDirectionalDerivative` / `fmi3GetDirectionalDerivative` of C at its
-latest communication point, times the unit conversions of both connections) after every step of C and before V's
-refresh, and `use_port_derivatives` = 1 once at the start. The inputs are never connected; with this off, or a
-component that provides no directional derivatives, they stay at their start values (0: nnfmu's vehicle then keeps
-its fitted elements exactly). A derivative that is not finite, or a call that fails, at the start stops the run
-naming the element and port; later it keeps the last finite value (the vehicle also clamps negative values to 0).
+The convention is by name, so the master needs to know nothing of vehicles: an element V with inputs named
+`P_per_D` and `P_per_D_given`, whose input P is fed by output F of a component C and whose output D feeds C's input
+I, gets dP/dD = dF/dI (`fmi2GetDirectionalDerivative` / `fmi3GetDirectionalDerivative` of C at its latest
+communication point, times the unit conversions of both connections) after every step of C and before V's refresh,
+and `P_per_D_given` = 1 once at the start. Such inputs are never connected; those the rule finds no pair for, and all
+of them with the setting off or a component that provides no directional derivatives, stay at their start values
+(0: nnfmu's vehicle then keeps its fitted elements exactly). A derivative that is not finite, or a call that
+fails, at the start stops the run naming the element and port; later the last finite value is kept (the vehicle
+also clamps negative values to 0).
 """
 
 from __future__ import annotations
@@ -24,8 +25,7 @@ from nnfmu.cosim.direct import RealBlock
 from nnfmu.cosim.slave import FmuSlave
 from nnfmu.errors import NnfmuError
 
-USE = "use_port_derivatives"
-PER = "_per_"
+PER, GIVEN = "_per_", "_given"
 
 
 class PortDerivativeError(NnfmuError, ValueError):
@@ -46,39 +46,48 @@ class Link:
 
 @dataclass(frozen=True)
 class _Derivative:
-    """dF/dI of `component` for `element`'s input `name` (value references and the connections' scale)."""
+    """dP/dY for `element`'s input `name` = `P_per_Y`: `component`'s output `unknown` (feeding P, times `scale`) along
+    the seed `seeds` on its inputs `knowns` (those Y feeds, each its connection's scale); no knowns: 0."""
 
     element: str
     name: str
     component: str
     unknown: int
-    known: int
+    knowns: tuple[int, ...]
+    seeds: tuple[float, ...]
     scale: float
 
 
 def port_derivative_inputs(slaves: Mapping[str, FmuSlave], links: Sequence[Link]) -> dict[str, list[_Derivative]]:
-    """Per element, its port derivative inputs found by the naming rule (the element must also have
-    `use_port_derivatives`); components named but not providing derivatives included (see `provides`)."""
+    """Per element, its port derivative inputs found by the naming rule: `P_per_Y` where input P is fed by a
+    component's output and Y is an output of the element (fed to that component's inputs, or to none of them: then
+    the component's output does not depend on Y, and the value is 0)."""
     found: dict[str, list[_Derivative]] = {}
     for name, slave in slaves.items():
-        inputs = set(slave.names("input"))
-        if USE not in inputs:
-            continue
+        inputs = derivative_inputs(slave.names("input"))
+        outputs = set(slave.names("output"))
         for force in (link for link in links if link.target == name):
-            for motion in (link for link in links if link.source == name and link.target == force.source):
-                gain = f"{force.input}{PER}{motion.output}"
-                if gain not in inputs:
+            for gain in sorted(g for g in inputs if g.startswith(f"{force.input}{PER}") and not g.endswith(GIVEN)):
+                motion = gain.removeprefix(f"{force.input}{PER}")
+                if motion not in outputs:
                     continue
+                fed = [
+                    link for link in links if (link.source, link.output, link.target) == (name, motion, force.source)
+                ]
                 component = slaves[force.source]
-                unknown, known = component.value_references([force.output, motion.input])
-                scale = force.a * force.s * motion.a * motion.s
-                found.setdefault(name, []).append(_Derivative(name, gain, force.source, unknown, known, scale))
+                (unknown,) = component.value_references([force.output])
+                knowns = tuple(component.value_references([link.input for link in fed]))
+                seeds = tuple(link.a * link.s for link in fed)
+                derivative = _Derivative(name, gain, force.source, unknown, knowns, seeds, force.a * force.s)
+                found.setdefault(name, []).append(derivative)
     return found
 
 
 def derivative_inputs(inputs: Sequence[str]) -> set[str]:
-    """The inputs among an element's `inputs` that the port-derivative rule may set (none without `USE`)."""
-    return {n for n in inputs if n == USE or PER in n} if USE in inputs else set()
+    """The inputs among an element's `inputs` that the port-derivative rule may set: `X_per_Y` with its flag
+    `X_per_Y_given`, and the flag."""
+    names = set(inputs)
+    return {n for g in names if PER in g and f"{g}{GIVEN}" in names for n in (g, f"{g}{GIVEN}")}
 
 
 def exempt_inputs(slaves: Mapping[str, FmuSlave]) -> set[tuple[str, str]]:
@@ -97,11 +106,8 @@ class PortDerivatives:
     def __init__(self, slaves: Mapping[str, FmuSlave], links: Sequence[Link]) -> None:
         found = port_derivative_inputs(slaves, links)
         self.slaves = slaves
-        self.derivatives = {
-            name: [d for d in items if provides(slaves[d.component])]
-            for name, items in found.items()
-            if all(provides(slaves[d.component]) for d in items)
-        }
+        kept = {name: [d for d in items if provides(slaves[d.component])] for name, items in found.items()}
+        self.derivatives = {name: items for name, items in kept.items() if items}
         self.blocks = {
             name: RealBlock(slaves[name], [d.name for d in items]) for name, items in self.derivatives.items()
         }
@@ -115,9 +121,9 @@ class PortDerivatives:
         return [f"{d.element}.{d.name}" for items in self.derivatives.values() for d in items]
 
     def start(self) -> None:
-        """`use_port_derivatives` = 1 and the first values; PortDerivativeError for a value not to be had."""
+        """Each `..._given` flag = 1 and the first values; PortDerivativeError for a value not to be had."""
         for name, items in self.derivatives.items():
-            self.slaves[name].set_real([USE], [1.0])
+            self.slaves[name].set_real([f"{d.name}{GIVEN}" for d in items], [1.0] * len(items))
             block = self.blocks[name]
             for i, d in enumerate(items):
                 value = self._derivative(d)
@@ -140,9 +146,11 @@ class PortDerivatives:
             block.set()
 
     def _derivative(self, d: _Derivative) -> float:
-        """dF/dI of the component times the connections' scale; NaN where the call fails."""
+        """The component's derivative along the seeds times the connections' scale; NaN where the call fails."""
+        if not d.knowns:
+            return 0.0
         try:  # fmpy's FMI 2 and FMI 3 calls take (unknowns, knowns, seed) alike
-            value = self.slaves[d.component].fmu.getDirectionalDerivative([d.unknown], [d.known], [1.0])[0]
+            value = self.slaves[d.component].fmu.getDirectionalDerivative([d.unknown], list(d.knowns), list(d.seeds))[0]
         except Exception:  # noqa: BLE001 (an FMI error status: fmpy raises its own exception class)
             return float("nan")
         return float(np.float64(value) * d.scale)

@@ -35,7 +35,7 @@ from nnfmu.vehicle.fmu.errors import VehicleBuildError
 STATE_IN, STATE_OUT, INPUTS, OUTPUTS = "x", "x_next", "u", "y"
 INPUTS_START = "u_start"  # the inputs at the previous sample: the start of the interval
 FIRST_IN, FIRST_OUT = "first", "first_next"
-GAINS, GAINS_START = "port_gains", "port_gains_start"  # [k..., c..., use] of the stabilised ports (`port_gains`)
+GAINS, GAINS_START = "port_gains", "port_gains_start"  # stabilised ports' [k..., c..., k given..., c given...]
 
 
 @dataclass(frozen=True)
@@ -108,7 +108,7 @@ def discrete_step_graph(discrete: DiscreteVehicle, gains: GainCorrection | None 
     graph_inputs = [_row(STATE_IN, nx), _row(FIRST_IN, 1), _row(INPUTS, nu), _row(INPUTS_START, nu)]
     if gains is not None:
         advanced = _gain_corrected(graph, gains, advanced)
-        graph_inputs += [_row(GAINS, 2 * len(gains.ports) + 1), _row(GAINS_START, 2 * len(gains.ports) + 1)]
+        graph_inputs += [_row(GAINS, 4 * len(gains.ports)), _row(GAINS_START, 4 * len(gains.ports))]
     keep = graph.node("Mul", [FIRST_IN, STATE_IN], "kept_state")
     later = graph.node("Sub", [graph.constant("one", np.ones(1)), FIRST_IN], "later_sample")
     state = graph.node("Add", [graph.node("Mul", [later, advanced], "advanced_state"), keep], "state")
@@ -233,47 +233,27 @@ def _advance(graph: GraphBuilder, discrete: DiscreteVehicle, spline: dict[str, s
 
 def _gain_corrected(graph: GraphBuilder, gains: GainCorrection, advanced: str) -> str:
     """`advanced` (the step on the fitted elements) corrected for the ports' elements given at the interval start,
-    `port_gains_start` = [k..., c..., use]: dk = use (Relu(k) - k0), dc likewise, then `GainCorrection.correct`.
-    The end values `port_gains` only reach the graph times 0 (the FMU feeds every input tensor)."""
+    `port_gains_start` = [k..., c..., k given..., c given...] (4 ns): dk = k_given (Relu(k) - k0), dc likewise, then
+    `GainCorrection.correct`. The end values `port_gains` reach the graph only times 0 (the FMU feeds every input
+    tensor; the step holds the values given at its start)."""
     ns = len(gains.ports)
-    pick = np.zeros((3, 2 * ns + 1, ns))
-    pick[0, np.arange(ns), np.arange(ns)] = 1.0
-    pick[1, ns + np.arange(ns), np.arange(ns)] = 1.0
-    pick[2, 2 * ns, :] = 1.0
-    k, c, use = (
-        graph.node("MatMul", [GAINS_START, graph.constant(f"pick_{n}", pick[i])], f"given_{n}")
-        for i, n in enumerate(("stiffness", "damping", "use"))
-    )
-    dk = graph.node(
-        "Mul",
-        [
-            use,
-            graph.node(
-                "Sub",
-                [graph.node("Relu", [k], "passive_stiffness"), graph.constant("fitted_stiffness", gains.fitted[:, 0])],
-                "stiffness_change_given",
-            ),
-        ],
-        "stiffness_change",
-    )
-    dc = graph.node(
-        "Mul",
-        [
-            use,
-            graph.node(
-                "Sub",
-                [graph.node("Relu", [c], "passive_damping"), graph.constant("fitted_damping", gains.fitted[:, 1])],
-                "damping_change_given",
-            ),
-        ],
-        "damping_change",
-    )
-    unused = graph.node("MatMul", [GAINS, graph.constant("ignore_end_gains", np.zeros((2 * ns + 1, 1)))], "gains_end")
-    dk = graph.node(
-        "Add",
-        [dk, graph.node("Mul", [unused, graph.constant("zero_gain", np.zeros(1))], "nothing")],
-        "stiffness_change_applied",
-    )
+    size = 4 * ns
+    parts = []
+    for i, n in enumerate(("stiffness", "damping", "stiffness_given", "damping_given")):
+        pick = np.zeros((size, ns))
+        pick[i * ns + np.arange(ns), np.arange(ns)] = 1.0
+        parts.append(graph.node("MatMul", [GAINS_START, graph.constant(f"pick_{n}", pick)], f"input_{n}"))
+    k, c, k_given, c_given = parts
+    end = graph.node("MatMul", [GAINS, graph.constant("ignore_end_gains", np.zeros((size, 1)))], "gains_end")
+    nothing = graph.node("Mul", [end, graph.constant("zero_gain", np.zeros(1))], "nothing")
+
+    def change(given: str, value: str, fitted: np.ndarray, name: str) -> str:
+        passive = graph.node("Relu", [value], f"passive_{name}")
+        moved = graph.node("Sub", [passive, graph.constant(f"fitted_{name}", fitted)], f"{name}_change_given")
+        return graph.node("Add", [graph.node("Mul", [given, moved], f"{name}_change_used"), nothing], f"{name}_change")
+
+    dk = change(k_given, k, gains.fitted[:, 0], "stiffness")
+    dc = change(c_given, c, gains.fitted[:, 1], "damping")
     moved = graph.node("Sub", [advanced, STATE_IN], "moved")
 
     def rows(name: str, matrix: np.ndarray, row: str) -> str:

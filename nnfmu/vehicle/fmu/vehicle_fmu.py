@@ -96,7 +96,7 @@ def _start(vehicle: LinearVehicle, settings: VehicleBuildSettings) -> tuple[floa
     return tuple(float(v) for v in settings.initial_state)
 
 
-USE_PORT_DERIVATIVES = "use_port_derivatives"  # the input that switches the stabilised ports to the given elements
+GIVEN = "_given"  # suffix of the flag input that switches one element input on
 
 
 def _per(force_unit: str, motion_unit: str) -> str:
@@ -108,7 +108,7 @@ def _per(force_unit: str, motion_unit: str) -> str:
 
 def gain_ports(discrete: DiscreteVehicle, gains: GainCorrection, settings: VehicleBuildSettings) -> list[Port]:
     """The inputs of the `port_gains` tensor: `P_per_D` (stiffness) for every stabilised port P, then `P_per_V`
-    (damping), D and V its deflection and rate outputs, then `use_port_derivatives`."""
+    (damping), D and V its deflection and rate outputs, then each one's flag `P_per_D_given`, `P_per_V_given`."""
     vehicle = discrete.vehicle
     motions = {
         force: (disp, rate)
@@ -116,41 +116,23 @@ def gain_ports(discrete: DiscreteVehicle, gains: GainCorrection, settings: Vehic
         if choice == STABILISED
         for force, disp, rate in component_channels(name)
     }
-    stiffness, damping = [], []
+    units = {o.name: o.unit for o in vehicle.outputs}
+    values: list[list[tuple[str, str, str]]] = [[], []]
     for j, p in enumerate(gains.ports):
         port = vehicle.inputs[p]
-        disp, rate = motions[port.name]
-        units = {o.name: o.unit for o in vehicle.outputs}
-        k0, c0 = gains.fitted[j]
-        stiffness.append(
-            Port(
-                f"{port.name}_per_{disp}",
-                _per(port.unit, units[disp]),
-                f"local stiffness of the component on {port.name} (d {port.name} / d {disp}), used when "
-                f"{USE_PORT_DERIVATIVES} = 1, below 0 taken as 0; fitted: {k0:.9g}",
-                GAINS,
-                j,
+        for kind, (what, motion) in enumerate(zip(("stiffness", "damping"), motions[port.name])):
+            name = f"{port.name}_per_{motion}"
+            text = (
+                f"local {what} of the component on {port.name} (d {port.name} / d {motion}) for the step from now, "
+                f"used while {name}{GIVEN} = 1, below 0 taken as 0 (else the fitted {gains.fitted[j, kind]:.9g})"
             )
-        )
-        damping.append(
-            Port(
-                f"{port.name}_per_{rate}",
-                _per(port.unit, units[rate]),
-                f"local damping of the component on {port.name} (d {port.name} / d {rate}), used when "
-                f"{USE_PORT_DERIVATIVES} = 1, below 0 taken as 0; fitted: {c0:.9g}",
-                GAINS,
-                len(gains.ports) + j,
-            )
-        )
-    use = Port(
-        USE_PORT_DERIVATIVES,
-        "1",
-        "1: the stabilised ports take the stiffness and damping inputs given at "
-        "each step's start; 0 (default): the elements fitted at build time",
-        GAINS,
-        2 * len(gains.ports),
-    )
-    return [*stiffness, *damping, use]
+            values[kind].append((name, _per(port.unit, units[motion]), text))
+    given = [
+        Port(f"{name}{GIVEN}", "1", f"1: {name} replaces the fitted element from the next step; 0 (default): not")
+        for name, _, _ in [*values[0], *values[1]]
+    ]
+    ports = [Port(name, unit, text) for name, unit, text in [*values[0], *values[1]]] + given
+    return [Port(p.name, p.unit, p.description, GAINS, i) for i, p in enumerate(ports)]
 
 
 def port_gain_correction(discrete: DiscreteVehicle) -> GainCorrection:
