@@ -187,6 +187,7 @@ class Assembly:
             Dyn=np.array([r[3] for r in rows]).reshape(len(rows), nn),
             stabiliser=self._stabiliser(q_u.shape[1]),
             stabiliser_rows=self._stabiliser_rows(q_u.shape[1]),
+            stabiliser_elements=self._stabiliser_elements(q_u.shape[1]),
         )
 
     def _stabiliser(self, inputs: int) -> np.ndarray:
@@ -206,6 +207,15 @@ class Assembly:
             if spring is not None:
                 rows[first + i] = row
         return rows
+
+    def _stabiliser_elements(self, inputs: int) -> np.ndarray:
+        """(nu, 2): (stiffness, damping) of each stabilised force port's element (zero rows for other inputs)."""
+        first = inputs - len(self.forces)
+        elements = np.zeros((inputs, 2))
+        for i, (_, _, spring) in enumerate(self.forces):
+            if spring is not None:
+                elements[first + i] = (spring.stiffness, spring.damping)
+        return elements
 
     def _output_rows(
         self,

@@ -49,7 +49,7 @@ class LinearVehicle:
     Bn (nx, nn), Cn (nn, nx), Dn (nn, nu), Dyn (ny, nn) connect the nn nonlinear built-in elements `feedback_laws`.
     `stabiliser` (nu, nx): the stabilised force ports' reference force S x (zero rows elsewhere; None: no such port);
     `stabiliser_rows` (nu, nx / 2): each such port's deflection as a row over the coordinates q, so that its row of S
-    is [k r, c r] with its element's stiffness k and damping c (`stabiliser_elements`).
+    is [k r, c r] with its element's stiffness k and damping c, `stabiliser_elements` (nu, 2).
     """
 
     name: str
@@ -72,12 +72,15 @@ class LinearVehicle:
     Dyn: np.ndarray
     stabiliser: np.ndarray | None = None
     stabiliser_rows: np.ndarray | None = None
+    stabiliser_elements: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.stabiliser is None:
             self.stabiliser = np.zeros((len(self.inputs), len(self.states)))
         if self.stabiliser_rows is None:
             self.stabiliser_rows = np.zeros((len(self.inputs), len(self.states) // 2))
+        if self.stabiliser_elements is None:
+            self.stabiliser_elements = np.zeros((len(self.inputs), 2))
 
     @property
     def stabilised_A(self) -> np.ndarray:
@@ -88,15 +91,6 @@ class LinearVehicle:
     def stabilised_inputs(self) -> np.ndarray:
         """Boolean mask of the inputs that are stabilised force ports (a nonzero row of `stabiliser`)."""
         return np.any(self.stabiliser != 0.0, axis=1)
-
-    def stabiliser_elements(self) -> np.ndarray:
-        """(nu, 2): (stiffness, damping) of each stabilised force port's reference element (zero rows elsewhere)."""
-        n = len(self.states) // 2
-        norms = np.einsum("ij,ij->i", self.stabiliser_rows, self.stabiliser_rows)
-        safe = np.where(norms > 0.0, norms, 1.0)
-        k = np.einsum("ij,ij->i", self.stabiliser[:, :n], self.stabiliser_rows) / safe
-        c = np.einsum("ij,ij->i", self.stabiliser[:, n:], self.stabiliser_rows) / safe
-        return np.column_stack([np.where(norms > 0.0, k, 0.0), np.where(norms > 0.0, c, 0.0)])
 
     @property
     def f(self) -> np.ndarray:

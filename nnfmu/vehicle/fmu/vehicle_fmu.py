@@ -141,7 +141,7 @@ def port_gain_correction(discrete: DiscreteVehicle) -> GainCorrection:
     if not np.any(vehicle.stabilised_inputs):
         raise VehicleBuildError(f"{vehicle.name}: port derivatives asked for, but no force port is stabilised")
     return gain_correction(
-        vehicle.stabilised_A, vehicle.B, vehicle.stabiliser_rows, vehicle.stabiliser_elements(), discrete.dt
+        vehicle.stabilised_A, vehicle.B, vehicle.stabiliser_rows, vehicle.stabiliser_elements, discrete.dt
     )
 
 
