@@ -11,6 +11,7 @@ import pytest
 from nnfmu.component import Component
 from nnfmu.export.step_runner import run_step_graph
 from nnfmu.vehicle.fmu import VehicleBuildSettings
+from nnfmu.vehicle.fmu.errors import VehicleBuildError
 from nnfmu.vehicle.fmu.vehicle_fmu import vehicle_step_graph
 
 FITTED = (1.0e5, 1500.0)  # N/m, N.s/m: the damper port's element as built
@@ -75,3 +76,8 @@ def test_negative_values_count_as_zero(graphs) -> None:
     negative = _run(with_inputs, inputs, -5e6, -1e4, (1.0, 1.0))
     assert all(np.array_equal(zero[k], negative[k]) for k in zero)
     assert all(np.all(np.isfinite(v)) for v in negative.values())
+
+
+def test_no_stabilised_port_refused() -> None:
+    with pytest.raises(VehicleBuildError, match="no force port is stabilised"):
+        vehicle_step_graph("quarter-car", VehicleBuildSettings(port_derivatives=True))
