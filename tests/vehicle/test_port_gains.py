@@ -12,7 +12,8 @@ from nnfmu.component import Component
 from nnfmu.export.step_runner import run_step_graph
 from nnfmu.vehicle.fmu import VehicleBuildSettings
 from nnfmu.vehicle.fmu.errors import VehicleBuildError
-from nnfmu.vehicle.fmu.vehicle_fmu import vehicle_step_graph
+from nnfmu.vehicle.fmu.settings import MAX_SUBSTEP
+from nnfmu.vehicle.fmu.vehicle_fmu import initial_state, port_gain_correction, vehicle_model, vehicle_step_graph
 
 FITTED = (1.0e5, 1500.0)  # N/m, N.s/m: the damper port's element as built
 BASE = VehicleBuildSettings(
@@ -81,3 +82,25 @@ def test_negative_values_count_as_zero(graphs) -> None:
 def test_no_stabilised_port_refused() -> None:
     with pytest.raises(VehicleBuildError, match="no force port is stabilised"):
         vehicle_step_graph("quarter-car", VehicleBuildSettings(port_derivatives=True))
+
+
+def test_graph_follows_the_numpy_correction(graphs) -> None:
+    """The graph's arithmetic is `GainCorrection.correct` after the exact step (outputs to 1e-9 of their spread)."""
+    _, with_inputs, inputs = graphs
+    given = (4e5, 3000.0)
+    outputs = _run(with_inputs, inputs, *given, (1.0, 1.0))
+    settings = dataclasses.replace(BASE, port_derivatives=True)
+    vehicle = vehicle_model("quarter-car", settings)
+    discrete = vehicle.discretise(settings.sample_period, "foh", MAX_SUBSTEP)
+    correction = port_gain_correction(discrete)
+    dk, dc = correction.changes(np.array([given[0]]), np.array([given[1]]))
+    u = np.column_stack([inputs[p.name] for p in vehicle.inputs])
+    x = np.array(initial_state(vehicle))
+    expected = [vehicle.output_vector(x, u[0])]
+    for k in range(1, len(u)):
+        x = correction.correct(x, discrete.step(x, u[k - 1], u[k]), dk, dc)
+        expected.append(vehicle.output_vector(x, u[k]))
+    expected = np.array(expected)
+    for i, name in enumerate(vehicle.output_names):
+        spread = np.ptp(expected[:, i]) or 1.0
+        assert np.max(np.abs(outputs[name] - expected[:, i])) <= 1e-9 * spread, name
