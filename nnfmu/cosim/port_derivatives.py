@@ -97,7 +97,7 @@ def exempt_inputs(slaves: Mapping[str, FmuSlave]) -> set[tuple[str, str]]:
 
 def provides(slave: FmuSlave) -> bool:
     """The FMU declares directional derivatives (FMI 2 `providesDirectionalDerivative`, FMI 3 `...Derivatives`)."""
-    return bool(getattr(slave.description.coSimulation, "providesDirectionalDerivative", False))
+    return slave.provides_directional_derivatives
 
 
 class PortDerivatives:
