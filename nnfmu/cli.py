@@ -504,6 +504,10 @@ def vehicle_build(
         None,
         help="Ports to stabilise with their linear reference over each step (stiff bushings on a light arm), e.g. bushing_fl_front,bushing_fl_rear.",
     ),
+    port_derivatives: bool = typer.Option(
+        False,
+        help="Give each stabilised port P the inputs P_per_<deflection> [N/m or N.m/rad] and P_per_<rate> [N.s/m or N.m.s/rad] with their P_..._given flags, so a master can hand it the component's local stiffness and damping every step (nnfmu cosim does, from the component's directional derivatives; docs/masters.md).",
+    ),
     sample_period: float = typer.Option(1e-4, help="Internal sample period [s] of the exact discrete model."),
     fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
     corner: Optional[str] = typer.Option(
@@ -524,6 +528,7 @@ def vehicle_build(
             params_path=params,
             components={n: "reference" for n in _split(reference)} | {n: "stabilised" for n in _split(stabilise)},
             sample_period=sample_period,
+            port_derivatives=port_derivatives,
             fmi_version=fmi,
             corner=corner,
             backend=backend,

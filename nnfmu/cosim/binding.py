@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from nnfmu.cosim.drive_inputs import DriveInputError
+from nnfmu.cosim.port_derivatives import derivative_inputs
 from nnfmu.cosim.ssp import SystemStructure
 
 
@@ -38,17 +39,20 @@ class DriveBinding:
 
 
 def free_inputs(system: SystemStructure) -> dict[str, list[str]]:
-    """Every element's inputs that no connection of `system` reaches, in FMU order (elements without any left out)."""
+    """Every element's inputs that no connection of `system` reaches, in FMU order (elements without any left out),
+    less the port derivative inputs the master sets itself (`port_derivatives.py`)."""
     from fmpy import read_model_description
 
     connected = {(c.end_element, c.end_connector) for c in system.connections}
     free: dict[str, list[str]] = {}
     for element in system.elements:
-        names = [
+        inputs = [
             v.name
             for v in read_model_description(str(system.fmu_path(element))).modelVariables
-            if v.causality == "input" and (element.name, v.name) not in connected
+            if v.causality == "input"
         ]
+        own = derivative_inputs(inputs)
+        names = [n for n in inputs if (element.name, n) not in connected and n not in own]
         if names:
             free[element.name] = names
     return free

@@ -60,6 +60,7 @@ from nnfmu.cosim.direct import FmiStatusError, RealBlock, SlopeBlock, Stepper
 from nnfmu.cosim.drive_inputs import DriveInputs
 from nnfmu.cosim.inner_loop import CompiledLoop, LoopFailure
 from nnfmu.cosim.instances import InstancePool
+from nnfmu.cosim.port_derivatives import Link, PortDerivatives, exempt_inputs
 from nnfmu.cosim.results import CosimResult
 from nnfmu.cosim.slave import FmuSlave
 from nnfmu.cosim.ssp import SystemStructure
@@ -104,7 +105,9 @@ class CosimSettings:
     are the accurate one-pass scheme of the module docstring. `order` 'vehicle-first' steps the driven element
     (the binding's, see `binding.py`) first. `inner_loop`: 'auto' steps one-pass schemes of FMI 2 FMUs
     in compiled C where a host compiler is found (`inner_loop.py`; same numbers), else in Python; 'python' always
-    in Python; 'c' requires the C loop.
+    in Python; 'c' requires the C loop. `port_derivatives`: set an element's port derivative inputs (nnfmu's
+    vehicle built with them: its stabilised ports' stiffness and damping) from the connected components'
+    directional derivatives every step (`port_derivatives.py`; such a run steps in Python).
     """
 
     step: float = 1e-3
@@ -117,6 +120,7 @@ class CosimSettings:
     iterations: int = 0
     tolerance: float = 1e-10
     inner_loop: str = "auto"
+    port_derivatives: bool = True
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.step) and self.step > 0):
@@ -237,7 +241,7 @@ class _System:
             self._check_binding(system.name, binding, connected)
             self.drive_names = list(binding.inputs)
             self.drive = DriveInputs(drive, binding.channels)
-            bound = {(binding.element, n) for n in binding.inputs}
+            bound = {(binding.element, n) for n in binding.inputs} | exempt_inputs(self.slaves)
             for name, slave in self.slaves.items():
                 free = [n for n in slave.names("input") if (name, n) not in connected | bound]
                 if free:
@@ -253,6 +257,11 @@ class _System:
                 for name, slave in self.slaves.items()
             }
             self.elements = self._wire(system.name)
+            links = [
+                Link(link.source, link.output, link.target, link.input, s, a)
+                for link, (s, _, a, _) in zip(self.links, self.link_conversions)
+            ]
+            self.derivatives = PortDerivatives(self.slaves, links) if settings.port_derivatives else None
         except BaseException:
             self.close(healthy=False)
             raise
@@ -481,6 +490,8 @@ class _System:
                 element.outputs.get()
                 if fresh is not None:
                     fresh[element.span] = self.values[element.span]
+        if self.derivatives is not None:
+            self.derivatives.update()
         self.refresh(end)
 
     def step(self, t: float, h: float, first: bool, drive: np.ndarray, end: np.ndarray) -> tuple[int, bool]:
@@ -605,11 +616,12 @@ def _compiled_loop(parts: _System, settings: CosimSettings) -> CompiledLoop | No
     """The C loop where the settings allow it and it runs this system; CosimError when 'c' is asked and it cannot."""
     if settings.inner_loop == "python":
         return None
-    if CompiledLoop.usable(parts):
+    if CompiledLoop.usable(parts) and not (parts.derivatives is not None and parts.derivatives.active):
         return CompiledLoop(parts, len(parts.drive_names))
     if settings.inner_loop == "c":
         raise CosimError(
-            "inner_loop 'c' needs a one-pass scheme (iterations 0, not plain), FMI 2 FMUs only and a host C compiler"
+            "inner_loop 'c' needs a one-pass scheme (iterations 0, not plain), FMI 2 FMUs only, a host C compiler "
+            "and no port derivatives (CosimSettings.port_derivatives=False)"
         )
     return None
 
@@ -661,6 +673,9 @@ def cosimulate(
         rows = result_table(n_steps, len(channels))
         parts.check_periods(system.name, h)
         parts.initialise(t0, parts.drive.at(t0))
+        if parts.derivatives is not None and parts.derivatives.active:
+            parts.derivatives.start()
+            parts.refresh(parts.drive.at(t0))
         rows[0] = parts.values
         loop = _compiled_loop(parts, settings)
         if loop is not None:
@@ -710,6 +725,11 @@ def cosimulate(
         channels={name: rows[:, i] for i, (name, _) in enumerate(channels)},
         units={name: unit for name, unit in channels},
         source=f"co-simulation of {system.name} ({settings.scheme}, h = {h:g} s) on {drive.source}",
-        notes={"wall_time_s": f"{elapsed:.3f}", "inner_loop": "C" if loop is not None else "Python"},
+        notes={"wall_time_s": f"{elapsed:.3f}", "inner_loop": "C" if loop is not None else "Python"}
+        | (
+            {"port_derivatives": ", ".join(parts.derivatives.names())}
+            if parts.derivatives is not None and parts.derivatives.active
+            else {}
+        ),
     )
     return CosimResult(measurement, n_steps, passes, unconverged, master="fmpy")

@@ -78,6 +78,7 @@ class FmuSlave:
             self._cleanup = weakref.finalize(self, _remove_extracted, self._unzip_dir, _FMI2_SINKS, self._key)
         try:
             directory = extract(str(self.path), unzipdir=self._unzip_dir)
+            self.directory = Path(directory)
             self.sample_period = read_sample_period(Path(directory) / "modelDescription.xml")
             kwargs = dict(
                 guid=self.description.guid,
@@ -116,6 +117,17 @@ class FmuSlave:
     def takes_input_slopes(self) -> bool:
         """FMI 2 `canInterpolateInputs`: the FMU accepts its inputs' time derivatives for the coming step."""
         return self.fmi_version == 2 and bool(self.description.coSimulation.canInterpolateInputs)
+
+    @property
+    def provides_directional_derivatives(self) -> bool:
+        """FMI 2 `providesDirectionalDerivative`, FMI 3 `providesDirectionalDerivatives` on the co-simulation element
+        (fmpy reads only the FMI 2 spelling, so FMI 3's is read from the model description itself)."""
+        if self.fmi_version == 2:
+            return bool(self.description.coSimulation.providesDirectionalDerivative)
+        from xml.etree import ElementTree
+
+        element = ElementTree.parse(self.directory / "modelDescription.xml").getroot().find("CoSimulation")
+        return element is not None and element.get("providesDirectionalDerivatives") == "true"
 
     @property
     def feedthrough(self) -> bool:

@@ -186,6 +186,8 @@ class Assembly:
             Dn=dn,
             Dyn=np.array([r[3] for r in rows]).reshape(len(rows), nn),
             stabiliser=self._stabiliser(q_u.shape[1]),
+            stabiliser_rows=self._stabiliser_rows(q_u.shape[1]),
+            stabiliser_elements=self._stabiliser_elements(q_u.shape[1]),
         )
 
     def _stabiliser(self, inputs: int) -> np.ndarray:
@@ -196,6 +198,24 @@ class Assembly:
             if spring is not None:
                 s[first + i] = np.concatenate([spring.stiffness * row, spring.damping * row])
         return s
+
+    def _stabiliser_rows(self, inputs: int) -> np.ndarray:
+        """(nu, n) rows: each stabilised force port's deflection as a row over q (zero rows for other inputs)."""
+        first = inputs - len(self.forces)
+        rows = np.zeros((inputs, self.size))
+        for i, (_, row, spring) in enumerate(self.forces):
+            if spring is not None:
+                rows[first + i] = row
+        return rows
+
+    def _stabiliser_elements(self, inputs: int) -> np.ndarray:
+        """(nu, 2): (stiffness, damping) of each stabilised force port's element (zero rows for other inputs)."""
+        first = inputs - len(self.forces)
+        elements = np.zeros((inputs, 2))
+        for i, (_, _, spring) in enumerate(self.forces):
+            if spring is not None:
+                elements[first + i] = (spring.stiffness, spring.damping)
+        return elements
 
     def _output_rows(
         self,

@@ -47,7 +47,9 @@ class LinearVehicle:
 
     `gravity` and `preload` (nx,) add up to the constant term f; `e` (ny,) is the constant output term (static loads).
     Bn (nx, nn), Cn (nn, nx), Dn (nn, nu), Dyn (ny, nn) connect the nn nonlinear built-in elements `feedback_laws`.
-    `stabiliser` (nu, nx): the stabilised force ports' reference force S x (zero rows elsewhere; None: no such port).
+    `stabiliser` (nu, nx): the stabilised force ports' reference force S x (zero rows elsewhere; None: no such port);
+    `stabiliser_rows` (nu, nx / 2): each such port's deflection as a row over the coordinates q, so that its row of S
+    is [k r, c r] with its element's stiffness k and damping c, `stabiliser_elements` (nu, 2).
     """
 
     name: str
@@ -69,10 +71,16 @@ class LinearVehicle:
     Dn: np.ndarray
     Dyn: np.ndarray
     stabiliser: np.ndarray | None = None
+    stabiliser_rows: np.ndarray | None = None
+    stabiliser_elements: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.stabiliser is None:
             self.stabiliser = np.zeros((len(self.inputs), len(self.states)))
+        if self.stabiliser_rows is None:
+            self.stabiliser_rows = np.zeros((len(self.inputs), len(self.states) // 2))
+        if self.stabiliser_elements is None:
+            self.stabiliser_elements = np.zeros((len(self.inputs), 2))
 
     @property
     def stabilised_A(self) -> np.ndarray:

@@ -33,6 +33,10 @@ class VehicleBuildSettings:
     difference. `initial_state` [q, q'] the FMU starts in (None: the static equilibrium on the linear reference
     elements, `initial_state`; a road test gives the rest state on the components it connects,
     `nnfmu.vehicle.dynamics.rest_state`).
+    `port_derivatives`: give every stabilised force port P two more inputs, `P_per_D` and `P_per_V` (its element's
+    stiffness and damping, D and V its deflection and rate outputs), used when the input `use_port_derivatives` is
+    1 (a master setting them each step from the component's directional derivatives; at 0, the default, the
+    fitted elements, exactly: `nnfmu.vehicle.dynamics.port_gains`).
     A stabilised port holds its reference from the start of each *sample*: sample at the communication step, or
     the stabilisation is renewed at every sample inside a step and mostly lost."""
 
@@ -45,6 +49,7 @@ class VehicleBuildSettings:
     platforms: tuple[str, ...] | None = None
     initial_state: tuple[float, ...] | None = None
     stabilisers: dict[str, tuple[float, float]] = field(default_factory=dict)
+    port_derivatives: bool = False
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.sample_period) and self.sample_period > 0.0):

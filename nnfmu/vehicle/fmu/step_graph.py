@@ -29,11 +29,13 @@ from onnx import TensorProto, helper
 from nnfmu.export.graph import IR_VERSION, OPSET, GraphBuilder
 from nnfmu.vehicle.dynamics.builtin_elements import SplineDamper
 from nnfmu.vehicle.dynamics.linear import DiscreteVehicle, LinearVehicle
+from nnfmu.vehicle.dynamics.port_gains import MIN_DIAGONAL, GainCorrection
 from nnfmu.vehicle.fmu.errors import VehicleBuildError
 
 STATE_IN, STATE_OUT, INPUTS, OUTPUTS = "x", "x_next", "u", "y"
 INPUTS_START = "u_start"  # the inputs at the previous sample: the start of the interval
 FIRST_IN, FIRST_OUT = "first", "first_next"
+GAINS, GAINS_START = "port_gains", "port_gains_start"  # stabilised ports' [k..., c..., k given..., c given...]
 
 
 @dataclass(frozen=True)
@@ -88,8 +90,10 @@ def _spline(graph: GraphBuilder, v: str, terms: dict[str, str], name: str) -> st
     return graph.node("Add", [linear, graph.node("MatMul", [past, terms["kink_slopes"]], f"{name}_kinks")], name)
 
 
-def discrete_step_graph(discrete: DiscreteVehicle) -> onnx.ModelProto:
-    """The step graph of `discrete` (first-order hold): each evaluation after the first advances `discrete.dt`."""
+def discrete_step_graph(discrete: DiscreteVehicle, gains: GainCorrection | None = None) -> onnx.ModelProto:
+    """The step graph of `discrete` (first-order hold): each evaluation after the first advances `discrete.dt`.
+    With `gains`, the stabilised ports take their elements from the inputs `port_gains` at the interval start
+    (`_gain_corrected`)."""
     if discrete.hold != "foh":
         raise VehicleBuildError(
             f"{discrete.vehicle.name}: hold {discrete.hold!r}; the FMU interpolates its inputs "
@@ -97,9 +101,14 @@ def discrete_step_graph(discrete: DiscreteVehicle) -> onnx.ModelProto:
         )
     vehicle = discrete.vehicle
     nx, nu, ny = len(vehicle.states), len(vehicle.inputs), len(vehicle.outputs)
-    graph = GraphBuilder(reserved=(STATE_IN, FIRST_IN, INPUTS, INPUTS_START, OUTPUTS, STATE_OUT, FIRST_OUT))
+    reserved = (STATE_IN, FIRST_IN, INPUTS, INPUTS_START, OUTPUTS, STATE_OUT, FIRST_OUT, GAINS, GAINS_START)
+    graph = GraphBuilder(reserved=reserved)
     spline = _spline_constants(graph, vehicle)
     advanced = _advance(graph, discrete, spline, *_interval_inputs(graph, vehicle))
+    graph_inputs = [_row(STATE_IN, nx), _row(FIRST_IN, 1), _row(INPUTS, nu), _row(INPUTS_START, nu)]
+    if gains is not None:
+        advanced = _gain_corrected(graph, gains, advanced)
+        graph_inputs += [_row(GAINS, 4 * len(gains.ports)), _row(GAINS_START, 4 * len(gains.ports))]
     keep = graph.node("Mul", [FIRST_IN, STATE_IN], "kept_state")
     later = graph.node("Sub", [graph.constant("one", np.ones(1)), FIRST_IN], "later_sample")
     state = graph.node("Add", [graph.node("Mul", [later, advanced], "advanced_state"), keep], "state")
@@ -117,7 +126,7 @@ def discrete_step_graph(discrete: DiscreteVehicle) -> onnx.ModelProto:
     onnx_graph = helper.make_graph(
         graph.nodes,
         vehicle.name,
-        [_row(STATE_IN, nx), _row(FIRST_IN, 1), _row(INPUTS, nu), _row(INPUTS_START, nu)],
+        graph_inputs,
         [_row(OUTPUTS, ny), _row(STATE_OUT, nx), _row(FIRST_OUT, 1)],
         graph.initializers,
         doc_string=f"exact discrete step of {vehicle.description}, {discrete.dt:g} s",
@@ -220,6 +229,58 @@ def _advance(graph: GraphBuilder, discrete: DiscreteVehicle, spline: dict[str, s
             "Add", [predicted, _affine(graph, change, correct, no_correction, f"{tag}_ramp")], f"{tag}_state"
         )
     return x
+
+
+def _gain_corrected(graph: GraphBuilder, gains: GainCorrection, advanced: str) -> str:
+    """`advanced` (the step on the fitted elements) corrected for the ports' elements given at the interval start,
+    `port_gains_start` = [k..., c..., k given..., c given...] (4 ns): dk = k_given (Relu(k) - k0), dc likewise, then
+    `GainCorrection.correct`. The end values `port_gains` reach the graph only times 0 (the FMU feeds every input
+    tensor; the step holds the values given at its start)."""
+    ns = len(gains.ports)
+    size = 4 * ns
+    parts = []
+    for i, n in enumerate(("stiffness", "damping", "stiffness_given", "damping_given")):
+        pick = np.zeros((size, ns))
+        pick[i * ns + np.arange(ns), np.arange(ns)] = 1.0
+        parts.append(graph.node("MatMul", [GAINS_START, graph.constant(f"pick_{n}", pick)], f"input_{n}"))
+    k, c, k_given, c_given = parts
+    end = graph.node("MatMul", [GAINS, graph.constant("ignore_end_gains", np.zeros((size, 1)))], "gains_end")
+    nothing = graph.node("Mul", [end, graph.constant("zero_gain", np.zeros(1))], "nothing")
+
+    def change(given: str, value: str, fitted: np.ndarray, name: str) -> str:
+        passive = graph.node("Relu", [value], f"passive_{name}")
+        moved = graph.node("Sub", [passive, graph.constant(f"fitted_{name}", fitted)], f"{name}_change_given")
+        return graph.node("Add", [graph.node("Mul", [given, moved], f"{name}_change_used"), nothing], f"{name}_change")
+
+    dk = change(k_given, k, gains.fitted[:, 0], "stiffness")
+    dc = change(c_given, c, gains.fitted[:, 1], "damping")
+    moved = graph.node("Sub", [advanced, STATE_IN], "moved")
+
+    def rows(name: str, matrix: np.ndarray, row: str) -> str:
+        return graph.node("MatMul", [row, graph.constant(name, np.ascontiguousarray(matrix.T))], f"{name}_of_{row}")
+
+    def weighted(d_part: str, r_part: str, name: str) -> str:
+        return graph.node(
+            "Add", [graph.node("Mul", [dk, d_part], f"{name}_k"), graph.node("Mul", [dc, r_part], f"{name}_c")], name
+        )
+
+    pulled = weighted(rows("port_deflection", gains.deflection, moved), rows("port_rate", gains.rate, moved), "pulled")
+    diag_d = graph.constant("own_deflection_ramp", np.diag(gains.deflection_ramp).copy())
+    diag_r = graph.constant("own_rate_ramp", np.diag(gains.rate_ramp).copy())
+    coupled = weighted(diag_d, diag_r, "own_coupling")
+    one_less = graph.node("Sub", [graph.constant("diagonal_one", np.ones(1)), coupled], "diagonal_raw")
+    floor = graph.constant("diagonal_floor", np.array([MIN_DIAGONAL]))
+    diagonal = graph.node(
+        "Add",
+        [floor, graph.node("Relu", [graph.node("Sub", [one_less, floor], "over_floor")], "above_floor")],
+        "diagonal",
+    )
+    first = graph.node("Div", [pulled, diagonal], "first_force")
+    off_d = gains.deflection_ramp - np.diag(np.diag(gains.deflection_ramp))
+    off_r = gains.rate_ramp - np.diag(np.diag(gains.rate_ramp))
+    cross = weighted(rows("cross_deflection_ramp", off_d, first), rows("cross_rate_ramp", off_r, first), "cross")
+    force = graph.node("Div", [graph.node("Add", [pulled, cross], "pulled_and_cross"), diagonal], "ramp_force")
+    return graph.node("Add", [advanced, rows("port_ramp", gains.ramp, force)], "gain_corrected")
 
 
 def _row(name: str, size: int) -> onnx.ValueInfoProto:

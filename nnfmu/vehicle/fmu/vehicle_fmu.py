@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import onnx
 
 import nnfmu
@@ -29,15 +30,19 @@ from nnfmu.vehicle.dynamics import (
     VehicleParameters,
 )
 from nnfmu.vehicle.dynamics.builtin_elements import LinearSpring
+from nnfmu.vehicle.dynamics.components import STABILISED
 from nnfmu.vehicle.dynamics.full_vehicle import build_full_vehicle
 from nnfmu.vehicle.dynamics.linear import DiscreteVehicle
-from nnfmu.vehicle.dynamics.ports import CORNERS
+from nnfmu.vehicle.dynamics.port_gains import GainCorrection, gain_correction
+from nnfmu.vehicle.dynamics.ports import CORNERS, component_channels
 from nnfmu.vehicle.dynamics.quarter_car import build_quarter_car
 from nnfmu.vehicle.fmu.errors import VehicleBuildError
 from nnfmu.vehicle.fmu.settings import MAX_SUBSTEP, MODELS, VehicleBuildSettings
 from nnfmu.vehicle.fmu.step_graph import (
     FIRST_IN,
     FIRST_OUT,
+    GAINS,
+    GAINS_START,
     INPUTS,
     INPUTS_START,
     OUTPUTS,
@@ -91,13 +96,66 @@ def _start(vehicle: LinearVehicle, settings: VehicleBuildSettings) -> tuple[floa
     return tuple(float(v) for v in settings.initial_state)
 
 
-def vehicle_component(discrete: DiscreteVehicle, model: str, settings: VehicleBuildSettings) -> Component:
-    """The component description of the step graph of `discrete`: ports with units, state, period, no filter."""
+GIVEN = "_given"  # suffix of the flag input that switches one element input on
+
+
+def _per(force_unit: str, motion_unit: str) -> str:
+    """The unit of a force per motion: 'N' per 'm' -> 'N/m', per 'm/s' -> 'N.s/m' (likewise N.m per rad)."""
+    if motion_unit.endswith("/s"):
+        return f"{force_unit}.s/{motion_unit.removesuffix('/s')}"
+    return f"{force_unit}/{motion_unit}"
+
+
+def gain_ports(discrete: DiscreteVehicle, gains: GainCorrection, settings: VehicleBuildSettings) -> list[Port]:
+    """The inputs of the `port_gains` tensor: `P_per_D` (stiffness) for every stabilised port P, then `P_per_V`
+    (damping), D and V its deflection and rate outputs, then each one's flag `P_per_D_given`, `P_per_V_given`."""
+    vehicle = discrete.vehicle
+    motions = {
+        force: (disp, rate)
+        for name, choice in settings.components.items()
+        if choice == STABILISED
+        for force, disp, rate in component_channels(name)
+    }
+    units = {o.name: o.unit for o in vehicle.outputs}
+    values: list[list[tuple[str, str, str]]] = [[], []]
+    for j, p in enumerate(gains.ports):
+        port = vehicle.inputs[p]
+        for kind, (what, motion) in enumerate(zip(("stiffness", "damping"), motions[port.name])):
+            name = f"{port.name}_per_{motion}"
+            text = (
+                f"local {what} of the component on {port.name} (d {port.name} / d {motion}) for the step from now, "
+                f"used while {name}{GIVEN} = 1, below 0 taken as 0 (else the fitted {gains.fitted[j, kind]:.9g})"
+            )
+            values[kind].append((name, _per(port.unit, units[motion]), text))
+    given = [
+        Port(f"{name}{GIVEN}", "1", f"1: {name} replaces the fitted element from the next step; 0 (default): not")
+        for name, _, _ in [*values[0], *values[1]]
+    ]
+    ports = [Port(name, unit, text) for name, unit, text in [*values[0], *values[1]]] + given
+    return [Port(p.name, p.unit, p.description, GAINS, i) for i, p in enumerate(ports)]
+
+
+def port_gain_correction(discrete: DiscreteVehicle) -> GainCorrection:
+    """The correction of `discrete`'s stabilised ports for elements given per step (VehicleBuildError: none)."""
+    vehicle = discrete.vehicle
+    if not np.any(vehicle.stabilised_inputs):
+        raise VehicleBuildError(f"{vehicle.name}: port derivatives asked for, but no force port is stabilised")
+    return gain_correction(
+        vehicle.stabilised_A, vehicle.B, vehicle.stabiliser_rows, vehicle.stabiliser_elements, discrete.dt
+    )
+
+
+def vehicle_component(
+    discrete: DiscreteVehicle, model: str, settings: VehicleBuildSettings, gains: GainCorrection | None = None
+) -> Component:
+    """The component description of the step graph of `discrete`: ports with units, state, period, no filter (and
+    with `gains`, the stabilised ports' element inputs)."""
     vehicle = discrete.vehicle
     external = [p.name for p in vehicle.inputs if not p.name.startswith("actuator")]
+    extra = gain_ports(discrete, gains, settings) if gains is not None else []
     return Component(
         name=vehicle.name,
-        inputs=[Port(p.name, p.unit, p.description, INPUTS, i) for i, p in enumerate(vehicle.inputs)],
+        inputs=[Port(p.name, p.unit, p.description, INPUTS, i) for i, p in enumerate(vehicle.inputs)] + extra,
         outputs=[Port(p.name, p.unit, p.description, OUTPUTS, i) for i, p in enumerate(vehicle.outputs)],
         states=[
             StatePort(STATE_IN, STATE_OUT, _start(vehicle, settings), "vehicle state [q, q'] (names in the metadata)"),
@@ -106,7 +164,7 @@ def vehicle_component(discrete: DiscreteVehicle, model: str, settings: VehicleBu
         sample_period=discrete.dt,
         description=vehicle.description,
         filter_cutoff=0.0,
-        interval_starts={INPUTS: INPUTS_START},
+        interval_starts={INPUTS: INPUTS_START} | ({GAINS: GAINS_START} if gains is not None else {}),
         metadata={
             "producer": f"nnfmu {nnfmu.__version__} vehicle build",
             "model": model,
@@ -127,8 +185,9 @@ def vehicle_step_graph(model: str, settings: VehicleBuildSettings) -> onnx.Model
     """The ONNX step graph of `model` at `settings.sample_period`, its `Component` attached."""
     vehicle = vehicle_model(model, settings)
     discrete = vehicle.discretise(settings.sample_period, "foh", MAX_SUBSTEP)
-    graph = discrete_step_graph(discrete)
-    vehicle_component(discrete, model, settings).attach_to(graph)
+    gains = port_gain_correction(discrete) if settings.port_derivatives else None
+    graph = discrete_step_graph(discrete, gains)
+    vehicle_component(discrete, model, settings, gains).attach_to(graph)
     return graph
 
 

@@ -123,11 +123,16 @@ def vehicle_components(system: str) -> dict[str, str]:
 
 
 def build_vehicle(
-    system: str, out: Path, step: float, stabilisers: Mapping[str, tuple[float, float]] | None = None
+    system: str,
+    out: Path,
+    step: float,
+    stabilisers: Mapping[str, tuple[float, float]] | None = None,
+    port_derivatives: bool = False,
 ) -> Path:
     """The vehicle FMU of `system` (`vehicle_components`) sampled at the communication `step` [s] (exact: every
     component is a port, so the vehicle is linear), starting where the monolithic reference does (`settled_state`);
-    `stabilisers` replace the parameter file's elements of stabilised ports (`stabilisers.bushing_stabilisers`)."""
+    `stabilisers` replace the parameter file's elements of stabilised ports (`stabilisers.bushing_stabilisers`);
+    `port_derivatives` gives those ports their stiffness and damping inputs (`VehicleBuildSettings`)."""
     components = vehicle_components(system)
     return build_vehicle_fmu(
         system,
@@ -137,6 +142,7 @@ def build_vehicle(
             sample_period=step,
             initial_state=settled_state(system, components),
             stabilisers=dict(stabilisers or {}),
+            port_derivatives=port_derivatives and bool(components),
         ),
     )
 
