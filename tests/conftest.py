@@ -31,12 +31,32 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     items.sort(key=lambda item: item.path not in slow_modules)  # stable: collection order within each part
 
 
-def pytest_configure(config: object) -> None:
-    """Every figure a test saves is checked for cut texts and doubled names (`tests/figure_guard.py`)."""
+def _helper(name: str):
+    """A helper module beside this file (the suite is imported with `--import-mode=importlib`, not as a package)."""
     import importlib.util
+    import sys
     from pathlib import Path
 
-    spec = importlib.util.spec_from_file_location("figure_guard", Path(__file__).with_name("figure_guard.py"))
-    guard = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(guard)
-    guard.install()
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(name, Path(__file__).with_name(f"{name}.py"))
+        sys.modules[name] = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(sys.modules[name])
+    return sys.modules[name]
+
+
+def pytest_configure(config: object) -> None:
+    """Every figure a test saves is checked for cut texts and doubled names (`tests/figure_guard.py`); compiles of
+    identical inputs are made once per session outside the build stage's own tests (`tests/compile_cache.py`)."""
+    _helper("figure_guard").install()
+    _helper("compile_cache").install()
+
+
+def pytest_unconfigure(config: object) -> None:
+    """The session's compile cache removed by the process that made it."""
+    _helper("compile_cache").uninstall()
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_setup(item: pytest.Item) -> None:
+    """The compile cache on or off for `item`, before its fixtures are set up."""
+    _helper("compile_cache").select(item)
