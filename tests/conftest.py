@@ -4,14 +4,22 @@ from __future__ import annotations
 
 import os
 import shutil
+from pathlib import Path
 
 import pytest
 
-# FMUs the tests build without naming platforms carry this machine's binary and, where MinGW-w64 is installed, the
-# win64 DLL (what a default build carried before Zig): a default build with the cross extra compiles five platforms,
-# about 6 times the time on a loaded 2-core machine (bench/results/cross-build.json). The default choice itself is
-# tested with the variable removed (tests/fmu/test_cross.py, test_win64.py); FMUs built for every platform there.
-os.environ.setdefault("NNFMU_PLATFORMS", "host,win64" if shutil.which("x86_64-w64-mingw32-gcc") else "host")
+# FMUs the tests of the build stage (`tests/fmu/`) and tests marked `win64` build without naming platforms carry this
+# machine's binary and, where MinGW-w64 is installed, the win64 DLL (what a default build carried before Zig); every
+# other test's FMUs carry the host's binary alone (they never look at another; the win64 compile was 9-10 s of CPU for
+# a full car's truth FMUs). A default build with the cross extra compiles five platforms, about 6 times the time on a
+# loaded 2-core machine (bench/results/cross-build.json). The default choice itself is tested with the variable
+# removed (tests/fmu/test_cross.py, test_win64.py); FMUs built for every platform there. A value set before the
+# suite starts is kept for every test.
+PLATFORMS_SET = "NNFMU_PLATFORMS" in os.environ
+WITH_WIN64 = "host,win64" if shutil.which("x86_64-w64-mingw32-gcc") else "host"
+os.environ.setdefault("NNFMU_PLATFORMS", WITH_WIN64)
+if not PLATFORMS_SET:
+    os.environ["NNFMU_TEST_WIN64_PLATFORMS"] = WITH_WIN64  # what marked tests get (tests/test_suite_settings.py)
 
 # pytest-xdist runs the suite in one worker process per core (`-n auto` in pyproject.toml, docs/development.md): a
 # worker's torch, BLAS and OpenMP then use one thread each instead of every core apiece (set before any of them is
@@ -58,5 +66,8 @@ def pytest_unconfigure(config: object) -> None:
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_runtest_setup(item: pytest.Item) -> None:
-    """The compile cache on or off for `item`, before its fixtures are set up."""
+    """The compile cache on or off and the default platforms of `item`'s FMUs, before its fixtures are set up."""
     _helper("compile_cache").select(item)
+    if not PLATFORMS_SET:
+        build_stage = Path(item.path).relative_to(Path(__file__).parent).parts[0] == "fmu"
+        os.environ["NNFMU_PLATFORMS"] = WITH_WIN64 if build_stage or item.get_closest_marker("win64") else "host"

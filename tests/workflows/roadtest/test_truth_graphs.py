@@ -96,6 +96,7 @@ def test_the_bushing_graph_starts_relaxed_where_it_stands() -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.win64  # the truth graphs' C compiled by MinGW-w64 too (-Werror): no test of tests/fmu/ builds them
 def test_the_native_fmus_are_their_graphs(tmp_path: Path) -> None:
     truth = DamperTruth(DamperParams(), ("hysteresis", "seal_friction"))
     cases = {

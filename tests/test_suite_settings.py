@@ -1,7 +1,10 @@
-"""The suite's compile cache (`tests/compile_cache.py`): identical inputs compiled once, anything else compiled."""
+"""The suite's own settings (`tests/conftest.py`): the compile cache (`tests/compile_cache.py`) compiles identical
+inputs once and anything else anew; FMUs carry the win64 DLL in the build stage's tests and marked ones only."""
 
 from __future__ import annotations
 
+import os
+import shutil
 import sys
 import uuid
 from pathlib import Path
@@ -47,3 +50,20 @@ def test_a_failed_compile_is_not_kept(tmp_path: Path) -> None:
         with pytest.raises(CompilerError, match="C compiler failed"):
             compiler.compile_shared_library(host_target(), [source], tmp_path, tmp_path / "broken.so")
     assert state["misses"] == misses + 2
+
+
+CHOSEN = pytest.mark.skipif("NNFMU_TEST_WIN64_PLATFORMS" not in os.environ, reason="NNFMU_PLATFORMS set by the caller")
+
+
+@CHOSEN
+def test_fmus_outside_the_build_stage_carry_the_host_binary_alone() -> None:
+    assert os.environ["NNFMU_PLATFORMS"] == "host"
+
+
+@CHOSEN
+@pytest.mark.win64
+def test_a_win64_test_builds_the_win64_dll_where_mingw_is_installed() -> None:
+    mingw = shutil.which("x86_64-w64-mingw32-gcc")
+    assert (
+        os.environ["NNFMU_PLATFORMS"] == os.environ["NNFMU_TEST_WIN64_PLATFORMS"] == ("host,win64" if mingw else "host")
+    )
