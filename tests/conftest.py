@@ -32,7 +32,8 @@ if XDIST_WORKER:
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """Under xdist, the modules holding slow tests first (each module runs on one worker, `--dist loadfile`): a
-    long module started last would leave the other worker idle at the end."""
+    long module started last would leave the other worker idle at the end. xdist keeps this order only with
+    `--no-loadscope-reorder` (pyproject.toml); by default it hands out the modules with the most tests first."""
     if not XDIST_WORKER:
         return
     slow_modules = {item.path for item in items if item.get_closest_marker("slow")}
