@@ -15,7 +15,8 @@ import pytest
 # loaded 2-core machine (bench/results/cross-build.json). The default choice itself is tested with the variable
 # removed (tests/fmu/test_cross.py, test_win64.py); FMUs built for every platform there. A value set before the
 # suite starts is kept for every test.
-PLATFORMS_SET = "NNFMU_PLATFORMS" in os.environ
+# An xdist worker inherits the controller's environment: NNFMU_TEST_WIN64_PLATFORMS marks a value this file set.
+PLATFORMS_SET = "NNFMU_PLATFORMS" in os.environ and "NNFMU_TEST_WIN64_PLATFORMS" not in os.environ
 WITH_WIN64 = "host,win64" if shutil.which("x86_64-w64-mingw32-gcc") else "host"
 os.environ.setdefault("NNFMU_PLATFORMS", WITH_WIN64)
 if not PLATFORMS_SET:
