@@ -44,8 +44,10 @@ def check_stop() -> None:
 def interrupts_deferred() -> Iterator[None]:
     """Hold SIGINT and SIGTERM back for the block and deliver them after it: a temporary made and its cleanup armed
     inside cannot be split by an interrupt (one between mkdtemp and its `try` left a folder behind)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield  # only the main thread runs Python's signal handlers
+    if threading.current_thread() is not threading.main_thread() or any(
+        signal.getsignal(number) is None for number in _STOP_SIGNALS
+    ):
+        yield  # only the main thread runs Python's handlers; one installed outside Python cannot be put back
         return
     held: list[int] = []
     previous = {number: signal.signal(number, lambda signum, _frame: held.append(signum)) for number in _STOP_SIGNALS}
