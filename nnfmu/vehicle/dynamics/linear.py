@@ -171,9 +171,9 @@ class LinearVehicle:
         bd0, bnd, fd = gamma[:, :nu], gamma[:, nu:-1], gamma[:, -1]
         bd1 = np.zeros_like(bd0)
         if hold == "foh":
-            ramp = _ramp_integral(a, self.B, h)
+            ramp = ramp_integral(a, self.B, h)
             bd0, bd1 = bd0 - ramp / h, ramp / h
-        bnr = _ramp_integral(a, self.Bn, h) / h
+        bnr = ramp_integral(a, self.Bn, h) / h
         return DiscreteVehicle(self, dt, hold, substeps, ad, bd0, bd1, bnd, bnr, fd)
 
 
@@ -194,7 +194,7 @@ def _zoh(a: np.ndarray, b: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray
     return e[:nx, nx:], e[:nx, :nx]
 
 
-def _ramp_integral(a: np.ndarray, b: np.ndarray, h: float) -> np.ndarray:
+def ramp_integral(a: np.ndarray, b: np.ndarray, h: float) -> np.ndarray:
     """Response at h to an input ramp of unit slope starting at 0 from rest: integral_0^h e^{A(h-s)} B s ds."""
     nx, nb = b.shape
     aug = np.zeros((nx + 2 * nb, nx + 2 * nb))

@@ -22,7 +22,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import expm
+
+from nnfmu.vehicle.dynamics.linear import ramp_integral
 
 MIN_DIAGONAL = 0.5  # 1 - (G R)_jj is kept at or above this (at most twice the exact step's motion per channel)
 
@@ -66,15 +67,5 @@ def gain_correction(a: np.ndarray, b: np.ndarray, rows: np.ndarray, elements: np
     n = rows.shape[1]
     deflection = np.hstack([rows[ports], np.zeros((len(ports), n))])
     rate = np.hstack([np.zeros((len(ports), n)), rows[ports]])
-    ramp = _unit_ramp_response(a, b[:, ports], dt)
+    ramp = ramp_integral(a, b[:, ports], dt) / dt  # the state at dt under inputs ramping from 0 to 1
     return GainCorrection(ports, elements[ports], deflection, rate, ramp, deflection @ ramp, rate @ ramp)
-
-
-def _unit_ramp_response(a: np.ndarray, b: np.ndarray, h: float) -> np.ndarray:
-    """State at h from rest under inputs ramping from 0 to 1 over h: (1/h) integral_0^h e^{A(h-s)} B s ds."""
-    nx, nb = b.shape
-    aug = np.zeros((nx + 2 * nb, nx + 2 * nb))
-    aug[:nx, :nx] = a
-    aug[:nx, nx : nx + nb] = b
-    aug[nx : nx + nb, nx + nb :] = np.eye(nb)
-    return expm(aug * h)[:nx, nx + nb :] / h
