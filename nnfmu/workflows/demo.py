@@ -41,6 +41,7 @@ from nnfmu.models.train import Progress
 from nnfmu.out_paths import check_output_dir, mark_output_dir
 from nnfmu.validate import ValidationSettings, compare, write_report
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.vehicle.dynamics.kernel_warmup import kernel_compiled_in_background
 from nnfmu.workflows.characterise.settings import QUICK_SETTINGS as QUICK_CHARACTERISE
 from nnfmu.workflows.fmu_build import host_binaries_only
 from nnfmu.workflows.iterate import IterateResult, IterateSettings, run_iterate
@@ -433,7 +434,8 @@ def run_demo(
     mark_output_dir(out, "demo")
     clock = StageClock(log)
     try:
-        with host_binaries_only() if settings.quick else nullcontext():  # quick: no cross builds
+        # quick: no cross builds; the monolithic kernel compiled on the second core while the first stage trains
+        with host_binaries_only() if settings.quick else nullcontext(), kernel_compiled_in_background():
             clock.log(settings.announcement)
             with clock.stage("component networks"):
                 report, results = _components(out, settings, clock)

@@ -23,6 +23,7 @@ from scipy.optimize import root
 from scipy.sparse import csr_array
 
 from nnfmu.vehicle.dynamics.errors import VehicleModelError
+from nnfmu.vehicle.dynamics.kernel_warmup import wait_for_kernel
 from nnfmu.vehicle.dynamics.law_tables import LawTable, law_table, spline_table
 from nnfmu.vehicle.dynamics.laws import BushingTruthBank, BushingTruthLaw, ComponentLaw
 from nnfmu.vehicle.dynamics.linear import LinearVehicle, input_samples
@@ -225,6 +226,7 @@ def _solve_compiled(
     """The RK4 loop in the compiled kernel; only the output rows the laws read are evaluated at each stage."""
     from nnfmu.vehicle.dynamics import rk4_kernel  # numba takes about a second to load; only solving needs it
 
+    wait_for_kernel()  # a child compiling the kernel for this run: its cached code is loaded, not compiled again
     rows = np.concatenate([wiring.disp_rows, wiring.rate_rows])
     splines = spline_table(vehicle.feedback_laws)
     matrices = (vehicle.A, vehicle.B, vehicle.Bn, vehicle.Cn, vehicle.Dn, vehicle.C[rows], vehicle.D[rows])
