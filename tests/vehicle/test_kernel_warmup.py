@@ -17,7 +17,8 @@ from nnfmu.vehicle.dynamics import kernel_warmup
 _CALLER = """
 import json, time
 from nnfmu.vehicle.dynamics import rk4_kernel
-from nnfmu.vehicle.dynamics.kernel_warmup import kernel_compiled_in_background, solve_tiny_run
+from nnfmu.vehicle.dynamics.kernel_warmup import kernel_compiled_in_background
+from nnfmu.vehicle.dynamics.tiny_run import solve_tiny_run
 with kernel_compiled_in_background():
     time.sleep(1.0)
     solve_tiny_run()

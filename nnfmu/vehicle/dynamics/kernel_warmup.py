@@ -2,10 +2,10 @@
 
 numba compiles `rk4_kernel.solve` on its first call on a machine (about 20 s of CPU) and caches the machine code on
 disk. A run that needs the kernel only later (the demo: its first stage trains networks on one thread) opens
-`kernel_compiled_in_background` first: a child process solves a two-sample quarter car, which compiles and caches the
-kernel on another core, and the caller's first compiled solve waits for the child (`wait_for_kernel`) and then loads
-the cached code. Where the cache is warm the child only loads it (about 2 s of CPU); where the child fails, the
-caller compiles the kernel itself, as without it.
+`kernel_compiled_in_background` first: a child process solves a two-sample quarter car (`tiny_run.py`), which
+compiles and caches the kernel on another core, and the caller's first compiled solve waits for the child
+(`wait_for_kernel`) and then loads the cached code. Where the cache is warm the child only loads it (a few seconds of
+CPU, mostly imports); where the child fails, the caller compiles the kernel itself, as without it.
 """
 
 from __future__ import annotations
@@ -22,25 +22,8 @@ from nnfmu.stopping import interrupts_deferred
 # The longest the caller waits for the child [s]: a compile takes ~20 s of CPU on an idle core and several times that
 # on a busy machine; past this the caller compiles the kernel itself.
 WAIT_LIMIT_S = 600.0
-_CHILD_CODE = "from nnfmu.vehicle.dynamics.kernel_warmup import solve_tiny_run; solve_tiny_run()"
+_CHILD_CODE = "from nnfmu.vehicle.dynamics.tiny_run import solve_tiny_run; solve_tiny_run()"
 _child: subprocess.Popen[bytes] | None = None
-
-
-def solve_tiny_run() -> None:
-    """A two-sample quarter car with the truth damper on the compiled path: the kernel compiled or loaded (child)."""
-    import numpy as np
-
-    from nnfmu.data.rigs import DamperParams, DamperTruth
-    from nnfmu.vehicle.dynamics.laws import DamperTruthLaw
-    from nnfmu.vehicle.dynamics.monolithic import MonolithicSettings, simulate_monolithic
-    from nnfmu.vehicle.dynamics.parameters import VehicleParameters
-    from nnfmu.vehicle.dynamics.quarter_car import build_quarter_car
-    from nnfmu.vehicle.dynamics.quarter_car_parameters import QuarterCarParameters
-
-    car = build_quarter_car(QuarterCarParameters.from_vehicle(VehicleParameters.load()))
-    laws = {"damper_force": DamperTruthLaw(DamperTruth(DamperParams(), ("hysteresis",)))}
-    posts = {name: np.zeros(2) for name in car.input_names if name.startswith("actuator")}
-    simulate_monolithic(car, laws, posts, MonolithicSettings(1e-3))
 
 
 @contextmanager
