@@ -56,9 +56,9 @@ import numpy as np
 
 from nnfmu.component import same_period
 from nnfmu.cosim.binding import DriveBinding, bind_free_inputs
-from nnfmu.cosim.direct import FmiStatusError, RealBlock, SlopeBlock, Stepper
+from nnfmu.cosim.direct import ElementTransfers, FmiStatusError, RealBlock, SlopeBlock, Stepper
 from nnfmu.cosim.drive_inputs import DriveInputs
-from nnfmu.cosim.inner_loop import CompiledLoop, LoopFailure
+from nnfmu.cosim.inner_loop import CompiledLoop, LoopFailure, LoopSystem, library
 from nnfmu.cosim.instances import InstancePool
 from nnfmu.cosim.port_derivatives import Link, PortDerivatives, exempt_inputs
 from nnfmu.cosim.results import CosimResult
@@ -186,26 +186,6 @@ class _Link:
     input: str
 
 
-@dataclass(eq=False, slots=True)
-class _Element:
-    """One element's transfers in a step, prepared once: its coupling inputs gathered from the values row at
-    `sources` into `coupled`, the drive's values into `driven` (the driven element only), one set of all its inputs, one
-    doStep, one get of all its Real outputs into `span` of the values row. An element with `feedthrough` is set its
-    inputs at t_{n+1} after the step (refresh); `slopes` (FMI 2, inputs interpolated) takes their slopes over it."""
-
-    name: str
-    driven_element: bool
-    feedthrough: bool
-    sources: np.ndarray
-    coupled: np.ndarray
-    driven: np.ndarray
-    inputs: RealBlock | None
-    slopes: SlopeBlock | None
-    outputs: RealBlock
-    stepper: Stepper
-    span: slice
-
-
 class _System:
     """The instantiated FMUs, their wiring, and the coupling values at t_n, t_{n-1} and the estimate for t_{n+1}.
 
@@ -305,7 +285,7 @@ class _System:
                 f"{', '.join(wrong)} are not free inputs of its FMU (no such input, or connected)"
             )
 
-    def _wire(self, system_name: str) -> dict[str, _Element]:
+    def _wire(self, system_name: str) -> dict[str, ElementTransfers]:
         """The values row, every output's place in it, and each element's prepared transfers."""
         spans, position, start = {}, {}, 0
         for name, outputs in self.outputs.items():
@@ -341,7 +321,7 @@ class _System:
             outputs = RealBlock(slave, self.outputs[name], self.values[spans[name]])
             units = [self.units[name][n] for n in self.outputs[name]]
             outputs.convert(np.array([u.scale for u in units]), np.array([u.offset for u in units]))
-            elements[name] = _Element(
+            elements[name] = ElementTransfers(
                 name=name,
                 driven_element=is_driven,
                 feedthrough=slave.feedthrough,
@@ -414,7 +394,9 @@ class _System:
             return 2.0 * self.now - self.before
         return self.now.copy()
 
-    def _set_inputs(self, element: _Element, source: np.ndarray, drive: np.ndarray, end: np.ndarray, h: float) -> None:
+    def _set_inputs(
+        self, element: ElementTransfers, source: np.ndarray, drive: np.ndarray, end: np.ndarray, h: float
+    ) -> None:
         """Before an element's step: a sampled element's inputs from `source` (a sampled driven element: the mean of t_n
         and `source`, and the drive's mean, unless the scheme is plain); an element with feedthrough has its inputs at
         t_n (set by the refresh, else here) and gets their slopes toward `source` and toward the drive's value `end`
@@ -445,7 +427,7 @@ class _System:
                 element.driven[:] = drive
         element.inputs.set()
 
-    def _diverged(self, element: _Element, source: np.ndarray, h: float) -> _Diverged | None:
+    def _diverged(self, element: ElementTransfers, source: np.ndarray, h: float) -> _Diverged | None:
         """When a slope an element refused is not finite, the coupling values it came from, named by their source
         (the element that diverged, not the one that refused its rate)."""
         n = len(element.sources)
@@ -616,8 +598,20 @@ def _compiled_loop(parts: _System, settings: CosimSettings) -> CompiledLoop | No
     """The C loop where the settings allow it and it runs this system; CosimError when 'c' is asked and it cannot."""
     if settings.inner_loop == "python":
         return None
-    if CompiledLoop.usable(parts) and not (parts.derivatives is not None and parts.derivatives.active):
-        return CompiledLoop(parts, len(parts.drive_names))
+    one_pass = settings.iterations == 0 and not settings.plain
+    fmi2 = all(slave.fmi_version == 2 for slave in parts.slaves.values())
+    derivatives = parts.derivatives is not None and parts.derivatives.active
+    if one_pass and fmi2 and not derivatives and library() is not None:
+        return CompiledLoop(
+            LoopSystem(
+                groups=parts.groups,
+                refreshed=parts.refreshed,
+                values=parts.values,
+                drive_size=len(parts.drive_names),
+                linear_extrapolation=settings.extrapolation == "linear",
+                gauss_seidel=settings.scheme == "gauss-seidel",
+            )
+        )
     if settings.inner_loop == "c":
         raise CosimError(
             "inner_loop 'c' needs a one-pass scheme (iterations 0, not plain), FMI 2 FMUs only, a host C compiler "
@@ -679,7 +673,7 @@ def cosimulate(
         rows[0] = parts.values
         loop = _compiled_loop(parts, settings)
         if loop is not None:
-            loop.start()
+            loop.start(parts.now, parts.before)
         passes = unconverged = 0
         every = max(1, n_steps // 200)
         started = clock.perf_counter()
