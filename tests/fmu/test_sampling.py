@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from nnfmu.cosim.linear_damper import linear_damper_graph
+from nnfmu.export.linear_damper import linear_damper_graph
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.fmu.sampling import SamplingAnnotationError, read_sample_period

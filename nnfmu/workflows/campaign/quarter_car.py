@@ -2,7 +2,7 @@
 FMU, linear damper FMUs of several valvings, and a `SystemStructure.ssd` joining the vehicle to the first of them.
 
 Everything is native FMUs built from the package's presets (no torch): the vehicle from the default parameter file
-(`nnfmu vehicle build quarter-car`), each damper F = c v (`nnfmu.cosim.linear_damper`) with its output filter off.
+(`nnfmu vehicle build quarter-car`), each damper F = c v (`nnfmu.export.linear_damper`) with its output filter off.
 The example campaign, the campaign tests and `bench/batch.py` use it.
 """
 
@@ -14,8 +14,8 @@ from pathlib import Path
 import onnx
 
 from nnfmu.atomic import atomic_path
-from nnfmu.cosim.linear_damper import linear_damper_graph
 from nnfmu.cosim.ssp import connect_by_name, write_ssd
+from nnfmu.export.linear_damper import linear_damper_graph
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.vehicle.fmu.settings import VehicleBuildSettings
