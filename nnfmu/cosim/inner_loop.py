@@ -109,9 +109,7 @@ def library() -> CDLL | None:
     """The compiled loop (compiled on first use, then from the cache); None when no host C compiler can build it."""
     global _LIBRARY
     if _LIBRARY is None:
-        from nnfmu.fmu.errors import CompilerError
-        from nnfmu.fmu.native.compiler import compile_shared_library
-        from nnfmu.fmu.native.toolchain import host_target
+        from nnfmu.fmu import CompilerError, compile_shared_library, host_target
 
         try:
             target = host_target()

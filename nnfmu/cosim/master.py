@@ -62,26 +62,18 @@ from nnfmu.cosim.inner_loop import CompiledLoop, LoopFailure, LoopSystem, librar
 from nnfmu.cosim.instances import InstancePool
 from nnfmu.cosim.port_derivatives import Link, PortDerivatives, exempt_inputs
 from nnfmu.cosim.results import CosimResult
+from nnfmu.cosim.settings import CosimError, CosimSettings
 from nnfmu.cosim.slave import FmuSlave
 from nnfmu.cosim.ssp import SystemStructure
 from nnfmu.cosim.units import PortUnit, input_conversion, table_unit
 from nnfmu.data import Measurement, check_measurement
 from nnfmu.data.units import si_unit_of
-from nnfmu.errors import NnfmuError
 from nnfmu.stopping import check_stop
 
-SCHEMES = ("gauss-seidel", "jacobi")
-ORDERS = ("components-first", "vehicle-first")
-EXTRAPOLATIONS = ("none", "linear")
 STEP_COUNT_TOLERANCE = 1e-9  # relative mismatch allowed between (stop - start) / step and a whole number
-INNER_LOOPS = ("auto", "c", "python")
 DRIVE_BLOCK = 4096  # steps whose drive inputs are interpolated at once (bounds the table's memory on long runs)
 Progress = Callable[[int, int], None]  # (steps done, steps in all)
 MAX_RESULT_BYTES = 2 * 1024**3  # the result table a run holds in memory: one float64 per step and channel
-
-
-class CosimError(NnfmuError, ValueError):
-    """The system or settings cannot be co-simulated; the message names the element, connector or setting."""
 
 
 class CosimWarning(UserWarning):
@@ -91,57 +83,6 @@ class CosimWarning(UserWarning):
 
 class _Diverged(Exception):
     """A coupling value grew past what a rate over one step can hold; the message names its source."""
-
-
-@dataclass(frozen=True)
-class CosimSettings:
-    """Communication `step` [s]; `stop_time` [s] (None: the system's default experiment, else the last whole step
-    within the drive).
-
-    `scheme` 'gauss-seidel' (elements one after another in `order`) or 'jacobi' (all on the same values);
-    `extrapolation` of coupling signals over a step, 'none' or 'linear'; `refresh`: give elements with feedthrough
-    their inputs at t_{n+1} after the step and read their outputs again; `iterations`: most repeats of a step for
-    strong coupling (0: none), until the t_{n+1} values change by less than `tolerance` of their peak. The defaults
-    are the accurate one-pass scheme of the module docstring. `order` 'vehicle-first' steps the driven element
-    (the binding's, see `binding.py`) first. `inner_loop`: 'auto' steps one-pass schemes of FMI 2 FMUs
-    in compiled C where a host compiler is found (`inner_loop.py`; same numbers), else in Python; 'python' always
-    in Python; 'c' requires the C loop. `port_derivatives`: set an element's port derivative inputs (nnfmu's
-    vehicle built with them: its stabilised ports' stiffness and damping) from the connected components'
-    directional derivatives every step (`port_derivatives.py`; such a run steps in Python).
-    """
-
-    step: float = 1e-3
-    stop_time: float | None = None
-    start_time: float = 0.0
-    scheme: str = "gauss-seidel"
-    order: str = "vehicle-first"
-    extrapolation: str = "linear"
-    refresh: bool = True
-    iterations: int = 0
-    tolerance: float = 1e-10
-    inner_loop: str = "auto"
-    port_derivatives: bool = True
-
-    def __post_init__(self) -> None:
-        if not (math.isfinite(self.step) and self.step > 0):
-            raise CosimError(f"communication step {self.step!r} must be a positive number of seconds")
-        for name, value, choices in (
-            ("scheme", self.scheme, SCHEMES),
-            ("order", self.order, ORDERS),
-            ("extrapolation", self.extrapolation, EXTRAPOLATIONS),
-            ("inner_loop", self.inner_loop, INNER_LOOPS),
-        ):
-            if value not in choices:
-                raise CosimError(f"{name} {value!r} is not one of {', '.join(choices)}")
-        if not (isinstance(self.iterations, int) and self.iterations >= 0):
-            raise CosimError(f"iterations {self.iterations!r} must be a whole number >= 0")
-        if not (self.tolerance > 0):
-            raise CosimError(f"tolerance {self.tolerance!r} must be positive")
-
-    @property
-    def plain(self) -> bool:
-        """No estimate of the step's end: every input takes the latest value (what a basic master does)."""
-        return self.extrapolation == "none" and self.iterations == 0
 
 
 def step_count(start: float, stop: float, step: float) -> int:

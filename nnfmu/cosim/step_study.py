@@ -121,7 +121,7 @@ def estimate(name: str, unit: str, runs: list[np.ndarray], h: float, target: flo
 
 def sample_periods(system: SystemStructure) -> dict[str, float]:
     """Each element's annotated sample period T [s] (nnfmu's FMUs), by element; elements without one left out."""
-    from nnfmu.fmu.sampling import read_sample_period
+    from nnfmu.fmu import read_sample_period
 
     periods = {}
     for element in system.elements:
@@ -134,7 +134,7 @@ def sample_periods(system: SystemStructure) -> dict[str, float]:
     return periods
 
 
-def step_study(
+def study_step(
     system: SystemStructure, settings: CosimSettings, run: Runner, target: float = DEFAULT_TARGET
 ) -> StepStudy:
     """Run `run` at settings.step, its half and its quarter over the first run's span and estimate every channel."""

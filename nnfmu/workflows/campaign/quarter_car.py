@@ -14,12 +14,10 @@ from pathlib import Path
 import onnx
 
 from nnfmu.atomic import atomic_path
-from nnfmu.cosim.ssp import connect_by_name, write_ssd
+from nnfmu.cosim import connect_by_name, write_ssd
 from nnfmu.export.linear_damper import linear_damper_graph
-from nnfmu.fmu.build import build_fmu
-from nnfmu.fmu.options import BuildOptions
-from nnfmu.vehicle.fmu.settings import VehicleBuildSettings
-from nnfmu.vehicle.fmu.vehicle_fmu import build_vehicle_fmu
+from nnfmu.fmu import BuildOptions, build_fmu
+from nnfmu.vehicle import VehicleBuildSettings, build_vehicle_fmu
 
 DAMPER_ELEMENT = "damper"
 NO_FILTER = {"filter_cutoff": 0.0}

@@ -16,8 +16,7 @@ import numpy as np
 from nnfmu.atomic import scratch_dir, staging_dir
 from nnfmu.data import DataError, Measurement, load_measurement
 from nnfmu.data.drive_files import RPC_SUFFIXES, read_drive
-from nnfmu.fmu.errors import FmuBuildError
-from nnfmu.fmu.factory import load_onnx
+from nnfmu.fmu import FmuBuildError, load_onnx
 from nnfmu.out_paths import check_output_dir, replace_output_dir
 from nnfmu.stopping import check_stop
 from nnfmu.workflows.vehicle_loop.attribution import (
