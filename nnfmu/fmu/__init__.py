@@ -18,7 +18,7 @@ __all__, __getattr__ = face(
         "options": ("BACKENDS", "FMI_VERSIONS", "Backend", "BuildOptions", "FmiVersion"),
         "package": ("binary_folders",),
         "reference_results": ("has_reference_results",),
-        "sampling": ("read_sample_period",),
+        "sampling": ("fmu_sample_period", "read_sample_period"),
         "step_graph": (
             "GRAPH_MEMBER",
             "StepGraphError",

@@ -14,7 +14,7 @@ from pathlib import Path
 import onnx
 
 from nnfmu.atomic import atomic_path
-from nnfmu.cosim import connect_by_name, write_ssd
+from nnfmu.cosim import DEFAULT_STEP, connect_by_name, write_ssd
 from nnfmu.export.linear_damper import linear_damper_graph
 from nnfmu.fmu import BuildOptions, build_fmu
 from nnfmu.vehicle import VehicleBuildSettings, build_vehicle_fmu
@@ -31,7 +31,7 @@ def damper_fmu(damping: float, out: Path) -> Path:
     return build_fmu(graph, BuildOptions(out=out))
 
 
-def build_quarter_car_system(folder: Path, dampers: Mapping[str, float], step: float = 1e-3) -> dict[str, Path]:
+def build_quarter_car_system(folder: Path, dampers: Mapping[str, float], step: float = DEFAULT_STEP) -> dict[str, Path]:
     """In `folder`: `quarter-car.fmu` (sampled at `step` [s]), `damper-NAME.fmu` per entry of `dampers` (name ->
     damping [N.s/m]) and `SystemStructure.ssd` with the first damper; returns the paths by name ('system',
     'vehicle', and each damper's name)."""

@@ -2,7 +2,7 @@
 
 ```toml
 name = "damper valvings"                       # optional; default: the file's stem
-[coupling]                                     # nnfmu.cosim.master.CosimSettings fields, by name
+[coupling]                                     # nnfmu.cosim.CosimSettings fields, by name
 step = 1e-3
 [metrics]
 channels = ["damper_force", "body_acceleration"]   # default: every output channel

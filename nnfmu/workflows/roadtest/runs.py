@@ -24,7 +24,7 @@ from fmpy import read_model_description
 
 from nnfmu.atomic import write_text_atomic
 from nnfmu.component import Component
-from nnfmu.cosim import CosimSettings, cosimulate, open_system, replay_fmu
+from nnfmu.cosim import DEFAULT_STEP, CosimSettings, cosimulate, open_system, replay_fmu
 from nnfmu.data import Measurement, save_measurement
 from nnfmu.data.drive_files import write_drive
 from nnfmu.fmu import load_fmu_graph
@@ -92,7 +92,7 @@ class SystemRun:
     compared with the reference (empty: the system's default set, `COMPARED`)."""
 
     duration: float
-    step: float = 1e-3
+    step: float = DEFAULT_STEP
     iterations: int = 0
     filter_cutoff: float | None = None
     channels: tuple[str, ...] = ()

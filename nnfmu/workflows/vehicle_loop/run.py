@@ -14,9 +14,10 @@ from pathlib import Path
 import numpy as np
 
 from nnfmu.atomic import scratch_dir, staging_dir
+from nnfmu.cosim import DEFAULT_STEP
 from nnfmu.data import DataError, Measurement, load_measurement
 from nnfmu.data.drive_files import RPC_SUFFIXES, read_drive
-from nnfmu.fmu import FmuBuildError, load_onnx
+from nnfmu.fmu import FmuBuildError, fmu_sample_period, load_onnx
 from nnfmu.out_paths import check_output_dir, replace_output_dir
 from nnfmu.stopping import check_stop
 from nnfmu.workflows.vehicle_loop.attribution import (
@@ -210,8 +211,9 @@ def _run_vehicle_loop(
     m = _load(measured, "measurement", _read_record)
     d = _load(drive, "drive", read_drive)
     _check_time_axes(m, d)
-    log(f"replaying {car.name} on {d.source}")
-    base = replay_system(car.ssd, d, settings.step, settings.allow_outside)
+    step = settings.step if settings.step is not None else fmu_sample_period(car.vehicle_fmu) or DEFAULT_STEP
+    log(f"replaying {car.name} on {d.source} at a {step:g} s step")
+    base = replay_system(car.ssd, d, step, settings.allow_outside)
     recorded = [c for c in m.names if f"derived:{c}" not in m.notes and not c.startswith("actuator_")]
     channels = [c for c in recorded if c in base.channels]
     ignored = [c for c in recorded if c not in channels]
@@ -239,7 +241,7 @@ def _run_vehicle_loop(
     with staging_dir(out_dir.parent, f".{out_dir.name}.staging-") as staging:
 
         def replay(ssd: Path) -> Measurement:
-            return on_record(replay_system(ssd, d, settings.step), m, channels, settings.settle)
+            return on_record(replay_system(ssd, d, step), m, channels, settings.settle)
 
         sensitivities = Sensitivities(car, staging / "sensitivity", replay, virtual, channels)
         columns: dict[str, list[np.ndarray]] = {}
@@ -293,7 +295,7 @@ def _run_vehicle_loop(
             else:
                 fixes.append(fix_by_terms(e, onnx_path, staging / "components"))
         final, fmus = _fixed_system(car, fixes, staging, out_dir)
-        after_result = on_record(replay_system(final, d, settings.step), m, channels, settings.settle)
+        after_result = on_record(replay_system(final, d, step), m, channels, settings.settle)
         corrected = Measurement(
             record.time,
             {c: record[c] - offsets.get(c, 0.0) for c in channels},

@@ -23,7 +23,8 @@ def _in_situ_loop() -> LoopSettings:
 class VehicleLoopSettings:
     """How the vehicle loop replays, attributes and fixes.
 
-    `step` [s]: the co-simulation's communication step. `settle` [s]: the first seconds of the record left out of
+    `step` [s]: the co-simulation's communication step (None: the vehicle FMU's sample period, as the road test
+    built it; `DEFAULT_STEP` for a vehicle that carries none). `settle` [s]: the first seconds of the record left out of
     every metric and fit (the virtual car starts at rest on its networks, the lab car on its own physics; after a fix
     the virtual car settles to its new rest state). `blocks`: the record is cut into this many contiguous blocks,
     half fit and half evaluate, then the other way round (out of sample, as the component diagnosis does).
@@ -35,7 +36,7 @@ class VehicleLoopSettings:
     the coupling stay within a few per cent on the road test). `allow_outside`: the system's FMUs may lie outside its
     folder (`open_system`)."""
 
-    step: float = 1e-3
+    step: float | None = None
     settle: float = 1.5
     blocks: int = 16
     alpha: float = 0.05
@@ -46,7 +47,7 @@ class VehicleLoopSettings:
     allow_outside: bool = False
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.step) and self.step > 0):
+        if self.step is not None and not (math.isfinite(self.step) and self.step > 0):
             raise VehicleLoopError(f"step {self.step!r} s must be a positive number")
         if not (math.isfinite(self.settle) and self.settle >= 0):
             raise VehicleLoopError(f"settle {self.settle!r} s must be a number >= 0")
