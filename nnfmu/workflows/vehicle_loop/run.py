@@ -14,10 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from nnfmu.atomic import scratch_dir, staging_dir
-from nnfmu.cosim import DEFAULT_STEP
 from nnfmu.data import DataError, Measurement, load_measurement
 from nnfmu.data.drive_files import RPC_SUFFIXES, read_drive
-from nnfmu.fmu import FmuBuildError, fmu_sample_period, load_onnx
+from nnfmu.fmu import FmuBuildError, load_onnx
 from nnfmu.out_paths import check_output_dir, replace_output_dir
 from nnfmu.stopping import check_stop
 from nnfmu.workflows.vehicle_loop.attribution import (
@@ -211,7 +210,7 @@ def _run_vehicle_loop(
     m = _load(measured, "measurement", _read_record)
     d = _load(drive, "drive", read_drive)
     _check_time_axes(m, d)
-    step = settings.step if settings.step is not None else fmu_sample_period(car.vehicle_fmu) or DEFAULT_STEP
+    step = settings.step_for(car.vehicle_fmu)
     log(f"replaying {car.name} on {d.source} at a {step:g} s step")
     base = replay_system(car.ssd, d, step, settings.allow_outside)
     recorded = [c for c in m.names if f"derived:{c}" not in m.notes and not c.startswith("actuator_")]

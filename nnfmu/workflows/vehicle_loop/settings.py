@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 
+from nnfmu.cosim import DEFAULT_STEP
 from nnfmu.errors import NnfmuError
+from nnfmu.fmu import fmu_sample_period
 from nnfmu.workflows.loop import LoopSettings
 
 
@@ -49,6 +52,13 @@ class VehicleLoopSettings:
     def __post_init__(self) -> None:
         if self.step is not None and not (math.isfinite(self.step) and self.step > 0):
             raise VehicleLoopError(f"step {self.step!r} s must be a positive number")
+
+    def step_for(self, vehicle_fmu: Path) -> float:
+        """The communication step [s] for a virtual car with this vehicle FMU: `step`, else the FMU's sample period
+        (the finest step its feedthrough allows), else `DEFAULT_STEP`."""
+        if self.step is not None:
+            return self.step
+        return fmu_sample_period(vehicle_fmu) or DEFAULT_STEP
         if not (math.isfinite(self.settle) and self.settle >= 0):
             raise VehicleLoopError(f"settle {self.settle!r} s must be a number >= 0")
         if self.blocks < 2 or self.blocks % 2:
