@@ -21,11 +21,11 @@ from pathlib import Path
 import numpy as np
 import onnx
 
-from nnfmu.cosim.linear_damper import linear_damper_graph
 from nnfmu.cosim.master import CosimSettings, cosimulate
 from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd
 from nnfmu.data import Measurement
 from nnfmu.data.derive import derive_rates
+from nnfmu.export.linear_damper import linear_damper_graph
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.vehicle.drive import DriveSettings, generate_drive

@@ -160,8 +160,8 @@ def make_fixtures(root: Path) -> Fixtures:
     system (vehicle + linear damper FMUs) with a 1 s drive, and a loop-vehicle quarter car with a 3 s drive."""
     import onnx
 
-    from nnfmu.cosim.linear_damper import linear_damper_graph
     from nnfmu.cosim.ssp import connect_by_name, write_ssd
+    from nnfmu.export.linear_damper import linear_damper_graph
     from nnfmu.workflows.campaign.quarter_car import build_quarter_car_system
 
     fx = Fixtures(root)

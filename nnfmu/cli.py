@@ -11,7 +11,7 @@ import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Literal, Optional, Union
+from typing import Any, Literal, Optional, Union
 
 import click
 import typer
@@ -20,6 +20,7 @@ from typer.core import TyperGroup
 from nnfmu.errors import NnfmuError, SettingsError
 from nnfmu.out_paths import check_output_file
 from nnfmu.stopping import clear_stop, request_stop, stop_requested
+from nnfmu.workflows.defaults import DEFAULT_STEP
 
 
 class _Commands(TyperGroup):
@@ -89,15 +90,50 @@ LOOP_ERRORS = (
     ("peak_error", "peak error [SI]", 1.0),
     ("pseudo_damage_ratio", "pseudo-damage ratio", 1.0),
 )
-ALLOW_OUTSIDE_HELP = (
-    "Load FMUs (and, for a campaign, drives and systems) from outside the system's or campaign's folder; an FMU is "
-    "native code, so this is asked for explicitly."
-)
-PLATFORMS_HELP = (
-    "Binaries of the native backend, comma-separated: host, all, or FMI platforms x86_64-linux (linux64), "
-    "aarch64-linux, x86_64-windows (win64), x86_64-darwin (darwin64), aarch64-darwin (default: every platform "
-    "a compiler here builds; pip install 'nnfmu[cross]' brings Zig, which builds them all)."
-)
+
+
+# One helper per option several commands share, so its name, default and help read the same everywhere.
+def _allow_outside_option() -> Any:
+    return typer.Option(
+        False,
+        help="Load FMUs (and, for a campaign, drives and systems) from outside the system's or campaign's folder; an "
+        "FMU is native code, so this is asked for explicitly.",
+    )
+
+
+def _fmi_option() -> Any:
+    return typer.Option(2, "--fmi", help="FMI version: 2 or 3.")
+
+
+def _backend_option() -> Any:
+    return typer.Option("native", help="native (generated C, no Python at run time) or pythonfmu (onnxruntime).")
+
+
+def _platforms_option() -> Any:
+    return typer.Option(
+        None,
+        help="Binaries of the native backend, comma-separated: host, all, or FMI platforms x86_64-linux (linux64), "
+        "aarch64-linux, x86_64-windows (win64), x86_64-darwin (darwin64), aarch64-darwin (default: every platform "
+        "a compiler here builds; pip install 'nnfmu[cross]' brings Zig, which builds them all).",
+    )
+
+
+def _map_option() -> Any:
+    return typer.Option(
+        None,
+        "--map",
+        help='Rename a file channel to an nnfmu channel, e.g. --map "Axial Force=force" (repeat); '
+        "for MTS exports also picks the time axis (NAME=time).",
+    )
+
+
+def _rpc_data_type_option() -> Any:
+    return typer.Option("int16", help="RPC III sample type: int16 or float32.")
+
+
+def _step_option(text: str) -> Any:
+    """`--step`: a co-simulation's communication step, defaulting to the master's (`nnfmu.cosim.DEFAULT_STEP`)."""
+    return typer.Option(DEFAULT_STEP, help=text)
 
 
 @app.callback()
@@ -114,6 +150,15 @@ def _fail(error: NnfmuError) -> None:
     Commands pass only NnfmuError here: any other exception is a programming error and keeps its traceback."""
     typer.echo(f"error: {error}", err=True)
     raise typer.Exit(code=2)
+
+
+@contextmanager
+def _user_errors() -> Iterator[None]:
+    """A command's work: an NnfmuError raised inside the block ends the command through `_fail`."""
+    try:
+        yield
+    except NnfmuError as error:
+        _fail(error)
 
 
 def _split(items: Optional[list[str]]) -> list[str]:
@@ -196,7 +241,7 @@ def rig(
 
     chosen = None if effects is None else () if effects.strip() == "none" else tuple(_split([effects]))
     vehicle = drive_from is not None or excitation == "vehicle"
-    try:
+    with _user_errors():
         options = RigOptions(
             sample_rate=sample_rate,
             duration=duration,
@@ -210,8 +255,6 @@ def rig(
         data_path, truth_path = write_rig_record(
             kind, target, options, drive_from, _split(element), margin, band, not default_sensors
         )
-    except NnfmuError as error:
-        _fail(error)
     typer.echo(f"data: {data_path}\ntruth (for evaluation only, never for training): {truth_path}")
 
 
@@ -223,12 +266,6 @@ def _channel_map(items: Optional[list[str]]) -> dict[str, str]:
         return parse_channel_map(items or [])
     except SettingsError as error:
         raise typer.BadParameter(f"--map: {error}") from None
-
-
-MAP_HELP = (
-    'Rename a file channel to an nnfmu channel, e.g. --map "Axial Force=force" (repeat); '
-    "for MTS exports also picks the time axis (NAME=time)."
-)
 
 
 def _int_list(items: Optional[list[str]], option: str) -> tuple[int, ...]:
@@ -276,7 +313,7 @@ def train(
     max_epochs: Optional[int] = typer.Option(None, help="Epoch limit (early stopping usually ends sooner)."),
     seed: int = typer.Option(0, help="Seed: the same seed gives the same network."),
     name: str = typer.Option("", help="Model name stored in the ONNX metadata (default: from the preset)."),
-    channel_map: Optional[list[str]] = typer.Option(None, "--map", help=MAP_HELP),
+    channel_map: Optional[list[str]] = _map_option(),
     moving_mass: Optional[str] = typer.Option(
         None,
         help="Dyno mass [kg] between load cell and actuator (rod, piston, fixture): subtracted from the force as m·a before training, as a dyno's mass compensation does; 0: none (the force trained as measured); auto or default: for damper-spline and damper-hysteresis estimated from the record, reported, and subtracted where its 95 % interval excludes 0 kg (docs/moving-mass.md); other presets: nothing subtracted unless a mass is given.",
@@ -314,17 +351,14 @@ def train(
         input_cutoff=input_cutoff,
     )
     console = Console(markup=False)  # feature and channel names carry brackets: velocity[k]
-    try:
-        with Progress(console=console, transient=True) as bar:
-            task = bar.add_task("training", total=1.0)
-            outcome = train_from_file(
-                data,
-                request,
-                check_output_file(out, [data]),
-                lambda what, done: bar.update(task, description=what, completed=done),
-            )
-    except NnfmuError as error:
-        _fail(error)
+    with _user_errors(), Progress(console=console, transient=True) as bar:
+        task = bar.add_task("training", total=1.0)
+        outcome = train_from_file(
+            data,
+            request,
+            check_output_file(out, [data]),
+            lambda what, done: bar.update(task, description=what, completed=done),
+        )
     if outcome.selection is not None:
         ranking = Table(title="input sensitivity ranking (validation MSE increase when shuffled)")
         ranking.add_column("feature")
@@ -377,17 +411,12 @@ def demo(
     from nnfmu.workflows.tables import COMPONENT_LEGEND, component_table, loop_table, stage_table
 
     console = Console(markup=False)  # diagnosis test names carry brackets: test[velocity]
-    try:
-        with _warnings_as_lines():
-            summary = run_demo(
-                out,
-                DemoSettings(
-                    seed=seed, quick=quick, vehicle_bushings=not lab_bushings, vehicle_dampers=not lab_dampers
-                ),
-                log=console.print,
-            )
-    except NnfmuError as error:
-        _fail(error)
+    with _user_errors(), _warnings_as_lines():
+        summary = run_demo(
+            out,
+            DemoSettings(seed=seed, quick=quick, vehicle_bushings=not lab_bushings, vehicle_dampers=not lab_dampers),
+            log=console.print,
+        )
     console.print(component_table(summary.models))
     console.print(COMPONENT_LEGEND)
     console.print(f"component report: {summary.report}")
@@ -410,22 +439,20 @@ def build(
         "-o",
         help="FMU path (default: exported/ and the ONNX file's name: damper.onnx -> exported/damper.fmu).",
     ),
-    backend: str = typer.Option(
-        "native", help="native (generated C, no Python at run time) or pythonfmu (onnxruntime)."
-    ),
-    fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
+    backend: str = _backend_option(),
+    fmi: int = _fmi_option(),
     name: Optional[str] = typer.Option(None, help="Model name (default: from the ONNX metadata)."),
     filter_cutoff: Optional[float] = typer.Option(
         None,
         help="Start value [Hz] of the FMU's output low-pass (default: the model's, 0 = off; the thesis used 100 "
         "for stability of a stiff coupling, at a large cost in accuracy: docs/fmu.md).",
     ),
-    platforms: Optional[list[str]] = typer.Option(None, help=PLATFORMS_HELP),
+    platforms: Optional[list[str]] = _platforms_option(),
 ) -> None:
     """Build a standalone FMI co-simulation FMU from an ONNX model."""
     from nnfmu.workflows.fmu_build import BuildOptions, build_fmu
 
-    try:
+    with _user_errors():
         target = None if out is None else check_output_file(out, [model])
         with _warnings_as_lines():
             path = build_fmu(
@@ -439,8 +466,6 @@ def build(
                     platforms=_platforms(platforms),
                 ),
             )
-    except NnfmuError as error:
-        _fail(error)
     typer.echo(f"FMU: {path}")
     _echo_binaries(path)
     _echo_reference_results(path)
@@ -478,10 +503,8 @@ def check(
     """Replay the reference results an FMU carries with fmpy and report pass/fail per output (exit 1 on failure)."""
     from nnfmu.workflows.fmu_build import check_fmu, report_lines
 
-    try:
+    with _user_errors():
         report = check_fmu(fmu, tolerance)
-    except NnfmuError as error:
-        _fail(error)
     for line in report_lines(report):
         typer.echo(line)
     if not report.passed:
@@ -509,13 +532,13 @@ def vehicle_build(
         help="Give each stabilised port P the inputs P_per_<deflection> [N/m or N.m/rad] and P_per_<rate> [N.s/m or N.m.s/rad] with their P_..._given flags, so a master can hand it the component's local stiffness and damping every step (nnfmu cosim does, from the component's directional derivatives; docs/masters.md).",
     ),
     sample_period: float = typer.Option(1e-4, help="Internal sample period [s] of the exact discrete model."),
-    fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
+    fmi: int = _fmi_option(),
     corner: Optional[str] = typer.Option(
         None,
         help="Quarter car only: the corner it stands on, fl, fr, rl or rr; its actuator inputs read that corner's drive channels (default: a quarter-car file's own corner, fl of a full-vehicle file).",
     ),
-    backend: str = typer.Option("native", help="native or pythonfmu."),
-    platforms: Optional[list[str]] = typer.Option(None, help=PLATFORMS_HELP),
+    backend: str = _backend_option(),
+    platforms: Optional[list[str]] = _platforms_option(),
 ) -> None:
     """Build a vehicle model into a co-simulation FMU with external component ports.
 
@@ -523,7 +546,7 @@ def vehicle_build(
     """
     from nnfmu.workflows.fmu_build import VehicleBuildSettings, build_vehicle_fmu
 
-    try:
+    with _user_errors():
         settings = VehicleBuildSettings(
             params_path=params,
             components={n: "reference" for n in _split(reference)} | {n: "stabilised" for n in _split(stabilise)},
@@ -536,8 +559,6 @@ def vehicle_build(
         )
         with _warnings_as_lines():
             path = build_vehicle_fmu(model, check_output_file(out, [params] if params else []), settings)
-    except NnfmuError as error:
-        _fail(error)
     typer.echo(f"FMU: {path}")
     _echo_binaries(path)
 
@@ -554,7 +575,7 @@ def controller_build(
     command_min: Optional[float] = typer.Option(None, help="Command giving --c-min (default: 0 V, or 0.3 A)."),
     command_max: Optional[float] = typer.Option(None, help="Command giving --c-max (default: 5 V, or 1.8 A)."),
     sample_period: float = typer.Option(1e-3, help="Controller sample period [s]."),
-    fmi: int = typer.Option(2, "--fmi", help="FMI version: 2 or 3."),
+    fmi: int = _fmi_option(),
 ) -> None:
     """Build a semi-active damper controller into a co-simulation FMU.
 
@@ -562,7 +583,7 @@ def controller_build(
     """
     from nnfmu.workflows.controller import SkyhookSettings, build_controller_fmu, known_command
 
-    try:
+    with _user_errors():
         settings = SkyhookSettings(
             c_sky=c_sky,
             c_min=c_min,
@@ -573,8 +594,6 @@ def controller_build(
         )
         with _warnings_as_lines():
             path = build_controller_fmu(law, settings, check_output_file(out, []), fmi)
-    except NnfmuError as error:
-        _fail(error)
     typer.echo(f"FMU: {path}")
     _echo_binaries(path)
 
@@ -584,7 +603,7 @@ def cosim(
     system: Path = typer.Argument(..., help="System: SystemStructure.ssd, its folder, or an .ssp archive."),
     drive: Path = typer.Option(..., help="Drive file with the actuator channels (.csv, .mf4, .rsp, .drv, .tim)."),
     out: str = typer.Option(..., "--out", "-o", help="Result file (.csv or .mf4), units in every channel."),
-    step: float = typer.Option(1e-3, help="Communication step [s]."),
+    step: float = _step_option("Communication step [s]."),
     stop: Optional[float] = typer.Option(None, help="Stop time [s] (default: the end of the drive file)."),
     scheme: str = typer.Option("gauss-seidel", help="gauss-seidel (one element after another) or jacobi."),
     order: str = typer.Option("vehicle-first", help="Gauss-Seidel order: vehicle-first or components-first."),
@@ -609,14 +628,14 @@ def cosim(
     target_nrmse: float = typer.Option(
         0.01, help="Step study: the NRMSE (fraction, 0.01 = 1 %) each channel should meet."
     ),
-    allow_outside: bool = typer.Option(False, help=ALLOW_OUTSIDE_HELP),
+    allow_outside: bool = _allow_outside_option(),
 ) -> None:
     """Co-simulate a vehicle FMU with component FMUs on a drive file."""
     from rich.progress import Progress
 
     from nnfmu.workflows.cosim import CosimSettings, CosimWarning, run_cosim, run_step_study, study_lines
 
-    try:
+    with _user_errors():
         target = check_output_file(out, [system, drive])
         settings = CosimSettings(
             step=step,
@@ -648,8 +667,6 @@ def cosim(
                 progress=lambda done, total: bar.update(task, completed=done, total=total),
                 allow_outside=allow_outside,
             )
-    except NnfmuError as error:
-        _fail(error)
     typer.echo(f"{result.steps} steps of {step:g} s; result: {out}")
     if iterations:
         typer.echo(
@@ -670,7 +687,7 @@ def batch(
         True,
         help="Keep FMU instances between cases and reset them (fmi2Reset/fmi3Reset) instead of opening them again; --no-reuse-instances for FMUs whose reset is unreliable.",
     ),
-    allow_outside: bool = typer.Option(False, help=ALLOW_OUTSIDE_HELP),
+    allow_outside: bool = _allow_outside_option(),
 ) -> None:
     """Run a road-test campaign (events x variants) on Dask into one Parquet table of pseudo-damage per channel."""
     from nnfmu.workflows.campaign import run_campaign
@@ -678,7 +695,7 @@ def batch(
 
     if workers is not None and workers < 0:
         raise typer.BadParameter(f"--workers {workers}: give 0 (here, serially) or more")
-    try:
+    with _user_errors():
         run = run_campaign(
             campaign,
             out,
@@ -690,8 +707,6 @@ def batch(
             warn=lambda line: typer.echo(f"warning: {line}", err=True),
             allow_outside=allow_outside,
         )
-    except NnfmuError as error:
-        _fail(error)
     typer.echo(
         f"{run.cases} cases: {run.ok} ok, {run.failed} failed, {run.skipped} finished before "
         f"({run.wall_s:.1f} s on {run.engine.kind})"
@@ -717,12 +732,10 @@ def loop(
     from nnfmu.workflows.loop.settings import LoopSettings
     from nnfmu.workflows.validation import Target
 
-    try:
+    with _user_errors():
         target = Target() if target_nrmse is None else Target(target_nrmse / 100, "--target-nrmse")
         with _warnings_as_lines():
             report = run_loop(data, model, output, out, LoopSettings(max_effects=max_effects, target=target))
-    except NnfmuError as error:
-        _fail(error)
     typer.echo(report.summary)
     typer.echo(f"effects added: {', '.join(report.effects_added) or 'none'}")
     for key, label, scale in LOOP_ERRORS:
@@ -755,9 +768,9 @@ def iterate(
     stroke_limit: float = typer.Option(0.125, help="Actuator stroke limit: peak |displacement| from rest [m]."),
     velocity_limit: float = typer.Option(2.5, help="Actuator velocity limit [m/s]."),
     acceleration_limit: float = typer.Option(400.0, help="Actuator acceleration limit [m/s^2]."),
-    step: float = typer.Option(1e-3, help="Communication step of the co-simulations [s]."),
+    step: float = _step_option("Communication step of the co-simulations [s]."),
     rpc: bool = typer.Option(False, help="Also write the drive as RPC III (drive.drv)."),
-    allow_outside: bool = typer.Option(False, help=ALLOW_OUTSIDE_HELP),
+    allow_outside: bool = _allow_outside_option(),
 ) -> None:
     """Iterate a four-poster drive file on the virtual car until its responses match a road record (noise
     identification, regularised inverse FRF, corrections per iteration within the actuator limits)."""
@@ -769,7 +782,7 @@ def iterate(
         run_iterate,
     )
 
-    try:
+    with _user_errors():
         common, per_channel = parse_tolerance(tolerance)
         settings = IterateSettings(
             channels=tuple(_split(channels)) or None,
@@ -787,8 +800,6 @@ def iterate(
             allow_outside=allow_outside,
         )
         result = run_iterate(target, system, out, settings, log=typer.echo)
-    except NnfmuError as error:
-        _fail(error)
     typer.echo(f"report: {result.files['html']}")
 
 
@@ -858,11 +869,9 @@ def characterise(
             target[key] = value
     if settle_cycles is not None:
         damper["settle_cycles"] = bushing["settle_cycles"] = settle_cycles
-    try:
+    with _user_errors():
         settings = CharacteriseSettings(DamperTestSettings(**damper), BushingTestSettings(**bushing))  # type: ignore[arg-type]
         report = run_characterise(model, out, measured, settings, log=typer.echo)
-    except NnfmuError as error:
-        _fail(error)
     for line in report.lines:
         typer.echo(f"  {line}")
     typer.echo(f"report: {report.index}")
@@ -882,7 +891,7 @@ def loop_vehicle(
         help="ELEMENT=ONNX: an element's step graph (default: the one its FMU carries; a given one must be the same "
         "network, checked by digest, unless the FMU records none); repeat.",
     ),
-    allow_outside: bool = typer.Option(False, help=ALLOW_OUTSIDE_HELP),
+    allow_outside: bool = _allow_outside_option(),
 ) -> None:
     """`nnfmu loop vehicle`: which component and which effect explain the lab car's difference from the virtual
     car; the component fixed, its FMU swapped in, the vehicle error before and after."""
@@ -894,19 +903,16 @@ def loop_vehicle(
         if not sep or not element or not path:
             _fail(SettingsError(f"--model {item!r}: give ELEMENT=PATH.onnx"))
         models[element] = Path(path)
-    try:
-        with _warnings_as_lines():
-            report = run_vehicle_loop(
-                measured,
-                system,
-                drive,
-                out,
-                VehicleLoopSettings(max_effects=max_effects, allow_outside=allow_outside),
-                models,
-                log=typer.echo,
-            )
-    except NnfmuError as error:
-        _fail(error)
+    with _user_errors(), _warnings_as_lines():
+        report = run_vehicle_loop(
+            measured,
+            system,
+            drive,
+            out,
+            VehicleLoopSettings(max_effects=max_effects, allow_outside=allow_outside),
+            models,
+            log=typer.echo,
+        )
     typer.echo(report.summary)
     for item in report.iterations:
         typer.echo(f"  {item['component']}: {item['effect']} (p = {item['p_value']:.3g})")
@@ -925,16 +931,14 @@ def loop_vehicle(
 def data_check(
     path: Path = typer.Argument(..., help="CSV (`name [unit]` headers, `time [s]` first), MDF4 or MTS 793 export."),
     require: Optional[list[str]] = typer.Option(None, "--require", "-r", help="Channel that must be present (repeat)."),
-    channel_map: Optional[list[str]] = typer.Option(None, "--map", help=MAP_HELP),
+    channel_map: Optional[list[str]] = _map_option(),
 ) -> None:
     """Load a measurement, convert it to SI units and report its channels, or say exactly what is wrong."""
     from nnfmu.workflows.data_check import check_data_file
 
     mapping = _channel_map(channel_map)
-    try:
+    with _user_errors():
         m = check_data_file(path, _split(require), mapping)
-    except NnfmuError as error:
-        _fail(error)
     typer.echo(f"{path}: {len(m)} samples, sample period {m.sample_period:.6g} s")
     for name in m.names:
         typer.echo(f"  {name} [{m.units[name]}]  min {m[name].min():.6g}  max {m[name].max():.6g}")
@@ -972,7 +976,7 @@ def drive_generate(
     kerb: Optional[list[str]] = typer.Option(
         None, help="Kerb strike TIME[:HEIGHT:RAMP:LENGTH:SIDE] [s, m, m, m] (repeat)."
     ),
-    rpc_data_type: str = typer.Option("int16", help="RPC III sample type: int16 or float32."),
+    rpc_data_type: str = _rpc_data_type_option(),
 ) -> None:
     """Write four actuator displacement channels from an ISO 8608 road at a given speed, with optional events."""
     from nnfmu.workflows.drive import DriveSettings, KerbStrike, Pothole, write_generated_drive
@@ -995,11 +999,9 @@ def drive_generate(
         seed=seed,
         events=tuple(events),
     )
-    try:
+    with _user_errors():
         target = check_output_file(out, [])
         path = write_generated_drive(settings, target, rpc_data_type=rpc_data_type)
-    except NnfmuError as error:
-        _fail(error)
     typer.echo(f"drive file: {path}")
 
 
@@ -1007,15 +1009,13 @@ def drive_generate(
 def drive_convert(
     source: Path = typer.Argument(..., help="Drive file to read (.csv, .mf4, .rsp, .drv, .tim)."),
     target: str = typer.Argument(..., help="Drive file to write; the format follows the suffix."),
-    rpc_data_type: str = typer.Option("int16", help="RPC III sample type: int16 or float32."),
+    rpc_data_type: str = _rpc_data_type_option(),
 ) -> None:
     """Convert a drive file between CSV, MDF4 and RPC III, keeping channel names and units."""
     from nnfmu.workflows.drive import convert_drive
 
-    try:
+    with _user_errors():
         path = convert_drive(source, check_output_file(target, [source], "TARGET"), rpc_data_type=rpc_data_type)
-    except NnfmuError as error:
-        _fail(error)
     typer.echo(f"drive file: {path}")
 
 
@@ -1072,7 +1072,7 @@ def validate(
     """Compare a result with a reference: NRMSE, R², peaks, mean shift, RMS, PSD and rainflow pseudo-damage."""
     from nnfmu.workflows.validation import Target, ValidationSettings, validate_files
 
-    try:
+    with _user_errors():
         settings = ValidationSettings(
             basquin_slope=slope,
             slopes=_slopes(slope_for or []),
@@ -1083,8 +1083,6 @@ def validate(
         )
         target = Target() if target_nrmse is None else Target(target_nrmse / 100, "--target-nrmse")
         report = validate_files(result, reference, _split(channels) or None, out, settings, target)
-    except NnfmuError as error:
-        _fail(error)
     for c in report.comparisons:
         m = c.metrics
         damage = m.not_meaningful.get("pseudo_damage_ratio") or f"{m.pseudo_damage_ratio:.4g}"

@@ -1,17 +1,22 @@
-"""The import picture: stages import only downward, the CLI only the workflows floor, and no module imports itself
-back through a circle (docs/architecture.md states the same rules)."""
+"""The import picture: stages import only downward, the CLI only the workflows floor, other floors reach `cosim`,
+`fmu` and `vehicle` only through their faces, and no module imports itself back through a circle
+(docs/architecture.md states the same rules)."""
 
 from __future__ import annotations
 
 import ast
+import functools
 import graphlib
+import importlib
+import subprocess
+import sys
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "nnfmu"
 
 # Floors, lowest first: a module may import its own top-level package and any package on a lower floor.
 FLOORS: tuple[tuple[str, ...], ...] = (
-    ("errors", "stopping", "input_files"),
+    ("errors", "stopping", "input_files", "faces"),
     ("atomic", "safe_zip", "resources", "physics", "component"),
     ("out_paths", "reference_stimulus"),
     ("data",),
@@ -30,6 +35,8 @@ FLOOR = {name: level for level, names in enumerate(FLOORS) for name in names}
 # What the CLI may import besides the workflows floor: the error base it catches, the output-path checks and the
 # stop request its signal handler records.
 CLI_ALLOWED = {"workflows", "errors", "out_paths", "stopping"}
+# Packages other floors import only through their `__init__` (the face: `from nnfmu.cosim import cosimulate`).
+FACES = ("cosim", "fmu", "vehicle")
 
 
 def module_name(path: Path) -> str:
@@ -51,12 +58,14 @@ def _runtime_nodes(tree: ast.AST) -> list[ast.AST]:
     return nodes
 
 
-def imports(path: Path) -> set[str]:
-    """Every nnfmu module `path` imports at run time, at any depth of its code (imports inside functions count)."""
+def imports(path: Path, typing: bool = False) -> set[str]:
+    """Every nnfmu module `path` imports at run time, at any depth of its code (imports inside functions count);
+    with `typing`, those under `if TYPE_CHECKING:` too."""
     name = module_name(path)
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     found: set[str] = set()
-    for node in _runtime_nodes(ast.parse(path.read_text(encoding="utf-8"))):
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    for node in ast.walk(tree) if typing else _runtime_nodes(tree):
         if isinstance(node, ast.Import):
             found |= {alias.name for alias in node.names if alias.name.split(".")[0] == "nnfmu"}
         elif isinstance(node, ast.ImportFrom):
@@ -76,8 +85,9 @@ def top(module: str) -> str:
     return parts[1] if len(parts) > 1 else ""
 
 
-def all_modules() -> dict[str, set[str]]:
-    return {module_name(path): imports(path) for path in sorted(PACKAGE.rglob("*.py"))}
+@functools.cache
+def all_modules(typing: bool = False) -> dict[str, set[str]]:
+    return {module_name(path): imports(path, typing) for path in sorted(PACKAGE.rglob("*.py"))}
 
 
 def test_every_top_level_part_has_a_floor() -> None:
@@ -101,8 +111,8 @@ def test_the_cli_imports_only_the_workflows_floor() -> None:
     assert not outside, f"nnfmu/cli.py imports past the workflows floor: {outside}"
 
 
-def test_no_module_imports_itself_back_through_a_circle() -> None:
-    modules = all_modules()
+def circles(modules: dict[str, set[str]]) -> str | None:
+    """One import circle among `modules` (name -> the nnfmu modules it imports), as `a -> b -> a`; None if none."""
     graph: dict[str, set[str]] = {}
     for name, targets in modules.items():
         for target in targets:
@@ -115,10 +125,82 @@ def test_no_module_imports_itself_back_through_a_circle() -> None:
     try:
         tuple(graphlib.TopologicalSorter(graph).static_order())
     except graphlib.CycleError as error:
-        raise AssertionError(f"import circle: {' -> '.join(error.args[1])}") from None
+        return " -> ".join(error.args[1])
+    return None
+
+
+def test_no_module_imports_itself_back_through_a_circle() -> None:
+    """Imports for annotations only (`if TYPE_CHECKING:`) count: a module reading another's types while that one
+    imports it is the same knot, only hidden from the interpreter."""
+    circle = circles(all_modules(typing=True))
+    assert circle is None, f"import circle: {circle}"
+
+
+def test_the_circle_check_sees_a_circle() -> None:
+    """A guard on the check: a circle through an annotation-only import is found, a package re-exporting its own
+    module is not one."""
+    assert circles({"nnfmu.a.x": {"nnfmu.a.y"}, "nnfmu.a.y": {"nnfmu.a.x"}}) is not None
+    assert circles({"nnfmu.a": {"nnfmu.a.x"}, "nnfmu.a.x": {"nnfmu.a"}}) is None
 
 
 def test_the_checker_sees_an_upward_import() -> None:
     """A guard on the walk: the CLI's imports of the workflows floor are found (an empty walk would pass all)."""
     assert any(top(t) == "workflows" for t in all_modules()["nnfmu.cli"])
     assert any(top(t) == "data" for t in all_modules()["nnfmu.models.train"])
+
+
+def test_other_floors_import_the_faced_packages_only_through_their_faces() -> None:
+    """`from nnfmu.cosim import cosimulate`, never `from nnfmu.cosim.master import ...`, outside the package (imports
+    for annotations count); inside it, its modules import each other, never its face (that would be a circle)."""
+    wrong = []
+    for name, targets in all_modules(typing=True).items():
+        for target in targets:
+            part = top(target)
+            if part in FACES and part != top(name) and target != f"nnfmu.{part}":
+                wrong.append(f"{name} -> {target} (import from nnfmu.{part})")
+            elif part in FACES and part == top(name) and target == f"nnfmu.{part}" and name != target:
+                wrong.append(f"{name} -> {target} (inside the package: import the module)")
+    assert not wrong, "imports past a face:\n" + "\n".join(sorted(wrong))
+
+
+def test_the_face_check_sees_an_internal_import() -> None:
+    """A guard on the walk: internal modules of a faced package are imported, from inside it."""
+    assert "nnfmu.cosim.direct" in all_modules()["nnfmu.cosim.master"]
+
+
+# Every name of every face resolves, and the whole of them loads no torch (building and running FMUs never does):
+# in a fresh interpreter, so the names this test process imported before cannot hide a wrong home.
+FACE_SCRIPT = """
+import importlib, sys
+for package in sys.argv[1:]:
+    face = importlib.import_module(package)
+    for name in face.__all__:
+        getattr(face, name)
+assert "torch" not in sys.modules, "a face imported torch"
+"""
+# Importing the faces alone: no module of their packages loaded.
+BARE_SCRIPT = """
+import sys, nnfmu.cosim, nnfmu.fmu, nnfmu.vehicle
+print(sorted(m for m in sys.modules if m.count(".") > 1 and m.split(".")[1] in ("cosim", "fmu", "vehicle")))
+"""
+
+
+def test_every_name_of_every_face_resolves_without_torch() -> None:
+    faces = [f"nnfmu.{part}" for part in FACES]
+    run = subprocess.run([sys.executable, "-c", FACE_SCRIPT, *faces], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+
+
+def test_a_face_loads_its_modules_only_when_a_name_is_asked_for() -> None:
+    """The CLI's start-up and an FMU build pay only for what they use."""
+    run = subprocess.run([sys.executable, "-c", BARE_SCRIPT], capture_output=True, text=True, check=True)
+    assert run.stdout.strip() == "[]", run.stdout
+
+
+def test_no_public_name_of_a_face_is_also_one_of_its_modules() -> None:
+    """Loading a module sets it as its package's attribute, which a lazy face's name of the same spelling would then
+    never replace (`from nnfmu.cosim import step_study` gave the module)."""
+    for part in FACES:
+        face = importlib.import_module(f"nnfmu.{part}")
+        clash = [n for n in face.__all__ if (PACKAGE / part / f"{n}.py").exists() or (PACKAGE / part / n).is_dir()]
+        assert not clash, f"nnfmu.{part}: public names that are also module names: {clash}"

@@ -11,8 +11,8 @@ from typer.testing import CliRunner
 
 from nnfmu.cli import app
 from nnfmu.component import METADATA_KEY, replace_metadata
-from nnfmu.cosim.linear_damper import linear_damper_graph
 from nnfmu.errors import SettingsError
+from nnfmu.export.linear_damper import linear_damper_graph
 
 runner = CliRunner()
 

@@ -12,9 +12,9 @@ import pytest
 from typer.testing import CliRunner
 
 from nnfmu.cli import app
-from nnfmu.cosim.linear_damper import linear_damper_graph
 from nnfmu.cosim.ssp import connect_by_name, write_ssd
 from nnfmu.data.drive_files import read_drive, write_drive
+from nnfmu.export.linear_damper import linear_damper_graph
 
 runner = CliRunner()
 

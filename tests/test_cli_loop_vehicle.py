@@ -10,10 +10,10 @@ import pytest
 from typer.testing import CliRunner
 
 from nnfmu.cli import app
-from nnfmu.cosim.linear_damper import linear_damper_graph
 from nnfmu.cosim.ssp import connect_by_name, write_ssd
 from nnfmu.data import Measurement, save_measurement
 from nnfmu.data.drive_files import read_drive
+from nnfmu.export.linear_damper import linear_damper_graph
 from nnfmu.workflows.vehicle_loop.residuals import ChannelError
 from nnfmu.workflows.vehicle_loop.run import verdict
 

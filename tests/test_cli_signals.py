@@ -16,7 +16,7 @@ import pytest
 from typer.testing import CliRunner
 
 from nnfmu.cli import app
-from nnfmu.cosim.linear_damper import linear_damper_graph
+from nnfmu.export.linear_damper import linear_damper_graph
 
 runner = CliRunner()
 

@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 
 from nnfmu.cli import app
 from nnfmu.component import METADATA_KEY
-from nnfmu.cosim.linear_damper import linear_damper_graph
+from nnfmu.export.linear_damper import linear_damper_graph
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.errors import FmuBuildError
 from nnfmu.fmu.options import BuildOptions

@@ -8,7 +8,7 @@ Usage: python examples/semiactive/run_closed_loop.py [--damper DAMPER.fmu] [--ou
 Builds into DIR (default out/semiactive): the packaged sedan's front-left quarter car as a vehicle FMU (damper as a
 port), the damper (--damper: any damper FMU with `velocity` [m/s] and a command input `voltage` [V] or `current` [A],
 e.g. a trained `damper-semiactive` network, whose displacement input, if any, is wired too; default: the analytic
-damper F = (c0 + c1·u_f)·v of `nnfmu.cosim.semiactive_damper`, 1-4 kN.s/m over 0-5 V with a 5.3 ms coil lag), the
+damper F = (c0 + c1·u_f)·v of `nnfmu.export.semiactive_damper`, 1-4 kN.s/m over 0-5 V with a 5.3 ms coil lag), the
 skyhook controller and two fixed-command controllers (soft: --command-min, hard: --command-max), one SSP system per
 controller (`nnfmu.workflows.controller.write_closed_loop`), and a class C drive. Each system is co-simulated with
 the fmpy master's default scheme; the skyhook loop again with fmpy and libcosim on the Jacobi scheme they share, as
@@ -29,8 +29,8 @@ from fmpy import read_model_description
 
 from nnfmu.atomic import write_text_atomic
 from nnfmu.cosim.master import CosimSettings
-from nnfmu.cosim.semiactive_damper import semiactive_damper_graph
 from nnfmu.data.drive_files import write_drive
+from nnfmu.export.semiactive_damper import semiactive_damper_graph
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.vehicle.fmu import build_vehicle_fmu
 from nnfmu.workflows.controller import (

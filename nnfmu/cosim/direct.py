@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from ctypes import CFUNCTYPE, POINTER, byref, c_bool, c_double, c_int, c_size_t, c_uint32, c_void_p
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -76,7 +77,7 @@ class RealBlock:
             self._set = _TRANSFER3((self._set_name, library))
             self._get = _TRANSFER3((self._get_name, library))
             self._args = (instance, references, n, pointer, n)
-        self._references = references  # the C function reads them on every call: keep them alive
+        self.references = references  # the C function reads them on every call (so does the C loop): keep them alive
         self.scale: np.ndarray | None = None
         self.offset: np.ndarray | None = None
 
@@ -123,10 +124,10 @@ class SlopeBlock:
         self.slave = slave
         self.names = list(names)
         self.values = np.zeros(n)
-        self._references = (c_uint32 * n)(*slave.value_references(self.names))
-        self._orders = (c_int * n)(*([1] * n))
+        self.references = (c_uint32 * n)(*slave.value_references(self.names))
+        self.orders = (c_int * n)(*([1] * n))
         self._call = _SLOPES2(("fmi2SetRealInputDerivatives", slave.fmu.dll))
-        self._args = (slave.fmu.component, self._references, n, self._orders, self.values.ctypes.data_as(_DOUBLES))
+        self._args = (slave.fmu.component, self.references, n, self.orders, self.values.ctypes.data_as(_DOUBLES))
         self.scale: np.ndarray | None = None  # the inputs' unit scales: a slope converts by the scale alone
 
     def set(self) -> None:
@@ -165,3 +166,24 @@ class Stepper:
 
     def error(self, t: float, h: float, status: int) -> FmiStatusError:
         return FmiStatusError(self.slave, f"{self._name}(t = {t:.9g} s, h = {h:.9g} s)", status)
+
+
+@dataclass(eq=False, slots=True)
+class ElementTransfers:
+    """One element's transfers in a step, prepared once: its coupling inputs gathered from the values row at
+    `sources` into `coupled`, the drive's values into `driven` (the driven element only), one set of all its inputs, one
+    doStep, one get of all its Real outputs into `span` of the values row. An element with `feedthrough` is set its
+    inputs at t_{n+1} after the step (refresh); `slopes` (FMI 2, inputs interpolated) takes their slopes over it.
+    The master's Python loop and its C loop (`inner_loop`) both step these."""
+
+    name: str
+    driven_element: bool
+    feedthrough: bool
+    sources: np.ndarray
+    coupled: np.ndarray
+    driven: np.ndarray
+    inputs: RealBlock | None
+    slopes: SlopeBlock | None
+    outputs: RealBlock
+    stepper: Stepper
+    span: slice

@@ -15,14 +15,11 @@ import os
 from ctypes import CDLL, Structure, byref, c_double, c_int, c_int64, c_void_p, cast
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from nnfmu.atomic import scratch_dir
-
-if TYPE_CHECKING:
-    from nnfmu.cosim.master import _Element, _System
+from nnfmu.cosim.direct import ElementTransfers
 
 SOURCE = Path(__file__).with_name("inner_loop.c")
 CALL_NAMES = ("set inputs", "set input slopes", "step", "get outputs", "refresh: set inputs", "refresh: get outputs")
@@ -78,11 +75,25 @@ class _CFailure(Structure):
 
 
 @dataclass(frozen=True)
+class LoopSystem:
+    """What the C loop steps, as the master prepared it: the elements' transfers in `groups` (one element a group
+    under Gauss-Seidel, all in one under Jacobi), those refreshed at t_{n+1} after each step, the values row their
+    outputs land in, the drive's width, and the scheme (linear extrapolation or none; Gauss-Seidel or Jacobi)."""
+
+    groups: list[list[ElementTransfers]]
+    refreshed: list[ElementTransfers]
+    values: np.ndarray
+    drive_size: int
+    linear_extrapolation: bool
+    gauss_seidel: bool
+
+
+@dataclass(frozen=True)
 class LoopFailure:
     """A call the C loop saw fail: step index, the element, which call (`CALL_NAMES`) and the FMI status."""
 
     step: int
-    element: _Element
+    element: ElementTransfers
     call: str
     status: int
 
@@ -98,9 +109,7 @@ def library() -> CDLL | None:
     """The compiled loop (compiled on first use, then from the cache); None when no host C compiler can build it."""
     global _LIBRARY
     if _LIBRARY is None:
-        from nnfmu.fmu.errors import CompilerError
-        from nnfmu.fmu.native.compiler import compile_shared_library
-        from nnfmu.fmu.native.toolchain import host_target
+        from nnfmu.fmu import CompilerError, compile_shared_library, host_target
 
         try:
             target = host_target()
@@ -133,15 +142,14 @@ def _pointer(array: np.ndarray) -> int:
 
 
 class CompiledLoop:
-    """The prepared C loop for `system` (every FMU FMI 2; scheme not plain, no iterations: see `usable`)."""
+    """The prepared C loop for `system` (every FMU FMI 2, one pass per step; `library()` not None)."""
 
-    def __init__(self, system: _System, drive_size: int) -> None:
+    def __init__(self, system: LoopSystem) -> None:
         self.library = library()
         groups = system.groups
         order = [element for group in groups for element in group]
         self.order = order
-        self.system = system
-        settings = system.settings
+        self.gauss_seidel = system.gauss_seidel
         index = {id(element): i for i, element in enumerate(order)}
         keep: list[object] = []  # arrays the C structs point into
         elements = (_CElement * len(order))()
@@ -156,14 +164,14 @@ class CompiledLoop:
             slot.n_coupled, slot.n_driven = len(element.sources), len(element.driven)
             slot.sources = _pointer(sources)
             if inputs is not None:
-                slot.input_references, slot.inputs = cast(inputs._references, c_void_p).value, _pointer(inputs.values)
+                slot.input_references, slot.inputs = cast(inputs.references, c_void_p).value, _pointer(inputs.values)
             if element.slopes is not None:
                 slopes = element.slopes
                 slot.set_slopes = _address(dll.fmi2SetRealInputDerivatives)
-                slot.slope_references = cast(slopes._references, c_void_p).value
-                slot.slope_orders = cast(slopes._orders, c_void_p).value
+                slot.slope_references = cast(slopes.references, c_void_p).value
+                slot.slope_orders = cast(slopes.orders, c_void_p).value
                 slot.slopes = _pointer(slopes.values)
-            slot.output_references = cast(element.outputs._references, c_void_p).value
+            slot.output_references = cast(element.outputs.references, c_void_p).value
             slot.n_outputs, slot.span_start = len(element.outputs.names), element.span.start
             slot.is_driven, slot.feedthrough = int(element.driven_element), int(element.feedthrough)
             if inputs is not None and inputs.scale is not None:
@@ -184,9 +192,9 @@ class CompiledLoop:
             refreshed=_pointer(refreshed),
             n_refreshed=len(refreshed),
             n_values=n,
-            n_drive=drive_size,
-            linear_extrapolation=int(settings.extrapolation == "linear"),
-            gauss_seidel=int(settings.scheme == "gauss-seidel"),
+            n_drive=system.drive_size,
+            linear_extrapolation=int(system.linear_extrapolation),
+            gauss_seidel=int(system.gauss_seidel),
             values=_pointer(self.values),
             now=_pointer(self.now),
             before=_pointer(self.before),
@@ -196,22 +204,10 @@ class CompiledLoop:
         self._keep = (keep, elements)
         self.failure = _CFailure()
 
-    @staticmethod
-    def usable(system: _System) -> bool:
-        """Whether the C loop can run `system`: one pass per step (no iterations, scheme not plain), every FMU FMI 2,
-        and the loop compiled on this machine."""
-        settings = system.settings
-        return (
-            settings.iterations == 0
-            and not settings.plain
-            and all(slave.fmi_version == 2 for slave in system.slaves.values())
-            and library() is not None
-        )
-
-    def start(self) -> None:
-        """Take the coupling values at t0 from the initialised system."""
-        self.now[:] = self.system.now
-        self.before[:] = self.system.before
+    def start(self, now: np.ndarray, before: np.ndarray) -> None:
+        """Take the coupling values at t0 (`now`) and before it from the initialised system."""
+        self.now[:] = now
+        self.before[:] = before
 
     def steps(
         self, first: int, last: int, t0: float, h: float, drive: np.ndarray, rows: np.ndarray
@@ -238,4 +234,4 @@ class CompiledLoop:
     def source(self) -> np.ndarray:
         """The coupling values the elements were set from in the latest step (the estimate, with fresh outputs
         under Gauss-Seidel)."""
-        return self.fresh if self.system.settings.scheme == "gauss-seidel" else self.estimate
+        return self.fresh if self.gauss_seidel else self.estimate

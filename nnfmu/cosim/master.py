@@ -56,32 +56,24 @@ import numpy as np
 
 from nnfmu.component import same_period
 from nnfmu.cosim.binding import DriveBinding, bind_free_inputs
-from nnfmu.cosim.direct import FmiStatusError, RealBlock, SlopeBlock, Stepper
+from nnfmu.cosim.direct import ElementTransfers, FmiStatusError, RealBlock, SlopeBlock, Stepper
 from nnfmu.cosim.drive_inputs import DriveInputs
-from nnfmu.cosim.inner_loop import CompiledLoop, LoopFailure
+from nnfmu.cosim.inner_loop import CompiledLoop, LoopFailure, LoopSystem, library
 from nnfmu.cosim.instances import InstancePool
 from nnfmu.cosim.port_derivatives import Link, PortDerivatives, exempt_inputs
 from nnfmu.cosim.results import CosimResult
+from nnfmu.cosim.settings import CosimError, CosimSettings
 from nnfmu.cosim.slave import FmuSlave
 from nnfmu.cosim.ssp import SystemStructure
 from nnfmu.cosim.units import PortUnit, input_conversion, table_unit
 from nnfmu.data import Measurement, check_measurement
 from nnfmu.data.units import si_unit_of
-from nnfmu.errors import NnfmuError
 from nnfmu.stopping import check_stop
 
-SCHEMES = ("gauss-seidel", "jacobi")
-ORDERS = ("components-first", "vehicle-first")
-EXTRAPOLATIONS = ("none", "linear")
 STEP_COUNT_TOLERANCE = 1e-9  # relative mismatch allowed between (stop - start) / step and a whole number
-INNER_LOOPS = ("auto", "c", "python")
 DRIVE_BLOCK = 4096  # steps whose drive inputs are interpolated at once (bounds the table's memory on long runs)
 Progress = Callable[[int, int], None]  # (steps done, steps in all)
 MAX_RESULT_BYTES = 2 * 1024**3  # the result table a run holds in memory: one float64 per step and channel
-
-
-class CosimError(NnfmuError, ValueError):
-    """The system or settings cannot be co-simulated; the message names the element, connector or setting."""
 
 
 class CosimWarning(UserWarning):
@@ -91,57 +83,6 @@ class CosimWarning(UserWarning):
 
 class _Diverged(Exception):
     """A coupling value grew past what a rate over one step can hold; the message names its source."""
-
-
-@dataclass(frozen=True)
-class CosimSettings:
-    """Communication `step` [s]; `stop_time` [s] (None: the system's default experiment, else the last whole step
-    within the drive).
-
-    `scheme` 'gauss-seidel' (elements one after another in `order`) or 'jacobi' (all on the same values);
-    `extrapolation` of coupling signals over a step, 'none' or 'linear'; `refresh`: give elements with feedthrough
-    their inputs at t_{n+1} after the step and read their outputs again; `iterations`: most repeats of a step for
-    strong coupling (0: none), until the t_{n+1} values change by less than `tolerance` of their peak. The defaults
-    are the accurate one-pass scheme of the module docstring. `order` 'vehicle-first' steps the driven element
-    (the binding's, see `binding.py`) first. `inner_loop`: 'auto' steps one-pass schemes of FMI 2 FMUs
-    in compiled C where a host compiler is found (`inner_loop.py`; same numbers), else in Python; 'python' always
-    in Python; 'c' requires the C loop. `port_derivatives`: set an element's port derivative inputs (nnfmu's
-    vehicle built with them: its stabilised ports' stiffness and damping) from the connected components'
-    directional derivatives every step (`port_derivatives.py`; such a run steps in Python).
-    """
-
-    step: float = 1e-3
-    stop_time: float | None = None
-    start_time: float = 0.0
-    scheme: str = "gauss-seidel"
-    order: str = "vehicle-first"
-    extrapolation: str = "linear"
-    refresh: bool = True
-    iterations: int = 0
-    tolerance: float = 1e-10
-    inner_loop: str = "auto"
-    port_derivatives: bool = True
-
-    def __post_init__(self) -> None:
-        if not (math.isfinite(self.step) and self.step > 0):
-            raise CosimError(f"communication step {self.step!r} must be a positive number of seconds")
-        for name, value, choices in (
-            ("scheme", self.scheme, SCHEMES),
-            ("order", self.order, ORDERS),
-            ("extrapolation", self.extrapolation, EXTRAPOLATIONS),
-            ("inner_loop", self.inner_loop, INNER_LOOPS),
-        ):
-            if value not in choices:
-                raise CosimError(f"{name} {value!r} is not one of {', '.join(choices)}")
-        if not (isinstance(self.iterations, int) and self.iterations >= 0):
-            raise CosimError(f"iterations {self.iterations!r} must be a whole number >= 0")
-        if not (self.tolerance > 0):
-            raise CosimError(f"tolerance {self.tolerance!r} must be positive")
-
-    @property
-    def plain(self) -> bool:
-        """No estimate of the step's end: every input takes the latest value (what a basic master does)."""
-        return self.extrapolation == "none" and self.iterations == 0
 
 
 def step_count(start: float, stop: float, step: float) -> int:
@@ -184,26 +125,6 @@ class _Link:
     output: str
     target: str
     input: str
-
-
-@dataclass(eq=False, slots=True)
-class _Element:
-    """One element's transfers in a step, prepared once: its coupling inputs gathered from the values row at
-    `sources` into `coupled`, the drive's values into `driven` (the driven element only), one set of all its inputs, one
-    doStep, one get of all its Real outputs into `span` of the values row. An element with `feedthrough` is set its
-    inputs at t_{n+1} after the step (refresh); `slopes` (FMI 2, inputs interpolated) takes their slopes over it."""
-
-    name: str
-    driven_element: bool
-    feedthrough: bool
-    sources: np.ndarray
-    coupled: np.ndarray
-    driven: np.ndarray
-    inputs: RealBlock | None
-    slopes: SlopeBlock | None
-    outputs: RealBlock
-    stepper: Stepper
-    span: slice
 
 
 class _System:
@@ -305,7 +226,7 @@ class _System:
                 f"{', '.join(wrong)} are not free inputs of its FMU (no such input, or connected)"
             )
 
-    def _wire(self, system_name: str) -> dict[str, _Element]:
+    def _wire(self, system_name: str) -> dict[str, ElementTransfers]:
         """The values row, every output's place in it, and each element's prepared transfers."""
         spans, position, start = {}, {}, 0
         for name, outputs in self.outputs.items():
@@ -341,7 +262,7 @@ class _System:
             outputs = RealBlock(slave, self.outputs[name], self.values[spans[name]])
             units = [self.units[name][n] for n in self.outputs[name]]
             outputs.convert(np.array([u.scale for u in units]), np.array([u.offset for u in units]))
-            elements[name] = _Element(
+            elements[name] = ElementTransfers(
                 name=name,
                 driven_element=is_driven,
                 feedthrough=slave.feedthrough,
@@ -414,7 +335,9 @@ class _System:
             return 2.0 * self.now - self.before
         return self.now.copy()
 
-    def _set_inputs(self, element: _Element, source: np.ndarray, drive: np.ndarray, end: np.ndarray, h: float) -> None:
+    def _set_inputs(
+        self, element: ElementTransfers, source: np.ndarray, drive: np.ndarray, end: np.ndarray, h: float
+    ) -> None:
         """Before an element's step: a sampled element's inputs from `source` (a sampled driven element: the mean of t_n
         and `source`, and the drive's mean, unless the scheme is plain); an element with feedthrough has its inputs at
         t_n (set by the refresh, else here) and gets their slopes toward `source` and toward the drive's value `end`
@@ -445,7 +368,7 @@ class _System:
                 element.driven[:] = drive
         element.inputs.set()
 
-    def _diverged(self, element: _Element, source: np.ndarray, h: float) -> _Diverged | None:
+    def _diverged(self, element: ElementTransfers, source: np.ndarray, h: float) -> _Diverged | None:
         """When a slope an element refused is not finite, the coupling values it came from, named by their source
         (the element that diverged, not the one that refused its rate)."""
         n = len(element.sources)
@@ -616,8 +539,20 @@ def _compiled_loop(parts: _System, settings: CosimSettings) -> CompiledLoop | No
     """The C loop where the settings allow it and it runs this system; CosimError when 'c' is asked and it cannot."""
     if settings.inner_loop == "python":
         return None
-    if CompiledLoop.usable(parts) and not (parts.derivatives is not None and parts.derivatives.active):
-        return CompiledLoop(parts, len(parts.drive_names))
+    one_pass = settings.iterations == 0 and not settings.plain
+    fmi2 = all(slave.fmi_version == 2 for slave in parts.slaves.values())
+    derivatives = parts.derivatives is not None and parts.derivatives.active
+    if one_pass and fmi2 and not derivatives and library() is not None:
+        return CompiledLoop(
+            LoopSystem(
+                groups=parts.groups,
+                refreshed=parts.refreshed,
+                values=parts.values,
+                drive_size=len(parts.drive_names),
+                linear_extrapolation=settings.extrapolation == "linear",
+                gauss_seidel=settings.scheme == "gauss-seidel",
+            )
+        )
     if settings.inner_loop == "c":
         raise CosimError(
             "inner_loop 'c' needs a one-pass scheme (iterations 0, not plain), FMI 2 FMUs only, a host C compiler "
@@ -679,7 +614,7 @@ def cosimulate(
         rows[0] = parts.values
         loop = _compiled_loop(parts, settings)
         if loop is not None:
-            loop.start()
+            loop.start(parts.now, parts.before)
         passes = unconverged = 0
         every = max(1, n_steps // 200)
         started = clock.perf_counter()

@@ -62,7 +62,7 @@ class FmuSlave:
     def __init__(self, path: str | Path, instance_name: str = "instance", logging_on: bool = False) -> None:
         from fmpy import extract, read_model_description
 
-        from nnfmu.fmu.sampling import read_sample_period
+        from nnfmu.fmu import read_sample_period
         from nnfmu.safe_zip import check_zip
 
         self.path = Path(path)

@@ -18,14 +18,11 @@ from __future__ import annotations
 import math
 import textwrap
 import time as clock
-import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from pathlib import Path
 
 import numpy as np
 
-from nnfmu.atomic import scratch_dir
 from nnfmu.cosim.master import CosimError, CosimSettings
 from nnfmu.cosim.results import CosimResult
 from nnfmu.cosim.ssp import SystemStructure
@@ -121,20 +118,17 @@ def estimate(name: str, unit: str, runs: list[np.ndarray], h: float, target: flo
 
 def sample_periods(system: SystemStructure) -> dict[str, float]:
     """Each element's annotated sample period T [s] (nnfmu's FMUs), by element; elements without one left out."""
-    from nnfmu.fmu.sampling import read_sample_period
+    from nnfmu.fmu import fmu_sample_period
 
     periods = {}
     for element in system.elements:
-        with zipfile.ZipFile(system.fmu_path(element)) as archive, scratch_dir("nnfmu-") as folder:
-            path = Path(folder) / "modelDescription.xml"
-            path.write_bytes(archive.read("modelDescription.xml"))
-            period = read_sample_period(path)
+        period = fmu_sample_period(system.fmu_path(element))
         if period is not None:
             periods[element.name] = period
     return periods
 
 
-def step_study(
+def study_step(
     system: SystemStructure, settings: CosimSettings, run: Runner, target: float = DEFAULT_TARGET
 ) -> StepStudy:
     """Run `run` at settings.step, its half and its quarter over the first run's span and estimate every channel."""

@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
+import zipfile
 from pathlib import Path
 
 from nnfmu.fmu.errors import FmuBuildError
 
 ANNOTATION_TOOL = "org.nnfmu"
+MODEL_DESCRIPTION = "modelDescription.xml"
 
 
 class SamplingAnnotationError(FmuBuildError):
@@ -42,7 +44,18 @@ def tool_annotation(root: ET.Element, fmi_version: int, tool: str) -> ET.Element
 def read_sample_period(model_description: Path) -> float | None:
     """The sample period [s] annotated in the model description file, or None (no annotation: a stateless graph or
     another tool's FMU). A malformed annotation raises SamplingAnnotationError naming the file."""
-    root = ET.parse(model_description).getroot()
+    return _annotated_period(ET.parse(model_description).getroot(), str(model_description))
+
+
+def fmu_sample_period(fmu: Path) -> float | None:
+    """The sample period [s] annotated in the model description inside the FMU archive `fmu`, or None; a malformed
+    annotation raises SamplingAnnotationError naming the FMU."""
+    with zipfile.ZipFile(fmu) as archive:
+        root = ET.fromstring(archive.read(MODEL_DESCRIPTION))
+    return _annotated_period(root, f"{fmu}: {MODEL_DESCRIPTION}")
+
+
+def _annotated_period(root: ET.Element, where: str) -> float | None:
     paths = (
         f"./VendorAnnotations/Tool[@name='{ANNOTATION_TOOL}']/Sampling",
         f"./Annotations/Annotation[@type='{ANNOTATION_TOOL}']/Sampling",
@@ -57,7 +70,6 @@ def read_sample_period(model_description: Path) -> float | None:
         period = math.nan
     if not (math.isfinite(period) and period > 0) or node.get("unit", "s") != "s":
         raise SamplingAnnotationError(
-            f"{model_description}: sampling annotation period={text!r} "
-            f"unit={node.get('unit')!r} is not a positive time in s"
+            f"{where}: sampling annotation period={text!r} unit={node.get('unit')!r} is not a positive time in s"
         )
     return period

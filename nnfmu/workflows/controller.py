@@ -17,10 +17,9 @@ from pathlib import Path
 import onnx
 
 from nnfmu.control import Command, SkyhookSettings, fixed_command_graph, known_command, skyhook_graph
-from nnfmu.cosim.ssp import Connection, Connector, Element, SspError, SystemStructure, local_fmu, write_ssd
+from nnfmu.cosim import Connection, Connector, Element, SspError, SystemStructure, local_fmu, write_ssd
 from nnfmu.errors import SettingsError
-from nnfmu.fmu.build import build_fmu_from_model
-from nnfmu.fmu.options import BuildOptions, FmiVersion
+from nnfmu.fmu import BuildOptions, FmiVersion, build_fmu_from_model
 
 __all__ = [
     "CONTROLLERS",

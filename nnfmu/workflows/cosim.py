@@ -7,10 +7,19 @@ import os
 import warnings
 
 from nnfmu.atomic import write_text_atomic
-from nnfmu.cosim.master import CosimSettings, CosimWarning, Progress, cosimulate
-from nnfmu.cosim.results import CosimResult, save_result
-from nnfmu.cosim.ssp import open_system
-from nnfmu.cosim.step_study import DEFAULT_TARGET, StepStudy, step_study, study_lines
+from nnfmu.cosim import (
+    DEFAULT_TARGET,
+    CosimResult,
+    CosimSettings,
+    CosimWarning,
+    Progress,
+    StepStudy,
+    cosimulate,
+    open_system,
+    save_result,
+    study_lines,
+    study_step,
+)
 from nnfmu.data.drive_files import read_drive
 from nnfmu.errors import SettingsError
 from nnfmu.workflows.training_range import training_range_lines
@@ -40,7 +49,7 @@ def run_cosim(
     with open_system(ssd_path, allow_outside) as system:
         binding = vehicle_binding(system)
         if master == "libcosim":
-            from nnfmu.cosim.libcosim_runner import run_libcosim
+            from nnfmu.cosim import run_libcosim
 
             result = run_libcosim(ssd_path, drive, settings, binding, allow_outside)
         else:
@@ -75,7 +84,7 @@ def run_step_study(
                 first.append(result)
             return result
 
-        study = step_study(system, settings, run, target)
+        study = study_step(system, settings, run, target)
     if out_path is not None:
         save_result(first[0], out_path)
     if json_path is not None:

@@ -27,21 +27,19 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 from nnfmu.atomic import write_text_atomic
-from nnfmu.cosim.replay import replay_fmu
+from nnfmu.cosim import replay_fmu
 from nnfmu.data import load_measurement, save_measurement
 from nnfmu.data.drive_files import write_drive
 from nnfmu.data.inertia import compensate_inertia
 from nnfmu.data.measurement import Measurement
 from nnfmu.data.rigs import DEFAULT_EFFECTS, DamperParams, RigOptions, write_rig
 from nnfmu.export import export_onnx
-from nnfmu.fmu.build import build_fmu
-from nnfmu.fmu.options import BuildOptions
+from nnfmu.fmu import BuildOptions, build_fmu
 from nnfmu.models import TrainSettings, get_preset, train_model
 from nnfmu.models.train import Progress
 from nnfmu.out_paths import check_output_dir, mark_output_dir
 from nnfmu.validate import ValidationSettings, compare, write_report
-from nnfmu.vehicle.drive import DriveSettings, generate_drive
-from nnfmu.vehicle.dynamics.kernel_warmup import kernel_compiled_in_background
+from nnfmu.vehicle import DriveSettings, generate_drive, kernel_compiled_in_background
 from nnfmu.workflows.characterise.settings import QUICK_SETTINGS as QUICK_CHARACTERISE
 from nnfmu.workflows.fmu_build import host_binaries_only
 from nnfmu.workflows.iterate import IterateResult, IterateSettings, run_iterate

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from nnfmu.data.drive_files import RpcDataType, read_drive, write_drive
-from nnfmu.vehicle.drive import DriveSettings, KerbStrike, Pothole, generate_drive
+from nnfmu.vehicle import DriveSettings, KerbStrike, Pothole, generate_drive
 
 __all__ = ["DriveSettings", "KerbStrike", "Pothole", "convert_drive", "write_generated_drive"]
 

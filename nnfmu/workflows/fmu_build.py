@@ -2,15 +2,18 @@
 
 from __future__ import annotations
 
-from nnfmu.fmu.build import build_fmu
-from nnfmu.fmu.check import check_fmu, report_lines
-from nnfmu.fmu.errors import PlatformSkippedWarning
-from nnfmu.fmu.native.toolchain import host_binaries_only
-from nnfmu.fmu.options import BuildOptions
-from nnfmu.fmu.package import binary_folders
-from nnfmu.fmu.reference_results import has_reference_results
-from nnfmu.fmu.step_graph import GRAPH_MEMBER
-from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
+from nnfmu.fmu import (
+    GRAPH_MEMBER,
+    BuildOptions,
+    PlatformSkippedWarning,
+    binary_folders,
+    build_fmu,
+    check_fmu,
+    has_reference_results,
+    host_binaries_only,
+    report_lines,
+)
+from nnfmu.vehicle import VehicleBuildSettings, build_vehicle_fmu
 
 __all__ = [
     "GRAPH_MEMBER",

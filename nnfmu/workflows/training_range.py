@@ -12,10 +12,9 @@ import numpy as np
 import onnx
 
 from nnfmu.component import Component
-from nnfmu.cosim.binding import DriveBinding
-from nnfmu.cosim.ssp import SystemStructure
+from nnfmu.cosim import DriveBinding, SystemStructure
 from nnfmu.data import Measurement
-from nnfmu.fmu.step_graph import StepGraphError, read_fmu_graph
+from nnfmu.fmu import StepGraphError, read_fmu_graph
 from nnfmu.workflows.roadtest.envelope import excursion
 
 

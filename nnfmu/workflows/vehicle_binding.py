@@ -2,10 +2,8 @@
 
 from __future__ import annotations
 
-from nnfmu.cosim.binding import DriveBinding, bind_free_inputs, free_inputs
-from nnfmu.cosim.drive_inputs import DriveInputError
-from nnfmu.cosim.ssp import SystemStructure
-from nnfmu.vehicle.dynamics.ports import CORNERS, actuator_ports
+from nnfmu.cosim import DriveBinding, DriveInputError, SystemStructure, bind_free_inputs, free_inputs
+from nnfmu.vehicle import CORNERS, actuator_ports
 
 ACTUATOR_INPUTS = frozenset(port.name for corner in CORNERS for port in actuator_ports(corner))
 

@@ -18,9 +18,9 @@ from onnx import TensorProto, helper, numpy_helper
 from scipy.linalg import expm
 
 from nnfmu.component import Component, Port, StatePort
-from nnfmu.cosim.linear_damper import linear_damper_graph
 from nnfmu.cosim.ssp import connect_by_name, write_ssd
 from nnfmu.data import Measurement
+from nnfmu.export.linear_damper import linear_damper_graph
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.vehicle.dynamics import QuarterCarParameters, build_quarter_car

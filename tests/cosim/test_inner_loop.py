@@ -15,9 +15,9 @@ import pytest
 from cosim_system_helpers import build, drive, write_system
 
 from nnfmu.cosim.inner_loop import library
-from nnfmu.cosim.linear_damper import linear_damper_graph
 from nnfmu.cosim.master import CosimError, CosimSettings, cosimulate
 from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd
+from nnfmu.export.linear_damper import linear_damper_graph
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu

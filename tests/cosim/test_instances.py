@@ -13,9 +13,9 @@ from cosim_system_helpers import drive
 
 from nnfmu.cosim.drive_inputs import DriveInputError
 from nnfmu.cosim.instances import InstancePool
-from nnfmu.cosim.linear_damper import linear_damper_graph
 from nnfmu.cosim.master import CosimSettings, cosimulate
 from nnfmu.cosim.ssp import SystemStructure, connect_by_name, open_system, write_ssd
+from nnfmu.export.linear_damper import linear_damper_graph
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.workflows.campaign.quarter_car import NO_FILTER, build_quarter_car_system

@@ -10,9 +10,9 @@ import numpy as np
 import onnxruntime as ort
 import pytest
 
-from nnfmu.cosim.semiactive_damper import semiactive_damper_graph
 from nnfmu.cosim.slave import FmuSlave
 from nnfmu.errors import SettingsError
+from nnfmu.export.semiactive_damper import semiactive_damper_graph
 from nnfmu.workflows.controller import build_graph_fmu
 
 T = 1e-3

@@ -10,7 +10,7 @@ import pytest
 from nnfmu.cosim.master import CosimError, CosimSettings
 from nnfmu.cosim.results import CosimResult
 from nnfmu.cosim.ssp import SystemStructure
-from nnfmu.cosim.step_study import step_study, study_lines
+from nnfmu.cosim.step_study import study_lines, study_step
 from nnfmu.data import Measurement
 
 C = 40.0  # the fake run's error coefficient: y_h = sin(2 pi t) + C h^2 cos(2 pi t)
@@ -32,7 +32,7 @@ def _run(refuse_below: float = 0.0):
 
 def test_a_second_order_error_is_estimated_exactly() -> None:
     h = 1e-2
-    study = step_study(EMPTY, CosimSettings(step=h), _run(), target=1e-3)
+    study = study_step(EMPTY, CosimSettings(step=h), _run(), target=1e-3)
     (force,) = study.channels
     t = np.arange(101) * h
     finest = np.sin(2 * np.pi * t) + C * (h / 4) ** 2 * np.cos(2 * np.pi * t)
@@ -45,7 +45,7 @@ def test_a_second_order_error_is_estimated_exactly() -> None:
 
 def test_a_refused_step_is_reported_with_the_masters_reason_and_the_order_taken_as_one() -> None:
     h = 1e-2
-    study = step_study(EMPTY, CosimSettings(step=h), _run(refuse_below=0.4 * h), target=1e-2)
+    study = study_step(EMPTY, CosimSettings(step=h), _run(refuse_below=0.4 * h), target=1e-2)
     assert list(study.runs) == [h, h / 2] and list(study.refused) == [h / 4]
     (force,) = study.channels
     assert not force.observed and force.order == 1.0

@@ -8,8 +8,8 @@ import onnxruntime as ort
 import pytest
 
 from nnfmu.component import Component
-from nnfmu.cosim.linear_damper import linear_damper_graph
 from nnfmu.export.errors import ExportError
+from nnfmu.export.linear_damper import linear_damper_graph
 from nnfmu.export.terms import OutputTerm, add_output_terms
 
 

@@ -14,7 +14,7 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from native_fmu_helpers import SAMPLE_PERIOD, Reference, delay_step_graph
 
-from nnfmu.cosim.linear_damper import linear_damper_graph
+from nnfmu.export.linear_damper import linear_damper_graph
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.errors import FmuBuildError
 from nnfmu.fmu.options import BuildOptions

@@ -13,7 +13,7 @@ import pytest
 from fmpy.validation import validate_fmu
 
 from nnfmu.component import Component
-from nnfmu.cosim.linear_damper import linear_damper_graph
+from nnfmu.export.linear_damper import linear_damper_graph
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.fmu.step_graph import (

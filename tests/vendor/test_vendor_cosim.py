@@ -15,7 +15,7 @@ from vendor_system import DAMPER, VEHICLE, road, write_vendor_system
 from nnfmu.cli import app
 from nnfmu.cosim.master import CosimSettings, CosimWarning, cosimulate
 from nnfmu.cosim.ssp import Connection, SspError, open_system
-from nnfmu.cosim.step_study import step_study
+from nnfmu.cosim.step_study import study_step
 from nnfmu.cosim.units import UnitError
 from nnfmu.data import load_measurement
 from nnfmu.workflows.cosim import run_cosim
@@ -92,7 +92,7 @@ def test_step_study_estimates_the_error_at_h_close_to_a_fine_runs(vendor: tuple[
         def run(settings: CosimSettings):
             return cosimulate(system, drive, settings)
 
-        study = step_study(system, CosimSettings(step=h), run, target=0.01)
+        study = study_step(system, CosimSettings(step=h), run, target=0.01)
         coarse = run(CosimSettings(step=h)).measurement
         fine = run(CosimSettings(step=h / 32, stop_time=coarse.time[-1])).measurement
     assert not study.refused and len(study.runs) == 3

@@ -11,9 +11,9 @@ import pytest
 
 from nnfmu.control import SkyhookSettings, known_command
 from nnfmu.cosim.master import CosimSettings
-from nnfmu.cosim.semiactive_damper import semiactive_damper_graph
 from nnfmu.cosim.ssp import Connection, SspError, open_system
 from nnfmu.data.drive_files import write_drive
+from nnfmu.export.semiactive_damper import semiactive_damper_graph
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.vehicle.fmu import build_vehicle_fmu
 from nnfmu.workflows.controller import (

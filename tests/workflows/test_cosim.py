@@ -12,12 +12,12 @@ import pytest
 sys.path.insert(0, str(Path(__file__).parents[1] / "cosim"))  # the hand-made quarter car of the master's tests
 from cosim_system_helpers import DAMPING, build, damper_graph, drive, write_system  # noqa: E402
 
-from nnfmu.cosim.linear_damper import linear_damper_graph  # noqa: E402
 from nnfmu.cosim.master import CosimSettings, CosimWarning  # noqa: E402
 from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd  # noqa: E402
 from nnfmu.data import load_measurement  # noqa: E402
 from nnfmu.data.drive_files import write_drive  # noqa: E402
 from nnfmu.errors import SettingsError  # noqa: E402
+from nnfmu.export.linear_damper import linear_damper_graph  # noqa: E402
 from nnfmu.vehicle.dynamics.parameters import DEFAULTS_DIR  # noqa: E402
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu  # noqa: E402
 from nnfmu.workflows.cosim import run_cosim  # noqa: E402

@@ -14,8 +14,8 @@ import pytest
 from typer.testing import CliRunner
 
 from nnfmu.cli import app
-from nnfmu.cosim.linear_damper import linear_damper_graph
 from nnfmu.data.drive_files import read_drive, write_drive
+from nnfmu.export.linear_damper import linear_damper_graph
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.fmu.step_graph import GRAPH_MEMBER, graph_digest

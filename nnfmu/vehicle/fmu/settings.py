@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from nnfmu.fmu.options import BACKENDS, FMI_VERSIONS, Backend, FmiVersion
+from nnfmu.fmu import BACKENDS, FMI_VERSIONS, Backend, FmiVersion
 from nnfmu.vehicle.dynamics.components import CHOICES
 from nnfmu.vehicle.dynamics.ports import CORNERS
 from nnfmu.vehicle.fmu.errors import VehicleBuildError

@@ -20,8 +20,7 @@ import onnx
 
 import nnfmu
 from nnfmu.component import Component, Port, StatePort
-from nnfmu.fmu.build import build_fmu_from_model
-from nnfmu.fmu.options import BuildOptions
+from nnfmu.fmu import BuildOptions, build_fmu_from_model
 from nnfmu.vehicle.dynamics import (
     DEFAULT_FILE,
     LinearVehicle,

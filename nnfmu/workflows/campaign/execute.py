@@ -23,9 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from nnfmu.atomic import atomic_path
-from nnfmu.cosim.instances import InstancePool
-from nnfmu.cosim.master import CosimSettings, cosimulate
-from nnfmu.cosim.ssp import Connection, Connector, Element, SystemStructure
+from nnfmu.cosim import Connection, Connector, CosimSettings, Element, InstancePool, SystemStructure, cosimulate
 from nnfmu.data import Measurement
 from nnfmu.data.drive_files import read_drive
 from nnfmu.errors import NnfmuError
@@ -33,7 +31,7 @@ from nnfmu.stopping import interrupts_deferred
 from nnfmu.validate.compare import ValidationSettings
 from nnfmu.validate.damage import pseudo_damage
 from nnfmu.validate.metrics import rms
-from nnfmu.vehicle.drive import generate_drive
+from nnfmu.vehicle import generate_drive
 from nnfmu.workflows.campaign.cases import Case
 from nnfmu.workflows.campaign.hashing import json_sha256
 from nnfmu.workflows.campaign.spec import EventSpec, FileRef, drive_settings

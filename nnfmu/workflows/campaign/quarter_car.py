@@ -2,7 +2,7 @@
 FMU, linear damper FMUs of several valvings, and a `SystemStructure.ssd` joining the vehicle to the first of them.
 
 Everything is native FMUs built from the package's presets (no torch): the vehicle from the default parameter file
-(`nnfmu vehicle build quarter-car`), each damper F = c v (`nnfmu.cosim.linear_damper`) with its output filter off.
+(`nnfmu vehicle build quarter-car`), each damper F = c v (`nnfmu.export.linear_damper`) with its output filter off.
 The example campaign, the campaign tests and `bench/batch.py` use it.
 """
 
@@ -14,12 +14,10 @@ from pathlib import Path
 import onnx
 
 from nnfmu.atomic import atomic_path
-from nnfmu.cosim.linear_damper import linear_damper_graph
-from nnfmu.cosim.ssp import connect_by_name, write_ssd
-from nnfmu.fmu.build import build_fmu
-from nnfmu.fmu.options import BuildOptions
-from nnfmu.vehicle.fmu.settings import VehicleBuildSettings
-from nnfmu.vehicle.fmu.vehicle_fmu import build_vehicle_fmu
+from nnfmu.cosim import DEFAULT_STEP, connect_by_name, write_ssd
+from nnfmu.export.linear_damper import linear_damper_graph
+from nnfmu.fmu import BuildOptions, build_fmu
+from nnfmu.vehicle import VehicleBuildSettings, build_vehicle_fmu
 
 DAMPER_ELEMENT = "damper"
 NO_FILTER = {"filter_cutoff": 0.0}
@@ -33,7 +31,7 @@ def damper_fmu(damping: float, out: Path) -> Path:
     return build_fmu(graph, BuildOptions(out=out))
 
 
-def build_quarter_car_system(folder: Path, dampers: Mapping[str, float], step: float = 1e-3) -> dict[str, Path]:
+def build_quarter_car_system(folder: Path, dampers: Mapping[str, float], step: float = DEFAULT_STEP) -> dict[str, Path]:
     """In `folder`: `quarter-car.fmu` (sampled at `step` [s]), `damper-NAME.fmu` per entry of `dampers` (name ->
     damping [N.s/m]) and `SystemStructure.ssd` with the first damper; returns the paths by name ('system',
     'vehicle', and each damper's name)."""

@@ -2,7 +2,7 @@
 
 ```toml
 name = "damper valvings"                       # optional; default: the file's stem
-[coupling]                                     # nnfmu.cosim.master.CosimSettings fields, by name
+[coupling]                                     # nnfmu.cosim.CosimSettings fields, by name
 step = 1e-3
 [metrics]
 channels = ["damper_force", "body_acceleration"]   # default: every output channel
@@ -47,10 +47,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from nnfmu.cosim.master import CosimSettings
-from nnfmu.cosim.ssp import Element, SspError, SystemStructure, check_against_fmus, open_system
+from nnfmu.cosim import CosimSettings, Element, SspError, SystemStructure, check_against_fmus, open_system
 from nnfmu.validate.damage import MAX_SLOPE
-from nnfmu.vehicle.drive import DriveError, DriveSettings, KerbStrike, Pothole
+from nnfmu.vehicle import DriveError, DriveSettings, KerbStrike, Pothole
 from nnfmu.workflows.campaign.errors import CampaignError
 from nnfmu.workflows.campaign.hashing import bytes_sha256, file_bytes, file_sha256
 

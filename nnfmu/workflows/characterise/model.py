@@ -12,14 +12,9 @@ import numpy as np
 
 from nnfmu.atomic import scratch_dir
 from nnfmu.component import Component, Port
-from nnfmu.cosim.replay import replay_fmu
-from nnfmu.cosim.slave import FmuSlave
+from nnfmu.cosim import FmuSlave, replay_fmu
 from nnfmu.data.measurement import Measurement
-from nnfmu.fmu.build import build_fmu
-from nnfmu.fmu.factory import load_onnx
-from nnfmu.fmu.native.toolchain import host_binaries_only
-from nnfmu.fmu.options import BuildOptions
-from nnfmu.fmu.step_graph import read_fmu_graph
+from nnfmu.fmu import BuildOptions, build_fmu, host_binaries_only, load_onnx, read_fmu_graph
 from nnfmu.input_files import not_regular
 from nnfmu.workflows.characterise.kind import BushingPorts, CharacteriseError, DamperPorts, component_kind
 from nnfmu.workflows.characterise.signals import SineTest, TestMotion, sine_motion

@@ -12,10 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from nnfmu.atomic import staging_dir
-from nnfmu.cosim.binding import DriveBinding
-from nnfmu.cosim.instances import InstancePool
-from nnfmu.cosim.master import CosimSettings, cosimulate
-from nnfmu.cosim.ssp import SystemStructure, open_system
+from nnfmu.cosim import CosimSettings, DriveBinding, InstancePool, SystemStructure, cosimulate, open_system
 from nnfmu.data import Measurement
 from nnfmu.data.drive_files import RPC_SUFFIXES, read_drive, write_drive
 from nnfmu.data.load import load_measurement

@@ -6,6 +6,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+from nnfmu.cosim import DEFAULT_STEP
 from nnfmu.errors import NnfmuError
 
 MAX_ITERATIONS = 100  # most drives one iteration plays
@@ -65,7 +66,7 @@ class IterateSettings:
     regularisation: float = 0.05
     reestimate: int = 2
     fade: float = 0.5
-    step: float = 1e-3
+    step: float = DEFAULT_STEP
     limits: ActuatorLimits = field(default_factory=ActuatorLimits)
     basquin_slope: float = 5.0
     seed: int = 0

@@ -17,12 +17,11 @@ import numpy as np
 
 from nnfmu.atomic import staging_dir
 from nnfmu.component import same_period
-from nnfmu.cosim.replay import replay_fmu
+from nnfmu.cosim import replay_fmu
 from nnfmu.data import DataError, Measurement, check_measurement, load_measurement
 from nnfmu.diagnosis import Diagnosis, FamilyGains, diagnose
 from nnfmu.export import ExportError, export_onnx, read_step_graph
-from nnfmu.fmu.build import build_fmu
-from nnfmu.fmu.options import BuildOptions
+from nnfmu.fmu import BuildOptions, build_fmu
 from nnfmu.models.features import FeatureSpec
 from nnfmu.models.trained import TrainedModel
 from nnfmu.out_paths import check_output_dir, replace_output_dir

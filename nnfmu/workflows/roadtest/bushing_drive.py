@@ -21,10 +21,9 @@ from nnfmu.component import Component
 from nnfmu.data import Measurement, save_measurement
 from nnfmu.data.drive_files import write_drive
 from nnfmu.data.rigs import DriveDesign, RigOptions, write_vehicle_rig
-from nnfmu.fmu.build import build_fmu
-from nnfmu.fmu.options import BuildOptions
+from nnfmu.fmu import BuildOptions, build_fmu
 from nnfmu.validate import ChannelComparison, ValidationSettings, compare
-from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.vehicle import DriveSettings, generate_drive
 from nnfmu.workflows.roadtest.envelope import Excursion, excursion
 from nnfmu.workflows.roadtest.record_training import train_on_record
 from nnfmu.workflows.roadtest.runs import RoadTestSettings, _open_loop, _ports

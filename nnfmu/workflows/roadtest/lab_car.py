@@ -22,9 +22,7 @@ import numpy as np
 from nnfmu.atomic import write_text_atomic
 from nnfmu.data import Measurement, save_measurement
 from nnfmu.physics import DAMPER_EFFECTS, BushingChannelParams, BushingChannelTruth, DamperTruth
-from nnfmu.vehicle.dynamics import truth_laws
-from nnfmu.vehicle.dynamics.laws import BushingTruthLaw, ComponentLaw, DamperTruthLaw
-from nnfmu.vehicle.fmu import VehicleBuildSettings, vehicle_model
+from nnfmu.vehicle import BushingTruthLaw, ComponentLaw, DamperTruthLaw, VehicleBuildSettings, truth_laws, vehicle_model
 from nnfmu.workflows.roadtest.systems import RoadTestError, bushing_elements, damper_elements, vehicle_components
 from nnfmu.workflows.roadtest.truth_reference import monolithic_reference
 

@@ -24,14 +24,12 @@ from fmpy import read_model_description
 
 from nnfmu.atomic import write_text_atomic
 from nnfmu.component import Component
-from nnfmu.cosim.master import CosimSettings, cosimulate
-from nnfmu.cosim.replay import replay_fmu
-from nnfmu.cosim.ssp import open_system
+from nnfmu.cosim import DEFAULT_STEP, CosimSettings, cosimulate, open_system, replay_fmu
 from nnfmu.data import Measurement, save_measurement
 from nnfmu.data.drive_files import write_drive
-from nnfmu.fmu.step_graph import load_fmu_graph
+from nnfmu.fmu import load_fmu_graph
 from nnfmu.validate import ChannelComparison, Target, ValidationSettings, compare, write_report
-from nnfmu.vehicle.drive import DriveSettings, generate_drive
+from nnfmu.vehicle import DriveSettings, generate_drive
 from nnfmu.workflows.characterise.linked import LinkedCharacterisation, characterise_models
 from nnfmu.workflows.characterise.settings import CharacteriseSettings
 from nnfmu.workflows.roadtest.budget import BudgetRow, budget_rows
@@ -94,7 +92,7 @@ class SystemRun:
     compared with the reference (empty: the system's default set, `COMPARED`)."""
 
     duration: float
-    step: float = 1e-3
+    step: float = DEFAULT_STEP
     iterations: int = 0
     filter_cutoff: float | None = None
     channels: tuple[str, ...] = ()

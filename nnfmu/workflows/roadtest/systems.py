@@ -21,17 +21,12 @@ from pathlib import Path
 import onnx
 
 from nnfmu.atomic import atomic_path
-from nnfmu.cosim.ssp import connect_by_name, write_ssd
+from nnfmu.cosim import connect_by_name, write_ssd
 from nnfmu.data.rigs import BUSHING_CHANNELS
 from nnfmu.errors import NnfmuError
 from nnfmu.export.merge import merge_step_graphs
-from nnfmu.fmu.build import build_fmu
-from nnfmu.fmu.options import BuildOptions
-from nnfmu.vehicle.dynamics import truth_laws
-from nnfmu.vehicle.dynamics.components import STABILISED
-from nnfmu.vehicle.dynamics.full_vehicle import FRONT_CORNERS
-from nnfmu.vehicle.dynamics.ports import CORNERS
-from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
+from nnfmu.fmu import BuildOptions, build_fmu
+from nnfmu.vehicle import CORNERS, FRONT_CORNERS, STABILISED, VehicleBuildSettings, build_vehicle_fmu, truth_laws
 from nnfmu.workflows.roadtest.truth_graphs import bushing_truth_graph, damper_truth_graph
 from nnfmu.workflows.roadtest.truth_reference import settled_state
 

@@ -16,9 +16,17 @@ import numpy as np
 
 from nnfmu.data import Measurement
 from nnfmu.data.derive import derive_rates
-from nnfmu.vehicle.dynamics import LinearVehicle, MonolithicSettings, rest_state, simulate_monolithic, truth_laws
-from nnfmu.vehicle.dynamics.laws import ComponentLaw
-from nnfmu.vehicle.fmu import VehicleBuildSettings, initial_state, vehicle_model
+from nnfmu.vehicle import (
+    ComponentLaw,
+    LinearVehicle,
+    MonolithicSettings,
+    VehicleBuildSettings,
+    initial_state,
+    rest_state,
+    simulate_monolithic,
+    truth_laws,
+    vehicle_model,
+)
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nnfmu.cosim.replay import replay_fmu
+from nnfmu.cosim import replay_fmu
 from nnfmu.data import Measurement
 from nnfmu.data.derive import derivative
 from nnfmu.diagnosis import Diagnosis, diagnose

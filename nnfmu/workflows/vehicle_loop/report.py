@@ -1,9 +1,11 @@
-"""The vehicle loop's report: `report.json`, a time-history plot per channel the named effects explain most (lab
-car, virtual car before and after) and the NRMSE of every channel before and after, and `report.html` linking them."""
+"""The vehicle loop's report: what it found and did (`VehicleLoopReport`), written as `report.json`, a
+time-history plot per channel the named effects explain most (lab car, virtual car before and after) and the NRMSE of
+every channel before and after, and `report.html` linking them."""
 
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -18,10 +20,89 @@ from nnfmu.validate.plots import axis_label, new_axes
 from nnfmu.validate.verdict import per_cent
 
 if TYPE_CHECKING:
-    from nnfmu.workflows.vehicle_loop.run import VehicleLoopReport
+    from nnfmu.diagnosis import Diagnosis
+    from nnfmu.workflows.vehicle_loop.attribution import Attribution
+    from nnfmu.workflows.vehicle_loop.fix import Fixed
+    from nnfmu.workflows.vehicle_loop.residuals import ChannelError
 
 TEMPLATE = "vehicle_report.html.j2"
 WINDOW = 3.0  # [s] of the record drawn in a time-history plot, from its settled start
+
+
+@dataclass
+class VehicleLoopReport:
+    """What the vehicle loop found and did (JSON-ready by `to_dict`)."""
+
+    measured: str
+    system: str
+    fixed_system: Path
+    fmus: dict[str, Path]
+    channels: dict[str, dict[str, ChannelError]]
+    attribution: Attribution
+    fixes: list[Fixed]
+    offsets: dict[str, float]
+    in_situ: dict[str, Diagnosis]
+    coverage: list[str]
+    ignored: list[str]
+    summary: str
+    notes: list[str] = field(default_factory=list)
+    untested: list[str] = field(default_factory=list)
+
+    @property
+    def iterations(self) -> list[dict[str, object]]:
+        """The named (component, effect) pairs and sensor offsets, in the order named."""
+        out = []
+        for e in self.attribution.named:
+            situ = self.in_situ.get(e.candidate.component)
+            words = (
+                f"explains {e.explained:.1%} of the vehicle residual beyond those named before (alone "
+                f"{e.explained_alone:.1%}), out of sample; most in "
+                + ", ".join(f"{c} ({v:.0%})" for c, v in sorted(e.channels.items(), key=lambda kv: -kv[1])[:3])
+            )
+            if situ is not None:
+                words += f"; in situ: {situ.summary}"
+            if e.alike:
+                words += f"; cannot be told apart from {', '.join(e.alike)} by these channels"
+            out.append(
+                {
+                    "component": e.candidate.component,
+                    "effect": e.candidate.effect,
+                    "evidence": words,
+                    "why": e.why,
+                    "p_value": e.p_value,
+                }
+            )
+        return out
+
+    def to_dict(self) -> dict[str, object]:
+        return {
+            "measured": self.measured,
+            "system_before": self.system,
+            "system": str(self.fixed_system),
+            "fmus": {k: str(v) for k, v in self.fmus.items()},
+            "summary": self.summary,
+            "iterations": self.iterations,
+            "channels": {
+                name: {when: error.to_dict() for when, error in pair.items()} for name, pair in self.channels.items()
+            },
+            "channels_note": (
+                "virtual car vs lab car after the settling time; mean_shift = mean(virtual) - mean(measured) in the "
+                "channel's unit; 'after' compares the fixed system with the record, sensor offsets taken out of "
+                "their channels"
+            ),
+            "sensor_offsets": self.offsets,
+            "fixes": [
+                {"component": f.element, "method": f.method, "fmu": str(f.fmu), "onnx": str(f.onnx)} for f in self.fixes
+            ],
+            "candidates": [e.to_dict() for e in self.attribution.evidence],
+            "significance_threshold": self.attribution.threshold,
+            "untestable": self.attribution.untestable,
+            "untested_components": self.untested,
+            "in_situ": {k: d.to_dict() for k, d in self.in_situ.items()},
+            "coverage": self.coverage,
+            "ignored_channels": self.ignored,
+            "notes": self.notes,
+        }
 
 
 def _number(value: object) -> str:

@@ -9,8 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from nnfmu.cosim.master import CosimSettings, cosimulate
-from nnfmu.cosim.ssp import open_system
+from nnfmu.cosim import CosimSettings, cosimulate, open_system
 from nnfmu.data import Measurement
 from nnfmu.validate import ChannelComparison, ValidationSettings, compare
 from nnfmu.workflows.vehicle_binding import vehicle_binding

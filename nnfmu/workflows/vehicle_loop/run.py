@@ -9,7 +9,6 @@ from __future__ import annotations
 import os
 import shutil
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -17,14 +16,11 @@ import numpy as np
 from nnfmu.atomic import scratch_dir, staging_dir
 from nnfmu.data import DataError, Measurement, load_measurement
 from nnfmu.data.drive_files import RPC_SUFFIXES, read_drive
-from nnfmu.diagnosis import Diagnosis
-from nnfmu.fmu.errors import FmuBuildError
-from nnfmu.fmu.factory import load_onnx
+from nnfmu.fmu import FmuBuildError, load_onnx
 from nnfmu.out_paths import check_output_dir, replace_output_dir
 from nnfmu.stopping import check_stop
 from nnfmu.workflows.vehicle_loop.attribution import (
     SENSOR_OFFSET,
-    Attribution,
     Candidate,
     Evidence,
     attribute,
@@ -40,7 +36,7 @@ from nnfmu.workflows.vehicle_loop.fix import (
     in_situ_record,
     trained_network,
 )
-from nnfmu.workflows.vehicle_loop.report import write_vehicle_report
+from nnfmu.workflows.vehicle_loop.report import VehicleLoopReport, write_vehicle_report
 from nnfmu.workflows.vehicle_loop.residuals import ChannelError, channel_errors, on_record, replay_system, settled
 from nnfmu.workflows.vehicle_loop.sensitivity import PERTURBATION, Sensitivities, network_stiffness
 from nnfmu.workflows.vehicle_loop.settings import VehicleLoopError, VehicleLoopSettings
@@ -53,82 +49,6 @@ BUDGET = (
     "consistent with the co-simulation error budget: no component effect or sensor offset explains a significant "
     "share of the residual, which is left to the networks' own error and the coupling"
 )
-
-
-@dataclass
-class VehicleLoopReport:
-    """What the vehicle loop found and did (JSON-ready by `to_dict`)."""
-
-    measured: str
-    system: str
-    fixed_system: Path
-    fmus: dict[str, Path]
-    channels: dict[str, dict[str, ChannelError]]
-    attribution: Attribution
-    fixes: list[Fixed]
-    offsets: dict[str, float]
-    in_situ: dict[str, Diagnosis]
-    coverage: list[str]
-    ignored: list[str]
-    summary: str
-    notes: list[str] = field(default_factory=list)
-    untested: list[str] = field(default_factory=list)
-
-    @property
-    def iterations(self) -> list[dict[str, object]]:
-        """The named (component, effect) pairs and sensor offsets, in the order named."""
-        out = []
-        for e in self.attribution.named:
-            situ = self.in_situ.get(e.candidate.component)
-            words = (
-                f"explains {e.explained:.1%} of the vehicle residual beyond those named before (alone "
-                f"{e.explained_alone:.1%}), out of sample; most in "
-                + ", ".join(f"{c} ({v:.0%})" for c, v in sorted(e.channels.items(), key=lambda kv: -kv[1])[:3])
-            )
-            if situ is not None:
-                words += f"; in situ: {situ.summary}"
-            if e.alike:
-                words += f"; cannot be told apart from {', '.join(e.alike)} by these channels"
-            out.append(
-                {
-                    "component": e.candidate.component,
-                    "effect": e.candidate.effect,
-                    "evidence": words,
-                    "why": e.why,
-                    "p_value": e.p_value,
-                }
-            )
-        return out
-
-    def to_dict(self) -> dict[str, object]:
-        return {
-            "measured": self.measured,
-            "system_before": self.system,
-            "system": str(self.fixed_system),
-            "fmus": {k: str(v) for k, v in self.fmus.items()},
-            "summary": self.summary,
-            "iterations": self.iterations,
-            "channels": {
-                name: {when: error.to_dict() for when, error in pair.items()} for name, pair in self.channels.items()
-            },
-            "channels_note": (
-                "virtual car vs lab car after the settling time; mean_shift = mean(virtual) - mean(measured) in the "
-                "channel's unit; 'after' compares the fixed system with the record, sensor offsets taken out of "
-                "their channels"
-            ),
-            "sensor_offsets": self.offsets,
-            "fixes": [
-                {"component": f.element, "method": f.method, "fmu": str(f.fmu), "onnx": str(f.onnx)} for f in self.fixes
-            ],
-            "candidates": [e.to_dict() for e in self.attribution.evidence],
-            "significance_threshold": self.attribution.threshold,
-            "untestable": self.attribution.untestable,
-            "untested_components": self.untested,
-            "in_situ": {k: d.to_dict() for k, d in self.in_situ.items()},
-            "coverage": self.coverage,
-            "ignored_channels": self.ignored,
-            "notes": self.notes,
-        }
 
 
 def _load(data: str | os.PathLike[str] | Measurement, what: str, reader) -> Measurement:
@@ -290,8 +210,9 @@ def _run_vehicle_loop(
     m = _load(measured, "measurement", _read_record)
     d = _load(drive, "drive", read_drive)
     _check_time_axes(m, d)
-    log(f"replaying {car.name} on {d.source}")
-    base = replay_system(car.ssd, d, settings.step, settings.allow_outside)
+    step = settings.step_for(car.vehicle_fmu)
+    log(f"replaying {car.name} on {d.source} at a {step:g} s step")
+    base = replay_system(car.ssd, d, step, settings.allow_outside)
     recorded = [c for c in m.names if f"derived:{c}" not in m.notes and not c.startswith("actuator_")]
     channels = [c for c in recorded if c in base.channels]
     ignored = [c for c in recorded if c not in channels]
@@ -319,7 +240,7 @@ def _run_vehicle_loop(
     with staging_dir(out_dir.parent, f".{out_dir.name}.staging-") as staging:
 
         def replay(ssd: Path) -> Measurement:
-            return on_record(replay_system(ssd, d, settings.step), m, channels, settings.settle)
+            return on_record(replay_system(ssd, d, step), m, channels, settings.settle)
 
         sensitivities = Sensitivities(car, staging / "sensitivity", replay, virtual, channels)
         columns: dict[str, list[np.ndarray]] = {}
@@ -373,7 +294,7 @@ def _run_vehicle_loop(
             else:
                 fixes.append(fix_by_terms(e, onnx_path, staging / "components"))
         final, fmus = _fixed_system(car, fixes, staging, out_dir)
-        after_result = on_record(replay_system(final, d, settings.step), m, channels, settings.settle)
+        after_result = on_record(replay_system(final, d, step), m, channels, settings.settle)
         corrected = Measurement(
             record.time,
             {c: record[c] - offsets.get(c, 0.0) for c in channels},

@@ -14,8 +14,7 @@ from nnfmu.atomic import atomic_path
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import BUSHING_CHANNELS
 from nnfmu.export.terms import OutputTerm, add_output_terms
-from nnfmu.fmu.build import build_fmu
-from nnfmu.fmu.options import BuildOptions
+from nnfmu.fmu import BuildOptions, build_fmu
 from nnfmu.workflows.vehicle_loop.system_files import VirtualCar, swapped_system
 
 Replay = Callable[[Path], Measurement]  # an SSD -> its channels on the record's time stamps

@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 
+from nnfmu.cosim import DEFAULT_STEP
 from nnfmu.errors import NnfmuError
+from nnfmu.fmu import fmu_sample_period
 from nnfmu.workflows.loop import LoopSettings
 
 
@@ -23,7 +26,8 @@ def _in_situ_loop() -> LoopSettings:
 class VehicleLoopSettings:
     """How the vehicle loop replays, attributes and fixes.
 
-    `step` [s]: the co-simulation's communication step. `settle` [s]: the first seconds of the record left out of
+    `step` [s]: the co-simulation's communication step (None: the vehicle FMU's sample period, as the road test
+    built it; `DEFAULT_STEP` for a vehicle that carries none). `settle` [s]: the first seconds of the record left out of
     every metric and fit (the virtual car starts at rest on its networks, the lab car on its own physics; after a fix
     the virtual car settles to its new rest state). `blocks`: the record is cut into this many contiguous blocks,
     half fit and half evaluate, then the other way round (out of sample, as the component diagnosis does).
@@ -35,7 +39,7 @@ class VehicleLoopSettings:
     the coupling stay within a few per cent on the road test). `allow_outside`: the system's FMUs may lie outside its
     folder (`open_system`)."""
 
-    step: float = 1e-3
+    step: float | None = None
     settle: float = 1.5
     blocks: int = 16
     alpha: float = 0.05
@@ -46,8 +50,15 @@ class VehicleLoopSettings:
     allow_outside: bool = False
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.step) and self.step > 0):
+        if self.step is not None and not (math.isfinite(self.step) and self.step > 0):
             raise VehicleLoopError(f"step {self.step!r} s must be a positive number")
+
+    def step_for(self, vehicle_fmu: Path) -> float:
+        """The communication step [s] for a virtual car with this vehicle FMU: `step`, else the FMU's sample period
+        (the finest step its feedthrough allows), else `DEFAULT_STEP`."""
+        if self.step is not None:
+            return self.step
+        return fmu_sample_period(vehicle_fmu) or DEFAULT_STEP
         if not (math.isfinite(self.settle) and self.settle >= 0):
             raise VehicleLoopError(f"settle {self.settle!r} s must be a number >= 0")
         if self.blocks < 2 or self.blocks % 2:

@@ -14,8 +14,8 @@ from pathlib import Path
 
 import onnx
 
-from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd
-from nnfmu.fmu.step_graph import StepGraphError, check_same_graph, extract_fmu_graph
+from nnfmu.cosim import connect_by_name, open_system, write_ssd
+from nnfmu.fmu import StepGraphError, check_same_graph, extract_fmu_graph
 from nnfmu.input_files import not_regular
 from nnfmu.workflows.vehicle_binding import vehicle_binding
 from nnfmu.workflows.vehicle_loop.settings import VehicleLoopError

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import onnx
 
-from nnfmu.cosim.linear_damper import linear_damper_graph
 from nnfmu.export.graph import GraphBuilder
+from nnfmu.export.linear_damper import linear_damper_graph
 from nnfmu.workflows.characterise.linked import LinkedCharacterisation, characterise_models
 from nnfmu.workflows.characterise.settings import QUICK_SETTINGS
 from nnfmu.workflows.roadtest.report import write_system_report

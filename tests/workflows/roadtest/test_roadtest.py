@@ -11,10 +11,10 @@ import numpy as np
 import onnx
 import pytest
 
-from nnfmu.cosim.linear_damper import linear_damper_graph
 from nnfmu.cosim.master import CosimSettings, cosimulate
 from nnfmu.cosim.ssp import open_system
 from nnfmu.data.rigs import RigOptions, write_rig
+from nnfmu.export.linear_damper import linear_damper_graph
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
