@@ -82,6 +82,8 @@ drive_app = typer.Typer(no_args_is_help=True, help="Drive files for a four-post 
 app.add_typer(drive_app, name="drive")
 controller_app = typer.Typer(no_args_is_help=True, help="Controllers of semi-active dampers, as FMUs.")
 app.add_typer(controller_app, name="controller")
+system_app = typer.Typer(no_args_is_help=True, help="SSP systems as one FMU with nnfmu's coupling inside.")
+app.add_typer(system_app, name="system")
 # `nnfmu loop`'s before -> after lines: (key of the report's errors, label, scale); NRMSE in per cent as the headline.
 LOOP_ERRORS = (
     ("nrmse", "NRMSE [%]", 100.0),
@@ -577,6 +579,41 @@ def controller_build(
         _fail(error)
     typer.echo(f"FMU: {path}")
     _echo_binaries(path)
+
+
+@system_app.command("build")
+def system_build(
+    system: Path = typer.Argument(..., help="System: SystemStructure.ssd, its folder, or an .ssp archive."),
+    out: str = typer.Option(..., "--out", "-o", help="FMU path to write (one FMI 2 co-simulation FMU)."),
+    fmi: int = typer.Option(2, "--fmi", help="FMI version of the system FMU: 2 (3 is not built yet)."),
+    step: float = typer.Option(1e-3, help="Communication step H [s] the FMU suggests (its default experiment)."),
+    inner_step: Optional[float] = typer.Option(
+        None, help="Inner step h [s] at which the FMU steps its parts, H a whole multiple of it (default: --step)."
+    ),
+    scheme: str = typer.Option("gauss-seidel", help="gauss-seidel (one element after another) or jacobi."),
+    order: str = typer.Option("vehicle-first", help="Gauss-Seidel order: vehicle-first or components-first."),
+    refresh: bool = typer.Option(
+        True, help="Give FMUs with feedthrough their inputs at each inner step's end and read their outputs again."
+    ),
+    allow_outside: bool = typer.Option(False, help=ALLOW_OUTSIDE_HELP),
+) -> None:
+    """Build an SSP system into one co-simulation FMU stepping its FMUs with nnfmu's coupling (docs/system-fmu.md).
+
+    Inputs: the vehicle's free actuator inputs (the drive) in SI units; outputs: every Real output as nnfmu cosim
+    names its channels; parameters: element.parameter. This machine's platform only.
+    """
+    from nnfmu.workflows.system_build import CosimSettings, run_system_build
+
+    try:
+        target = check_output_file(out, [system])
+        settings = CosimSettings(scheme=scheme, order=order, refresh=refresh, port_derivatives=False)
+        plan = run_system_build(system, target, step, inner_step, settings, fmi, allow_outside)
+    except NnfmuError as error:
+        _fail(error)
+    typer.echo(
+        f"FMU: {target} ({len(plan.parts)} FMUs stepped at {plan.inner_step:g} s; {len(plan.inputs)} inputs, "
+        f"{len(plan.outputs)} outputs, {len(plan.parameters)} parameters)"
+    )
 
 
 @app.command()

@@ -1,0 +1,219 @@
+"""The system FMU (`nnfmu system build`) in a plain FMI 2 loop against nnfmu's Python master on the same system.
+
+The quarter car of the vehicle package (interpolates its inputs, feedthrough: slopes and the refresh) with a linear
+damper FMU. The loop sets the system FMU's drive inputs at t_n and their slopes over the step (the drive is linear
+between its samples, as the master interpolates it), so the C master inside sees what the Python master sees: at the
+outer step H = h the two must agree to rounding on every output, and with H = 4 h the system FMU must reproduce the
+master's run at h (sub-stepping), not its run at H.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import onnx
+import pytest
+from cosim_system_helpers import drive
+from fmpy.fmi1 import FMICallException
+from fmpy.validation import validate_fmu
+
+from nnfmu.cosim.container.build import build_system_fmu
+from nnfmu.cosim.linear_damper import linear_damper_graph
+from nnfmu.cosim.master import CosimError, CosimSettings, cosimulate
+from nnfmu.cosim.slave import FmuSlave
+from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd
+from nnfmu.fmu.build import build_fmu
+from nnfmu.fmu.options import BuildOptions
+from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
+
+pytestmark = pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")
+
+H = 1e-3  # [s] the outer step
+DURATION = 0.3  # [s]
+TOLERANCE = 1e-12  # relative to each output's peak
+NO_DERIVATIVES = {"port_derivatives": False}
+
+
+def quarter_car(folder: Path, sample_period: float) -> Path:
+    """The quarter car (fl corner, sampling at `sample_period` [s]) with a linear damper FMU of 2400 N.s/m."""
+    folder.mkdir(parents=True, exist_ok=True)
+    onnx.save(linear_damper_graph(2400.0), folder / "damper.onnx")
+    damper = build_fmu(folder / "damper.onnx", BuildOptions(out=folder / "damper.fmu"))
+    vehicle = build_vehicle_fmu("quarter-car", folder / "car.fmu", VehicleBuildSettings(sample_period=sample_period))
+    return write_ssd(
+        connect_by_name("quarter car", ("vehicle", vehicle), {"damper": damper}, folder), folder / "system.ssd"
+    )
+
+
+@pytest.fixture(scope="module")
+def at_h(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return quarter_car(tmp_path_factory.mktemp("system_h"), H)
+
+
+@pytest.fixture(scope="module")
+def at_quarter_h(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return quarter_car(tmp_path_factory.mktemp("system_h4"), H / 4)
+
+
+def build(ssd: Path, out: Path, inner_step: float | None = None, **settings: object) -> Path:
+    with open_system(ssd) as system:
+        build_system_fmu(system, out, H, inner_step, CosimSettings(**NO_DERIVATIVES, **settings))
+    return out
+
+
+def master(ssd: Path, step: float, **settings: object) -> dict[str, np.ndarray]:
+    with open_system(ssd) as system:
+        result = cosimulate(
+            system, drive(DURATION, H, corner="fl"), CosimSettings(step=step, **NO_DERIVATIVES, **settings)
+        )
+    return {name: result.measurement[name] for name in result.measurement.names}
+
+
+def run(fmu: Path, slopes: bool = True, drive_scale: float = 1.0) -> tuple[dict[str, np.ndarray], FmuSlave]:
+    """The system FMU in a fixed-step loop at H on the test drive (sampled at H): inputs at t_n, with `slopes` their
+    slopes over the step; outputs at t_0 .. t_N. Returns the outputs and the (closed) slave, for its messages."""
+    slave = FmuSlave(fmu, instance_name="car")
+    inputs, outputs = slave.names("input"), slave.names("output")
+    source = drive(DURATION, H, corner="fl")
+    u = np.column_stack([source[name] for name in inputs]) * drive_scale
+    rows = []
+    try:
+        slave.enter_initialization(0.0)
+        slave.set_real(inputs, u[0])
+        slave.exit_initialization()
+        rows.append(slave.get_real(outputs))
+        references = slave.value_references(inputs)
+        for n in range(len(u) - 1):
+            slave.set_real(inputs, u[n])
+            if slopes:
+                slave.fmu.setRealInputDerivatives(references, [1] * len(inputs), list((u[n + 1] - u[n]) / H))
+            slave.do_step(n * H, H)
+            rows.append(slave.get_real(outputs))
+    finally:
+        slave.close()
+    table = np.array(rows)
+    return {name: table[:, i] for i, name in enumerate(outputs)}, slave
+
+
+def worst(result: dict[str, np.ndarray], reference: dict[str, np.ndarray], stride: int = 1) -> dict[str, float]:
+    """Per output: the largest difference relative to the reference's peak (reference sampled every `stride`)."""
+    return {
+        name: float(np.max(np.abs(values - reference[name][::stride])) / np.max(np.abs(reference[name][::stride])))
+        for name, values in result.items()
+    }
+
+
+SCHEMES = [{}, {"scheme": "jacobi"}, {"order": "components-first", "refresh": False}]
+
+
+@pytest.mark.parametrize("settings", SCHEMES, ids=lambda s: ",".join(f"{k}={v}" for k, v in s.items()) or "default")
+def test_the_system_fmu_gives_the_masters_numbers_at_its_step(at_h: Path, tmp_path: Path, settings: dict) -> None:
+    result, _ = run(build(at_h, tmp_path / "car.fmu", **settings))
+    reference = master(at_h, H, **settings)
+    assert set(result) == set(reference)
+    errors = worst(result, reference)
+    assert max(errors.values()) <= TOLERANCE, errors
+    assert np.ptp(result["damper_force"]) > 100.0  # [N] the damper did work: the comparison means something
+
+
+def test_the_system_fmu_sub_steps_as_the_master_at_the_inner_step(at_quarter_h: Path, tmp_path: Path) -> None:
+    """H = 4 h: the master's run at h, every fourth sample, to rounding; the master's run at H differs by far more."""
+    result, _ = run(build(at_quarter_h, tmp_path / "car.fmu", inner_step=H / 4))
+    fine, coarse = master(at_quarter_h, H / 4), master(at_quarter_h, H)
+    assert max(worst(result, fine, stride=4).values()) <= TOLERANCE
+    assert worst(result, coarse)["damper_force"] > 1e-4  # sub-stepping changed the result measurably
+
+
+def test_the_system_fmu_validates_and_runs_in_fmpys_own_loop(at_h: Path, tmp_path: Path) -> None:
+    """fmpy's validation finds no problem; fmpy's simulate_fmu (no input derivatives: the drive held over each step)
+    runs it and the damper moves."""
+    from fmpy import simulate_fmu
+
+    fmu = build(at_h, tmp_path / "car.fmu")
+    assert validate_fmu(str(fmu)) == []
+    source = drive(DURATION, H, corner="fl")
+    signals = np.array(
+        list(zip(source.time, source["actuator_fl_displacement"], source["actuator_fl_velocity"])),
+        dtype=[("time", float), ("actuator_fl_displacement", float), ("actuator_fl_velocity", float)],
+    )
+    result = simulate_fmu(str(fmu), stop_time=DURATION, output_interval=H, input=signals, output=["damper_force"])
+    assert np.all(np.isfinite(result["damper_force"])) and np.ptp(result["damper_force"]) > 100.0
+
+
+def test_a_parts_failure_is_the_system_fmus_error_naming_the_element(at_h: Path, tmp_path: Path) -> None:
+    """A drive that overflows the car's motion: the car finds its acceleration infinite and refuses, the system FMU
+    returns an error status and its log names the element, the call and the time; the part's own message comes with
+    its name."""
+    slave = FmuSlave(build(at_h, tmp_path / "car.fmu"), instance_name="car")
+    try:
+        slave.enter_initialization(0.0)
+        slave.exit_initialization()
+        slave.set_real(["actuator_fl_displacement", "actuator_fl_velocity"], [1e306, 1e306])
+        with pytest.raises(FMICallException, match="fmi2DoStep failed with status 3"):
+            for n in range(100):
+                slave.do_step(n * H, H)
+        errors = [message for status, _, message in slave.messages if status >= 3]
+        assert any(m.startswith("element 'vehicle': output 'spindle_acceleration'") for m in errors), errors
+        assert (
+            "element 'vehicle' (fmus/0): refresh: get outputs failed with status 3 in the inner step from t = 0 s "
+            "(h = 0.001 s)" in errors
+        ), errors
+        with pytest.raises(FMICallException):  # a failed system FMU steps no more
+            slave.do_step(n * H, H)
+    finally:
+        slave.close()
+
+
+def test_a_step_off_the_inner_grid_is_refused_with_the_reason(at_quarter_h: Path, tmp_path: Path) -> None:
+    fmu = build(at_quarter_h, tmp_path / "car.fmu", inner_step=H / 4)
+    slave = FmuSlave(fmu, instance_name="car")
+    try:
+        slave.enter_initialization(0.0)
+        slave.exit_initialization()
+        with pytest.raises(FMICallException):
+            slave.do_step(0.0, H / 3)
+        assert any("is not a whole number of the system's inner steps" in m for _, _, m in slave.messages)
+    finally:
+        slave.close()
+
+
+def test_an_inner_step_the_vehicle_cannot_honour_is_refused_at_build(at_h: Path, tmp_path: Path) -> None:
+    """The car samples every H and has feedthrough: an inner step of H/2 is refused before anything is compiled."""
+    with pytest.raises(CosimError, match="whole multiple of 0.001 s"):
+        with open_system(at_h) as system:
+            build_system_fmu(system, tmp_path / "car.fmu", H, H / 2, CosimSettings(**NO_DERIVATIVES))
+    assert not (tmp_path / "car.fmu").exists()
+
+
+def test_parameters_reach_the_part_by_element_name(at_h: Path, tmp_path: Path) -> None:
+    """`damper.output_gain` = 0 on the system FMU: the damper's force is zero throughout."""
+    fmu = build(at_h, tmp_path / "car.fmu")
+    slave = FmuSlave(fmu, instance_name="car")
+    try:
+        slave.set_real(["damper.output_gain"], [0.0])
+        slave.enter_initialization(0.0)
+        slave.exit_initialization()
+        slave.set_real(["actuator_fl_displacement", "actuator_fl_velocity"], [0.01, 0.1])
+        for n in range(20):
+            slave.do_step(n * H, H)
+        assert slave.get_real(["damper_force"])[0] == 0.0
+        assert slave.get_real(["damper.output_gain"])[0] == 0.0
+        assert slave.get_real(["spindle_displacement"])[0] != 0.0  # the car moved
+    finally:
+        slave.close()
+
+
+def test_the_cli_builds_one(at_h: Path, tmp_path: Path) -> None:
+    out = tmp_path / "cli.fmu"
+    done = subprocess.run(
+        [sys.executable, "-m", "nnfmu.cli", "system", "build", str(at_h), "--out", str(out), "--step", "1e-3"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    assert "2 FMUs stepped at 0.001 s; 2 inputs, 9 outputs, 4 parameters" in done.stdout and out.is_file()
