@@ -12,6 +12,12 @@ the run, teardown), the median of REPEATS runs; `loop_s` is the stepping alone. 
 bounded: every channel finite, and the peaks of its motion channels within BOUNDED_RATIO of a run of the same system
 with the parameter file's linear bushings built in instead of the networks. Progress goes to stderr; stdout gets one
 JSON object on one line (targets: full vehicle <= 2.5 s (20x real time, issue #14), quarter car <= 1 s for 50 s).
+
+The compiled engine (`compiled_*`): each system built into one system FMU (`nnfmu system build`, inner step = the
+1 ms step; the build is not timed) and stepped at 1 ms by an outer loop in Python of four direct FMI calls per step
+(drive inputs, their slopes, doStep, every output: `nnfmu.cosim.direct`), timed whole (instantiation to teardown);
+`compiled_*_matches_master` is the largest difference of any output from the Python master's run, relative to its
+peak (targets of issue 33: full vehicle >= 200x real time, quarter car >= 1000x).
 """
 
 from __future__ import annotations
@@ -28,7 +34,10 @@ from pathlib import Path
 import numpy as np
 from road_test import models_in  # bench/ is on the path when a bench script runs
 
+from nnfmu.cosim.container.build import build_system_fmu
+from nnfmu.cosim.direct import RealBlock, SlopeBlock, Stepper
 from nnfmu.cosim.master import CosimError, CosimSettings, cosimulate
+from nnfmu.cosim.slave import FmuSlave
 from nnfmu.cosim.ssp import open_system, read_ssd
 from nnfmu.data import Measurement
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
@@ -42,6 +51,7 @@ QUICK_RECORDS = {"damper": 40.0, "bushing": 20.0}  # [s] rig records for the qui
 QUICK_TRAINING = {"restarts": 1, "max_epochs": 15}
 # [s] for 50 s simulated (full vehicle: 20x real time)
 TARGETS = {"full_vehicle_wall_s": 2.5, "quarter_car_wall_s": 1.0}
+COMPILED_TARGETS = {"compiled_full_vehicle_wall_s": 50.0 / 200.0, "compiled_quarter_car_wall_s": 50.0 / 1000.0}
 MOTION_CHANNELS = (
     "body_heave",
     "body_pitch",
@@ -83,6 +93,59 @@ def timed_runs(
             walls.append(time.perf_counter() - started)
             loops.append(float(result.notes["wall_time_s"]))
     return walls, loops, result, ""
+
+
+def compiled_runs(
+    ssd: Path, drive: Measurement, duration: float, repeats: int, folder: Path, reference: Measurement | None
+) -> dict:
+    """The system FMU of `ssd` stepped at STEP by direct FMI calls from Python: wall times of whole runs, loop
+    times, and the largest difference of any output from the Python master's `reference`, relative to its peak."""
+    fmu = folder / f"{ssd.parent.name}-system.fmu"
+    with open_system(ssd) as system:
+        build_system_fmu(system, fmu, STEP, None, CosimSettings(port_derivatives=False))
+    walls, loops, table = [], [], None
+    for _ in range(repeats):
+        started = time.perf_counter()
+        slave = FmuSlave(fmu, instance_name="system")
+        try:
+            names, outputs = slave.names("input"), slave.names("output")
+            n = round(duration / STEP)
+            u = np.ascontiguousarray(
+                np.column_stack([np.interp(np.arange(n + 1) * STEP, drive.time, drive[c]) for c in names])
+            )
+            slopes = np.diff(u, axis=0) / STEP
+            inputs, rates, step = RealBlock(slave, names), SlopeBlock(slave, names), Stepper(slave)
+            rows = np.empty((n + 1, len(outputs)))
+            slave.enter_initialization(0.0)
+            slave.set_real(names, u[0])
+            slave.exit_initialization()
+            row = RealBlock(slave, outputs)
+            row.get()
+            rows[0] = row.values
+            looped = time.perf_counter()
+            for k in range(n):
+                inputs.values[:] = u[k]
+                inputs.set()
+                rates.values[:] = slopes[k]
+                rates.set()
+                step.step(k * STEP, STEP)
+                row.get()
+                rows[k + 1] = row.values
+            loops.append(time.perf_counter() - looped)
+            table = rows
+        finally:
+            slave.close()
+        walls.append(time.perf_counter() - started)
+    record = {"wall_s": [round(w, 3) for w in walls], "median_wall_s": round(statistics.median(walls), 3)}
+    record["median_loop_s"] = round(statistics.median(loops), 3)
+    record["real_time_factor"] = round(duration / record["median_wall_s"], 1)
+    if reference is not None and table is not None:
+        errors = [
+            float(np.max(np.abs(table[:, i] - reference[c])) / max(float(np.max(np.abs(reference[c]))), 1e-300))
+            for i, c in enumerate(outputs)
+        ]
+        record["matches_master"] = max(errors)
+    return record
 
 
 def summary(name: str, fmus: int, walls: list[float], loops: list[float], duration: float, error: str) -> dict:
@@ -159,6 +222,10 @@ def main() -> None:
             walls, loops, results[system], error = timed_runs(ssd, drive, duration, repeats)
             records[system] = summary(system, len(read_ssd(ssd).elements), walls, loops, duration, error)
             log(json.dumps(records[system]))
+        compiled = {}
+        for system, ssd in ssds.items():
+            compiled[system] = compiled_runs(ssd, drive, duration, repeats, work, results[system])
+            log(json.dumps({"compiled": system} | compiled[system]))
         _, _, yardstick, error = timed_runs(linear, drive, duration, 1)
         if yardstick is None:
             raise SystemExit(f"the linear-bushing yardstick run failed: {error}")
@@ -172,6 +239,12 @@ def main() -> None:
                 "repeats": repeats,
                 "full_vehicle_wall_s": full["median_wall_s"],
                 "quarter_car_wall_s": quarter["median_wall_s"],
+                "compiled_full_vehicle_wall_s": compiled["full-vehicle"]["median_wall_s"],
+                "compiled_quarter_car_wall_s": compiled["quarter-car"]["median_wall_s"],
+                "compiled_full_vehicle_matches_master": compiled["full-vehicle"].get("matches_master"),
+                "compiled_quarter_car_matches_master": compiled["quarter-car"].get("matches_master"),
+                "compiled": compiled,
+                "compiled_targets_s": COMPILED_TARGETS,
                 "real_time_factor": {
                     "full_vehicle": full["real_time_factor"],
                     "quarter_car": quarter["real_time_factor"],

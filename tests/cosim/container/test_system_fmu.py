@@ -217,3 +217,45 @@ def test_the_cli_builds_one(at_h: Path, tmp_path: Path) -> None:
     )
     assert done.returncode == 0, done.stderr
     assert "2 FMUs stepped at 0.001 s; 2 inputs, 9 outputs, 4 parameters" in done.stdout and out.is_file()
+
+
+@pytest.mark.slow
+def test_the_system_fmus_master_runs_clean_under_asan_and_ubsan(at_h: Path, tmp_path: Path) -> None:
+    """Its shipped sources, compiled with ASan and UBSan, run 200 steps twice (reset between) with a refused
+    instantiation and a refused step: no sanitizer report, no leak, no unexpected status."""
+    import zipfile
+
+    from fmpy import read_model_description
+
+    from nnfmu.fmu.native.backend import fmi_headers_dir
+
+    fmu = build(at_h, tmp_path / "car.fmu")
+    unpacked = tmp_path / "car"
+    with zipfile.ZipFile(fmu) as archive:
+        archive.extractall(unpacked)
+    description = read_model_description(str(fmu))
+    sources = unpacked / "sources"
+    sanitize = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
+    flags = ["gcc", "-std=c99", "-g", "-Wall", "-Wextra", "-Werror", "-Wvla", *sanitize]
+    library = unpacked / "binaries" / "linux64" / f"{description.coSimulation.modelIdentifier}.so"
+    for command in (
+        [*flags, "-fPIC", "-shared", "-DNN_LOOP_HIDDEN", f"-I{sources}", "-o", str(library)]
+        + [str(sources / name) for name in ("system_fmu.c", "inner_loop.c")]
+        + ["-lm", "-ldl"],
+        [*flags, f"-I{fmi_headers_dir()}", "-o", str(tmp_path / "driver")]
+        + [str(Path(__file__).with_name("system_driver.c")), "-ldl", "-lm"],
+    ):
+        compiled = subprocess.run(command, capture_output=True, text=True, timeout=120)
+        assert compiled.returncode == 0, compiled.stderr
+    inputs = sum(v.causality == "input" for v in description.modelVariables)
+    outputs = sum(v.causality == "output" for v in description.modelVariables)
+    result = subprocess.run(
+        [str(tmp_path / "driver"), str(library), description.guid, (unpacked / "resources").as_uri()]
+        + [str(inputs), str(outputs), "200"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={"ASAN_OPTIONS": "detect_leaks=1", "PATH": "/usr/bin:/bin"},
+    )
+    assert result.returncode == 0, result.stderr[-4000:]
+    assert "0 unexpected statuses" in result.stderr and "runtime error" not in result.stderr
