@@ -36,6 +36,7 @@ from road_test import models_in  # bench/ is on the path when a bench script run
 
 from nnfmu.cosim.container.build import build_system_fmu
 from nnfmu.cosim.direct import RealBlock, SlopeBlock, Stepper
+from nnfmu.cosim.drive_inputs import DriveInputs
 from nnfmu.cosim.master import CosimError, CosimSettings, cosimulate
 from nnfmu.cosim.slave import FmuSlave
 from nnfmu.cosim.ssp import open_system, read_ssd
@@ -110,9 +111,7 @@ def compiled_runs(
         try:
             names, outputs = slave.names("input"), slave.names("output")
             n = round(duration / STEP)
-            u = np.ascontiguousarray(
-                np.column_stack([np.interp(np.arange(n + 1) * STEP, drive.time, drive[c]) for c in names])
-            )
+            u = DriveInputs(drive, names).table(np.arange(n + 1) * STEP)  # as the master reads it (rates derived)
             slopes = np.diff(u, axis=0) / STEP
             inputs, rates, step = RealBlock(slave, names), SlopeBlock(slave, names), Stepper(slave)
             rows = np.empty((n + 1, len(outputs)))

@@ -259,3 +259,26 @@ def test_the_system_fmus_master_runs_clean_under_asan_and_ubsan(at_h: Path, tmp_
     )
     assert result.returncode == 0, result.stderr[-4000:]
     assert "0 unexpected statuses" in result.stderr and "runtime error" not in result.stderr
+
+
+def test_libcosim_and_nnfmus_plain_master_step_it_as_a_plain_fmi_loop_does(at_h: Path, tmp_path: Path) -> None:
+    """The system FMU as the one element of an SSP system: libcosim (its own fixed-step algorithm) and nnfmu's master
+    with the plain Jacobi settings both set the drive at t_n and hold it over the step, as the plain loop without
+    slopes does; all three agree within 1e-12 on every output."""
+    pytest.importorskip("libcosimpy")
+    from nnfmu.cosim.binding import DriveBinding
+    from nnfmu.cosim.libcosim_runner import run_libcosim
+
+    fmu = build(at_h, tmp_path / "car.fmu")
+    ssd = write_ssd(connect_by_name("one car", ("car", fmu), {}, tmp_path), tmp_path / "system.ssd")
+    plain = CosimSettings(step=H, scheme="jacobi", extrapolation="none", refresh=False, **NO_DERIVATIVES)
+    binding = DriveBinding.by_name("car", ("actuator_fl_displacement", "actuator_fl_velocity"))
+    source = drive(DURATION, H, corner="fl")
+    held, _ = run(fmu, slopes=False)
+    libcosim = run_libcosim(ssd, source, plain, binding).measurement
+    with open_system(ssd) as system:
+        fmpy = cosimulate(system, source, plain, binding=binding).measurement
+    for other in (libcosim, fmpy):
+        errors = worst(held, {name: other[name] for name in held})
+        assert max(errors.values()) <= TOLERANCE, errors
+    assert np.ptp(held["damper_force"]) > 100.0
