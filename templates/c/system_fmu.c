@@ -46,7 +46,32 @@ typedef struct {
     fmi2SetRealTYPE *set_real;
     fmi2GetRealTYPE *get_real;
     fmi2SetDebugLoggingTYPE *set_debug_logging;
+    fmi2GetFMUstateTYPE *get_state; /* the state functions: NULL unless every part has them */
+    fmi2SetFMUstateTYPE *set_state;
+    fmi2FreeFMUstateTYPE *free_state;
+    fmi2SerializedFMUstateSizeTYPE *serialized_size;
+    fmi2SerializeFMUstateTYPE *serialize;
+    fmi2DeSerializeFMUstateTYPE *deserialize;
 } ns_part;
+
+/* What evolves in the system FMU itself; a saved state is this and every part's own state. */
+typedef struct {
+    int64_t mode;
+    int64_t steps_done;
+    double start_time;
+    double time;
+    double drive[NS_N_DRIVE + 1];
+    double slope[NS_N_DRIVE + 1];
+    double parameter[NS_N_PARAMETERS + 1];
+    double rows[5 * NS_N_VALUES + 1]; /* values, now, before, estimate, fresh */
+} ns_saved;
+
+typedef struct {
+    ns_saved own;
+    fmi2FMUstate parts[NS_N_PARTS];
+} ns_state;
+
+#define NS_STATE_MAGIC "nnfmu-system-state-1"
 
 struct ns_instance {
     char *name;
@@ -199,6 +224,18 @@ static int load_part(ns_instance *self, ns_part *part, const char *folder) {
     part->set_real = (fmi2SetRealTYPE *)symbol(self, part, "fmi2SetReal");
     part->get_real = (fmi2GetRealTYPE *)symbol(self, part, "fmi2GetReal");
     part->set_debug_logging = (fmi2SetDebugLoggingTYPE *)symbol(self, part, "fmi2SetDebugLogging");
+    if (NS_CAN_GET_AND_SET_STATE) {
+        part->get_state = (fmi2GetFMUstateTYPE *)symbol(self, part, "fmi2GetFMUstate");
+        part->set_state = (fmi2SetFMUstateTYPE *)symbol(self, part, "fmi2SetFMUstate");
+        part->free_state = (fmi2FreeFMUstateTYPE *)symbol(self, part, "fmi2FreeFMUstate");
+        if (!(part->get_state && part->set_state && part->free_state)) return 1;
+    }
+    if (NS_CAN_SERIALIZE_STATE) {
+        part->serialized_size = (fmi2SerializedFMUstateSizeTYPE *)symbol(self, part, "fmi2SerializedFMUstateSize");
+        part->serialize = (fmi2SerializeFMUstateTYPE *)symbol(self, part, "fmi2SerializeFMUstate");
+        part->deserialize = (fmi2DeSerializeFMUstateTYPE *)symbol(self, part, "fmi2DeSerializeFMUstate");
+        if (!(part->serialized_size && part->serialize && part->deserialize)) return 1;
+    }
     return !(part->instantiate && part->free_instance && part->setup_experiment && part->enter_initialization &&
              part->exit_initialization && part->terminate && part->reset && part->set_real && part->get_real &&
              part->set_debug_logging);
@@ -671,40 +708,208 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
     return none_or_unsupported(c, nvr, "fmi2SetString (no String variables)");
 }
 
+static void save_own(const ns_instance *self, ns_saved *own) {
+    own->mode = (int64_t)self->mode;
+    own->steps_done = self->steps_done;
+    own->start_time = self->start_time;
+    own->time = self->time;
+    memcpy(own->drive, self->drive, sizeof own->drive);
+    memcpy(own->slope, self->slope, sizeof own->slope);
+    memcpy(own->parameter, self->parameter, sizeof own->parameter);
+    memcpy(own->rows, self->plan.values, 5 * NS_N_VALUES * sizeof(double));
+}
+
+static void restore_own(ns_instance *self, const ns_saved *own) {
+    self->mode = (ns_mode)own->mode;
+    self->steps_done = own->steps_done;
+    self->start_time = own->start_time;
+    self->time = own->time;
+    memcpy(self->drive, own->drive, sizeof own->drive);
+    memcpy(self->slope, own->slope, sizeof own->slope);
+    memcpy(self->parameter, own->parameter, sizeof own->parameter);
+    memcpy(self->plan.values, own->rows, 5 * NS_N_VALUES * sizeof(double));
+}
+
+static int states_supported(ns_instance *self, const char *function) {
+    if (NS_CAN_GET_AND_SET_STATE) return 1;
+    say(self, fmi2Error, "%s: a part of this system cannot get and set its FMU state, so neither can the system",
+        function);
+    return 0;
+}
+
+/* The system's state: its own fields and every part's state (each part reuses its earlier state in place). */
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    (void)FMUstate;
-    return unsupported(c, "fmi2GetFMUstate");
+    ns_instance *self = (ns_instance *)c;
+    ns_state *state;
+    int64_t i;
+    if (!allowed(self, "fmi2GetFMUstate", NS_INSTANTIATED | NS_INITIALIZATION | NS_STEPPING | NS_TERMINATED) ||
+        !states_supported(self, "fmi2GetFMUstate") || FMUstate == NULL)
+        return fmi2Error;
+    state = (ns_state *)*FMUstate;
+    if (state == NULL) {
+        state = (ns_state *)calloc(1, sizeof(ns_state));
+        if (state == NULL) {
+            say(self, fmi2Error, "fmi2GetFMUstate: out of memory");
+            return fmi2Error;
+        }
+        *FMUstate = state;
+    }
+    for (i = 0; i < NS_N_PARTS; i++) {
+        ns_part *part = &self->parts[i];
+        fmi2Status status = part->get_state(part->component, &state->parts[i]);
+        if (status > fmi2Warning) {
+            say(self, status, "element '%s' (%s): fmi2GetFMUstate returned status %d", part->config->name,
+                part->config->folder, (int)status);
+            return status;
+        }
+    }
+    save_own(self, &state->own);
+    return fmi2OK;
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
-    (void)FMUstate;
-    return unsupported(c, "fmi2SetFMUstate");
+    ns_instance *self = (ns_instance *)c;
+    const ns_state *state = (const ns_state *)FMUstate;
+    int64_t i;
+    if (!allowed(self, "fmi2SetFMUstate", NS_ANY) || !states_supported(self, "fmi2SetFMUstate")) return fmi2Error;
+    if (state == NULL) {
+        say(self, fmi2Error, "fmi2SetFMUstate: no state given");
+        return fmi2Error;
+    }
+    for (i = 0; i < NS_N_PARTS; i++) {
+        ns_part *part = &self->parts[i];
+        fmi2Status status = part->set_state(part->component, state->parts[i]);
+        if (status > fmi2Warning) return part_failed(self, part, "fmi2SetFMUstate", status);
+    }
+    restore_own(self, &state->own);
+    return fmi2OK;
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
-    (void)FMUstate;
-    return unsupported(c, "fmi2FreeFMUstate");
+    ns_instance *self = (ns_instance *)c;
+    ns_state *state;
+    int64_t i;
+    if (!allowed(self, "fmi2FreeFMUstate", NS_ANY) || !states_supported(self, "fmi2FreeFMUstate")) return fmi2Error;
+    if (FMUstate == NULL || *FMUstate == NULL) return fmi2OK;
+    state = (ns_state *)*FMUstate;
+    for (i = 0; i < NS_N_PARTS; i++) {
+        ns_part *part = &self->parts[i];
+        if (state->parts[i] != NULL) part->free_state(part->component, &state->parts[i]);
+    }
+    free(state);
+    *FMUstate = NULL;
+    return fmi2OK;
+}
+
+/* Serialised: the magic text, the system's own fields, then per part its size (uint64_t) and its bytes. */
+static int serializable(ns_instance *self, const char *function) {
+    if (NS_CAN_SERIALIZE_STATE) return 1;
+    say(self, fmi2Error, "%s: a part of this system cannot serialise its FMU state, so neither can the system",
+        function);
+    return 0;
+}
+
+static fmi2Status part_sizes(ns_instance *self, const ns_state *state, size_t sizes[], size_t *total) {
+    int64_t i;
+    *total = sizeof NS_STATE_MAGIC + sizeof(ns_saved);
+    for (i = 0; i < NS_N_PARTS; i++) {
+        ns_part *part = &self->parts[i];
+        fmi2Status status = part->serialized_size(part->component, state->parts[i], &sizes[i]);
+        if (status > fmi2Warning) {
+            say(self, status, "element '%s': fmi2SerializedFMUstateSize returned status %d", part->config->name,
+                (int)status);
+            return status;
+        }
+        *total += sizeof(uint64_t) + sizes[i];
+    }
+    return fmi2OK;
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
-    (void)FMUstate;
-    (void)size;
-    return unsupported(c, "fmi2SerializedFMUstateSize");
+    ns_instance *self = (ns_instance *)c;
+    size_t sizes[NS_N_PARTS];
+    if (!allowed(self, "fmi2SerializedFMUstateSize", NS_ANY) || !serializable(self, "fmi2SerializedFMUstateSize") ||
+        FMUstate == NULL || size == NULL)
+        return fmi2Error;
+    return part_sizes(self, (const ns_state *)FMUstate, sizes, size);
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
-    (void)FMUstate;
-    (void)serializedState;
-    (void)size;
-    return unsupported(c, "fmi2SerializeFMUstate");
+    ns_instance *self = (ns_instance *)c;
+    const ns_state *state = (const ns_state *)FMUstate;
+    size_t sizes[NS_N_PARTS], total, at;
+    int64_t i;
+    fmi2Status status;
+    if (!allowed(self, "fmi2SerializeFMUstate", NS_ANY) || !serializable(self, "fmi2SerializeFMUstate") ||
+        state == NULL || serializedState == NULL)
+        return fmi2Error;
+    status = part_sizes(self, state, sizes, &total);
+    if (status != fmi2OK) return status;
+    if (size < total) {
+        say(self, fmi2Error, "fmi2SerializeFMUstate: %zu bytes given, the state takes %zu", size, total);
+        return fmi2Error;
+    }
+    memcpy(serializedState, NS_STATE_MAGIC, sizeof NS_STATE_MAGIC);
+    memcpy(serializedState + sizeof NS_STATE_MAGIC, &state->own, sizeof(ns_saved));
+    at = sizeof NS_STATE_MAGIC + sizeof(ns_saved);
+    for (i = 0; i < NS_N_PARTS; i++) {
+        ns_part *part = &self->parts[i];
+        uint64_t n = (uint64_t)sizes[i];
+        memcpy(serializedState + at, &n, sizeof n);
+        at += sizeof n;
+        status = part->serialize(part->component, state->parts[i], serializedState + at, sizes[i]);
+        if (status > fmi2Warning) {
+            say(self, status, "element '%s': fmi2SerializeFMUstate returned status %d", part->config->name,
+                (int)status);
+            return status;
+        }
+        at += sizes[i];
+    }
+    return fmi2OK;
 }
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
                                    fmi2FMUstate *FMUstate) {
-    (void)serializedState;
-    (void)size;
-    (void)FMUstate;
-    return unsupported(c, "fmi2DeSerializeFMUstate");
+    ns_instance *self = (ns_instance *)c;
+    ns_state *state;
+    size_t at = sizeof NS_STATE_MAGIC + sizeof(ns_saved);
+    int64_t i;
+    if (!allowed(self, "fmi2DeSerializeFMUstate", NS_ANY) || !serializable(self, "fmi2DeSerializeFMUstate") ||
+        serializedState == NULL || FMUstate == NULL)
+        return fmi2Error;
+    if (size < at || memcmp(serializedState, NS_STATE_MAGIC, sizeof NS_STATE_MAGIC) != 0) {
+        say(self, fmi2Error, "fmi2DeSerializeFMUstate: the %zu bytes are no state of an nnfmu system FMU", size);
+        return fmi2Error;
+    }
+    state = (ns_state *)calloc(1, sizeof(ns_state));
+    if (state == NULL) return fmi2Error;
+    memcpy(&state->own, serializedState + sizeof NS_STATE_MAGIC, sizeof(ns_saved));
+    for (i = 0; i < NS_N_PARTS; i++) {
+        ns_part *part = &self->parts[i];
+        uint64_t n = 0;
+        fmi2Status status = fmi2Error;
+        if (size - at >= sizeof n) {
+            memcpy(&n, serializedState + at, sizeof n);
+            at += sizeof n;
+            if (n <= size - at) status = part->deserialize(part->component, serializedState + at, (size_t)n,
+                                                           &state->parts[i]);
+            at += (size_t)n;
+        }
+        if (status > fmi2Warning) {
+            say(self, fmi2Error, "fmi2DeSerializeFMUstate: element '%s' refused its part of the state",
+                part->config->name);
+            fmi2FreeFMUstate(c, (fmi2FMUstate *)&state);
+            return fmi2Error;
+        }
+    }
+    if (at != size || state->own.mode < NS_INSTANTIATED || state->own.mode > NS_FAILED) {
+        say(self, fmi2Error, "fmi2DeSerializeFMUstate: the %zu bytes are no state of this system FMU", size);
+        fmi2FreeFMUstate(c, (fmi2FMUstate *)&state);
+        return fmi2Error;
+    }
+    if (*FMUstate != NULL) fmi2FreeFMUstate(c, FMUstate);
+    *FMUstate = state;
+    return fmi2OK;
 }
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,

@@ -86,6 +86,8 @@ class SystemPlan:
     settings: CosimSettings
     start_time: float
     stop_time: float | None
+    states: bool  # every part can get and set its FMU state: so can the system FMU
+    serializes: bool  # every part can also serialise it
 
 
 def _drive_units(system: SystemStructure, binding: DriveBinding) -> dict[str, str]:
@@ -248,4 +250,6 @@ def _plan(system, parts, settings, inner_step, binding, units, copy_to) -> Syste
         settings=settings,
         start_time=system.start_time,
         stop_time=system.stop_time,
+        states=all(bool(e.outputs.slave.description.coSimulation.canGetAndSetFMUstate) for e in order),
+        serializes=all(bool(e.outputs.slave.description.coSimulation.canSerializeFMUstate) for e in order),
     )
