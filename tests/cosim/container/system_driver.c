@@ -1,6 +1,7 @@
 /* A small FMI 2 master for the system FMU under the sanitizers: instantiate from the unpacked FMU's resources, run
  * `steps` steps of 1 ms with the drive as inputs and their slopes, read every output, terminate, reset, run again,
- * free; also a refused instantiation and a refused step. Prints the number of unexpected statuses to stderr.
+ * free; also a refused instantiation and a refused step; half way through each run the state is saved, serialised,
+ * deserialised, restored and freed. Prints the number of unexpected statuses to stderr.
  * Usage: system_driver LIBRARY GUID RESOURCE_URI N_INPUTS N_OUTPUTS STEPS */
 #include <dlfcn.h>
 #include <math.h>
@@ -48,6 +49,12 @@ int main(int argc, char **argv) {
         LOAD(fmi2DoStep);
         LOAD(fmi2Terminate);
         LOAD(fmi2Reset);
+        LOAD(fmi2GetFMUstate);
+        LOAD(fmi2SetFMUstate);
+        LOAD(fmi2FreeFMUstate);
+        LOAD(fmi2SerializedFMUstateSize);
+        LOAD(fmi2SerializeFMUstate);
+        LOAD(fmi2DeSerializeFMUstate);
         if (fmi2Instantiate("wrong", fmi2CoSimulation, "{not-the-guid}", argv[3], &callbacks, fmi2False, fmi2True))
             unexpected++;
         c = fmi2Instantiate("system", fmi2CoSimulation, argv[2], argv[3], &callbacks, fmi2False, fmi2False);
@@ -64,6 +71,23 @@ int main(int argc, char **argv) {
             unexpected += fmi2ExitInitializationMode(c) != fmi2OK;
             for (k = 0; k < steps; k++) {
                 double t = k * 1e-3;
+                if (k == steps / 2) {
+                    fmi2FMUstate state = NULL, copy = NULL;
+                    size_t size = 0;
+                    fmi2Byte *bytes;
+                    unexpected += fmi2GetFMUstate(c, &state) != fmi2OK;
+                    unexpected += fmi2GetFMUstate(c, &state) != fmi2OK; /* again, into the same state */
+                    unexpected += fmi2SerializedFMUstateSize(c, state, &size) != fmi2OK;
+                    bytes = (fmi2Byte *)malloc(size + 1);
+                    if (!bytes) return 2;
+                    unexpected += fmi2SerializeFMUstate(c, state, bytes, size) != fmi2OK;
+                    unexpected += fmi2DeSerializeFMUstate(c, bytes, size - 1, &copy) != fmi2Error; /* cut short */
+                    unexpected += fmi2DeSerializeFMUstate(c, bytes, size, &copy) != fmi2OK;
+                    unexpected += fmi2SetFMUstate(c, copy) != fmi2OK;
+                    unexpected += fmi2FreeFMUstate(c, &copy) != fmi2OK;
+                    unexpected += fmi2FreeFMUstate(c, &state) != fmi2OK;
+                    free(bytes);
+                }
                 for (i = 0; i < n_in; i++) {
                     value[i] = 0.01 * sin(2 * 3.14159 * 3 * t);
                     slope[i] = 0.01 * 2 * 3.14159 * 3 * cos(2 * 3.14159 * 3 * t);

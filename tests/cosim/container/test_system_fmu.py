@@ -222,7 +222,8 @@ def test_the_cli_builds_one(at_h: Path, tmp_path: Path) -> None:
 @pytest.mark.slow
 def test_the_system_fmus_master_runs_clean_under_asan_and_ubsan(at_h: Path, tmp_path: Path) -> None:
     """Its shipped sources, compiled with ASan and UBSan, run 200 steps twice (reset between) with a refused
-    instantiation and a refused step: no sanitizer report, no leak, no unexpected status."""
+    instantiation, a refused step and the state saved, serialised (and refused cut short), deserialised, restored
+    and freed: no sanitizer report, no leak, no unexpected status."""
     import zipfile
 
     from fmpy import read_model_description
