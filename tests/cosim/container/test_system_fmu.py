@@ -219,47 +219,66 @@ def test_the_cli_builds_one(at_h: Path, tmp_path: Path) -> None:
     assert "2 FMUs stepped at 0.001 s; 2 inputs, 9 outputs, 4 parameters" in done.stdout and out.is_file()
 
 
-@pytest.mark.slow
-def test_the_system_fmus_master_runs_clean_under_asan_and_ubsan(at_h: Path, tmp_path: Path) -> None:
-    """Its shipped sources, compiled with ASan and UBSan, run 200 steps twice (reset between) with a refused
-    instantiation, a refused step and the state saved, serialised (and refused cut short), deserialised, restored
-    and freed: no sanitizer report, no leak, no unexpected status."""
+SANITIZE = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
+
+
+def driven(fmu: Path, folder: Path, sanitize: list[str], steps: int) -> tuple[list[str], dict[str, str]]:
+    """The command running tests/cosim/container/system_driver.c on the unpacked `fmu` (its binary rebuilt from its
+    shipped sources with `sanitize` when given), and the environment to run it in."""
     import zipfile
 
     from fmpy import read_model_description
 
     from nnfmu.fmu.native.backend import fmi_headers_dir
 
-    fmu = build(at_h, tmp_path / "car.fmu")
-    unpacked = tmp_path / "car"
+    unpacked = folder / "car"
     with zipfile.ZipFile(fmu) as archive:
         archive.extractall(unpacked)
     description = read_model_description(str(fmu))
     sources = unpacked / "sources"
-    sanitize = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
     flags = ["gcc", "-std=c99", "-g", "-Wall", "-Wextra", "-Werror", "-Wvla", *sanitize]
     library = unpacked / "binaries" / "linux64" / f"{description.coSimulation.modelIdentifier}.so"
-    for command in (
-        [*flags, "-fPIC", "-shared", "-DNN_LOOP_HIDDEN", f"-I{sources}", "-o", str(library)]
-        + [str(sources / name) for name in ("system_fmu.c", "inner_loop.c")]
-        + ["-lm", "-ldl"],
-        [*flags, f"-I{fmi_headers_dir()}", "-o", str(tmp_path / "driver")]
-        + [str(Path(__file__).with_name("system_driver.c")), "-ldl", "-lm"],
-    ):
+    commands = [[*flags, f"-I{fmi_headers_dir()}", "-o", str(folder / "driver")]]
+    commands[0] += [str(Path(__file__).with_name("system_driver.c")), "-ldl", "-lm"]
+    if sanitize:
+        commands.append(
+            [*flags, "-fPIC", "-shared", "-DNN_LOOP_HIDDEN", f"-I{sources}", "-o", str(library)]
+            + [str(sources / name) for name in ("system_fmu.c", "inner_loop.c")]
+            + ["-lm", "-ldl"]
+        )
+    for command in commands:
         compiled = subprocess.run(command, capture_output=True, text=True, timeout=120)
         assert compiled.returncode == 0, compiled.stderr
     inputs = sum(v.causality == "input" for v in description.modelVariables)
     outputs = sum(v.causality == "output" for v in description.modelVariables)
-    result = subprocess.run(
-        [str(tmp_path / "driver"), str(library), description.guid, (unpacked / "resources").as_uri()]
-        + [str(inputs), str(outputs), "200"],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env={"ASAN_OPTIONS": "detect_leaks=1", "PATH": "/usr/bin:/bin"},
-    )
+    command = [str(folder / "driver"), str(library), description.guid, (unpacked / "resources").as_uri()]
+    return command + [str(inputs), str(outputs), str(steps)], {
+        "ASAN_OPTIONS": "detect_leaks=1",
+        "PATH": "/usr/bin:/bin",
+    }
+
+
+@pytest.mark.slow
+def test_the_system_fmus_master_runs_clean_under_asan_and_ubsan(at_h: Path, tmp_path: Path) -> None:
+    """Its shipped sources, compiled with ASan and UBSan, run 200 steps twice (reset between) with a refused
+    instantiation, a refused step and the state saved, serialised (and refused cut short), deserialised, restored
+    and freed: no sanitizer report, no leak, no unexpected status."""
+    command, environment = driven(build(at_h, tmp_path / "car.fmu"), tmp_path, SANITIZE, 200)
+    result = subprocess.run(command, capture_output=True, text=True, timeout=300, env=environment)
     assert result.returncode == 0, result.stderr[-4000:]
     assert "0 unexpected statuses" in result.stderr and "runtime error" not in result.stderr
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(shutil.which("valgrind") is None, reason="valgrind is not installed")
+def test_the_system_fmu_runs_clean_under_valgrind(at_h: Path, tmp_path: Path) -> None:
+    """The FMU's own binary (and its parts') under valgrind over the same cycle, 50 steps a run: no error, no leak."""
+    command, environment = driven(build(at_h, tmp_path / "car.fmu"), tmp_path, [], 50)
+    valgrind = ["valgrind", "--error-exitcode=99", "--leak-check=full"]
+    valgrind += ["--errors-for-leak-kinds=definite,indirect,possible", "--show-leak-kinds=definite,indirect,possible"]
+    result = subprocess.run([*valgrind, *command], capture_output=True, text=True, timeout=300, env=environment)
+    assert result.returncode == 0, result.stderr[-4000:]
+    assert "0 unexpected statuses" in result.stderr and "ERROR SUMMARY: 0 errors" in result.stderr
 
 
 def test_libcosim_and_nnfmus_plain_master_step_it_as_a_plain_fmi_loop_does(at_h: Path, tmp_path: Path) -> None:
