@@ -585,7 +585,9 @@ def controller_build(
 def system_build(
     system: Path = typer.Argument(..., help="System: SystemStructure.ssd, its folder, or an .ssp archive."),
     out: str = typer.Option(..., "--out", "-o", help="FMU path to write (one FMI 2 co-simulation FMU)."),
-    fmi: int = typer.Option(2, "--fmi", help="FMI version of the system FMU: 2 (3 is not built yet)."),
+    fmi: int = typer.Option(
+        2, "--fmi", help="FMI version of the system FMU: 2 (3 is not built yet); its FMUs may be 2 or 3."
+    ),
     step: float = typer.Option(1e-3, help="Communication step H [s] the FMU suggests (its default experiment)."),
     inner_step: Optional[float] = typer.Option(
         None, help="Inner step h [s] at which the FMU steps its parts, H a whole multiple of it (default: --step)."

@@ -17,6 +17,7 @@
 #include <string.h>
 
 #include "fmi2Functions.h"
+#include "fmi3FunctionTypes.h"
 #include "inner_loop.h"
 #include "system_config.h"
 
@@ -52,6 +53,28 @@ typedef struct {
     fmi2SerializedFMUstateSizeTYPE *serialized_size;
     fmi2SerializeFMUstateTYPE *serialize;
     fmi2DeSerializeFMUstateTYPE *deserialize;
+    /* An FMI 3 part: `component` points at the part itself and the functions above are adapters (fmi3_* below)
+     * over its own functions here. */
+    fmi3Instance instance3;
+    double tolerance, stop_time; /* FMI 2's SetupExperiment, kept for FMI 3's EnterInitializationMode */
+    int tolerance_defined, stop_time_defined;
+    double start_time;
+    fmi3InstantiateCoSimulationTYPE *instantiate3;
+    fmi3FreeInstanceTYPE *free3;
+    fmi3EnterInitializationModeTYPE *enter3;
+    fmi3ExitInitializationModeTYPE *exit3;
+    fmi3TerminateTYPE *terminate3;
+    fmi3ResetTYPE *reset3;
+    fmi3GetFloat64TYPE *get3;
+    fmi3SetFloat64TYPE *set3;
+    fmi3DoStepTYPE *step3;
+    fmi3SetDebugLoggingTYPE *debug3;
+    fmi3GetFMUStateTYPE *get_state3;
+    fmi3SetFMUStateTYPE *set_state3;
+    fmi3FreeFMUStateTYPE *free_state3;
+    fmi3SerializedFMUStateSizeTYPE *size3;
+    fmi3SerializeFMUStateTYPE *serialize3;
+    fmi3DeserializeFMUStateTYPE *deserialize3;
 } ns_part;
 
 /* What evolves in the system FMU itself; a saved state is this and every part's own state. */
@@ -131,6 +154,119 @@ static void part_logger(fmi2ComponentEnvironment environment, fmi2String instanc
                               category ? category : "", "%s", text);
 }
 
+/* An FMI 3 part's log message (already formatted), passed on with the element's name in front. */
+static void part_logger3(fmi3InstanceEnvironment environment, fmi3Status status, fmi3String category,
+                         fmi3String message) {
+    const ns_part *part = (const ns_part *)environment;
+    char text[NS_MESSAGE];
+    if (part == NULL || part->owner->outer.logger == NULL || message == NULL) return;
+    snprintf(text, sizeof text, "element '%s': %s", part->config->name, message);
+    part->owner->outer.logger(part->owner->outer.componentEnvironment, part->owner->name, (fmi2Status)status,
+                              category ? category : "", "%s", text);
+}
+
+/* FMI 2 calls on an FMI 3 part (`c` is the ns_part): the master calls every part alike. */
+static void fmi3_free(fmi2Component c) {
+    ns_part *part = (ns_part *)c;
+    if (part->instance3 != NULL) part->free3(part->instance3);
+    part->instance3 = NULL;
+}
+
+static fmi2Status fmi3_setup(fmi2Component c, fmi2Boolean tolerance_defined, fmi2Real tolerance, fmi2Real start,
+                             fmi2Boolean stop_defined, fmi2Real stop) {
+    ns_part *part = (ns_part *)c;
+    part->tolerance_defined = tolerance_defined != fmi2False;
+    part->tolerance = tolerance;
+    part->start_time = start;
+    part->stop_time_defined = stop_defined != fmi2False;
+    part->stop_time = stop;
+    return fmi2OK;
+}
+
+static fmi2Status fmi3_enter(fmi2Component c) {
+    ns_part *part = (ns_part *)c;
+    return (fmi2Status)part->enter3(part->instance3, part->tolerance_defined, part->tolerance, part->start_time,
+                                    part->stop_time_defined, part->stop_time);
+}
+
+static fmi2Status fmi3_exit(fmi2Component c) {
+    ns_part *part = (ns_part *)c;
+    return (fmi2Status)part->exit3(part->instance3);
+}
+
+static fmi2Status fmi3_terminate(fmi2Component c) {
+    ns_part *part = (ns_part *)c;
+    return (fmi2Status)part->terminate3(part->instance3);
+}
+
+static fmi2Status fmi3_reset(fmi2Component c) {
+    ns_part *part = (ns_part *)c;
+    return (fmi2Status)part->reset3(part->instance3);
+}
+
+static fmi2Status fmi3_set_real(fmi2Component c, const fmi2ValueReference vr[], size_t n, const fmi2Real value[]) {
+    ns_part *part = (ns_part *)c;
+    return (fmi2Status)part->set3(part->instance3, vr, n, value, n);
+}
+
+static fmi2Status fmi3_get_real(fmi2Component c, const fmi2ValueReference vr[], size_t n, fmi2Real value[]) {
+    ns_part *part = (ns_part *)c;
+    return (fmi2Status)part->get3(part->instance3, vr, n, value, n);
+}
+
+static fmi2Status fmi3_debug(fmi2Component c, fmi2Boolean on, size_t n, const fmi2String categories[]) {
+    ns_part *part = (ns_part *)c;
+    return (fmi2Status)part->debug3(part->instance3, on != fmi2False, n, categories);
+}
+
+static fmi2Status fmi3_get_state(fmi2Component c, fmi2FMUstate *state) {
+    ns_part *part = (ns_part *)c;
+    return (fmi2Status)part->get_state3(part->instance3, state);
+}
+
+static fmi2Status fmi3_set_state(fmi2Component c, fmi2FMUstate state) {
+    ns_part *part = (ns_part *)c;
+    return (fmi2Status)part->set_state3(part->instance3, state);
+}
+
+static fmi2Status fmi3_free_state(fmi2Component c, fmi2FMUstate *state) {
+    ns_part *part = (ns_part *)c;
+    return (fmi2Status)part->free_state3(part->instance3, state);
+}
+
+static fmi2Status fmi3_state_size(fmi2Component c, fmi2FMUstate state, size_t *size) {
+    ns_part *part = (ns_part *)c;
+    return (fmi2Status)part->size3(part->instance3, state, size);
+}
+
+static fmi2Status fmi3_serialize(fmi2Component c, fmi2FMUstate state, fmi2Byte bytes[], size_t size) {
+    ns_part *part = (ns_part *)c;
+    return (fmi2Status)part->serialize3(part->instance3, state, (fmi3Byte *)bytes, size);
+}
+
+static fmi2Status fmi3_deserialize(fmi2Component c, const fmi2Byte bytes[], size_t size, fmi2FMUstate *state) {
+    ns_part *part = (ns_part *)c;
+    return (fmi2Status)part->deserialize3(part->instance3, (const fmi3Byte *)bytes, size, state);
+}
+
+/* The loop's calls on an FMI 3 part (inner_loop.h's signatures; `instance` is the ns_part). */
+static int fmi3_loop_set(void *instance, const uint32_t *references, size_t n, double *values) {
+    ns_part *part = (ns_part *)instance;
+    return (int)part->set3(part->instance3, references, n, values, n);
+}
+
+static int fmi3_loop_get(void *instance, const uint32_t *references, size_t n, double *values) {
+    ns_part *part = (ns_part *)instance;
+    return (int)part->get3(part->instance3, references, n, values, n);
+}
+
+static int fmi3_loop_step(void *instance, double t, double h, int no_prior_state) {
+    ns_part *part = (ns_part *)instance;
+    fmi3Boolean event = fmi3False, terminate = fmi3False, early = fmi3False;
+    fmi3Float64 reached = t;
+    return (int)part->step3(part->instance3, t, h, no_prior_state != 0, &event, &terminate, &early, &reached);
+}
+
 static int allowed(ns_instance *self, const char *function, unsigned modes) {
     if (self == NULL) return 0;
     if (self->mode & modes) return 1;
@@ -190,30 +326,8 @@ static void *symbol(ns_instance *self, ns_part *part, const char *name) {
     return found;
 }
 
-/* Open the part's library and take its functions; 0 on success. */
-static int load_part(ns_instance *self, ns_part *part, const char *folder) {
-    const ns_part_config *c = part->config;
-    char *path = joined(folder, c->folder, "/binaries/" NS_PLATFORM_FOLDER "/", c->identifier);
-    char *library;
-    int flags = RTLD_NOW | RTLD_LOCAL;
-#if defined(RTLD_DEEPBIND) && !defined(__SANITIZE_ADDRESS__)
-    flags |= RTLD_DEEPBIND; /* the part's own FMI functions, not the system FMU's of the same names */
-#endif
-    if (path == NULL) return 1;
-    library = (char *)malloc(strlen(path) + strlen(NS_LIBRARY_SUFFIX) + 1);
-    if (library == NULL) {
-        free(path);
-        return 1;
-    }
-    sprintf(library, "%s%s", path, NS_LIBRARY_SUFFIX);
-    free(path);
-    part->library = dlopen(library, flags);
-    if (part->library == NULL) {
-        say(self, fmi2Error, "element '%s': cannot load %s: %s", c->name, library, dlerror());
-        free(library);
-        return 1;
-    }
-    free(library);
+/* An FMI 2 part's functions; 0 when it has them all. */
+static int load_fmi2(ns_instance *self, ns_part *part) {
     part->instantiate = (fmi2InstantiateTYPE *)symbol(self, part, "fmi2Instantiate");
     part->free_instance = (fmi2FreeInstanceTYPE *)symbol(self, part, "fmi2FreeInstance");
     part->setup_experiment = (fmi2SetupExperimentTYPE *)symbol(self, part, "fmi2SetupExperiment");
@@ -241,16 +355,93 @@ static int load_part(ns_instance *self, ns_part *part, const char *folder) {
              part->set_debug_logging);
 }
 
+/* An FMI 3 part's functions, and the FMI 2 adapters over them; 0 when it has them all. */
+static int load_fmi3(ns_instance *self, ns_part *part) {
+    part->instantiate3 = (fmi3InstantiateCoSimulationTYPE *)symbol(self, part, "fmi3InstantiateCoSimulation");
+    part->free3 = (fmi3FreeInstanceTYPE *)symbol(self, part, "fmi3FreeInstance");
+    part->enter3 = (fmi3EnterInitializationModeTYPE *)symbol(self, part, "fmi3EnterInitializationMode");
+    part->exit3 = (fmi3ExitInitializationModeTYPE *)symbol(self, part, "fmi3ExitInitializationMode");
+    part->terminate3 = (fmi3TerminateTYPE *)symbol(self, part, "fmi3Terminate");
+    part->reset3 = (fmi3ResetTYPE *)symbol(self, part, "fmi3Reset");
+    part->get3 = (fmi3GetFloat64TYPE *)symbol(self, part, "fmi3GetFloat64");
+    part->set3 = (fmi3SetFloat64TYPE *)symbol(self, part, "fmi3SetFloat64");
+    part->step3 = (fmi3DoStepTYPE *)symbol(self, part, "fmi3DoStep");
+    part->debug3 = (fmi3SetDebugLoggingTYPE *)symbol(self, part, "fmi3SetDebugLogging");
+    part->free_instance = fmi3_free;
+    part->setup_experiment = fmi3_setup;
+    part->enter_initialization = fmi3_enter;
+    part->exit_initialization = fmi3_exit;
+    part->terminate = fmi3_terminate;
+    part->reset = fmi3_reset;
+    part->set_real = fmi3_set_real;
+    part->get_real = fmi3_get_real;
+    part->set_debug_logging = fmi3_debug;
+    if (NS_CAN_GET_AND_SET_STATE) {
+        part->get_state3 = (fmi3GetFMUStateTYPE *)symbol(self, part, "fmi3GetFMUState");
+        part->set_state3 = (fmi3SetFMUStateTYPE *)symbol(self, part, "fmi3SetFMUState");
+        part->free_state3 = (fmi3FreeFMUStateTYPE *)symbol(self, part, "fmi3FreeFMUState");
+        if (!(part->get_state3 && part->set_state3 && part->free_state3)) return 1;
+        part->get_state = fmi3_get_state;
+        part->set_state = fmi3_set_state;
+        part->free_state = fmi3_free_state;
+    }
+    if (NS_CAN_SERIALIZE_STATE) {
+        part->size3 = (fmi3SerializedFMUStateSizeTYPE *)symbol(self, part, "fmi3SerializedFMUStateSize");
+        part->serialize3 = (fmi3SerializeFMUStateTYPE *)symbol(self, part, "fmi3SerializeFMUState");
+        part->deserialize3 = (fmi3DeserializeFMUStateTYPE *)symbol(self, part, "fmi3DeserializeFMUState");
+        if (!(part->size3 && part->serialize3 && part->deserialize3)) return 1;
+        part->serialized_size = fmi3_state_size;
+        part->serialize = fmi3_serialize;
+        part->deserialize = fmi3_deserialize;
+    }
+    return !(part->instantiate3 && part->free3 && part->enter3 && part->exit3 && part->terminate3 && part->reset3 &&
+             part->get3 && part->set3 && part->step3 && part->debug3);
+}
+
+/* Open the part's library and take its functions; 0 on success. */
+static int load_part(ns_instance *self, ns_part *part, const char *folder) {
+    const ns_part_config *c = part->config;
+    char *path = joined(folder, c->folder, "/binaries/", c->platform);
+    char *library;
+    int flags = RTLD_NOW | RTLD_LOCAL;
+#if defined(RTLD_DEEPBIND) && !defined(__SANITIZE_ADDRESS__)
+    flags |= RTLD_DEEPBIND; /* the part's own FMI functions, not the system FMU's of the same names */
+#endif
+    if (path == NULL) return 1;
+    library = (char *)malloc(strlen(path) + strlen(c->identifier) + strlen(NS_LIBRARY_SUFFIX) + 2);
+    if (library == NULL) {
+        free(path);
+        return 1;
+    }
+    sprintf(library, "%s/%s%s", path, c->identifier, NS_LIBRARY_SUFFIX);
+    free(path);
+    part->library = dlopen(library, flags);
+    if (part->library == NULL) {
+        say(self, fmi2Error, "element '%s': cannot load %s: %s", c->name, library, dlerror());
+        free(library);
+        return 1;
+    }
+    free(library);
+    return c->fmi_version == 3 ? load_fmi3(self, part) : load_fmi2(self, part);
+}
+
 /* The loop's element for part i: its buffers carved from `next`, its functions from the part's library. */
 static double *wire_element(ns_instance *self, int64_t i, double *next) {
     const ns_part_config *c = self->parts[i].config;
     nn_element *e = &self->elements[i];
     e->instance = self->parts[i].component;
-    e->set_real = (nn_transfer)dlsym(self->parts[i].library, "fmi2SetReal");
-    e->get_real = (nn_transfer)dlsym(self->parts[i].library, "fmi2GetReal");
-    e->do_step = (nn_do_step)dlsym(self->parts[i].library, "fmi2DoStep");
-    e->set_slopes = c->takes_slopes ? (nn_set_slopes)dlsym(self->parts[i].library, "fmi2SetRealInputDerivatives")
-                                    : NULL;
+    if (c->fmi_version == 3) {
+        e->set_real = fmi3_loop_set;
+        e->get_real = fmi3_loop_get;
+        e->do_step = fmi3_loop_step;
+        e->set_slopes = NULL; /* FMI 3 co-simulation takes no input derivatives */
+    } else {
+        e->set_real = (nn_transfer)dlsym(self->parts[i].library, "fmi2SetReal");
+        e->get_real = (nn_transfer)dlsym(self->parts[i].library, "fmi2GetReal");
+        e->do_step = (nn_do_step)dlsym(self->parts[i].library, "fmi2DoStep");
+        e->set_slopes =
+            c->takes_slopes ? (nn_set_slopes)dlsym(self->parts[i].library, "fmi2SetRealInputDerivatives") : NULL;
+    }
     e->input_references = c->input_references;
     e->n_coupled = c->n_coupled;
     e->n_driven = c->n_driven;
@@ -358,19 +549,32 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
             free_instance(self);
             return NULL;
         }
-        part->callbacks.logger = part_logger;
-        part->callbacks.allocateMemory = functions->allocateMemory ? functions->allocateMemory : calloc;
-        part->callbacks.freeMemory = functions->freeMemory ? functions->freeMemory : free;
-        part->callbacks.stepFinished = NULL;
-        part->callbacks.componentEnvironment = part;
-        resources = joined(fmuResourceLocation, part->config->folder, "/resources", "");
-        if (resources == NULL) {
-            free(folder);
-            free_instance(self);
-            return NULL;
+        if (part->config->fmi_version == 3) { /* a path with a trailing separator */
+            resources = joined(folder, part->config->folder, "/resources/", "");
+            if (resources == NULL) {
+                free(folder);
+                free_instance(self);
+                return NULL;
+            }
+            part->instance3 = part->instantiate3(part->config->name, part->config->guid, resources, fmi3False,
+                                                 loggingOn != fmi2False, fmi3False, fmi3False, NULL, 0, part,
+                                                 part_logger3, NULL);
+            part->component = part->instance3 != NULL ? (fmi2Component)part : NULL;
+        } else { /* a URI */
+            part->callbacks.logger = part_logger;
+            part->callbacks.allocateMemory = functions->allocateMemory ? functions->allocateMemory : calloc;
+            part->callbacks.freeMemory = functions->freeMemory ? functions->freeMemory : free;
+            part->callbacks.stepFinished = NULL;
+            part->callbacks.componentEnvironment = part;
+            resources = joined(fmuResourceLocation, part->config->folder, "/resources", "");
+            if (resources == NULL) {
+                free(folder);
+                free_instance(self);
+                return NULL;
+            }
+            part->component = part->instantiate(part->config->name, fmi2CoSimulation, part->config->guid, resources,
+                                                &part->callbacks, fmi2False, loggingOn);
         }
-        part->component = part->instantiate(part->config->name, fmi2CoSimulation, part->config->guid, resources,
-                                            &part->callbacks, fmi2False, loggingOn);
         free(resources);
         if (part->component == NULL) {
             say(self, fmi2Error, "element '%s' (%s): fmi2Instantiate failed", part->config->name,

@@ -21,7 +21,13 @@ from nnfmu.fmu.names import c_identifier
 from nnfmu.resources import templates_dir
 
 HEADERS = ("inner_loop.h",)
-FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+FMI_HEADERS = (
+    "fmi2Functions.h",
+    "fmi2FunctionTypes.h",
+    "fmi2TypesPlatform.h",
+    "fmi3FunctionTypes.h",
+    "fmi3PlatformTypes.h",
+)
 DEFINES = ("-DNN_LOOP_HIDDEN",)  # the loop's functions stay inside the library: only the FMI functions are exported
 LIBRARIES = ("-lm", "-ldl")
 
@@ -70,7 +76,7 @@ def build_system_fmu(
         for name in FMI_HEADERS:
             shutil.copyfile(fmi_headers_dir() / name, sources / name)
         folder = target.folder(2)
-        (sources / CONFIG_NAME).write_text(render_config(plan, identifier, guid, folder, target.suffix), "utf-8")
+        (sources / CONFIG_NAME).write_text(render_config(plan, identifier, guid, target.suffix), "utf-8")
         (tree / "modelDescription.xml").write_text(render_model_description(plan, identifier, guid, step), "utf-8")
         compile_shared_library(
             target,

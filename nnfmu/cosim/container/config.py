@@ -33,7 +33,7 @@ def _array(lines: list[str], c_type: str, name: str, values: Sequence, render=st
     return name
 
 
-def render_config(plan: SystemPlan, identifier: str, guid: str, platform_folder: str, suffix: str) -> str:
+def render_config(plan: SystemPlan, identifier: str, guid: str, suffix: str) -> str:
     """The header's text."""
     settings = plan.settings
     n_values = len(plan.outputs)
@@ -47,7 +47,6 @@ def render_config(plan: SystemPlan, identifier: str, guid: str, platform_folder:
         "",
         f"#define NS_MODEL_IDENTIFIER {_string(identifier)}",
         f"#define NS_GUID {_string(guid)}",
-        f"#define NS_PLATFORM_FOLDER {_string(platform_folder)}",
         f"#define NS_LIBRARY_SUFFIX {_string(suffix)}",
         f"#define NS_N_PARTS {len(plan.parts)}",
         f"#define NS_N_VALUES {n_values}",
@@ -69,7 +68,9 @@ def render_config(plan: SystemPlan, identifier: str, guid: str, platform_folder:
         "    const char *name;",
         "    const char *folder; /* under resources/ */",
         "    const char *identifier;",
-        "    const char *guid;",
+        "    const char *guid; /* FMI 3: the instantiation token */",
+        "    const char *platform; /* the folder under its binaries/ */",
+        "    int64_t fmi_version;",
         "    int64_t n_coupled, n_driven, n_outputs, span_start, is_driven, feedthrough, takes_slopes;",
         "    const uint32_t *input_references;",
         "    const int64_t *sources;",
@@ -104,6 +105,8 @@ def render_config(plan: SystemPlan, identifier: str, guid: str, platform_folder:
             _string(part.folder),
             _string(part.identifier),
             _string(part.guid),
+            _string(part.platform),
+            str(part.fmi_version),
             str(part.n_coupled),
             str(n_inputs - part.n_coupled),
             str(len(part.output_references)),

@@ -26,7 +26,9 @@ class Part:
     name: str
     folder: str  # relative to the system FMU's resources/
     identifier: str
-    guid: str
+    guid: str  # FMI 3: the instantiation token
+    fmi_version: int
+    platform: str  # the folder of its binary under binaries/
     input_references: tuple[int, ...]  # coupled inputs, then the drive's (the driven part)
     n_coupled: int
     sources: tuple[int, ...]
@@ -126,12 +128,6 @@ def plan_system(
     )
     parts = _System(system, drive, settings, binding=binding)
     try:
-        versions = [name for name, slave in parts.slaves.items() if slave.fmi_version != 2]
-        if versions:
-            raise CosimError(
-                f"system {system.name!r}: element(s) {', '.join(versions)} are FMI 3; a system FMU "
-                "holds FMI 2 co-simulation FMUs"
-            )
         parts.check_periods(system.name, inner_step)
         if parts.derivatives is not None and parts.derivatives.active:
             raise CosimError(
@@ -164,13 +160,13 @@ def _plan(system, parts, settings, inner_step, binding, units, copy_to) -> Syste
     order = [element for group in parts.groups for element in group]
     index = {id(element): i for i, element in enumerate(order)}
     position = {e.name: i for i, e in enumerate(order)}
-    platform = host_platform_of().folder(2)
+    host = host_platform_of()
     built = []
     for i, element in enumerate(order):
         slave = element.outputs.slave
         folder = f"{FOLDER}/{i}"
         if copy_to is not None:
-            _copy_part(Path(slave.directory), copy_to / folder, platform, element.name)
+            _copy_part(Path(slave.directory), copy_to / folder, host.folder(slave.fmi_version), element.name)
         inputs = element.inputs
         conversions = inputs is not None and inputs.scale is not None
         outputs = element.outputs
@@ -179,7 +175,9 @@ def _plan(system, parts, settings, inner_step, binding, units, copy_to) -> Syste
                 name=element.name,
                 folder=folder,
                 identifier=slave.description.coSimulation.modelIdentifier,
-                guid=slave.description.guid,
+                guid=slave.description.guid if slave.fmi_version == 2 else slave.description.instantiationToken,
+                fmi_version=slave.fmi_version,
+                platform=host.folder(slave.fmi_version),
                 input_references=tuple(slave.value_references(inputs.names)) if inputs is not None else (),
                 n_coupled=len(element.sources),
                 sources=tuple(int(s) for s in element.sources),
