@@ -584,9 +584,11 @@ def controller_build(
 @system_app.command("build")
 def system_build(
     system: Path = typer.Argument(..., help="System: SystemStructure.ssd, its folder, or an .ssp archive."),
-    out: str = typer.Option(..., "--out", "-o", help="FMU path to write (one FMI 2 co-simulation FMU)."),
+    out: str = typer.Option(..., "--out", "-o", help="FMU path to write (one co-simulation FMU)."),
     fmi: int = typer.Option(
-        2, "--fmi", help="FMI version of the system FMU: 2 (3 is not built yet); its FMUs may be 2 or 3."
+        2,
+        "--fmi",
+        help="FMI version of the system FMU: 2 or 3 (FMI 3 has no input derivatives: the drive is held over each step); its FMUs may be 2 or 3.",
     ),
     step: float = typer.Option(1e-3, help="Communication step H [s] the FMU suggests (its default experiment)."),
     inner_step: Optional[float] = typer.Option(

@@ -26,9 +26,10 @@ def run_system_build(
     allow_outside: bool = False,
 ) -> SystemPlan:
     """Build the system (.ssd, its folder or .ssp) into the FMU `out` stepping its parts at `inner_step` [s] (None:
-    `step` [s], the default communication step) with the coupling `settings` (their step is not used)."""
-    if fmi != 2:
-        raise SettingsError(f"--fmi {fmi}: a system FMU is written for FMI 2 (FMI 3 is not built yet)")
+    `step` [s], the default communication step) with the coupling `settings` (their step is not used), as an FMU of
+    FMI version `fmi` (2 or 3)."""
+    if fmi not in (2, 3):
+        raise SettingsError(f"--fmi {fmi}: choose 2 or 3")
     settings = settings if settings is not None else CosimSettings(port_derivatives=False)
     with open_system(ssd_path, allow_outside) as system:
-        return build_system_fmu(system, out, step, inner_step, settings, vehicle_binding(system))
+        return build_system_fmu(system, out, step, inner_step, settings, vehicle_binding(system), fmi)

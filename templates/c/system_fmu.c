@@ -16,7 +16,15 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Compiled alone: the FMI 2 interface, exported. Included by system_fmu3.c (NS_FMI3_GLUE): the same functions, static,
+ * under its FMI 3 interface. */
+#ifdef NS_FMI3_GLUE
+#define NS_FMI2_API static __attribute__((unused))
+#include "fmi2FunctionTypes.h"
+#else
+#define NS_FMI2_API
 #include "fmi2Functions.h"
+#endif
 #include "fmi3FunctionTypes.h"
 #include "inner_loop.h"
 #include "system_config.h"
@@ -403,10 +411,6 @@ static int load_part(ns_instance *self, ns_part *part, const char *folder) {
     const ns_part_config *c = part->config;
     char *path = joined(folder, c->folder, "/binaries/", c->platform);
     char *library;
-    int flags = RTLD_NOW | RTLD_LOCAL;
-#if defined(RTLD_DEEPBIND) && !defined(__SANITIZE_ADDRESS__)
-    flags |= RTLD_DEEPBIND; /* the part's own FMI functions, not the system FMU's of the same names */
-#endif
     if (path == NULL) return 1;
     library = (char *)malloc(strlen(path) + strlen(c->identifier) + strlen(NS_LIBRARY_SUFFIX) + 2);
     if (library == NULL) {
@@ -415,7 +419,7 @@ static int load_part(ns_instance *self, ns_part *part, const char *folder) {
     }
     sprintf(library, "%s/%s%s", path, c->identifier, NS_LIBRARY_SUFFIX);
     free(path);
-    part->library = dlopen(library, flags);
+    part->library = dlopen(library, RTLD_NOW | RTLD_LOCAL);
     if (part->library == NULL) {
         say(self, fmi2Error, "element '%s': cannot load %s: %s", c->name, library, dlerror());
         free(library);
@@ -492,11 +496,13 @@ static void free_instance(ns_instance *self) {
     free(self);
 }
 
+#ifndef NS_FMI3_GLUE
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
 
 const char *fmi2GetVersion(void) { return fmi2Version; }
+#endif
 
-fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
+NS_FMI2_API fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
                               fmi2Boolean visible, fmi2Boolean loggingOn) {
     ns_instance *self;
@@ -611,9 +617,9 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     return self;
 }
 
-void fmi2FreeInstance(fmi2Component c) { free_instance((ns_instance *)c); }
+NS_FMI2_API void fmi2FreeInstance(fmi2Component c) { free_instance((ns_instance *)c); }
 
-fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
+NS_FMI2_API fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
                                const fmi2String categories[]) {
     ns_instance *self = (ns_instance *)c;
     int64_t i;
@@ -628,7 +634,7 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
     return worst > fmi2Warning ? fmi2Warning : worst; /* a part refusing categories does not fail the system */
 }
 
-fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+NS_FMI2_API fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
     ns_instance *self = (ns_instance *)c;
     int64_t i;
@@ -647,7 +653,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
     return fmi2OK;
 }
 
-fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
+NS_FMI2_API fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
     ns_instance *self = (ns_instance *)c;
     int64_t i;
     if (!allowed(self, "fmi2EnterInitializationMode", NS_INSTANTIATED)) return fmi2Error;
@@ -662,7 +668,7 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
 
 /* What the master does at t0 (master.py: _System.initialise): the drive into the driven part, the connections passed
  * as often as there are parts, initialisation ended, every output read, the refresh, and t0 as both t_n and t_{n-1}. */
-fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
+NS_FMI2_API fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     ns_instance *self = (ns_instance *)c;
     int64_t i, pass;
     fmi2Status status;
@@ -722,7 +728,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     return fmi2OK;
 }
 
-fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
+NS_FMI2_API fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
                       fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
     ns_instance *self = (ns_instance *)c;
     double h = communicationStepSize, inner, exact;
@@ -763,7 +769,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     return fmi2OK;
 }
 
-fmi2Status fmi2Terminate(fmi2Component c) {
+NS_FMI2_API fmi2Status fmi2Terminate(fmi2Component c) {
     ns_instance *self = (ns_instance *)c;
     int64_t i;
     fmi2Status worst = fmi2OK;
@@ -777,7 +783,7 @@ fmi2Status fmi2Terminate(fmi2Component c) {
     return worst > fmi2Warning ? fmi2Warning : worst;
 }
 
-fmi2Status fmi2Reset(fmi2Component c) {
+NS_FMI2_API fmi2Status fmi2Reset(fmi2Component c) {
     ns_instance *self = (ns_instance *)c;
     int64_t i;
     if (!allowed(self, "fmi2Reset", NS_ANY)) return fmi2Error;
@@ -795,7 +801,7 @@ fmi2Status fmi2Reset(fmi2Component c) {
     return apply_parameters(self);
 }
 
-fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
+NS_FMI2_API fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
     ns_instance *self = (ns_instance *)c;
     size_t i;
     if (!allowed(self, "fmi2GetReal", NS_ANY)) return fmi2Error;
@@ -816,7 +822,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     return fmi2OK;
 }
 
-fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
+NS_FMI2_API fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
     ns_instance *self = (ns_instance *)c;
     size_t i;
     if (!allowed(self, "fmi2SetReal", NS_INSTANTIATED | NS_INITIALIZATION | NS_STEPPING)) return fmi2Error;
@@ -849,7 +855,7 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     return fmi2OK;
 }
 
-fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+NS_FMI2_API fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                        const fmi2Integer order[], const fmi2Real value[]) {
     ns_instance *self = (ns_instance *)c;
     size_t i;
@@ -876,37 +882,37 @@ static fmi2Status none_or_unsupported(fmi2Component c, size_t n, const char *fun
     return n == 0 ? fmi2OK : unsupported(c, function);
 }
 
-fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[]) {
+NS_FMI2_API fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[]) {
     (void)vr;
     (void)value;
     return none_or_unsupported(c, nvr, "fmi2GetInteger (no Integer variables)");
 }
 
-fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[]) {
+NS_FMI2_API fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[]) {
     (void)vr;
     (void)value;
     return none_or_unsupported(c, nvr, "fmi2GetBoolean (no Boolean variables)");
 }
 
-fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
+NS_FMI2_API fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
     (void)vr;
     (void)value;
     return none_or_unsupported(c, nvr, "fmi2GetString (no String variables)");
 }
 
-fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[]) {
+NS_FMI2_API fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[]) {
     (void)vr;
     (void)value;
     return none_or_unsupported(c, nvr, "fmi2SetInteger (no Integer variables)");
 }
 
-fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[]) {
+NS_FMI2_API fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[]) {
     (void)vr;
     (void)value;
     return none_or_unsupported(c, nvr, "fmi2SetBoolean (no Boolean variables)");
 }
 
-fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[]) {
+NS_FMI2_API fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[]) {
     (void)vr;
     (void)value;
     return none_or_unsupported(c, nvr, "fmi2SetString (no String variables)");
@@ -942,7 +948,7 @@ static int states_supported(ns_instance *self, const char *function) {
 }
 
 /* The system's state: its own fields and every part's state (each part reuses its earlier state in place). */
-fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+NS_FMI2_API fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     ns_instance *self = (ns_instance *)c;
     ns_state *state;
     int64_t i;
@@ -971,7 +977,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     return fmi2OK;
 }
 
-fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
+NS_FMI2_API fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
     ns_instance *self = (ns_instance *)c;
     const ns_state *state = (const ns_state *)FMUstate;
     int64_t i;
@@ -989,7 +995,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
     return fmi2OK;
 }
 
-fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+NS_FMI2_API fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
     ns_instance *self = (ns_instance *)c;
     ns_state *state;
     int64_t i;
@@ -1029,7 +1035,7 @@ static fmi2Status part_sizes(ns_instance *self, const ns_state *state, size_t si
     return fmi2OK;
 }
 
-fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
+NS_FMI2_API fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
     ns_instance *self = (ns_instance *)c;
     size_t sizes[NS_N_PARTS];
     if (!allowed(self, "fmi2SerializedFMUstateSize", NS_ANY) || !serializable(self, "fmi2SerializedFMUstateSize") ||
@@ -1038,7 +1044,7 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, si
     return part_sizes(self, (const ns_state *)FMUstate, sizes, size);
 }
 
-fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
+NS_FMI2_API fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
     ns_instance *self = (ns_instance *)c;
     const ns_state *state = (const ns_state *)FMUstate;
     size_t sizes[NS_N_PARTS], total, at;
@@ -1072,7 +1078,7 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
     return fmi2OK;
 }
 
-fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
+NS_FMI2_API fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
                                    fmi2FMUstate *FMUstate) {
     ns_instance *self = (ns_instance *)c;
     ns_state *state;
@@ -1116,7 +1122,7 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     return fmi2OK;
 }
 
-fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
+NS_FMI2_API fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
                                         const fmi2ValueReference vKnown_ref[], size_t nKnown,
                                         const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
     (void)vUnknown_ref;
@@ -1128,7 +1134,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
     return unsupported(c, "fmi2GetDirectionalDerivative");
 }
 
-fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+NS_FMI2_API fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                         const fmi2Integer order[], fmi2Real value[]) {
     (void)vr;
     (void)nvr;
@@ -1137,15 +1143,15 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
     return unsupported(c, "fmi2GetRealOutputDerivatives (maxOutputDerivativeOrder is 0)");
 }
 
-fmi2Status fmi2CancelStep(fmi2Component c) { return unsupported(c, "fmi2CancelStep (doStep completes at once)"); }
+NS_FMI2_API fmi2Status fmi2CancelStep(fmi2Component c) { return unsupported(c, "fmi2CancelStep (doStep completes at once)"); }
 
-fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
+NS_FMI2_API fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
     (void)s;
     (void)value;
     return unsupported(c, "fmi2GetStatus (doStep completes at once)");
 }
 
-fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
+NS_FMI2_API fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
     ns_instance *self = (ns_instance *)c;
     if (!allowed(self, "fmi2GetRealStatus", NS_ANY) || value == NULL) return fmi2Error;
     if (s != fmi2LastSuccessfulTime) return unsupported(c, "fmi2GetRealStatus (except LastSuccessfulTime)");
@@ -1153,13 +1159,13 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *
     return fmi2OK;
 }
 
-fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
+NS_FMI2_API fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
     (void)s;
     (void)value;
     return unsupported(c, "fmi2GetIntegerStatus");
 }
 
-fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
+NS_FMI2_API fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
     ns_instance *self = (ns_instance *)c;
     if (!allowed(self, "fmi2GetBooleanStatus", NS_ANY) || value == NULL) return fmi2Error;
     if (s != fmi2Terminated) return unsupported(c, "fmi2GetBooleanStatus for a kind other than Terminated");
@@ -1167,7 +1173,7 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boo
     return fmi2OK;
 }
 
-fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
+NS_FMI2_API fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
     (void)s;
     (void)value;
     return unsupported(c, "fmi2GetStringStatus");

@@ -16,15 +16,16 @@ from nnfmu.cosim.container.model_description import SOURCES, render_model_descri
 from nnfmu.cosim.container.plan import SystemPlan, plan_system
 from nnfmu.cosim.master import CosimError, CosimSettings
 from nnfmu.cosim.ssp import SystemStructure
-from nnfmu.fmu.model_description import GENERATION_TOOL
+from nnfmu.fmu.model_description import GENERATION_TOOL, render_build_description
 from nnfmu.fmu.names import c_identifier
 from nnfmu.resources import templates_dir
 
-HEADERS = ("inner_loop.h",)
+HEADERS = ("inner_loop.h", "system_fmu.c")  # system_fmu.c: compiled for FMI 2, included by system_fmu3.c
 FMI_HEADERS = (
     "fmi2Functions.h",
     "fmi2FunctionTypes.h",
     "fmi2TypesPlatform.h",
+    "fmi3Functions.h",
     "fmi3FunctionTypes.h",
     "fmi3PlatformTypes.h",
 )
@@ -45,16 +46,20 @@ def build_system_fmu(
     inner_step: float | None = None,
     settings: CosimSettings | None = None,
     binding: DriveBinding | None = None,
+    fmi: int = 2,
 ) -> SystemPlan:
     """Write the system FMU of `system` to `out` (a .fmu, replaced atomically) with the default communication step
     `step` [s] and the inner step `inner_step` [s] (None: `step`); `settings` pick the scheme (its step is ignored),
-    `binding` the drive inputs (None: the one element with free inputs). Returns the plan. CosimError naming the
-    element or setting that cannot be built; CompilerError without a host C compiler."""
+    `binding` the drive inputs (None: the one element with free inputs), `fmi` the system FMU's FMI version (2 or 3;
+    its parts may be either). Returns the plan. CosimError naming the element or setting that cannot be built;
+    CompilerError without a host C compiler."""
     from nnfmu.fmu.native.backend import fmi_headers_dir
     from nnfmu.fmu.native.compiler import compile_shared_library
     from nnfmu.fmu.native.toolchain import host_target
     from nnfmu.fmu.package import package_fmu
 
+    if fmi not in SOURCES:
+        raise CosimError(f"FMI version {fmi!r}: a system FMU is FMI 2 or 3")
     inner = step if inner_step is None else inner_step
     for name, value in (("step", step), ("inner step", inner)):
         if not (value > 0 and value < float("inf")):
@@ -71,16 +76,22 @@ def build_system_fmu(
         guid = _guid(plan, identifier)
         sources = tree / "sources"
         sources.mkdir(parents=True)
-        for name in (*SOURCES, *HEADERS):
+        for name in dict.fromkeys((*SOURCES[fmi], *HEADERS)):
             shutil.copyfile(templates_dir() / "c" / name, sources / name)
         for name in FMI_HEADERS:
             shutil.copyfile(fmi_headers_dir() / name, sources / name)
-        folder = target.folder(2)
+        folder = target.folder(fmi)
         (sources / CONFIG_NAME).write_text(render_config(plan, identifier, guid, target.suffix), "utf-8")
-        (tree / "modelDescription.xml").write_text(render_model_description(plan, identifier, guid, step), "utf-8")
+        description = render_model_description(plan, identifier, guid, step, fmi)
+        (tree / "modelDescription.xml").write_text(description, "utf-8")
+        if fmi == 3:
+            build = render_build_description(identifier, list(SOURCES[3])).replace(
+                'name="m"/>', 'name="m"/>\n    <Library name="dl"/>'
+            )
+            (sources / "buildDescription.xml").write_text(build, "utf-8")
         compile_shared_library(
             target,
-            [sources / name for name in SOURCES],
+            [sources / name for name in SOURCES[fmi]],
             sources,
             tree / "binaries" / folder / f"{identifier}{target.suffix}",
             defines=DEFINES,

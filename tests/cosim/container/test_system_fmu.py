@@ -66,9 +66,9 @@ def at_quarter_h(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return quarter_car(tmp_path_factory.mktemp("system_h4"), H / 4)
 
 
-def build(ssd: Path, out: Path, inner_step: float | None = None, **settings: object) -> Path:
+def build(ssd: Path, out: Path, inner_step: float | None = None, fmi: int = 2, **settings: object) -> Path:
     with open_system(ssd) as system:
-        build_system_fmu(system, out, H, inner_step, CosimSettings(**NO_DERIVATIVES, **settings))
+        build_system_fmu(system, out, H, inner_step, CosimSettings(**NO_DERIVATIVES, **settings), fmi=fmi)
     return out
 
 
@@ -161,6 +161,18 @@ def test_the_system_fmu_validates_and_runs_in_fmpys_own_loop(at_h: Path, tmp_pat
     )
     result = simulate_fmu(str(fmu), stop_time=DURATION, output_interval=H, input=signals, output=["damper_force"])
     assert np.all(np.isfinite(result["damper_force"])) and np.ptp(result["damper_force"]) > 100.0
+
+
+def test_an_fmi3_system_fmu_validates_and_steps_as_the_fmi2_one_with_the_drive_held(at_h: Path, tmp_path: Path) -> None:
+    """`--fmi 3`: fmpy's validation finds no problem; FMI 3 co-simulation has no input derivatives, so it holds the
+    drive over each step, and gives the FMI 2 system FMU's numbers when that is given no slopes either."""
+    fmu3 = build(at_h, tmp_path / "car3.fmu", fmi=3)
+    assert validate_fmu(str(fmu3)) == []
+    result, _ = run(fmu3, slopes=False)
+    reference, _ = run(build(at_h, tmp_path / "car2.fmu"), slopes=False)
+    errors = worst(result, reference)
+    assert max(errors.values()) <= TOLERANCE, errors
+    assert np.ptp(result["damper_force"]) > 100.0
 
 
 def test_a_parts_failure_is_the_system_fmus_error_naming_the_element(at_h: Path, tmp_path: Path) -> None:
