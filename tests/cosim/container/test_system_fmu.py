@@ -253,9 +253,10 @@ def test_the_cli_builds_one(at_h: Path, tmp_path: Path) -> None:
 SANITIZE = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
 
 
-def driven(fmu: Path, folder: Path, sanitize: list[str], steps: int) -> tuple[list[str], dict[str, str]]:
-    """The command running tests/cosim/container/system_driver.c on the unpacked `fmu` (its binary rebuilt from its
-    shipped sources with `sanitize` when given), and the environment to run it in."""
+def driven(fmu: Path, folder: Path, sanitize: list[str], steps: int, fmi: int = 2) -> tuple[list[str], dict[str, str]]:
+    """The command running tests/cosim/container/system_driver.c (FMI 2) or system_driver3.c (FMI 3) on the unpacked
+    `fmu` (its binary rebuilt from its shipped sources with `sanitize` when given), and the environment to run it
+    in."""
     import zipfile
 
     from fmpy import read_model_description
@@ -268,35 +269,39 @@ def driven(fmu: Path, folder: Path, sanitize: list[str], steps: int) -> tuple[li
     description = read_model_description(str(fmu))
     sources = unpacked / "sources"
     flags = ["gcc", "-std=c99", "-g", "-Wall", "-Wextra", "-Werror", "-Wvla", *sanitize]
-    library = unpacked / "binaries" / "linux64" / f"{description.coSimulation.modelIdentifier}.so"
-    commands = [[*flags, f"-I{fmi_headers_dir()}", "-o", str(folder / "driver")]]
-    commands[0] += [str(Path(__file__).with_name("system_driver.c")), "-ldl", "-lm"]
+    platform = "linux64" if fmi == 2 else "x86_64-linux"
+    library = unpacked / "binaries" / platform / f"{description.coSimulation.modelIdentifier}.so"
+    driver = Path(__file__).with_name("system_driver.c" if fmi == 2 else "system_driver3.c")
+    commands = [[*flags, f"-I{fmi_headers_dir()}", "-o", str(folder / "driver"), str(driver), "-ldl", "-lm"]]
     if sanitize:
         commands.append(
             [*flags, "-fPIC", "-shared", "-DNN_LOOP_HIDDEN", f"-I{sources}", "-o", str(library)]
-            + [str(sources / name) for name in ("system_fmu.c", "inner_loop.c")]
+            + [str(sources / name) for name in ("system_fmu.c" if fmi == 2 else "system_fmu3.c", "inner_loop.c")]
             + ["-lm", "-ldl"]
         )
     for command in commands:
         compiled = subprocess.run(command, capture_output=True, text=True, timeout=120)
         assert compiled.returncode == 0, compiled.stderr
-    inputs = sum(v.causality == "input" for v in description.modelVariables)
-    outputs = sum(v.causality == "output" for v in description.modelVariables)
-    command = [str(folder / "driver"), str(library), description.guid, (unpacked / "resources").as_uri()]
-    return command + [str(inputs), str(outputs), str(steps)], {
-        "ASAN_OPTIONS": "detect_leaks=1",
-        "PATH": "/usr/bin:/bin",
-    }
+    variables = description.modelVariables
+    inputs = sum(v.causality == "input" for v in variables)
+    outputs = sum(v.causality == "output" for v in variables)
+    token = description.guid if fmi == 2 else description.instantiationToken
+    resources = (unpacked / "resources").as_uri() if fmi == 2 else f"{unpacked / 'resources'}/"
+    command = [str(folder / "driver"), str(library), token, resources, str(inputs), str(outputs), str(steps)]
+    if fmi == 3:
+        command.append(str(next(v.valueReference for v in variables if v.causality == "independent")))
+    return command, {"ASAN_OPTIONS": "detect_leaks=1", "PATH": "/usr/bin:/bin"}
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("fmi", [2, 3])
-def test_the_system_fmus_master_runs_clean_under_asan_and_ubsan(request, fmi: int, tmp_path: Path) -> None:
+@pytest.mark.parametrize(("parts", "fmi"), [(2, 2), (3, 2), (2, 3)], ids=["fmi2", "fmi3-parts", "fmi3"])
+def test_the_system_fmus_master_runs_clean_under_asan_and_ubsan(request, parts: int, fmi: int, tmp_path: Path) -> None:
     """Its shipped sources, compiled with ASan and UBSan, run 200 steps twice (reset between) with a refused
     instantiation, a refused step and the state saved, serialised (and refused cut short), deserialised, restored
-    and freed, over FMI 2 parts and over FMI 3 parts: no sanitizer report, no leak, no unexpected status."""
-    ssd = request.getfixturevalue("at_h" if fmi == 2 else "at_h_fmi3")
-    command, environment = driven(build(ssd, tmp_path / "car.fmu"), tmp_path, SANITIZE, 200)
+    and freed: over FMI 2 parts, over FMI 3 parts, and as an FMI 3 system FMU: no sanitizer report, no leak, no
+    unexpected status."""
+    ssd = request.getfixturevalue("at_h" if parts == 2 else "at_h_fmi3")
+    command, environment = driven(build(ssd, tmp_path / "car.fmu", fmi=fmi), tmp_path, SANITIZE, 200, fmi)
     result = subprocess.run(command, capture_output=True, text=True, timeout=300, env=environment)
     assert result.returncode == 0, result.stderr[-4000:]
     assert "0 unexpected statuses" in result.stderr and "runtime error" not in result.stderr
@@ -337,10 +342,11 @@ def test_libcosim_and_nnfmus_plain_master_step_it_as_a_plain_fmi_loop_does(at_h:
     assert np.ptp(held["damper_force"]) > 100.0
 
 
-def test_the_whole_systems_state_is_saved_restored_and_serialised(at_h: Path, tmp_path: Path) -> None:
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_the_whole_systems_state_is_saved_restored_and_serialised(at_h: Path, tmp_path: Path, fmi: int) -> None:
     """A state saved after 50 steps (every part's and the master's own), restored after 50 more, gives those 50
-    steps again bit for bit; so does the state serialised, deserialised and restored."""
-    slave = FmuSlave(build(at_h, tmp_path / "car.fmu"), instance_name="car")
+    steps again bit for bit; so does the state serialised, deserialised and restored (FMI 2 and FMI 3 system FMU)."""
+    slave = FmuSlave(build(at_h, tmp_path / "car.fmu", fmi=fmi), instance_name="car")
     inputs, outputs = slave.names("input"), slave.names("output")
     source = drive(DURATION, H, corner="fl")
     u = np.column_stack([source[name] for name in inputs])
@@ -350,7 +356,8 @@ def test_the_whole_systems_state_is_saved_restored_and_serialised(at_h: Path, tm
         rows = []
         for n in range(first, last):
             slave.set_real(inputs, u[n])
-            slave.fmu.setRealInputDerivatives(references, [1] * len(inputs), list((u[n + 1] - u[n]) / H))
+            if fmi == 2:
+                slave.fmu.setRealInputDerivatives(references, [1] * len(inputs), list((u[n + 1] - u[n]) / H))
             slave.do_step(n * H, H)
             rows.append(slave.get_real(outputs))
         return np.array(rows)
