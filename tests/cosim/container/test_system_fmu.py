@@ -381,3 +381,21 @@ def test_the_whole_systems_state_is_saved_restored_and_serialised(at_h: Path, tm
         slave.close()
     assert np.array_equal(first, again) and np.array_equal(first, third)
     assert np.ptp(first[:, outputs.index("damper_force")]) > 10.0  # the steps moved the car
+
+
+def test_it_runs_inside_an_fmu_manipulation_toolbox_container(at_h: Path, tmp_path: Path) -> None:
+    """Nested in fmu-manipulation-toolbox's FMU container (inputs and outputs exposed by name, its step 1 ms), it
+    gives its own numbers in a plain loop holding the drive, within 1e-12 on every output."""
+    pytest.importorskip("fmu_manipulation_toolbox")
+    from fmu_manipulation_toolbox.assembly import AssemblyNode
+
+    build(at_h, tmp_path / "car.fmu")
+    node = AssemblyNode("outer.fmu", step_size=H)
+    node.add_fmu("car.fmu")
+    node.make_fmu(tmp_path)
+    nested, _ = run(tmp_path / "outer.fmu", slopes=False)
+    alone, _ = run(tmp_path / "car.fmu", slopes=False)
+    assert set(alone) <= set(nested)
+    errors = worst({name: nested[name] for name in alone}, alone)
+    assert max(errors.values()) <= TOLERANCE, errors
+    assert np.ptp(nested["damper_force"]) > 100.0
