@@ -3,7 +3,7 @@ constants, so the C master reads exactly the doubles the Python master holds; na
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from nnfmu.cosim.container.plan import SystemPlan
 
@@ -25,7 +25,9 @@ def _double(value: float) -> str:
     return float(value).hex()
 
 
-def _array(lines: list[str], c_type: str, name: str, values: Sequence, render=str) -> str:  # noqa: ANN001
+def _array(
+    lines: list[str], c_type: str, name: str, values: Sequence[float], render: Callable[[float], str] = str
+) -> str:
     """Append `static const c_type name[] = {...};` to `lines` and return `name`, or "NULL" for no values."""
     if not values:
         return "NULL"

@@ -154,7 +154,16 @@ def _copy_part(source: Path, target: Path, platform_folder: str, name: str) -> N
     )
 
 
-def _plan(system, parts, settings, inner_step, binding, units, copy_to) -> SystemPlan:  # noqa: ANN001 (private)
+def _plan(
+    system: SystemStructure,
+    parts: _System,
+    settings: CosimSettings,
+    inner_step: float,
+    binding: DriveBinding,
+    units: dict[str, str],
+    copy_to: Path | None,
+) -> SystemPlan:
+    """The plan from the master's prepared `parts` (see `plan_system`)."""
     from nnfmu.fmu.native.toolchain import host_platform_of
 
     order = [element for group in parts.groups for element in group]
@@ -234,6 +243,13 @@ def _plan(system, parts, settings, inner_step, binding, units, copy_to) -> Syste
                     bound=bound,
                 )
             )
+    names = [v.name for v in (*inputs, *outputs, *parameters)]
+    clashes = sorted({n for n in names if names.count(n) > 1})
+    if clashes:
+        raise CosimError(
+            f"system {system.name!r}: the system FMU would have two variables named {', '.join(clashes)} (an input, "
+            "an output or an element.parameter); rename an element or port"
+        )
     starts = np.cumsum([0] + [len(group) for group in parts.groups])
     return SystemPlan(
         name=system.name,
