@@ -2,8 +2,9 @@
 
 Workflow tests build the same FMUs again and again (the truth step graphs of every road test, the vehicle FMUs, the
 loop's term FMUs): the same generated C, byte for byte, compiled by the same compiler with the same flags. Here
-`nnfmu.fmu.native.compiler._compile` looks its inputs up first: the compiler command, its flags, the library's file
-name, and the name and bytes of every source and of every file of the include folder. A hit copies the library the
+`nnfmu.fmu.native.compiler._compile` looks its inputs up first: the compiler command, its flags, the defines and
+libraries asked for, the library's file name, and the name and bytes of every source and of every file of the include
+folder. A hit copies the library the
 first compile of those inputs made; a miss compiles and keeps what it made. Failed compiles are never kept. The tests
 of the build stage itself (`tests/fmu/`, and the build signals of `tests/test_cli_signals.py`) always compile, as do
 subprocesses (`nnfmu` run as a command): the cache is this process's, its files shared by the xdist workers of one

@@ -9,6 +9,7 @@
  * it; outputs are every Real output of every part, in the master's row units. An inner FMU's failure becomes the
  * system FMU's, logged with the element's name.
  */
+#include <ctype.h>
 #include <dlfcn.h>
 #include <math.h>
 #include <stdarg.h>
@@ -304,7 +305,7 @@ static char *uri_path(const char *uri) {
     path = (char *)malloc(strlen(p) + 1);
     if (path == NULL) return NULL;
     for (out = path; *p; p++) {
-        if (p[0] == '%' && p[1] && p[2]) {
+        if (p[0] == '%' && isxdigit((unsigned char)p[1]) && isxdigit((unsigned char)p[2])) {
             char hex[3] = {p[1], p[2], 0};
             *out++ = (char)strtol(hex, NULL, 16);
             p += 2;
