@@ -33,9 +33,10 @@ DEFINES = ("-DNN_LOOP_HIDDEN",)  # the loop's functions stay inside the library:
 LIBRARIES = ("-lm", "-ldl")
 
 
-def _guid(plan: SystemPlan, identifier: str) -> str:
-    """A GUID-shaped token from the plan (its parts' GUIDs among it) and the generator: same system, same token."""
-    digest = hashlib.sha256(f"{GENERATION_TOOL}\0{identifier}\0{plan!r}".encode())
+def _guid(plan: SystemPlan, identifier: str, fmi: int) -> str:
+    """A GUID-shaped token from the plan (its parts' GUIDs among it), the FMI version and the generator: same system,
+    same token."""
+    digest = hashlib.sha256(f"{GENERATION_TOOL}\0{identifier}\0fmi{fmi}\0{plan!r}".encode())
     return "{" + str(uuid.UUID(bytes=digest.digest()[:16], version=4)) + "}"
 
 
@@ -73,7 +74,7 @@ def build_system_fmu(
     with scratch_dir("nnfmu-system-fmu-") as scratch:
         tree = Path(scratch) / "fmu"
         plan = plan_system(system, settings, inner, binding, copy_to=tree / "resources")
-        guid = _guid(plan, identifier)
+        guid = _guid(plan, identifier, fmi)
         sources = tree / "sources"
         sources.mkdir(parents=True)
         for name in dict.fromkeys((*SOURCES[fmi], *HEADERS)):
