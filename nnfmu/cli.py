@@ -599,6 +599,12 @@ def system_build(
     refresh: bool = typer.Option(
         True, help="Give FMUs with feedthrough their inputs at each inner step's end and read their outputs again."
     ),
+    extrapolate_drive: bool = typer.Option(
+        True,
+        "--extrapolate-drive/--hold-drive",
+        help="When the outer master sets no input derivatives, extrapolate the drive over each step from its slope "
+        "over the step before (second order in H); --hold-drive holds it (first order).",
+    ),
     allow_outside: bool = typer.Option(False, help=ALLOW_OUTSIDE_HELP),
 ) -> None:
     """Build an SSP system into one co-simulation FMU stepping its FMUs with nnfmu's coupling (docs/system-fmu.md).
@@ -611,7 +617,7 @@ def system_build(
     try:
         target = check_output_file(out, [system])
         settings = CosimSettings(scheme=scheme, order=order, refresh=refresh, port_derivatives=False)
-        plan = run_system_build(system, target, step, inner_step, settings, fmi, allow_outside)
+        plan = run_system_build(system, target, step, inner_step, settings, fmi, allow_outside, extrapolate_drive)
     except NnfmuError as error:
         _fail(error)
     typer.echo(

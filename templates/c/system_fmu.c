@@ -5,8 +5,8 @@
  * What differs between systems lives in the generated system_config.h: the parts in stepping order with their value
  * references, the values row and unit conversions (the same plan the Python master builds), the connections for
  * initialisation, the drive inputs and the parameters the system FMU exposes. Inputs of the system FMU are the driven
- * element's free inputs (the drive), held over a step or, with input derivatives (canInterpolateInputs), linear over
- * it; outputs are every Real output of every part, in the master's row units. An inner FMU's failure becomes the
+ * element's free inputs (the drive), linear over a step: with the input derivatives a master sets
+ * (canInterpolateInputs), else extrapolated from the drive of the step before (NS_EXTRAPOLATE_DRIVE) or held; outputs are every Real output of every part, in the master's row units. An inner FMU's failure becomes the
  * system FMU's, logged with the element's name.
  */
 #include <ctype.h>
@@ -94,6 +94,10 @@ typedef struct {
     double time;
     double drive[NS_N_DRIVE + 1];
     double slope[NS_N_DRIVE + 1];
+    double previous[NS_N_DRIVE + 1];
+    double previous_step;
+    int64_t slopes_set;
+    int64_t have_previous;
     double parameter[NS_N_PARAMETERS + 1];
     double rows[5 * NS_N_VALUES + 1]; /* values, now, before, estimate, fresh */
 } ns_saved;
@@ -114,7 +118,11 @@ struct ns_instance {
     double time;
     int64_t steps_done; /* inner steps since initialisation: the loop's step index */
     double drive[NS_N_DRIVE + 1];     /* inputs of the system FMU (the drive), in their declared units */
-    double slope[NS_N_DRIVE + 1];     /* their derivatives over the coming step (0 unless set) */
+    double slope[NS_N_DRIVE + 1];     /* their derivatives over the coming step (0 unless set or extrapolated) */
+    double previous[NS_N_DRIVE + 1];  /* the drive set before the previous step, and that step's size [s] */
+    double previous_step;
+    int64_t slopes_set;               /* the master set derivatives for the coming step */
+    int64_t have_previous;            /* a step was taken since initialisation */
     double at_start[NS_N_DRIVE + 1];  /* the drive at an inner step's start and end */
     double at_end[NS_N_DRIVE + 1];
     double parameter[NS_N_PARAMETERS + 1];
@@ -725,6 +733,7 @@ NS_FMI2_API fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     memcpy(self->plan.now, self->plan.values, NS_N_VALUES * sizeof(double));
     memcpy(self->plan.before, self->plan.values, NS_N_VALUES * sizeof(double));
     self->steps_done = 0;
+    self->have_previous = 0;
     self->mode = NS_STEPPING;
     return fmi2OK;
 }
@@ -749,6 +758,8 @@ NS_FMI2_API fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunication
         return fmi2Error;
     }
     inner = h / (double)m;
+    if (NS_EXTRAPOLATE_DRIVE && !self->slopes_set && self->have_previous)
+        for (i = 0; i < NS_N_DRIVE; i++) self->slope[i] = (self->drive[i] - self->previous[i]) / self->previous_step;
     for (k = 0; k < m; k++) {
         double t = currentCommunicationPoint + (double)k * inner;
         for (i = 0; i < NS_N_DRIVE; i++) {
@@ -765,6 +776,10 @@ NS_FMI2_API fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunication
         }
         self->steps_done++;
     }
+    memcpy(self->previous, self->drive, sizeof self->previous);
+    self->previous_step = h;
+    self->have_previous = 1;
+    self->slopes_set = 0;
     memset(self->slope, 0, sizeof self->slope);
     self->time = currentCommunicationPoint + h;
     return fmi2OK;
@@ -795,6 +810,7 @@ NS_FMI2_API fmi2Status fmi2Reset(fmi2Component c) {
     }
     memset(self->drive, 0, sizeof self->drive);
     memset(self->slope, 0, sizeof self->slope);
+    self->slopes_set = self->have_previous = 0;
     memset(self->plan.values, 0, 5 * NS_N_VALUES * sizeof(double));
     self->steps_done = 0;
     self->time = self->start_time;
@@ -869,6 +885,7 @@ NS_FMI2_API fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2Va
             return fmi2Error;
         }
         self->slope[vr[i]] = value[i];
+        self->slopes_set = 1;
     }
     return fmi2OK;
 }
@@ -926,6 +943,10 @@ static void save_own(const ns_instance *self, ns_saved *own) {
     own->time = self->time;
     memcpy(own->drive, self->drive, sizeof own->drive);
     memcpy(own->slope, self->slope, sizeof own->slope);
+    memcpy(own->previous, self->previous, sizeof own->previous);
+    own->previous_step = self->previous_step;
+    own->slopes_set = self->slopes_set;
+    own->have_previous = self->have_previous;
     memcpy(own->parameter, self->parameter, sizeof own->parameter);
     memcpy(own->rows, self->plan.values, 5 * NS_N_VALUES * sizeof(double));
 }
@@ -937,6 +958,10 @@ static void restore_own(ns_instance *self, const ns_saved *own) {
     self->time = own->time;
     memcpy(self->drive, own->drive, sizeof own->drive);
     memcpy(self->slope, own->slope, sizeof own->slope);
+    memcpy(self->previous, own->previous, sizeof own->previous);
+    self->previous_step = own->previous_step;
+    self->slopes_set = own->slopes_set;
+    self->have_previous = own->have_previous;
     memcpy(self->parameter, own->parameter, sizeof own->parameter);
     memcpy(self->plan.values, own->rows, 5 * NS_N_VALUES * sizeof(double));
 }

@@ -48,12 +48,14 @@ def build_system_fmu(
     settings: CosimSettings | None = None,
     binding: DriveBinding | None = None,
     fmi: int = 2,
+    extrapolate_drive: bool = True,
 ) -> SystemPlan:
     """Write the system FMU of `system` to `out` (a .fmu, replaced atomically) with the default communication step
     `step` [s] and the inner step `inner_step` [s] (None: `step`); `settings` pick the scheme (its step is ignored),
     `binding` the drive inputs (None: the one element with free inputs), `fmi` the system FMU's FMI version (2 or 3;
-    its parts may be either). Returns the plan. CosimError naming the element or setting that cannot be built;
-    CompilerError without a host C compiler."""
+    its parts may be either); `extrapolate_drive`: without input derivatives from the outer master, the drive over a
+    step follows its slope over the step before (False: held). Returns the plan. CosimError naming the element or
+    setting that cannot be built; CompilerError without a host C compiler."""
     from nnfmu.fmu.native.backend import fmi_headers_dir
     from nnfmu.fmu.native.compiler import compile_shared_library
     from nnfmu.fmu.native.toolchain import host_target
@@ -73,7 +75,7 @@ def build_system_fmu(
     target = host_target()
     with scratch_dir("nnfmu-system-fmu-") as scratch:
         tree = Path(scratch) / "fmu"
-        plan = plan_system(system, settings, inner, binding, copy_to=tree / "resources")
+        plan = plan_system(system, settings, inner, binding, tree / "resources", extrapolate_drive)
         guid = _guid(plan, identifier, fmi)
         sources = tree / "sources"
         sources.mkdir(parents=True)

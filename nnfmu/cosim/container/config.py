@@ -60,6 +60,7 @@ def render_config(plan: SystemPlan, identifier: str, guid: str, suffix: str) -> 
         f"#define NS_INNER_STEP {_double(plan.inner_step)} /* [s] */",
         f"#define NS_LINEAR_EXTRAPOLATION {int(settings.extrapolation == 'linear')}",
         f"#define NS_GAUSS_SEIDEL {int(settings.scheme == 'gauss-seidel')}",
+        f"#define NS_EXTRAPOLATE_DRIVE {int(plan.extrapolate_drive)}",
         f"#define NS_CAN_GET_AND_SET_STATE {int(plan.states)}",
         f"#define NS_CAN_SERIALIZE_STATE {int(plan.states and plan.serializes)}",
         "#define NS_VR_OUTPUTS NS_N_DRIVE",

@@ -88,6 +88,7 @@ class SystemPlan:
     settings: CosimSettings
     start_time: float
     stop_time: float | None
+    extrapolate_drive: bool  # without input derivatives: the drive extrapolated from the step before (else held)
     states: bool  # every part can get and set its FMU state: so can the system FMU
     serializes: bool  # every part can also serialise it
 
@@ -112,10 +113,13 @@ def plan_system(
     inner_step: float,
     binding: DriveBinding | None = None,
     copy_to: Path | None = None,
+    extrapolate_drive: bool = True,
 ) -> SystemPlan:
     """The plan of `system` under `settings` (one pass per step: iterations 0, extrapolation 'linear'; no port
     derivatives) at the fixed inner step `inner_step` [s]; with `copy_to`, each part's unpacked FMU is copied to
-    copy_to/fmus/<index>/ on the way (the host platform's binaries only). CosimError naming what cannot be built."""
+    copy_to/fmus/<index>/ on the way (the host platform's binaries only). `extrapolate_drive`: a step the outer
+    master sets no input derivatives for takes the drive's slope from the step before (else holds it). CosimError
+    naming what cannot be built."""
     if settings.iterations or settings.plain:
         raise CosimError(
             "a system FMU steps nnfmu's one-pass schemes only (iterations 0, extrapolation 'linear'); "
@@ -135,7 +139,7 @@ def plan_system(
                 f"({', '.join(parts.derivatives.names())}); "
                 "a system FMU leaves them at their start values: plan it with port_derivatives=False"
             )
-        return _plan(system, parts, settings, inner_step, binding, units, copy_to)
+        return _plan(system, parts, settings, inner_step, binding, units, copy_to, extrapolate_drive)
     finally:
         parts.close(healthy=False)
 
@@ -162,6 +166,7 @@ def _plan(
     binding: DriveBinding,
     units: dict[str, str],
     copy_to: Path | None,
+    extrapolate_drive: bool,
 ) -> SystemPlan:
     """The plan from the master's prepared `parts` (see `plan_system`)."""
     from nnfmu.fmu.native.toolchain import host_platform_of
@@ -264,6 +269,7 @@ def _plan(
         settings=settings,
         start_time=system.start_time,
         stop_time=system.stop_time,
+        extrapolate_drive=extrapolate_drive,
         states=all(bool(e.outputs.slave.description.coSimulation.canGetAndSetFMUstate) for e in order),
         serializes=all(bool(e.outputs.slave.description.coSimulation.canSerializeFMUstate) for e in order),
     )

@@ -66,9 +66,12 @@ def at_quarter_h(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return quarter_car(tmp_path_factory.mktemp("system_h4"), H / 4)
 
 
-def build(ssd: Path, out: Path, inner_step: float | None = None, fmi: int = 2, **settings: object) -> Path:
+def build(
+    ssd: Path, out: Path, inner_step: float | None = None, fmi: int = 2, extrapolate: bool = True, **settings: object
+) -> Path:
     with open_system(ssd) as system:
-        build_system_fmu(system, out, H, inner_step, CosimSettings(**NO_DERIVATIVES, **settings), fmi=fmi)
+        coupling = CosimSettings(**NO_DERIVATIVES, **settings)
+        build_system_fmu(system, out, H, inner_step, coupling, fmi=fmi, extrapolate_drive=extrapolate)
     return out
 
 
@@ -147,8 +150,23 @@ def test_the_system_fmu_sub_steps_as_the_master_at_the_inner_step(at_quarter_h: 
     assert worst(result, coarse)["damper_force"] > 1e-4  # sub-stepping changed the result measurably
 
 
+def test_without_input_derivatives_the_drive_is_extrapolated_from_the_step_before(
+    at_quarter_h: Path, tmp_path: Path
+) -> None:
+    """A plain loop at H = 4 h that sets no input derivatives: the drive extrapolated over each step from its slope
+    over the step before comes at least five times closer to the master's run at h than the drive held (measured at
+    1 s: 0.15 % against 2.4 % of the damper force's peak at H = 10 h)."""
+    fine = master(at_quarter_h, H / 4)
+    extrapolated, _ = run(build(at_quarter_h, tmp_path / "on.fmu", inner_step=H / 4), slopes=False)
+    held, _ = run(build(at_quarter_h, tmp_path / "off.fmu", inner_step=H / 4, extrapolate=False), slopes=False)
+    errors = {
+        name: worst(result, fine, stride=4)["damper_force"] for name, result in (("on", extrapolated), ("off", held))
+    }
+    assert errors["on"] * 5 < errors["off"], errors
+
+
 def test_the_system_fmu_validates_and_runs_in_fmpys_own_loop(at_h: Path, tmp_path: Path) -> None:
-    """fmpy's validation finds no problem; fmpy's simulate_fmu (no input derivatives: the drive held over each step)
+    """fmpy's validation finds no problem; fmpy's simulate_fmu (no input derivatives: the drive extrapolated)
     runs it and the damper moves."""
     from fmpy import simulate_fmu
 
@@ -163,9 +181,10 @@ def test_the_system_fmu_validates_and_runs_in_fmpys_own_loop(at_h: Path, tmp_pat
     assert np.all(np.isfinite(result["damper_force"])) and np.ptp(result["damper_force"]) > 100.0
 
 
-def test_an_fmi3_system_fmu_validates_and_steps_as_the_fmi2_one_with_the_drive_held(at_h: Path, tmp_path: Path) -> None:
-    """`--fmi 3`: fmpy's validation finds no problem; FMI 3 co-simulation has no input derivatives, so it holds the
-    drive over each step, and gives the FMI 2 system FMU's numbers when that is given no slopes either."""
+def test_an_fmi3_system_fmu_validates_and_steps_as_the_fmi2_one_without_slopes(at_h: Path, tmp_path: Path) -> None:
+    """`--fmi 3`: fmpy's validation finds no problem; FMI 3 co-simulation has no input derivatives, so it always
+    extrapolates the drive from the step before, and gives the FMI 2 system FMU's numbers when that is given no
+    slopes either."""
     fmu3 = build(at_h, tmp_path / "car3.fmu", fmi=3)
     assert validate_fmu(str(fmu3)) == []
     result, _ = run(fmu3, slopes=False)
@@ -321,8 +340,8 @@ def test_the_system_fmu_runs_clean_under_valgrind(at_h: Path, tmp_path: Path) ->
 
 def test_libcosim_and_nnfmus_plain_master_step_it_as_a_plain_fmi_loop_does(at_h: Path, tmp_path: Path) -> None:
     """The system FMU as the one element of an SSP system: libcosim (its own fixed-step algorithm) and nnfmu's master
-    with the plain Jacobi settings both set the drive at t_n and hold it over the step, as the plain loop without
-    slopes does; all three agree within 1e-12 on every output."""
+    with the plain Jacobi settings both set the drive at t_n and no slopes, as the plain loop without slopes does; all
+    three agree within 1e-12 on every output."""
     pytest.importorskip("libcosimpy")
     from nnfmu.cosim.binding import DriveBinding
     from nnfmu.cosim.libcosim_runner import run_libcosim
@@ -332,14 +351,14 @@ def test_libcosim_and_nnfmus_plain_master_step_it_as_a_plain_fmi_loop_does(at_h:
     plain = CosimSettings(step=H, scheme="jacobi", extrapolation="none", refresh=False, **NO_DERIVATIVES)
     binding = DriveBinding.by_name("car", ("actuator_fl_displacement", "actuator_fl_velocity"))
     source = drive(DURATION, H, corner="fl")
-    held, _ = run(fmu, slopes=False)
+    loop, _ = run(fmu, slopes=False)
     libcosim = run_libcosim(ssd, source, plain, binding).measurement
     with open_system(ssd) as system:
         fmpy = cosimulate(system, source, plain, binding=binding).measurement
     for other in (libcosim, fmpy):
-        errors = worst(held, {name: other[name] for name in held})
+        errors = worst(loop, {name: other[name] for name in loop})
         assert max(errors.values()) <= TOLERANCE, errors
-    assert np.ptp(held["damper_force"]) > 100.0
+    assert np.ptp(loop["damper_force"]) > 100.0
 
 
 @pytest.mark.parametrize("fmi", [2, 3])
@@ -385,7 +404,7 @@ def test_the_whole_systems_state_is_saved_restored_and_serialised(at_h: Path, tm
 
 def test_it_runs_inside_an_fmu_manipulation_toolbox_container(at_h: Path, tmp_path: Path) -> None:
     """Nested in fmu-manipulation-toolbox's FMU container (inputs and outputs exposed by name, its step 1 ms), it
-    gives its own numbers in a plain loop holding the drive, within 1e-12 on every output."""
+    gives its own numbers in a plain loop without slopes, within 1e-12 on every output."""
     pytest.importorskip("fmu_manipulation_toolbox")
     from fmu_manipulation_toolbox.assembly import AssemblyNode
 
