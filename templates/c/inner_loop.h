@@ -1,12 +1,11 @@
 /* inner_loop.h: the co-simulation master's one-pass schemes in C (inner_loop.c), shared by nnfmu's Python master
- * (loaded through ctypes, nnfmu/cosim/inner_loop.py) and by the system FMU's master (container.c, `nnfmu system
+ * (loaded through ctypes, nnfmu/cosim/inner_loop.py) and by the system FMU's master (system_fmu.c, `nnfmu system
  * build`), which fills the same plan from its generated configuration. */
 #ifndef NN_INNER_LOOP_H
 #define NN_INNER_LOOP_H
 
 #include <stddef.h>
 #include <stdint.h>
-#include <string.h>
 
 /* Exported for ctypes; a system FMU compiles the loop with NN_LOOP_HIDDEN so only its FMI functions are visible. */
 #if defined(__GNUC__) && !defined(NN_LOOP_HIDDEN)
