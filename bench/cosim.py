@@ -12,6 +12,12 @@ the run, teardown), the median of REPEATS runs; `loop_s` is the stepping alone. 
 bounded: every channel finite, and the peaks of its motion channels within BOUNDED_RATIO of a run of the same system
 with the parameter file's linear bushings built in instead of the networks. Progress goes to stderr; stdout gets one
 JSON object on one line (targets: full vehicle <= 2.5 s (20x real time, issue #14), quarter car <= 1 s for 50 s).
+
+The compiled engine (`compiled_*`): each system built into one system FMU (`nnfmu system build`, inner step = the
+1 ms step; the build is not timed) and stepped at 1 ms by a master in C (bench/system_fmu_driver.c: per step the
+drive, its slopes, doStep, every output), timed from loading the FMU's library to closing it (instantiation
+included); `compiled_*_matches_master` is the largest difference of any output from the Python master's run,
+relative to its peak (targets of issue 33: full vehicle >= 200x real time, quarter car >= 1000x).
 """
 
 from __future__ import annotations
@@ -20,14 +26,19 @@ import json
 import os
 import platform
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
+import zipfile
 from pathlib import Path
 
 import numpy as np
+from fmpy import read_model_description
 from road_test import models_in  # bench/ is on the path when a bench script runs
 
+from nnfmu.cosim.container.build import build_system_fmu
+from nnfmu.cosim.drive_inputs import DriveInputs
 from nnfmu.cosim.master import CosimError, CosimSettings, cosimulate
 from nnfmu.cosim.ssp import open_system, read_ssd
 from nnfmu.data import Measurement
@@ -42,6 +53,7 @@ QUICK_RECORDS = {"damper": 40.0, "bushing": 20.0}  # [s] rig records for the qui
 QUICK_TRAINING = {"restarts": 1, "max_epochs": 15}
 # [s] for 50 s simulated (full vehicle: 20x real time)
 TARGETS = {"full_vehicle_wall_s": 2.5, "quarter_car_wall_s": 1.0}
+COMPILED_TARGETS = {"compiled_full_vehicle_wall_s": 50.0 / 200.0, "compiled_quarter_car_wall_s": 50.0 / 1000.0}
 MOTION_CHANNELS = (
     "body_heave",
     "body_pitch",
@@ -83,6 +95,58 @@ def timed_runs(
             walls.append(time.perf_counter() - started)
             loops.append(float(result.notes["wall_time_s"]))
     return walls, loops, result, ""
+
+
+def compiled_driver(folder: Path) -> Path:
+    """bench/system_fmu_driver.c compiled with the host compiler (-O2) into `folder`."""
+    from nnfmu.fmu.native.backend import fmi_headers_dir
+
+    driver = folder / "system_fmu_driver"
+    source = Path(__file__).with_name("system_fmu_driver.c")
+    command = ["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-Wvla", f"-I{fmi_headers_dir()}"]
+    subprocess.run([*command, "-o", str(driver), str(source), "-ldl"], check=True)
+    return driver
+
+
+def compiled_runs(
+    ssd: Path, drive: Measurement, duration: float, repeats: int, folder: Path, reference: Measurement | None
+) -> dict:
+    """The system FMU of `ssd` stepped at STEP by a C master (bench/system_fmu_driver.c): per run the seconds from
+    loading the FMU's library to closing it (instantiation included) and of the stepping loop, and the largest
+    difference of any output from the Python master's `reference`, relative to its peak."""
+    fmu = folder / f"{ssd.parent.name}-system.fmu"
+    with open_system(ssd) as system:
+        build_system_fmu(system, fmu, STEP, None, CosimSettings(port_derivatives=False))
+    unpacked = folder / f"{ssd.parent.name}-system"
+    with zipfile.ZipFile(fmu) as archive:
+        archive.extractall(unpacked)
+    description = read_model_description(str(fmu))
+    names = [v.name for v in description.modelVariables if v.causality == "input"]
+    outputs = [v.name for v in description.modelVariables if v.causality == "output"]
+    n = round(duration / STEP)
+    drive_file, out_file = folder / "drive.bin", folder / "outputs.bin"
+    DriveInputs(drive, names).table(np.arange(n + 1) * STEP).astype(np.float64).tofile(drive_file)
+    library = unpacked / "binaries" / "linux64" / f"{description.coSimulation.modelIdentifier}.so"
+    command = [str(compiled_driver(folder)), str(library), description.guid, (unpacked / "resources").as_uri()]
+    command += [str(len(names)), str(len(outputs)), str(n), repr(STEP), str(drive_file), str(out_file)]
+    walls, loops = [], []
+    for _ in range(repeats):
+        done = subprocess.run(command, capture_output=True, text=True, check=True)
+        loop, whole = map(float, done.stdout.split())
+        walls.append(whole)
+        loops.append(loop)
+    table = np.fromfile(out_file).reshape(n + 1, len(outputs))
+    record = {"wall_s": [round(w, 3) for w in walls], "median_wall_s": round(statistics.median(walls), 3)}
+    record["median_loop_s"] = round(statistics.median(loops), 3)
+    record["real_time_factor"] = round(duration / record["median_wall_s"], 1)
+    if reference is not None:
+        errors = {
+            c: float(np.max(np.abs(table[:, i] - reference[c])) / max(float(np.max(np.abs(reference[c]))), 1e-300))
+            for i, c in enumerate(outputs)
+        }
+        worst = max(errors, key=errors.get)
+        record["matches_master"] = {"largest_relative_difference": errors[worst], "channel": worst}
+    return record
 
 
 def summary(name: str, fmus: int, walls: list[float], loops: list[float], duration: float, error: str) -> dict:
@@ -159,6 +223,10 @@ def main() -> None:
             walls, loops, results[system], error = timed_runs(ssd, drive, duration, repeats)
             records[system] = summary(system, len(read_ssd(ssd).elements), walls, loops, duration, error)
             log(json.dumps(records[system]))
+        compiled = {}
+        for system, ssd in ssds.items():
+            compiled[system] = compiled_runs(ssd, drive, duration, repeats, work, results[system])
+            log(json.dumps({"compiled": system} | compiled[system]))
         _, _, yardstick, error = timed_runs(linear, drive, duration, 1)
         if yardstick is None:
             raise SystemExit(f"the linear-bushing yardstick run failed: {error}")
@@ -172,6 +240,12 @@ def main() -> None:
                 "repeats": repeats,
                 "full_vehicle_wall_s": full["median_wall_s"],
                 "quarter_car_wall_s": quarter["median_wall_s"],
+                "compiled_full_vehicle_wall_s": compiled["full-vehicle"]["median_wall_s"],
+                "compiled_quarter_car_wall_s": compiled["quarter-car"]["median_wall_s"],
+                "compiled_full_vehicle_matches_master": compiled["full-vehicle"].get("matches_master"),
+                "compiled_quarter_car_matches_master": compiled["quarter-car"].get("matches_master"),
+                "compiled": compiled,
+                "compiled_targets_s": COMPILED_TARGETS,
                 "real_time_factor": {
                     "full_vehicle": full["real_time_factor"],
                     "quarter_car": quarter["real_time_factor"],

@@ -30,6 +30,7 @@ NAV: tuple[tuple[str, str], ...] = (
     ("FMU platforms", "platforms.md"),
     ("Vehicle and road test", "vehicle.md"),
     ("Semi-active closed loop", "skyhook.md"),
+    ("System FMU", "system-fmu.md"),
     ("Campaigns", "campaigns.md"),
     ("Closing the loop", "loop.md"),
     ("Drive-file iteration", "iterate.md"),

@@ -83,6 +83,8 @@ drive_app = typer.Typer(no_args_is_help=True, help="Drive files for a four-post 
 app.add_typer(drive_app, name="drive")
 controller_app = typer.Typer(no_args_is_help=True, help="Controllers of semi-active dampers, as FMUs.")
 app.add_typer(controller_app, name="controller")
+system_app = typer.Typer(no_args_is_help=True, help="SSP systems as one FMU with nnfmu's coupling inside.")
+app.add_typer(system_app, name="system")
 # `nnfmu loop`'s before -> after lines: (key of the report's errors, label, scale); NRMSE in per cent as the headline.
 LOOP_ERRORS = (
     ("nrmse", "NRMSE [%]", 100.0),
@@ -596,6 +598,49 @@ def controller_build(
             path = build_controller_fmu(law, settings, check_output_file(out, []), fmi)
     typer.echo(f"FMU: {path}")
     _echo_binaries(path)
+
+
+@system_app.command("build")
+def system_build(
+    system: Path = typer.Argument(..., help="System: SystemStructure.ssd, its folder, or an .ssp archive."),
+    out: str = typer.Option(..., "--out", "-o", help="FMU path to write (one co-simulation FMU)."),
+    fmi: int = typer.Option(
+        2,
+        "--fmi",
+        help="FMI version of the system FMU: 2 or 3 (FMI 3 has no input derivatives: the drive is held over each step); its FMUs may be 2 or 3.",
+    ),
+    step: float = _step_option("Communication step H [s] the FMU suggests (its default experiment)."),
+    inner_step: Optional[float] = typer.Option(
+        None, help="Inner step h [s] at which the FMU steps its parts, H a whole multiple of it (default: --step)."
+    ),
+    scheme: str = typer.Option("gauss-seidel", help="gauss-seidel (one element after another) or jacobi."),
+    order: str = typer.Option("vehicle-first", help="Gauss-Seidel order: vehicle-first or components-first."),
+    refresh: bool = typer.Option(
+        True, help="Give FMUs with feedthrough their inputs at each inner step's end and read their outputs again."
+    ),
+    extrapolate_drive: bool = typer.Option(
+        True,
+        "--extrapolate-drive/--hold-drive",
+        help="When the outer master sets no input derivatives, extrapolate the drive over each step from its slope "
+        "over the step before (second order in H); --hold-drive holds it (first order).",
+    ),
+    allow_outside: bool = _allow_outside_option(),
+) -> None:
+    """Build an SSP system into one co-simulation FMU stepping its FMUs with nnfmu's coupling (docs/system-fmu.md).
+
+    Inputs: the vehicle's free actuator inputs (the drive) in SI units; outputs: every Real output as nnfmu cosim
+    names its channels; parameters: element.parameter. This machine's platform only.
+    """
+    from nnfmu.workflows.system_build import CosimSettings, run_system_build
+
+    with _user_errors():
+        target = check_output_file(out, [system])
+        settings = CosimSettings(scheme=scheme, order=order, refresh=refresh, port_derivatives=False)
+        plan = run_system_build(system, target, step, inner_step, settings, fmi, allow_outside, extrapolate_drive)
+    typer.echo(
+        f"FMU: {target} ({len(plan.parts)} FMUs stepped at {plan.inner_step:g} s; {len(plan.inputs)} inputs, "
+        f"{len(plan.outputs)} outputs, {len(plan.parameters)} parameters)"
+    )
 
 
 @app.command()

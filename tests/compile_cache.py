@@ -2,8 +2,9 @@
 
 Workflow tests build the same FMUs again and again (the truth step graphs of every road test, the vehicle FMUs, the
 loop's term FMUs): the same generated C, byte for byte, compiled by the same compiler with the same flags. Here
-`nnfmu.fmu.native.compiler._compile` looks its inputs up first: the compiler command, its flags, the library's file
-name, and the name and bytes of every source and of every file of the include folder. A hit copies the library the
+`nnfmu.fmu.native.compiler._compile` looks its inputs up first: the compiler command, its flags, the defines and
+libraries asked for, the library's file name, and the name and bytes of every source and of every file of the include
+folder. A hit copies the library the
 first compile of those inputs made; a miss compiles and keeps what it made. Failed compiles are never kept. The tests
 of the build stage itself (`tests/fmu/`, and the build signals of `tests/test_cli_signals.py`) always compile, as do
 subprocesses (`nnfmu` run as a command): the cache is this process's, its files shared by the xdist workers of one
@@ -27,10 +28,11 @@ ALWAYS_COMPILED = ("fmu", "test_cli_signals.py")
 _state = {"enabled": False, "owned": None, "hits": 0, "misses": 0}
 
 
-def _key(target, sources: list[Path], include_dir: Path, output: Path) -> str:
-    """A digest of everything the compiler reads and is told, paths of scratch folders aside."""
+def _key(target, sources: list[Path], include_dir: Path, output: Path, options: dict) -> str:
+    """A digest of everything the compiler reads and is told (defines and libraries too), paths of scratch folders
+    aside."""
     digest = hashlib.sha256()
-    for part in (*target.compiler, "\0", *target.flags, "\0", output.name):
+    for part in (*target.compiler, "\0", *target.flags, "\0", output.name, repr(sorted(options.items()))):
         digest.update(part.encode() + b"\0")
     files = [(s.name, s) for s in sources]
     files += [(f"include/{p.relative_to(include_dir).as_posix()}", p) for p in sorted(include_dir.rglob("*"))]
@@ -50,16 +52,16 @@ def install() -> None:
         _state["owned"] = folder
     compile_now = compiler._compile
 
-    def cached(target, sources, include_dir, output, cwd):
+    def cached(target, sources, include_dir, output, cwd, **options):
         if not _state["enabled"]:
-            return compile_now(target, sources, include_dir, output, cwd)
-        kept = Path(os.environ[VARIABLE]) / _key(target, sources, Path(include_dir), output)
+            return compile_now(target, sources, include_dir, output, cwd, **options)
+        kept = Path(os.environ[VARIABLE]) / _key(target, sources, Path(include_dir), output, options)
         if kept.is_file():
             _state["hits"] += 1
             shutil.copyfile(kept, output)
             return [*target.compiler, *target.flags, "-o", str(output), *map(str, sources)]
         _state["misses"] += 1
-        command = compile_now(target, sources, include_dir, output, cwd)
+        command = compile_now(target, sources, include_dir, output, cwd, **options)
         partial = kept.with_name(f"{kept.name}.{os.getpid()}.part")
         shutil.copyfile(output, partial)
         os.replace(partial, kept)  # whole or absent, whichever worker finishes first

@@ -10,6 +10,8 @@ __all__, __getattr__ = face(
     __name__,
     {
         "binding": ("DriveBinding", "bind_free_inputs", "free_inputs"),
+        "container.build": ("build_system_fmu",),
+        "container.plan": ("SystemPlan",),
         "drive_inputs": ("DriveInputError",),
         "instances": ("InstancePool",),
         "libcosim_runner": ("run_libcosim",),

@@ -1,11 +1,11 @@
-"""The master's one-pass schemes stepped in C (`inner_loop.c`): the same arithmetic as the Python loop, without a
-foreign call per transfer, which is most of a step's cost when nine FMUs exchange every millisecond.
+"""The master's one-pass schemes stepped in C (`templates/c/inner_loop.c`): the same arithmetic as the Python loop,
+without a foreign call per transfer, which is most of a step's cost when nine FMUs exchange every millisecond.
 
-The C source ships with the package and is compiled once per machine with the host C compiler (the one `nnfmu build`
-uses) into a cache folder (`$NNFMU_CACHE`, else `$XDG_CACHE_HOME/nnfmu`, else `~/.cache/nnfmu`), named by the hash of
-source and compiler command; without a compiler the master keeps its Python loop. Everything the C loop touches is
-a numpy array or ctypes object held by `CompiledLoop`, so the buffers stay alive and Python can read them after a
-failed call.
+The C source ships with the templates (the system FMU of `nnfmu system build` compiles the same loop) and is
+compiled once per machine with the host C compiler (the one `nnfmu build` uses) into a cache folder (`$NNFMU_CACHE`,
+else `$XDG_CACHE_HOME/nnfmu`, else `~/.cache/nnfmu`), named by the hash of source, header and compiler command;
+without a compiler the master keeps its Python loop. Everything the C loop touches is a numpy array or ctypes object
+held by `CompiledLoop`, so the buffers stay alive and Python can read them after a failed call.
 """
 
 from __future__ import annotations
@@ -20,14 +20,16 @@ import numpy as np
 
 from nnfmu.atomic import scratch_dir
 from nnfmu.cosim.direct import ElementTransfers
+from nnfmu.resources import templates_dir
 
-SOURCE = Path(__file__).with_name("inner_loop.c")
+SOURCE = templates_dir() / "c" / "inner_loop.c"
+HEADER = SOURCE.with_name("inner_loop.h")
 CALL_NAMES = ("set inputs", "set input slopes", "step", "get outputs", "refresh: set inputs", "refresh: get outputs")
 _LIBRARY: CDLL | None = None
 
 
 class _CElement(Structure):
-    """`nn_element` of inner_loop.c."""
+    """`nn_element` of inner_loop.h."""
 
     _fields_ = (
         [
@@ -52,7 +54,7 @@ class _CElement(Structure):
 
 
 class _CPlan(Structure):
-    """`nn_plan` of inner_loop.c."""
+    """`nn_plan` of inner_loop.h."""
 
     _fields_ = [
         ("elements", c_void_p),
@@ -69,7 +71,7 @@ class _CPlan(Structure):
 
 
 class _CFailure(Structure):
-    """`nn_failure` of inner_loop.c."""
+    """`nn_failure` of inner_loop.h."""
 
     _fields_ = [("step", c_int64), ("element", c_int64), ("call", c_int64), ("status", c_int64)]
 
@@ -115,7 +117,9 @@ def library() -> CDLL | None:
             target = host_target()
         except CompilerError:
             return None
-        key = hashlib.sha256(SOURCE.read_bytes() + "\0".join((*target.compiler, *target.flags)).encode()).hexdigest()
+        key = hashlib.sha256(
+            SOURCE.read_bytes() + HEADER.read_bytes() + "\0".join((*target.compiler, *target.flags)).encode()
+        ).hexdigest()
         path = cache_dir() / f"inner_loop-{key[:16]}{target.suffix}"
         if not path.is_file():
             path.parent.mkdir(parents=True, exist_ok=True)

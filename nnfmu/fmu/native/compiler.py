@@ -22,19 +22,35 @@ LIBRARIES = ("-lm",)
 COMPILE_TIMEOUT_S = 300
 
 
-def compile_shared_library(target: Target, sources: list[Path], include_dir: Path, output: Path) -> list[str]:
+def compile_shared_library(
+    target: Target,
+    sources: list[Path],
+    include_dir: Path,
+    output: Path,
+    defines: tuple[str, ...] = (),
+    libraries: tuple[str, ...] = LIBRARIES,
+) -> list[str]:
     """Compile `sources` into `target`'s shared library `output`, nothing else beside it (a linker's by-products, such
-    as Zig's `.pdb` and import `.lib` on Windows, stay in a scratch folder); return the command line used. Raises
-    CompilerError."""
+    as Zig's `.pdb` and import `.lib` on Windows, stay in a scratch folder); return the command line used. `defines`
+    (`-DNAME`) and `libraries` (`-lm`, `-ldl`) for the sources that need them. Raises CompilerError."""
     output.parent.mkdir(parents=True, exist_ok=True)
     with scratch_dir(f"nnfmu-cc-{target.name}-") as scratch:
         built = Path(scratch) / output.name
-        command = _compile(target, sources, include_dir, built, Path(scratch))
+        extra = {"defines": defines, "libraries": libraries} if defines or libraries != LIBRARIES else {}
+        command = _compile(target, sources, include_dir, built, Path(scratch), **extra)
         shutil.move(built, output)
     return command
 
 
-def _compile(target: Target, sources: list[Path], include_dir: Path, output: Path, cwd: Path) -> list[str]:
+def _compile(
+    target: Target,
+    sources: list[Path],
+    include_dir: Path,
+    output: Path,
+    cwd: Path,
+    defines: tuple[str, ...] = (),
+    libraries: tuple[str, ...] = LIBRARIES,
+) -> list[str]:
     """Run `target`'s compiler on `sources` into `output`, in `cwd`; the command line used. Raises CompilerError."""
     # A dylib's install name is the path it was linked at unless set: the FMU's own name instead of a build folder.
     install_name = (f"-Wl,-install_name,@rpath/{output.name}",) if target.suffix == ".dylib" else ()
@@ -42,11 +58,12 @@ def _compile(target: Target, sources: list[Path], include_dir: Path, output: Pat
         *target.compiler,
         *target.flags,
         *install_name,
+        *defines,
         f"-I{include_dir.resolve()}",
         "-o",
         str(output),
         *(str(s.resolve()) for s in sources),
-        *LIBRARIES,
+        *libraries,
     ]
     try:
         result = subprocess.run(

@@ -2,80 +2,10 @@
  * calls, step for step the same arithmetic, so a run gives the same numbers as the Python loop without a foreign call
  * per transfer. Python prepares everything (buffers, value references, function pointers taken from the FMUs' shared
  * libraries) and calls nn_cosim_steps once per block of steps; a failing call stops the block and is described in
- * nn_failure for Python to report. */
-#include <stddef.h>
-#include <stdint.h>
+ * nn_failure for Python to report. The system FMU (`nnfmu system build`) steps the same loop from its own master. */
 #include <string.h>
 
-#if defined(__GNUC__)
-#define NN_EXPORT __attribute__((visibility("default")))
-#else
-#define NN_EXPORT
-#endif
-
-#define NN_WARNING 1 /* fmi2Warning: a status above it means the call failed */
-
-typedef int (*nn_transfer)(void *instance, const uint32_t *references, size_t n, double *values);
-typedef int (*nn_set_slopes)(void *instance, const uint32_t *references, size_t n, const int *orders,
-                             const double *values);
-typedef int (*nn_do_step)(void *instance, double t, double h, int no_prior_state);
-
-/* One element: its coupled inputs are gathered from `sources` (positions in the values row) into the first
- * n_coupled entries of `inputs`; the driven element's drive inputs follow them. Its outputs land at values + span_start. */
-typedef struct {
-    void *instance;
-    nn_transfer set_real;
-    nn_transfer get_real;
-    nn_set_slopes set_slopes; /* NULL: the element takes no slopes */
-    nn_do_step do_step;
-    const uint32_t *input_references;
-    double *inputs;
-    int64_t n_coupled;
-    int64_t n_driven;
-    const int64_t *sources;
-    const uint32_t *slope_references;
-    const int *slope_orders;
-    double *slopes;
-    const uint32_t *output_references;
-    int64_t n_outputs;
-    int64_t span_start;
-    int64_t is_driven;
-    int64_t feedthrough;
-    const double *in_scale; /* units: input = value * in_scale + in_offset before each set (NULL: as they are) */
-    const double *in_offset;
-    const double *out_scale; /* row value = output * out_scale + out_offset after each get (NULL: as they are) */
-    const double *out_offset;
-} nn_element;
-
-/* Elements in stepping order; group g is elements [group_starts[g], group_starts[g + 1]). */
-typedef struct {
-    nn_element *elements;
-    int64_t n_elements;
-    const int64_t *group_starts;
-    int64_t n_groups;
-    const int64_t *refreshed; /* indices of the elements refreshed after the pass */
-    int64_t n_refreshed;
-    int64_t n_values;
-    int64_t n_drive;
-    int64_t linear_extrapolation;
-    int64_t gauss_seidel;
-    double *values; /* written by the FMUs */
-    double *now;
-    double *before;
-    double *estimate;
-    double *fresh; /* Gauss-Seidel: the estimate with the outputs of the elements stepped so far */
-} nn_plan;
-
-/* Which call failed: the step index, the element, the call (see NN_CALL_*) and its status. */
-typedef struct {
-    int64_t step;
-    int64_t element;
-    int64_t call;
-    int64_t status;
-} nn_failure;
-
-enum { NN_CALL_SET = 0, NN_CALL_SLOPES = 1, NN_CALL_STEP = 2, NN_CALL_GET = 3, NN_CALL_REFRESH_SET = 4,
-       NN_CALL_REFRESH_GET = 5 };
+#include "inner_loop.h"
 
 /* The element's inputs in its own units, then one set (master.py: RealBlock.set with a conversion). */
 static int set_real(const nn_element *e, int64_t step, int64_t index, int64_t call, nn_failure *failure);
@@ -91,7 +21,7 @@ static void outputs_in_row_units(const nn_element *e, double *span) {
 }
 
 static int failed(nn_failure *failure, int64_t step, int64_t element, int64_t call, int status) {
-    if (status <= NN_WARNING) return 0;
+    if (status <= NN_LOOP_WARNING) return 0;
     failure->step = step;
     failure->element = element;
     failure->call = call;
@@ -162,10 +92,9 @@ static int refresh(const nn_plan *plan, const double *end, int64_t step, nn_fail
 }
 
 /* One communication step n from t = t0 + n h (master.py: _System.step with no iterations, and exchange). */
-static int one_step(const nn_plan *plan, int64_t n, double t0, double h, const double *drive, const double *end,
+static int one_step(const nn_plan *plan, int64_t n, double t, double h, const double *drive, const double *end,
                     nn_failure *failure) {
     int64_t g, k, i, n_values = plan->n_values;
-    double t = t0 + (double)n * h;
     double *source = plan->gauss_seidel ? plan->fresh : plan->estimate;
     if (plan->linear_extrapolation && n > 0) {
         for (i = 0; i < n_values; i++) plan->estimate[i] = 2.0 * plan->now[i] - plan->before[i];
@@ -197,15 +126,22 @@ static int one_step(const nn_plan *plan, int64_t n, double t0, double h, const d
     return 0;
 }
 
-/* Steps first .. last - 1; drive holds the drive at t_first .. t_last (n_drive values each), rows receives the values
- * row after each step. Returns 0, or 1 with `failure` filled (the buffers then hold the failing step's values). */
 NN_EXPORT int nn_cosim_steps(const nn_plan *plan, int64_t first, int64_t last, double t0, double h,
                              const double *drive, double *rows, nn_failure *failure) {
     int64_t n;
     for (n = first; n < last; n++) {
         const double *at = drive + (n - first) * plan->n_drive;
-        if (one_step(plan, n, t0, h, at, at + plan->n_drive, failure)) return 1;
+        if (one_step(plan, n, t0 + (double)n * h, h, at, at + plan->n_drive, failure)) return 1;
         memcpy(rows + (n - first) * plan->n_values, plan->values, (size_t)plan->n_values * sizeof(double));
     }
     return 0;
+}
+
+NN_EXPORT int nn_cosim_step(const nn_plan *plan, int64_t n, double t, double h, const double *drive,
+                            const double *end, nn_failure *failure) {
+    return one_step(plan, n, t, h, drive, end, failure);
+}
+
+NN_EXPORT int nn_cosim_refresh(const nn_plan *plan, const double *end, nn_failure *failure) {
+    return refresh(plan, end, -1, failure);
 }
