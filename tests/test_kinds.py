@@ -121,3 +121,23 @@ def test_a_name_of_no_kind_is_refused_by_the_vehicle_ports() -> None:
 
     with pytest.raises(VehicleModelError, match="'engine_mount_front' is no element of a registered"):
         component_channels("engine_mount_front")
+
+
+def test_the_vehicle_loop_tries_the_effects_a_kind_names(monkeypatch: pytest.MonkeyPatch) -> None:
+    from dataclasses import replace
+
+    from nnfmu.workflows.vehicle_loop.run import _candidates
+    from nnfmu.workflows.vehicle_loop.system_files import VirtualCar
+
+    mount = replace(ENGINE_MOUNT, loop_effects=("gas_force",))
+    fmus = {"engine_mount_front": Path("m.fmu"), "damper_fl": Path("d.fmu")}
+    car = VirtualCar(Path("s.ssd"), "car", "vehicle", Path("v.fmu"), fmus, dict.fromkeys(fmus, Path("g.onnx")), {})
+    found, _ = _candidates(car, ["body_acceleration_fl"], replay=None)  # type: ignore[arg-type]
+    assert sorted(found) == ["body_acceleration_fl:sensor_offset", "damper_fl:gas_force"]
+    monkeypatch.setitem(KINDS, mount.name, mount)
+    found, _ = _candidates(car, ["body_acceleration_fl"], replay=None)  # type: ignore[arg-type]
+    assert sorted(found) == [
+        "body_acceleration_fl:sensor_offset",
+        "damper_fl:gas_force",
+        "engine_mount_front:gas_force",
+    ]
