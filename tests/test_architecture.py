@@ -17,7 +17,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "nnfmu"
 # Floors, lowest first: a module may import its own top-level package and any package on a lower floor.
 FLOORS: tuple[tuple[str, ...], ...] = (
     ("errors", "stopping", "input_files", "faces"),
-    ("atomic", "safe_zip", "resources", "physics", "component"),
+    ("atomic", "safe_zip", "resources", "physics", "component", "kinds"),
     ("out_paths", "reference_stimulus"),
     ("data",),
     ("models",),

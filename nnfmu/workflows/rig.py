@@ -6,6 +6,7 @@ from pathlib import Path
 
 from nnfmu.data.rigs import RIG_BANDS, DriveDesign, RigOptions, write_rig, write_vehicle_damper_dyno, write_vehicle_rig
 from nnfmu.errors import SettingsError
+from nnfmu.kinds import kind_of_rig
 
 __all__ = ["RigOptions", "write_rig_record"]
 
@@ -35,9 +36,9 @@ def write_rig_record(
     if drive_from is None:
         raise SettingsError("excitation 'vehicle' needs --drive-from RESULT (a vehicle result file)")
     if not elements:
-        example = "damper_fl" if kind == "damper" else "bushing_fl_front"
-        raise SettingsError(f"--drive-from needs --element NAME (e.g. {example})")
-    if kind == "damper" and not fit_sensors:
+        raise SettingsError(f"--drive-from needs --element NAME (e.g. {kind_of_rig(kind).example})")
+    write, sizes_sensors = _VEHICLE_RIGS[kind]
+    if not sizes_sensors and not fit_sensors:
         raise SettingsError(
             "--default-sensors is for the bushing rig; the damper dyno always records with its own transducers"
         )
@@ -46,6 +47,9 @@ def write_rig_record(
     except ValueError:
         raise SettingsError(f"--band must be LOW:HIGH in Hz, e.g. 0.5:40; got {band!r}") from None
     design = DriveDesign(margin=margin, band=(low, high), fit_sensors=fit_sensors)
-    if kind == "damper":
-        return write_vehicle_damper_dyno(drive_from, list(elements), out, options, design)
-    return write_vehicle_rig(drive_from, list(elements), out, options, design)
+    return write(drive_from, list(elements), out, options, design)
+
+
+# Per rig (a component kind's `rig`, `nnfmu.kinds`): its writer of a vehicle-derived record, and whether it sizes its
+# transducers for the test (the bushing rig) or always records with its own (the damper dyno).
+_VEHICLE_RIGS = {"damper": (write_vehicle_damper_dyno, False), "bushing": (write_vehicle_rig, True)}

@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass
 
 from nnfmu.errors import SettingsError
+from nnfmu.kinds import kind_of_rig
 from nnfmu.physics.effects import DEFAULT_EFFECTS, EFFECTS
 
 KINDS = ("damper", "bushing")
@@ -55,7 +56,7 @@ def effect_set(kind: str, damper_type: str = "passive") -> str:
         raise SettingsError(f"unknown damper type {damper_type!r}; valid types: {', '.join(DAMPER_TYPES)}")
     if damper_type == "passive":
         return kind
-    if kind != "damper":
+    if damper_type not in kind_of_rig(kind).rig_types:
         raise SettingsError(f"damper type {damper_type!r} is for the damper dyno, not the {kind} rig")
     return f"{damper_type}_damper"
 

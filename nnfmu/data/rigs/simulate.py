@@ -55,25 +55,7 @@ def simulate_rig(kind: str, options: RigOptions, params: RigParams | None = None
     duration = resolve_duration(kind, options)
     n = int(round(duration * options.sample_rate))
     run_args = (options.sample_rate, n, options.excitation, options.noise, options.seed)
-    if kind == "damper" and options.damper_type != "passive":
-        expected = SEMIACTIVE_PARAMS[options.damper_type]
-        params = params or expected()
-        _check_params(params, expected)
-        dyno = DamperDyno()
-        time, channels, excitation, sensors = run_semiactive_dyno(options.damper_type, params, effects, dyno, *run_args)
-        units, described = SEMIACTIVE_UNITS, describe(params)
-    elif kind == "damper":
-        params = params or DamperParams()
-        _check_params(params, DamperParams)
-        dyno = DamperDyno()
-        time, channels, excitation = run_damper_dyno(params, effects, dyno, *run_args)
-        units, described, sensors = DAMPER_UNITS, describe(params), dyno.sensors
-    else:
-        params = params or BushingParams()
-        _check_params(params, BushingParams)
-        rig = BushingRig()
-        time, channels, excitation = run_bushing_rig(params, effects, rig, *run_args)
-        units, described, sensors = BUSHING_UNITS, describe_params(params), rig.sensors
+    time, channels, excitation, sensors, units, described = _RUNS[kind](options, params, effects, run_args)
     what = kind if options.damper_type == "passive" else f"{kind} --type {options.damper_type}"
     source = f"nnfmu rig {what} (seed {options.seed})"
     measurement = Measurement(time=time, channels=channels, units={k: units[k] for k in channels}, source=source)
@@ -85,6 +67,34 @@ def simulate_rig(kind: str, options: RigOptions, params: RigParams | None = None
 def _check_params(params: object, expected: type) -> None:
     if not isinstance(params, expected):
         raise TypeError(f"parameters for this rig must be {expected.__name__}, got {type(params).__name__}")
+
+
+def _damper_run(options: RigOptions, params: RigParams | None, effects: tuple[str, ...], run_args: tuple) -> tuple:
+    """The damper dyno's run: the passive damper or the semi-active one of `options.damper_type`."""
+    dyno = DamperDyno()
+    if options.damper_type != "passive":
+        expected = SEMIACTIVE_PARAMS[options.damper_type]
+        params = params or expected()
+        _check_params(params, expected)
+        time, channels, excitation, sensors = run_semiactive_dyno(options.damper_type, params, effects, dyno, *run_args)
+        return time, channels, excitation, sensors, SEMIACTIVE_UNITS, describe(params)
+    params = params or DamperParams()
+    _check_params(params, DamperParams)
+    time, channels, excitation = run_damper_dyno(params, effects, dyno, *run_args)
+    return time, channels, excitation, dyno.sensors, DAMPER_UNITS, describe(params)
+
+
+def _bushing_run(options: RigOptions, params: RigParams | None, effects: tuple[str, ...], run_args: tuple) -> tuple:
+    """The four-channel bushing rig's run."""
+    params = params or BushingParams()
+    _check_params(params, BushingParams)
+    rig = BushingRig()
+    time, channels, excitation = run_bushing_rig(params, effects, rig, *run_args)
+    return time, channels, excitation, rig.sensors, BUSHING_UNITS, describe_params(params)
+
+
+# The simulator of each rig (`options.KINDS`; the rig a component kind names, `nnfmu.kinds`).
+_RUNS = {"damper": _damper_run, "bushing": _bushing_run}
 
 
 def write_rig(kind: str, out: Path, options: RigOptions) -> tuple[Path, Path]:

@@ -36,6 +36,7 @@ from nnfmu.data.measurement import Measurement
 from nnfmu.data.rigs.bushing_rig import CHANNELS
 from nnfmu.data.rigs.excitation import Motion, preload, random_motion
 from nnfmu.errors import SettingsError
+from nnfmu.kinds import BUSHING, DAMPER
 
 # The rig controller's pass band [Hz] by rig: the bushing rig's lab drive reaches 40 Hz; a servo-hydraulic damper
 # dyno follows small strokes to about 100 Hz, and the car moves its dampers there (wheel hop ~12 Hz, the road's
@@ -204,7 +205,7 @@ def deflection(source: Measurement, element: str, key: str) -> np.ndarray:
     if name not in source:
         raise DataError(
             f"{source.source}: no channel {name!r} for the {key} deflection of {element} (bushing "
-            f"channels there: {', '.join(n for n in source.names if n.startswith('bushing_')) or 'none'})"
+            f"channels there: {', '.join(n for n in source.names if BUSHING.owns(n)) or 'none'})"
         )
     unit = source.units.get(name)
     if unit != channel.position_unit:
@@ -221,7 +222,7 @@ def damper_stroke(source: Measurement, element: str) -> np.ndarray:
     if name not in source:
         raise DataError(
             f"{source.source}: no channel {name!r} for the stroke of {element} (damper channels there: "
-            f"{', '.join(n for n in source.names if n.startswith('damper_')) or 'none'})"
+            f"{', '.join(n for n in source.names if DAMPER.owns(n)) or 'none'})"
         )
     if source.units.get(name) != "m":
         raise DataError(

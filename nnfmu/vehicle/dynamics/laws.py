@@ -7,11 +7,13 @@ be solved with the very physics the component networks were trained on.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 
+from nnfmu.kinds import kind_of
 from nnfmu.physics import DEFAULT_EFFECTS, BushingChannelTruth, BushingParams, DamperParams, DamperTruth
 from nnfmu.vehicle.dynamics.errors import VehicleModelError
 from nnfmu.vehicle.dynamics.ports import component_channels
@@ -130,25 +132,39 @@ class BushingTruthBank:
 
 
 def truth_laws(force_inputs: list[str]) -> dict[str, ComponentLaw]:
-    """Default truth physics for every damper and bushing force input in `force_inputs` (rig defaults, no inertia)."""
-    damper_effects = tuple(e for e in DEFAULT_EFFECTS["damper"] if e != "inertia")
+    """Default truth physics for every damper and bushing force input in `force_inputs` (rig defaults, no inertia);
+    the law is chosen by the port's kind (`nnfmu.kinds`) from `_TRUTH`."""
+    laws: dict[str, ComponentLaw] = {}
+    for name in force_inputs:
+        kind = kind_of(name)
+        element = kind.element_of_port(name) if kind is not None else None
+        make = _TRUTH.get(kind.name) if kind is not None else None
+        law = make(name[len(element) + 1 :]) if make is not None and element is not None else None
+        if law is None:
+            raise VehicleModelError(f"no truth physics for port {name!r}")
+        laws[name] = law
+    return laws
+
+
+def _damper_truth(channel: str) -> ComponentLaw:
+    """The dyno damper's default truth, without the inertia the vehicle's own masses carry."""
+    return DamperTruthLaw(DamperTruth(DamperParams(), tuple(e for e in DEFAULT_EFFECTS["damper"] if e != "inertia")))
+
+
+def _bushing_truth(channel: str) -> ComponentLaw | None:
+    """The rig bushing's default truth of one channel (`axial_force`, ...); None for another channel."""
     bushing = BushingParams()
-    channel_params = {
+    params = {
         "axial_force": bushing.axial,
         "radial_force": bushing.radial,
         "axial_torque": bushing.axial_rotation,
         "conical_torque": bushing.conical_rotation,
-    }
-    laws: dict[str, ComponentLaw] = {}
-    for name in force_inputs:
-        if name.startswith("damper"):
-            laws[name] = DamperTruthLaw(DamperTruth(DamperParams(), damper_effects))
-            continue
-        suffix = next((s for s in channel_params if name.endswith(s)), None)
-        if not name.startswith("bushing") or suffix is None:
-            raise VehicleModelError(f"no truth physics for port {name!r}")
-        laws[name] = BushingTruthLaw(BushingChannelTruth(channel_params[suffix]))
-    return laws
+    }.get(channel)
+    return BushingTruthLaw(BushingChannelTruth(params)) if params is not None else None
+
+
+# Truth law per component kind (a kind's name in `nnfmu.kinds`), given the force channel of its port.
+_TRUTH: dict[str, Callable[[str], ComponentLaw | None]] = {"damper": _damper_truth, "bushing": _bushing_truth}
 
 
 def linear_laws(component: str, stiffness: tuple[float, ...], damping: tuple[float, ...]) -> dict[str, ComponentLaw]:

@@ -22,6 +22,7 @@ import numpy as np
 from scipy.optimize import root
 from scipy.sparse import csr_array
 
+from nnfmu.kinds import element_of_port
 from nnfmu.vehicle.dynamics.errors import VehicleModelError
 from nnfmu.vehicle.dynamics.kernel_warmup import wait_for_kernel
 from nnfmu.vehicle.dynamics.law_tables import LawTable, law_table, spline_table
@@ -105,7 +106,11 @@ def _components(vehicle: LinearVehicle) -> list[str]:
     for port in vehicle.inputs:
         if port.name.startswith("actuator"):
             continue
-        stem = port.name.rsplit("_", 1)[0] if port.name.startswith("damper") else "_".join(port.name.split("_")[:3])
+        stem = element_of_port(port.name)
+        if stem is None:
+            raise VehicleModelError(
+                f"force input {port.name!r} is no port of a registered component kind (nnfmu.kinds)"
+            )
         if stem not in names:
             names.append(stem)
     return names

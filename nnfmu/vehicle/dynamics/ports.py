@@ -4,15 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from nnfmu.kinds import kind_of
+from nnfmu.vehicle.dynamics.errors import VehicleModelError
+
 CORNERS = ("fl", "fr", "rl", "rr")
-# (force input, displacement output, rate output) suffixes of each channel of a component port
-DAMPER_CHANNELS = (("force", "displacement", "velocity"),)
-BUSHING_CHANNELS = (
-    ("axial_force", "axial_displacement", "axial_velocity"),
-    ("radial_force", "radial_displacement", "radial_velocity"),
-    ("axial_torque", "axial_rotation", "axial_angular_velocity"),
-    ("conical_torque", "conical_rotation", "conical_angular_velocity"),
-)
 
 
 @dataclass(frozen=True)
@@ -93,6 +88,9 @@ def bushing_outputs(name: str) -> list[VehiclePort]:
 
 
 def component_channels(component: str) -> list[tuple[str, str, str]]:
-    """(force input, displacement output, rate output) port names of a component such as 'bushing_fl_front'."""
-    channels = BUSHING_CHANNELS if component.startswith("bushing") else DAMPER_CHANNELS
-    return [(f"{component}_{force}", f"{component}_{disp}", f"{component}_{rate}") for force, disp, rate in channels]
+    """(force input, displacement output, rate output) port names of a component such as 'bushing_fl_front', its
+    channels those of its kind (`nnfmu.kinds`); VehicleModelError for a name of no registered kind."""
+    kind = kind_of(component)
+    if kind is None:
+        raise VehicleModelError(f"{component!r} is no element of a registered component kind (nnfmu.kinds)")
+    return kind.port_channels(component)

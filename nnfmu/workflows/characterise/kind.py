@@ -11,12 +11,14 @@ carries into the component's ports.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 from nnfmu.component import Component, Port
 from nnfmu.data.rigs import BUSHING_CHANNELS, COMMAND_CHANNELS
 from nnfmu.data.rigs.damper_rig import UNITS as DAMPER_UNITS
 from nnfmu.data.rigs.semiactive_rig import UNITS as SEMIACTIVE_UNITS
 from nnfmu.errors import NnfmuError
+from nnfmu.kinds import BUSHING, DAMPER
 
 DAMPER_INPUTS = ("velocity", "displacement", "temperature", *COMMAND_CHANNELS.values())
 
@@ -32,6 +34,7 @@ class DamperPorts:
     displacement: bool
     temperature: bool
     command: str | None
+    kind: ClassVar[str] = DAMPER.name
 
     @property
     def command_unit(self) -> str:
@@ -59,6 +62,7 @@ class BushingPorts:
     """The bushing channels a model has, in the rig's order."""
 
     channels: tuple[BushingChannelPorts, ...]
+    kind: ClassVar[str] = BUSHING.name
 
 
 def _check_unit(port: Port, expected: str, source: str, side: str) -> None:

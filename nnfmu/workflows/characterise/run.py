@@ -248,7 +248,7 @@ def characterise(
     out_dir = check_output_dir(out, KIND, inputs, replaces=True)
     record = load_measurement(measured) if measured is not None else None
     with model_under_test(model_path) as model:
-        kind = "damper" if isinstance(model.kind, DamperPorts) else "bushing"
+        kind = model.kind.kind
         log(f"{model.source}: {kind}, tested through {model.fmu.name} at {model.period:g} s")
         out_dir.parent.mkdir(parents=True, exist_ok=True)
         with staging_dir(out_dir.parent, f".{out_dir.name}.staging-") as staging:

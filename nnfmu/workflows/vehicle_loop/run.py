@@ -17,6 +17,7 @@ from nnfmu.atomic import scratch_dir, staging_dir
 from nnfmu.data import DataError, Measurement, load_measurement
 from nnfmu.data.drive_files import RPC_SUFFIXES, read_drive
 from nnfmu.fmu import FmuBuildError, load_onnx
+from nnfmu.kinds import DAMPER
 from nnfmu.out_paths import check_output_dir, replace_output_dir
 from nnfmu.stopping import check_stop
 from nnfmu.workflows.vehicle_loop.attribution import (
@@ -78,61 +79,24 @@ def _read_record(path: str | os.PathLike[str]) -> Measurement:
 
 
 def _coverage(car: VirtualCar, channels: list[str], retrainable: Mapping[str, bool]) -> list[str]:
-    """What the measured channels allow and what a missing one costs, per component element."""
+    """What the measured channels allow and what a missing one costs, per component element (its kind's words in
+    `_COVERAGE`)."""
     notes = []
     arms: dict[str, list[str]] = {}
     for element in car.fmus:
         kind = car.kind(element)
+        words = _COVERAGE.get(kind.name) if kind is not None else None
         if car.onnx[element] is None:
             notes.append(f"{element}: {_untested_words(car, element)}")
-        elif kind == "damper":
-            force, stroke = f"{element}_force" in channels, f"{element}_displacement" in channels
-            if force and stroke and retrainable[element]:
-                notes.append(f"{element}: load cell and LVDT measured: in-situ diagnosis and retraining")
-            elif force and stroke:
-                notes.append(
-                    f"{element}: load cell and LVDT measured, but its step graph is no network nnfmu trained: no "
-                    "in-situ diagnosis; its effects are fitted as physical terms to the vehicle residual"
-                )
-            else:
-                lacking = [c for c, ok in ((f"{element}_force", force), (f"{element}_displacement", stroke)) if not ok]
-                notes.append(
-                    f"{element}: {', '.join(lacking)} not measured: no in-situ data, so its effects are fitted as "
-                    "physical terms to the vehicle residual"
-                    + (
-                        "; without its load cell a gas preload shows only as a shift of its corner's attitude, which "
-                        "a zero offset of that corner's LCA angle or LVDT also gives"
-                        if not force
-                        else ""
-                    )
-                )
-        elif kind == "bushing":
-            corner = element.split("_")[1] if element.count("_") >= 2 else ""
-            arms.setdefault(corner, []).append(element)
-            seen = [c for c in _corner_channels(corner) if c in channels]
-            notes.append(
-                f"{element}: no lab channel measures its deflection or force, so its stiffness is fitted as physical "
-                "terms to the vehicle residual, "
-                + (
-                    f"seen at its corner through {', '.join(seen)}"
-                    if seen
-                    else f"and no channel at its corner ({', '.join(_corner_channels(corner))}) is measured: it "
-                    "shows only through the other corners, if at all"
-                )
-                + (
-                    ""
-                    if f"lca_{corner}_angle" in channels
-                    else f"; without lca_{corner}_angle its arm's rotation "
-                    "is read only from the damper stroke and the accelerations"
-                )
-            )
+        elif words is not None:
+            notes.append(words(element, channels, retrainable[element], arms))
     for corner, elements in arms.items():
         if len(elements) > 1:
             notes.append(
                 f"{' and '.join(elements)} hold the same arm: only how the arm's motion splits between their "
                 "deflections tells their stiffnesses apart"
             )
-    if not any(c.endswith("_force") and c.startswith("damper") for c in channels):
+    if not any(c.endswith("_force") and DAMPER.owns(c) for c in channels):
         notes.append(
             "no damper force measured: a damper's gas force and other spring-like effects at a corner are told "
             "apart only by their signatures in the motions and accelerations"
@@ -140,23 +104,93 @@ def _coverage(car: VirtualCar, channels: list[str], retrainable: Mapping[str, bo
     return notes
 
 
+def _damper_coverage(element: str, channels: list[str], retrainable: bool, arms: dict[str, list[str]]) -> str:
+    """What a damper's load cell and LVDT allow, measured or not."""
+    force, stroke = f"{element}_force" in channels, f"{element}_displacement" in channels
+    if force and stroke and retrainable:
+        return f"{element}: load cell and LVDT measured: in-situ diagnosis and retraining"
+    if force and stroke:
+        return (
+            f"{element}: load cell and LVDT measured, but its step graph is no network nnfmu trained: no "
+            "in-situ diagnosis; its effects are fitted as physical terms to the vehicle residual"
+        )
+    lacking = [c for c, ok in ((f"{element}_force", force), (f"{element}_displacement", stroke)) if not ok]
+    return (
+        f"{element}: {', '.join(lacking)} not measured: no in-situ data, so its effects are fitted as "
+        "physical terms to the vehicle residual"
+        + (
+            "; without its load cell a gas preload shows only as a shift of its corner's attitude, which "
+            "a zero offset of that corner's LCA angle or LVDT also gives"
+            if not force
+            else ""
+        )
+    )
+
+
+def _bushing_coverage(element: str, channels: list[str], retrainable: bool, arms: dict[str, list[str]]) -> str:
+    """Where a bushing shows at its corner (no lab channel measures it); the element joins its corner's `arms`."""
+    corner = element.split("_")[1] if element.count("_") >= 2 else ""
+    arms.setdefault(corner, []).append(element)
+    seen = [c for c in _corner_channels(corner) if c in channels]
+    return (
+        f"{element}: no lab channel measures its deflection or force, so its stiffness is fitted as physical "
+        "terms to the vehicle residual, "
+        + (
+            f"seen at its corner through {', '.join(seen)}"
+            if seen
+            else f"and no channel at its corner ({', '.join(_corner_channels(corner))}) is measured: it "
+            "shows only through the other corners, if at all"
+        )
+        + (
+            ""
+            if f"lca_{corner}_angle" in channels
+            else f"; without lca_{corner}_angle its arm's rotation "
+            "is read only from the damper stroke and the accelerations"
+        )
+    )
+
+
+# The coverage words per component kind (a kind's name in `nnfmu.kinds`); a kind not here gets none.
+_COVERAGE: dict[str, Callable[[str, list[str], bool, dict[str, list[str]]], str]] = {
+    "damper": _damper_coverage,
+    "bushing": _bushing_coverage,
+}
+
+
+def _gas_force(element: str, replay: Measurement) -> tuple[list[Candidate], str | None]:
+    """A damper's gas force candidate."""
+    return damper_candidates(element), None
+
+
+def _stiffness(element: str, replay: Measurement) -> tuple[list[Candidate], str | None]:
+    """A bushing's stiffness candidate, its rates its network's own along `replay`; or why it cannot be tested."""
+    made = bushing_candidates(element, network_stiffness(replay, element), PERTURBATION)
+    return made, None if made else "no deflection and force of the element in the replay to scale by"
+
+
+# The candidate builders of the effects a component kind names (`ComponentKind.loop_effects`).
+_LOOP_EFFECTS: dict[str, Callable[[str, Measurement], tuple[list[Candidate], str | None]]] = {
+    "gas_force": _gas_force,
+    "stiffness": _stiffness,
+}
+
+
 def _candidates(
     car: VirtualCar, channels: list[str], replay: Measurement
 ) -> tuple[dict[str, Candidate], dict[str, str]]:
-    """Every component element's candidate effects (a bushing's rates scaled to its network's own stiffness along
-    the virtual car's `replay`), a sensor offset per measured channel; and the candidates that cannot be tested."""
+    """Every component element's candidate effects, those its kind names (a bushing's rates scaled to its network's
+    own stiffness along the virtual car's `replay`), a sensor offset per measured channel; and the candidates that
+    cannot be tested."""
     found: dict[str, Candidate] = {}
     untestable: dict[str, str] = {}
     for element in car.fmus:
         kind = car.kind(element)
-        if kind == "damper":
-            made = damper_candidates(element)
-        elif kind == "bushing":
-            made = bushing_candidates(element, network_stiffness(replay, element), PERTURBATION)
-            if not made:
-                untestable[f"{element}:stiffness"] = "no deflection and force of the element in the replay to scale by"
-        else:
-            made = []
+        made: list[Candidate] = []
+        for effect in kind.loop_effects if kind is not None else ():
+            some, why = _LOOP_EFFECTS[effect](element, replay)
+            made += some
+            if why is not None:
+                untestable[f"{element}:{effect}"] = why
         for c in made:
             if car.onnx[element] is None:
                 untestable[c.key] = "no ONNX step graph of the element"
@@ -266,7 +300,8 @@ def _run_vehicle_loop(
         )
         in_situ = {}
         for element in car.fmus:
-            own = in_situ_record(m, element) if car.kind(element) == "damper" else None
+            kind = car.kind(element)
+            own = in_situ_record(m, element) if kind is not None and kind.in_situ else None
             if own is not None and retrainable[element]:
                 in_situ[element] = in_situ_diagnosis(
                     own.slice(*_rows(own, settings.settle)), car.fmus[element], car.onnx[element], settings.in_situ

@@ -17,6 +17,7 @@ import onnx
 from nnfmu.cosim import connect_by_name, open_system, write_ssd
 from nnfmu.fmu import StepGraphError, check_same_graph, extract_fmu_graph
 from nnfmu.input_files import not_regular
+from nnfmu.kinds import ComponentKind, kind_of
 from nnfmu.workflows.vehicle_binding import vehicle_binding
 from nnfmu.workflows.vehicle_loop.settings import VehicleLoopError
 
@@ -35,9 +36,9 @@ class VirtualCar:
     parameters: dict[str, dict[str, float]]
     graph_notes: tuple[str, ...] = ()
 
-    def kind(self, element: str) -> str:
-        """'damper', 'bushing' or 'other', from the element's name (the road test's naming)."""
-        return next((k for k in ("damper", "bushing") if element.startswith(k)), "other")
+    def kind(self, element: str) -> ComponentKind | None:
+        """The element's component kind, from its name (the road test's naming, `nnfmu.kinds`); None: no kind's."""
+        return kind_of(element)
 
 
 def read_virtual_car(
