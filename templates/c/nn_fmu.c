@@ -307,11 +307,21 @@ NNStatus nn_get_real(NNInstance *instance, unsigned vr, double *value) {
     return nn_refuse_type(instance, "GetReal", "Real", vr);
 }
 
+/* After one output is read without error, the preview and the latest sample are settled until an input is set:
+ * the other outputs of the same call are copied (a vehicle's 66 outputs read in one call pay for one check). */
 NNStatus nn_get_reals(NNInstance *instance, const unsigned vr[], size_t n, double value[]) {
     size_t i;
+    int settled = 0;
     for (i = 0; i < n; i++) {
-        NNStatus status = nn_get_real(instance, vr[i], &value[i]);
+        NNStatus status;
+        int output = in_range(vr[i], NN_VR_FIRST_OUTPUT, NN_N_OUTPUTS);
+        if (settled && output) {
+            value[i] = instance->data.output[vr[i] - NN_VR_FIRST_OUTPUT];
+            continue;
+        }
+        status = nn_get_real(instance, vr[i], &value[i]);
         if (status != NN_OK) return status;
+        settled |= output;
     }
     return NN_OK;
 }

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ctypes
+import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -173,6 +174,47 @@ def test_gemm(case: dict, tmp_path: Path) -> None:
         names.append("c")
     model = make_model([helper.make_node("Gemm", names, ["y"], **case)], inputs, ["y"], constants)
     assert_matches(model, inputs, tmp_path)
+
+
+def in_order(a: np.ndarray, b: np.ndarray, bias: np.ndarray) -> np.ndarray:
+    """A @ B + bias with each output summed from 0.0 over the inner index in order, one rounding per operation."""
+    y = np.zeros((a.shape[0], b.shape[1]))
+    for r in range(a.shape[0]):
+        for c in range(b.shape[1]):
+            acc = 0.0
+            for j in range(a.shape[1]):
+                acc += float(a[r, j]) * float(b[j, c])
+            y[r, c] = acc + float(bias[c])
+    return y
+
+
+GEMM_FORMS = {  # how B reaches the Gemm, and what the generated C must show for it
+    "sparse constant": r"acc\[\d+\] \+= x0\[",  # only the nonzero products, written out
+    "dense constant": "b_by_rows",  # transB: copied row by row for the side-by-side sums
+    "run-time input": r"acc\[c\] \+= a_j \* x1\[",
+}
+
+
+@needs_gcc
+@pytest.mark.parametrize("trans_b", [0, 1])
+@pytest.mark.parametrize("form", GEMM_FORMS)
+def test_gemm_sums_each_output_in_order(form: str, trans_b: int, tmp_path: Path) -> None:
+    """Whatever the form of B, each output is the in-order sum of its products bit for bit (the plain loop's
+    result): the side-by-side sums and the written-out nonzero products only change how fast it is computed."""
+    rng = np.random.default_rng(7)
+    a = rng.normal(size=(2, 9)) * 10.0 ** rng.integers(-6, 6, size=(2, 9))
+    b = rng.normal(size=(9, 5)) * 10.0 ** rng.integers(-6, 6, size=(9, 5))
+    if form == "sparse constant":
+        b[rng.random(b.shape) < 0.7] = 0.0
+    bias = rng.normal(size=5)
+    stored = b.T.copy() if trans_b else b
+    inputs = {"a": a, "bias": bias} | ({"b": stored} if form == "run-time input" else {})
+    constants = {} if form == "run-time input" else {"b": stored}
+    model = make_model([helper.make_node("Gemm", ["a", "b", "bias"], ["y"], transB=trans_b)], inputs, ["y"], constants)
+    if form != "dense constant" or trans_b:
+        assert re.search(GEMM_FORMS[form], generate_c(model, "nn").source)
+    (y,) = run_native(model, inputs, tmp_path)
+    assert np.array_equal(y, np.ravel(in_order(a, b, bias)))
 
 
 MATMUL_SHAPES = [

@@ -228,6 +228,29 @@ def test_quarter_car_fmu_equals_the_model(quarter_car_fmus: dict[str, Path], kin
     assert np.ptp(got["damper_velocity"]) > 0.05  # the spline is driven across several knots
 
 
+def test_outputs_read_in_one_call_equal_outputs_read_one_by_one(quarter_car_fmus: dict[str, Path]) -> None:
+    """A GetReal of all outputs (an input first) after the inputs are set at the latest sample's time, which settles
+    that sample once for the whole call, gives each output bit for bit as reading them one call each does."""
+    vehicle = vehicle_model("quarter-car", VehicleBuildSettings())
+    inputs = _random_inputs(vehicle, 50)
+    names = list(inputs)
+    tables = []
+    for one_by_one in (False, True):
+        with FmuSlave(quarter_car_fmus["external"]) as slave:
+            read = [names[0], *(o for o in slave.names("output") if o != "extrapolating")]
+            slave.enter_initialization(0.0)
+            slave.set_real(names, [inputs[k][0] for k in names])
+            slave.exit_initialization()
+            rows = []
+            for m in range(1, 50):
+                slave.do_step((m - 1) * T, T)
+                slave.set_real(names, [inputs[k][m] for k in names])
+                rows.append([slave.get_real([r])[0] for r in read] if one_by_one else list(slave.get_real(read)))
+        tables.append(np.array(rows))
+    assert np.array_equal(tables[0], tables[1])
+    assert np.ptp(tables[0][:, 1:], axis=0).max() > 0.0
+
+
 def test_vehicle_fmu_does_not_filter_its_outputs(quarter_car_fmus: dict[str, Path]) -> None:
     description = read_model_description(str(quarter_car_fmus["external"]))
     starts = {v.name: v.start for v in description.modelVariables if v.causality == "parameter"}

@@ -1,5 +1,12 @@
 """Matrix products: Gemm (with transposes, alpha, beta and a broadcast bias) and numpy-style MatMul, with their
-tangents by the product rule (terms of constant operands, such as weights, left out)."""
+tangents by the product rule (terms of constant operands, such as weights, left out).
+
+A Gemm sums each output's products in the order of the inner index, as the plain loop does, but keeps one accumulator
+per output column and adds the columns side by side (each output's sum is one chain of dependent additions; side by
+side the processor overlaps them), and with a mostly-zero constant B (a vehicle's output and stabiliser matrices)
+writes out only its nonzero products, in the same order: the sums are those of the plain loop bit for bit for finite
+operands (leaving out a product 0 * a only changes a result where a is infinite or NaN).
+"""
 
 from __future__ import annotations
 
@@ -10,6 +17,13 @@ import numpy as np
 from nnfmu.fmu.native.codegen.emitters.base import Emitter, Node, Params, TangentParams, TensorType
 from nnfmu.fmu.native.codegen.emitters.loops import broadcast_access, contiguous_strides
 from nnfmu.fmu.native.codegen.tensors import c_literal
+
+SPARSE_SHARE = 0.5  # a constant B with at most this share of nonzero entries has its products written out one by one
+MAX_WRITTEN_OUT = 4096  # at most this many products written out (more: the loop over every entry)
+MAX_SIDE_BY_SIDE = 1024  # at most this many output columns summed side by side (their accumulators on the stack)
+MAX_REORDERED = (
+    16384  # a constant B' stored by columns is copied by rows (read in the order of the sums) up to this size
+)
 
 
 def _matrix(node: Node, index: int, transposed: bool) -> tuple[int, int, int, int]:
@@ -56,26 +70,67 @@ class Gemm(Emitter):
 
     def body(self, node: Node, params: Params) -> list[str]:
         bias = params.x[2] if len(params.x) > 2 and node.optional(2) is not None else None
-        return self._product(node, params.x[0], params.x[1], bias, params.y[0], "=")
+        return self._product(node, params.x[0], params.x[1], bias, params.y[0], "=", _constant_b(node))
 
     def _product(
-        self, node: Node, x_a: str | None, x_b: str | None, bias: str | None, y: str, assign: str
+        self,
+        node: Node,
+        x_a: str | None,
+        x_b: str | None,
+        bias: str | None,
+        y: str,
+        assign: str,
+        b_value: np.ndarray | None = None,
     ) -> list[str]:
         """`y assign alpha * A' B' + beta * C`, with the product left out when an operand is None and the bias term
-        when `bias` is None (or beta is 0); `assign` is "=" or "+="."""
+        when `bias` is None (or beta is 0); `assign` is "=" or "+="; `b_value`: B's value when `x_b` is a constant
+        known now (its zero entries are then left out where they are most)."""
         (m, k, a_row, a_col), (_, n, b_row, b_col) = self._dims(node)
         dtype = node.input(0).dtype
         alpha, beta = float(node.attr("alpha", 1.0)), float(node.attr("beta", 1.0))
         ctype = node.input(0).ctype
+        product = x_a is not None and x_b is not None
+        side_by_side = product and 1 < n <= MAX_SIDE_BY_SIDE
+        acc = "acc[c]" if side_by_side else "acc"
         terms = []
-        if x_a is not None and x_b is not None:
-            terms.append("acc" if alpha == 1.0 else f"{c_literal(alpha, dtype)} * acc")
+        if product:
+            terms.append(acc if alpha == 1.0 else f"{c_literal(alpha, dtype)} * {acc}")
         if bias is not None and beta != 0.0:
             access = broadcast_access(node.input(2).shape, (m, n))
             term = f"{bias}[{_index(access.strides[0], 'r', access.strides[1], 'c')}]"
             terms.append(term if beta == 1.0 else f"{c_literal(beta, dtype)} * {term}")
+        store = [
+            f"    for (int c = 0; c < {n}; ++c) {{",
+            f"        {y}[{n} * r + c] {assign} {' + '.join(terms) or c_literal(0.0, dtype)};",
+            "    }",
+        ]
+        if side_by_side:
+            lines = [f"for (int r = 0; r < {m}; ++r) {{", f"    {ctype} acc[{n}];"]
+            lines += [f"    for (int c = 0; c < {n}; ++c) {{", f"        acc[c] = {c_literal(0.0, dtype)};", "    }"]
+            nonzero = _written_out(b_value, b_row, b_col, k, n)
+            if nonzero is not None:
+                row = _index(a_row, "r", 0, "")
+                lines += [
+                    f"    acc[{c}] += {x_a}[{row} + {a_col * j}] * {x_b}[{b_row * j + b_col * c}];" for j, c in nonzero
+                ]
+                if not nonzero:
+                    lines += [f"    (void){x_a};", f"    (void){x_b};"]
+            else:
+                b_read = f"{x_b}[{_index(b_row, 'j', b_col, 'c')}]"
+                if b_value is not None and b_col != 1 and k * n <= MAX_REORDERED:
+                    lines = [*_by_rows(b_value, k, n, ctype, dtype), f"(void){x_b};", *lines]
+                    b_read = f"b_by_rows[{n} * j + c]"
+                lines += [
+                    f"    for (int j = 0; j < {k}; ++j) {{",
+                    f"        const {ctype} a_j = {x_a}[{_index(a_row, 'r', a_col, 'j')}];",
+                    f"        for (int c = 0; c < {n}; ++c) {{",
+                    f"            acc[c] += a_j * {b_read};",
+                    "        }",
+                    "    }",
+                ]
+            return [*lines, *store, "}"]
         lines = [f"for (int r = 0; r < {m}; ++r) {{", f"    for (int c = 0; c < {n}; ++c) {{"]
-        if x_a is not None and x_b is not None:
+        if product:
             a_index, b_index = _index(a_row, "r", a_col, "j"), _index(b_row, "j", b_col, "c")
             lines += [
                 f"        {ctype} acc = {c_literal(0.0, dtype)};",
@@ -94,10 +149,37 @@ class Gemm(Emitter):
         dy = params.dy[0]
         if d_a is None and d_b is None:
             return self._product(node, None, None, d_c, dy, "=")
-        lines = self._product(node, d_a, x_b, d_c, dy, "=") if d_a is not None else []
+        lines = self._product(node, d_a, x_b, d_c, dy, "=", _constant_b(node)) if d_a is not None else []
         if d_b is not None:
             lines += self._product(node, x_a, d_b, None if lines else d_c, dy, "+=" if lines else "=")
         return lines
+
+
+def _constant_b(node: Node) -> np.ndarray | None:
+    """Gemm's B when it is a constant known now, else None."""
+    tensor = node.input(1)
+    return tensor.value if tensor.is_constant else None
+
+
+def _by_rows(b_value: np.ndarray, k: int, n: int, ctype: str, dtype: np.dtype) -> list[str]:
+    """A static copy of a constant B' (k, n), given as B (n, k), stored row by row: the loop over the output columns
+    then reads it in order (which the compiler can turn into vector instructions)."""
+    values = [c_literal(v, dtype) for v in np.ravel(np.asarray(b_value).reshape(n, k).T)]
+    rows = [", ".join(values[i : i + 8]) for i in range(0, len(values), 8)]
+    return [f"static const {ctype} b_by_rows[{k * n}] = {{", *(f"    {row}," for row in rows), "};"]
+
+
+def _written_out(b_value: np.ndarray | None, b_row: int, b_col: int, k: int, n: int) -> list[tuple[int, int]] | None:
+    """The (j, c) of B's nonzero entries B'[j, c], j first, when the products are to be written out one by one (a
+    mostly-zero constant B, not too many of them); None to loop over every entry."""
+    if b_value is None:
+        return None
+    flat = np.ravel(b_value)
+    b = flat.reshape(k, n) if (b_row, b_col) == (n, 1) else flat.reshape(n, k).T  # B'[j, c]
+    rows, cols = np.nonzero(b)  # j first, then c
+    if rows.size > SPARSE_SHARE * k * n or rows.size > MAX_WRITTEN_OUT:
+        return None
+    return list(zip(rows.tolist(), cols.tolist()))
 
 
 class MatMul(Emitter):
