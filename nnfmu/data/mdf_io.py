@@ -25,15 +25,18 @@ import logging
 import sys
 from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-from asammdf import MDF, Signal
 
 from nnfmu.data.channel_map import first_duplicate
 from nnfmu.data.errors import DataError
 from nnfmu.data.measurement import Measurement
 from nnfmu.data.raw import RawTable
 from nnfmu.data.timebase import Resolution, float32_resolution
+
+if TYPE_CHECKING:  # asammdf (with pandas) is imported where an MDF file is read or written: 1.5-4 s of every
+    from asammdf import MDF, Signal  # command's start otherwise, CSV records included
 
 TIME_MATCH = 1e-9  # largest time-stamp difference between groups, relative to the period, that counts as the same
 MDF_VERSION = "4.10"
@@ -84,6 +87,8 @@ def _quiet_asammdf() -> Iterator[None]:
 
 def _open(path: Path) -> MDF:
     """The file opened by asammdf; DataError (only) when asammdf cannot read it, whatever asammdf raised."""
+    from asammdf import MDF
+
     try:
         return MDF(str(path))
     except Exception as error:  # a corrupt file can make asammdf's parser raise anything
@@ -182,6 +187,8 @@ def _read_channels(mdf: MDF, path: Path) -> RawTable:
 
 def write_mdf(m: Measurement, path: Path) -> None:
     """Write `m` as one MDF 4 group with a common time base to `path` (exactly there; atomicity is the caller's)."""
+    from asammdf import MDF, Signal
+
     time = np.asarray(m.time, dtype=np.float64)
     signals = [
         Signal(samples=np.asarray(values, dtype=np.float64), timestamps=time, name=name, unit=m.units[name])
