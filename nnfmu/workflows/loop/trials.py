@@ -179,16 +179,22 @@ def _simpler_cover(
     settings: LoopSettings,
 ) -> tuple[Candidate, str]:
     """`candidate`, or the simplest family that holds it, with why it stands for it ("" when none does): one with
-    fewer regressors beyond which (and beyond `given`) its regressors explain less than `min_explained` of the
-    residual left beyond `given` (three low-passed displacements hold the displacement). Retrained, the richer
-    family would win only by the freedom of its extra inputs, which absorb some of the network's own error; if it is
-    real it stays significant beyond the simpler at the next diagnosis. Families in `taken` (added, or in the trial
-    group) are not offered."""
+    fewer regressors that itself explains at least `min_explained` of the residual left beyond `given`, and beyond
+    which (and beyond `given`) the candidate's regressors explain less than `min_explained` of it (three low-passed
+    displacements hold the displacement). Retrained, the richer family would win only by the freedom of its extra
+    inputs, which absorb some of the network's own error; if it is real it stays significant beyond the simpler at
+    the next diagnosis. A family that explains nothing itself holds nothing: beyond it a candidate at the edge of
+    `min_explained` falls under it by the noise of one more regressor column (after a temperature fade, hysteresis
+    at 5.1 % alone, 5.0 % beyond the moving mass, which explained -0.03 %: the moving mass was retrained and added).
+    Families in `taken` (added, or in the trial group) are not offered."""
     _, evidence, reason = candidate
     for family in _simpler_families(d, evidence, taken):
+        alone = beyond(family.name, given).explained
+        if alone < settings.min_explained:
+            continue
         gain = beyond(evidence.name, (*given, family.name))
         # on the scale of min_explained elsewhere: a share of the residual variance left beyond `given` alone
-        share = gain.explained * (1 - max(0.0, beyond(family.name, given).explained))
+        share = gain.explained * (1 - alone)
         if share < settings.min_explained:
             ext = extend(family.name)
             if isinstance(ext, Extension):

@@ -318,6 +318,33 @@ def test_a_significant_effect_gives_way_to_a_simpler_family_that_holds_it():
     assert _simpler_cover(richer, d, beyond("gas_force"), extend, (), {"gas_force"}, settings) == (richer, "")  # taken
 
 
+def test_a_family_that_explains_nothing_itself_does_not_hold_a_richer_effect():
+    """Hysteresis explained 5.1 % of the residual alone and 5.0 % beyond the moving mass, which explained -0.03 %
+    itself: the extra column's noise, not a cover. The moving mass was retrained in its place and added."""
+    m = record(FULL, duration=2.0)
+    rows = np.arange(len(m))
+    d = SimpleNamespace(
+        ranking=[
+            SimpleNamespace(name="hysteresis", testable=True, regressors=("r",) * 6),
+            SimpleNamespace(name="inertia", testable=True, regressors=("r",)),
+        ]
+    )
+    top = (extension("hysteresis", HISTORY, m, rows, SETTINGS), d.ranking[0], SIGNIFICANT)
+
+    def beyond(effect: str, given: tuple[str, ...]) -> GainTest:
+        if effect == "inertia":
+            return GainTest(-0.0003, 0.61, -0.3, 100.0, 3)
+        return GainTest(0.0499 if "inertia" in given else 0.0515, 1e-4, 3.7, 100.0, 3)
+
+    def extend(effect: str):
+        return extension(effect, HISTORY, m, rows, SETTINGS)
+
+    assert _simpler_cover(top, d, beyond, extend, ("temperature",), set(), LoopSettings(min_explained=0.05)) == (
+        top,
+        "",
+    )
+
+
 def test_a_partner_is_offered_with_the_simpler_rivals_that_explain_near_as_much_beyond_the_top_effect():
     m = record(FULL, duration=2.0)
     rows = np.arange(len(m))
