@@ -53,7 +53,9 @@ def test_build_time_grows_about_linearly_in_ports(tmp_path, monkeypatch):
     (tmp_path / "large").mkdir()
     _python_side_build_seconds(_vector_graph(20), tmp_path / "small", monkeypatch)  # imports and templates, once
     small = min(_python_side_build_seconds(_vector_graph(200), tmp_path / "small", monkeypatch) for _ in range(2))
-    large = _python_side_build_seconds(_vector_graph(2000), tmp_path / "large", monkeypatch)
+    # the best of two on each side: one run of the large graph alone caught a pause of the other xdist worker in CI
+    # (0.075 s vs 1.268 s; 0.11 s vs 0.50 s on idle cores)
+    large = min(_python_side_build_seconds(_vector_graph(2000), tmp_path / "large", monkeypatch) for _ in range(2))
     assert large < 15 * max(small, 0.02), f"200 ports: {small:.3f} s, 2000 ports: {large:.3f} s"
 
 
