@@ -7,6 +7,7 @@ becomes one index. Every graph input element must be fed by a port or a state.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -168,13 +169,18 @@ def render_config(
         "state_initial": _c_list([c_double(x) for x in ports.state_initial], "0.0"),
     }
     _check_consecutive(variables)
-    environment = jinja2.Environment(
+    return _environment().get_template("config.h.j2").render(c=values)
+
+
+@functools.cache
+def _environment() -> jinja2.Environment:
+    """The C header templates' environment, made once per process (its templates compiled once)."""
+    return jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(templates_dir())),
         autoescape=False,
         undefined=jinja2.StrictUndefined,
         keep_trailing_newline=True,
     )
-    return environment.get_template("config.h.j2").render(c=values)
 
 
 def _check_consecutive(variables: FmuVariables) -> None:
