@@ -93,6 +93,17 @@ def test_without_zig_a_default_build_names_what_it_left_out_and_all_is_refused(m
         assert toolchain.select_targets(None) == (toolchain.select_targets(("host",))[0], None)
 
 
+def test_binaries_that_never_leave_this_machine_are_built_by_the_host_compiler(monkeypatch):
+    monkeypatch.delenv("CC", raising=False)
+    monkeypatch.delenv(toolchain.PLATFORMS_VARIABLE, raising=False)
+    host = toolchain.host_platform_of()
+    with toolchain.host_binaries_only():
+        (target,), warning = toolchain.select_targets(None)
+    assert warning is None and target.name == host.name and target.label.startswith("host compiler")
+    if ZIG and host.name.endswith("linux"):  # outside it a Linux host keeps Zig first (the glibc baseline)
+        assert toolchain.candidates(host)[0].label.startswith("Zig")
+
+
 def test_nnfmu_platforms_is_the_default_choice(monkeypatch):
     host = toolchain.host_platform_of().name
     monkeypatch.setenv(toolchain.PLATFORMS_VARIABLE, " host, ")

@@ -147,7 +147,9 @@ def candidates(target: Platform) -> list[Target]:
     elif target == host_platform_of():
         host = _host_command()
         native = None if host is None else Target(target, host, HOST_FLAGS, f"host compiler {shlex.join(host)}")
-        prefer_host = bool(os.environ.get("CC", "").strip()) or target.name.endswith("darwin")
+        # The host compiler first where CC names it, on macOS, and for binaries that never leave this machine
+        # (`host_binaries_only`: no glibc baseline to keep, and gcc compiles them in about half Zig's time).
+        prefer_host = bool(os.environ.get("CC", "").strip()) or target.name.endswith("darwin") or _HOST_ONLY.get()
         found = [native, _zig_target(target)] if prefer_host else [_zig_target(target), native]
     else:
         found = [_zig_target(target)]
