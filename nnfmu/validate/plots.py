@@ -10,8 +10,10 @@ import textwrap
 from pathlib import Path
 
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.ticker import LogLocator
 
 from nnfmu.validate.compare import ChannelComparison
 from nnfmu.validate.damage import rainflow_cycles
@@ -90,6 +92,13 @@ def envelope(x: np.ndarray, y: np.ndarray, max_points: int = MAX_LINE_POINTS) ->
     return x[keep], y[keep]
 
 
+def log_scale(axes: Axes, which: str) -> None:
+    """The `which` ("x" or "y") axis of `axes` on a log scale, minor ticks at 2 and 5 times each decade only:
+    matplotlib's eight per decade were 20-30 % of a PSD or rainflow plot's CPU time (bench/plots.py)."""
+    (axes.set_xscale if which == "x" else axes.set_yscale)("log")
+    (axes.xaxis if which == "x" else axes.yaxis).set_minor_locator(LogLocator(subs=(2.0, 5.0)))
+
+
 def _save(figure: Figure, path: Path) -> Path:
     figure.savefig(path, format="png")
     return path
@@ -113,7 +122,7 @@ def plot_psd(c: ChannelComparison, path: Path) -> Path:
     axes.plot(c.psd_reference.frequency, c.psd_reference.density, **REFERENCE_STYLE)
     axes.plot(c.psd_result.frequency, c.psd_result.density, **RESULT_STYLE)
     if np.any(c.psd_reference.density > 0) or np.any(c.psd_result.density > 0):
-        axes.set_yscale("log")  # a constant channel has an all-zero PSD and keeps a linear axis
+        log_scale(axes, "y")  # a constant channel has an all-zero PSD and keeps a linear axis
     axes.set_xlabel("frequency [Hz]")
     axes.set_ylabel(f"PSD [{psd_unit(c.unit)}]", parse_math=False)
     axes.legend()
@@ -141,7 +150,7 @@ def plot_rainflow(c: ChannelComparison, path: Path) -> Path:
         axes.step(cumulative, ranges, where="post", **style)
         any_cycles = any_cycles or ranges.size > 0
     if any_cycles:
-        axes.set_xscale("log")  # a constant channel has no cycles and keeps a linear axis
+        log_scale(axes, "x")  # a constant channel has no cycles and keeps a linear axis
     axes.set_xlabel("cycles exceeding range [1]")
     axes.set_ylabel(axis_label(f"{c.name} range", c.unit), parse_math=False)
     axes.legend()

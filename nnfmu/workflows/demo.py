@@ -21,6 +21,7 @@ after.
 from __future__ import annotations
 
 import json
+import time
 from collections.abc import Callable
 from contextlib import nullcontext
 from dataclasses import asdict, dataclass, field, replace
@@ -40,6 +41,7 @@ from nnfmu.models.train import Progress
 from nnfmu.out_paths import check_output_dir, mark_output_dir
 from nnfmu.validate import ValidationSettings, compare, write_report
 from nnfmu.vehicle import DriveSettings, generate_drive, kernel_compiled_in_background
+from nnfmu.workflows.beside import beside
 from nnfmu.workflows.characterise.settings import QUICK_SETTINGS as QUICK_CHARACTERISE
 from nnfmu.workflows.fmu_build import host_binaries_only
 from nnfmu.workflows.iterate import IterateResult, IterateSettings, run_iterate
@@ -236,6 +238,10 @@ class DemoSummary:
     stage_seconds: dict[str, float] = field(default_factory=dict)  # wall time of each stage, in run order
 
 
+COMPONENT_STAGE = "component networks"
+LOOP_STAGE = "component loop"
+
+
 def channel_label(preset: str, output: str) -> str:
     """The report's name for `preset`'s `output`, said once: `damper_spline_force`, `bushing_axial_force` (not
     `bushing_axial_force_axial_force`)."""
@@ -284,6 +290,33 @@ def close_the_loop(
         f"{report.error_before['nrmse']:.2%} -> {report.error_after['nrmse']:.2%}"
     )
     return report
+
+
+@dataclass(frozen=True)
+class SideStages:
+    """What the demo's child process made: the component networks (when the road test does not need them), their
+    report, the component loop, and each of its stages' wall time [s]."""
+
+    report: Path | None
+    models: list[ModelResult]
+    loop: LoopReport
+    seconds: dict[str, float]
+
+
+def side_stages(out: Path, settings: DemoSettings, components: bool, log: Callable[[str], None]) -> SideStages:
+    """The stages that need nothing the others make, as the demo's child process runs them: the component networks
+    (if `components`) and the component loop (quick: host binaries only, as in the caller)."""
+    seconds: dict[str, float] = {}
+    report, models = None, []
+    with host_binaries_only() if settings.quick else nullcontext():
+        start = time.perf_counter()
+        if components:
+            report, models = _components(out, settings, log)
+            seconds[COMPONENT_STAGE] = time.perf_counter() - start
+            start = time.perf_counter()
+        loop = close_the_loop(out, settings, log)
+        seconds[LOOP_STAGE] = time.perf_counter() - start
+    return SideStages(report, models, loop, seconds)
 
 
 def thesis_residual(
@@ -361,7 +394,9 @@ def _origin(
     }
 
 
-def _components(out: Path, settings: DemoSettings, clock: StageClock) -> tuple[Path, list[ModelResult]]:
+def _components(
+    out: Path, settings: DemoSettings, log: Callable[[str], None], progress: Progress | None = None
+) -> tuple[Path, list[ModelResult]]:
     """Rig records, every preset trained, exported, built and replayed on its held-out record; the report's path."""
     comparisons = []
     results: list[ModelResult] = []
@@ -374,16 +409,14 @@ def _components(out: Path, settings: DemoSettings, clock: StageClock) -> tuple[P
             out / "rig" / f"{rig}_test.csv",
             RigOptions(seed=settings.seed + 1, duration=settings.test_duration, excitation="random"),
         )
-        clock.log(f"rig {rig}: lab record {lab}, held-out random record {test}")
+        log(f"rig {rig}: lab record {lab}, held-out random record {test}")
         measured = load_measurement(test)
         if rig in MOVING_MASS_BY_RIG:  # judged on the force the networks learn: the load cell's less m·a
             measured = compensate_inertia(measured, MOVING_MASS_BY_RIG[rig])
         for preset in presets:
-            clock.log(f"{preset}: training on {lab.name}")
-            trained = train_from_file(
-                lab, settings.request(preset, rig), out / "models" / f"{preset}.onnx", clock.progress
-            )
-            clock.log(f"{preset}: trained in {trained.seconds:.1f} s; building and replaying its FMU")
+            log(f"{preset}: training on {lab.name}")
+            trained = train_from_file(lab, settings.request(preset, rig), out / "models" / f"{preset}.onnx", progress)
+            log(f"{preset}: trained in {trained.seconds:.1f} s; building and replaying its FMU")
             fmu = build_fmu(trained.path, BuildOptions(out=out / "fmu" / f"{preset}.fmu"))
             output = trained.model.spec.output
             replayed = replay_fmu(fmu, measured)
@@ -406,7 +439,7 @@ def _components(out: Path, settings: DemoSettings, clock: StageClock) -> tuple[P
                     replay_pseudo_damage_ratio=errors.pseudo_damage_ratio,
                 )
             )
-            clock.log(f"{preset}: FMU {fmu}, held-out NRMSE {errors.nrmse:.2%}")
+            log(f"{preset}: FMU {fmu}, held-out NRMSE {errors.nrmse:.2%}")
     report = write_report(
         comparisons,
         out / "report",
@@ -417,7 +450,7 @@ def _components(out: Path, settings: DemoSettings, clock: StageClock) -> tuple[P
             "records": "lab: sine series + random (training); test: band-limited random (held out)",
         },
     )
-    clock.log(f"component report {report}")
+    log(f"component report {report}")
     return report, results
 
 
@@ -432,12 +465,23 @@ def run_demo(
     mark_output_dir(out, "demo")
     clock = StageClock(log)
     try:
-        # quick: no cross builds; the monolithic kernel compiled on the second core while the first stage trains
-        with host_binaries_only() if settings.quick else nullcontext(), kernel_compiled_in_background():
+        # quick: no cross builds. The monolithic kernel is compiled by a child process from the start, and the stages
+        # that need nothing the others make (the component networks, when the road test trains its own networks on
+        # vehicle-derived records, and the component loop) run in another child process beside the rest.
+        beside_components = settings.vehicle_bushings and settings.vehicle_dampers
+        side_names = [COMPONENT_STAGE, LOOP_STAGE] if beside_components else [LOOP_STAGE]
+        with (
+            host_binaries_only() if settings.quick else nullcontext(),
+            kernel_compiled_in_background(),
+            beside(" and ".join(side_names), side_stages, (out, settings, beside_components), clock.aside) as side,
+        ):
             clock.log(settings.announcement)
-            with clock.stage("component networks"):
-                report, results = _components(out, settings, clock)
-            onnx_files = {r.preset: Path(r.onnx) for r in results}
+            clock.log(f"{' and '.join(side_names)}: started in their own process beside the other stages")
+            onnx_files: dict[str, Path] = {}
+            if not beside_components:
+                with clock.stage(COMPONENT_STAGE):
+                    report, results = _components(out, settings, clock.log, clock.progress)
+                onnx_files = {r.preset: Path(r.onnx) for r in results}
             vehicle_bushings = None
             if settings.vehicle_bushings:
                 with clock.stage("vehicle-derived bushing networks"):
@@ -465,12 +509,18 @@ def run_demo(
                 road = run_road_test(out / "road_test", onnx_files, settings.road_test, clock.log)
                 for system, path in road.reports().items():
                     clock.log(f"road test {system}: report {path}")
-            with clock.stage("component loop"):
-                loop = close_the_loop(out, settings, clock.log, clock.progress)
             with clock.stage("vehicle loop"):
                 vehicle_loop = thesis_residual(road, out / "vehicle_loop", settings, clock.log)
             with clock.stage("drive iteration"):
                 iteration = iterate_road_drive(road, out / "iterate", settings, clock.log)
+            with clock.stage(f"waiting for {' and '.join(side_names)}"):
+                done = side.result()
+            for name, spent in done.seconds.items():
+                clock.record(f"{name} (own process)", spent)
+            loop = done.loop
+            if beside_components:
+                report, results = done.report, done.models
+                onnx_files = {r.preset: Path(r.onnx) for r in results} | onnx_files
         seconds = clock.elapsed()
     finally:
         clock.close()

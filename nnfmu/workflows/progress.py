@@ -60,6 +60,18 @@ class StageClock:
             line = f"[{stamp(self._last - self._started)}] {message}"
         self._log(line)
 
+    def aside(self, message: str) -> None:
+        """Print `message` with the elapsed time, leaving the stage's current step as it is (a line of work running
+        beside the stage, such as a child process's)."""
+        with self._lock:
+            line = f"[{stamp(time.perf_counter() - self._started)}] {message}"
+        self._log(line)
+
+    def record(self, name: str, seconds: float) -> None:
+        """Keep `seconds` as the time of `name`, work timed elsewhere (beside the stages, in its own process)."""
+        with self._lock:
+            self.seconds[name] = seconds
+
     def progress(self, label: str, done: float) -> None:
         """A step's own progress (a training's `label` and share `done` in [0, 1]): shown only by the heartbeat."""
         with self._lock:
