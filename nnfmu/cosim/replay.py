@@ -63,13 +63,14 @@ def replay_fmu(
         parameters = settings.parameters()
         if parameters:
             slave.set_real(list(parameters), list(parameters.values()))
-        slave.set_real(inputs, values[0])
+        io = slave.real_io(inputs, outputs)
+        io.set(values[0])
         slave.exit_initialization()
-        result[0] = slave.get_real(outputs)
+        result[0] = io.get()
         for k in range(1, len(measurement)):
-            slave.set_real(inputs, values[k])
+            io.set(values[k])
             slave.do_step(t0 + (k - 1) * dt, dt)
-            result[k] = slave.get_real(outputs)
+            result[k] = io.get()
         units = {name: slave.unit(name) for name in outputs}
     return Measurement(
         time=measurement.time.copy(),

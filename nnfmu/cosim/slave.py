@@ -165,6 +165,11 @@ class FmuSlave:
         vrs = self.value_references(names)
         return np.array((self.fmu.getReal if self.fmi_version == 2 else self.fmu.getFloat64)(vrs))
 
+    def real_io(self, inputs: Sequence[str], outputs: Sequence[str]) -> RealIo:
+        """Set `inputs` and get `outputs` (Real/Float64) through value references and buffers made once: a replay
+        does both every step, and fmpy's `setReal`/`getReal` build both arrays anew on each call."""
+        return RealIo(self, self.value_references(inputs), self.value_references(outputs))
+
     def get_boolean(self, names: Sequence[str]) -> list[bool]:
         return [bool(b) for b in self.fmu.getBoolean(self.value_references(names))]
 
@@ -217,3 +222,39 @@ class FmuSlave:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+class RealIo:
+    """Fixed Real/Float64 inputs and outputs of one instance, set from and read into numpy buffers; fmpy's low-level
+    calls check each status (an FMU's error raises)."""
+
+    def __init__(self, slave: FmuSlave, inputs: list[int], outputs: list[int]) -> None:
+        fmu = slave.fmu
+        if slave.fmi_version == 2:
+            from fmpy.fmi2 import fmi2Real as real
+            from fmpy.fmi2 import fmi2ValueReference as reference
+        else:
+            from fmpy.fmi3 import fmi3Float64 as real
+            from fmpy.fmi3 import fmi3ValueReference as reference
+        self._in_refs, self._out_refs = (reference * len(inputs))(*inputs), (reference * len(outputs))(*outputs)
+        self._in, self._out = (real * len(inputs))(), (real * len(outputs))()
+        self._in_view, self._out_view = np.ctypeslib.as_array(self._in), np.ctypeslib.as_array(self._out)
+        self._fmu, self._fmi3 = fmu, slave.fmi_version == 3
+
+    def set(self, values: np.ndarray) -> None:
+        """Set the inputs to `values` (in the order given)."""
+        self._in_view[:] = values
+        n = len(self._in)
+        if self._fmi3:
+            self._fmu.fmi3SetFloat64(self._fmu.component, self._in_refs, n, self._in, n)
+        else:
+            self._fmu.fmi2SetReal(self._fmu.component, self._in_refs, n, self._in)
+
+    def get(self) -> np.ndarray:
+        """The outputs now (a view of the buffer the next `get` overwrites: copy what you keep)."""
+        n = len(self._out)
+        if self._fmi3:
+            self._fmu.fmi3GetFloat64(self._fmu.component, self._out_refs, n, self._out, n)
+        else:
+            self._fmu.fmi2GetReal(self._fmu.component, self._out_refs, n, self._out)
+        return self._out_view
