@@ -409,15 +409,20 @@ def demo(
     """Run the pipeline end to end on built-in data: rig data, networks, ONNX, FMUs, replay, road test, loop."""
     from rich.console import Console
 
-    from nnfmu.workflows.demo import DemoSettings, run_demo
-    from nnfmu.workflows.tables import COMPONENT_LEGEND, component_table, loop_table, stage_table
+    from nnfmu.vehicle import kernel_compiled_in_background
+    from nnfmu.workflows.progress import StageClock
 
     console = Console(markup=False)  # diagnosis test names carry brackets: test[velocity]
-    with _user_errors(), _warnings_as_lines():
+    clock = StageClock(console.print)
+    # the monolithic kernel starts compiling (first run) on the second core while this process loads its modules
+    with _user_errors(), _warnings_as_lines(), kernel_compiled_in_background():
+        with clock.stage("loading modules"):
+            from nnfmu.workflows.demo import DemoSettings, run_demo
+            from nnfmu.workflows.tables import COMPONENT_LEGEND, component_table, loop_table, stage_table
         summary = run_demo(
             out,
             DemoSettings(seed=seed, quick=quick, vehicle_bushings=not lab_bushings, vehicle_dampers=not lab_dampers),
-            log=console.print,
+            clock=clock,
         )
     console.print(component_table(summary.models))
     console.print(COMPONENT_LEGEND)

@@ -455,16 +455,20 @@ def _components(
 
 
 def run_demo(
-    out: str | Path, settings: DemoSettings = DemoSettings(), log: Callable[[str], None] = print
+    out: str | Path,
+    settings: DemoSettings = DemoSettings(),
+    log: Callable[[str], None] = print,
+    clock: StageClock | None = None,
 ) -> DemoSummary:
     """Run every stage into `out` (rig/, models/, fmu/, report/, vehicle_bushing/, vehicle_damper/, road_test/, loop/,
     vehicle_loop/, iterate/, summary.json); every line logged carries the elapsed time, a stage quiet for 10 s says
-    so, and the summary holds each stage's time. Returns what it measured."""
-    out = check_output_dir(out, "demo")
-    out.mkdir(parents=True, exist_ok=True)
-    mark_output_dir(out, "demo")
-    clock = StageClock(log)
+    so, and the summary holds each stage's time. `clock`: one the caller started (and timed its own stages on, such
+    as loading the modules), else a new one logging to `log`; closed here. Returns what it measured."""
+    clock = StageClock(log) if clock is None else clock
     try:
+        out = check_output_dir(out, "demo")
+        out.mkdir(parents=True, exist_ok=True)
+        mark_output_dir(out, "demo")
         # quick: no cross builds. The monolithic kernel is compiled by a child process from the start, and the stages
         # that need nothing the others make (the component networks, when the road test trains its own networks on
         # vehicle-derived records, and the component loop) run in another child process beside the rest.

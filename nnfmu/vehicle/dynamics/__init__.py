@@ -1,45 +1,23 @@
-"""Vehicle models for the virtual road test simulator: linear(ised) state space, exact discretisation, named ports."""
+"""Vehicle models for the virtual road test simulator: linear(ised) state space, exact discretisation, named ports.
 
-from nnfmu.vehicle.dynamics.builtin_elements import LinearSpring, SplineDamper
-from nnfmu.vehicle.dynamics.errors import ParameterError, VehicleModelError
-from nnfmu.vehicle.dynamics.full_vehicle import build_full_vehicle
-from nnfmu.vehicle.dynamics.laws import (
-    BushingTruthLaw,
-    ComponentLaw,
-    DamperTruthLaw,
-    LinearLaw,
-    linear_laws,
-    truth_laws,
+Each name loads its module on first use (`nnfmu.faces`), so importing one module of the package (the kernel warm-up
+the demo starts before anything else) does not load the others and scipy.
+"""
+
+from nnfmu.faces import face
+
+__all__, __getattr__ = face(
+    __name__,
+    {
+        "builtin_elements": ("LinearSpring", "SplineDamper"),
+        "errors": ("ParameterError", "VehicleModelError"),
+        "full_vehicle": ("build_full_vehicle",),
+        "laws": ("BushingTruthLaw", "ComponentLaw", "DamperTruthLaw", "LinearLaw", "linear_laws", "truth_laws"),
+        "linear": ("DiscreteVehicle", "LinearVehicle", "SimulationSettings", "simulate"),
+        "monolithic": ("MonolithicSettings", "rest_state", "simulate_monolithic"),
+        "parameters": ("DEFAULT_FILE", "VehicleParameters"),
+        "ports": ("VehiclePort",),
+        "quarter_car": ("build_quarter_car",),
+        "quarter_car_parameters": ("QuarterCarParameters",),
+    },
 )
-from nnfmu.vehicle.dynamics.linear import DiscreteVehicle, LinearVehicle, SimulationSettings, simulate
-from nnfmu.vehicle.dynamics.monolithic import MonolithicSettings, rest_state, simulate_monolithic
-from nnfmu.vehicle.dynamics.parameters import DEFAULT_FILE, VehicleParameters
-from nnfmu.vehicle.dynamics.ports import VehiclePort
-from nnfmu.vehicle.dynamics.quarter_car import build_quarter_car
-from nnfmu.vehicle.dynamics.quarter_car_parameters import QuarterCarParameters
-
-__all__ = [
-    "BushingTruthLaw",
-    "ComponentLaw",
-    "DEFAULT_FILE",
-    "DamperTruthLaw",
-    "LinearLaw",
-    "MonolithicSettings",
-    "QuarterCarParameters",
-    "DiscreteVehicle",
-    "LinearSpring",
-    "LinearVehicle",
-    "ParameterError",
-    "SimulationSettings",
-    "SplineDamper",
-    "VehicleModelError",
-    "VehicleParameters",
-    "VehiclePort",
-    "build_full_vehicle",
-    "build_quarter_car",
-    "linear_laws",
-    "rest_state",
-    "simulate",
-    "simulate_monolithic",
-    "truth_laws",
-]
