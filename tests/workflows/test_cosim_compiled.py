@@ -133,3 +133,14 @@ def test_the_cli_runs_the_compiled_engine_and_refuses_what_it_cannot(
     )  # fmt: skip
     assert study.exit_code == 2 and "--step-study runs on --master fmpy --engine python" in study.output
     assert not (tmp_path / "r2.csv").exists() and not (tmp_path / "r3.csv").exists()
+
+
+def test_the_cosim_workflow_loads_no_torch() -> None:
+    """`nnfmu cosim` (either engine) checks the training envelope through `workflows.roadtest`, whose package must not
+    bring the training side (torch) with it: that import cost a 2 s full-vehicle run 4 s of CPU."""
+    import subprocess
+
+    script = "import sys, nnfmu.workflows.cosim; print('torch' in sys.modules)"
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "False"
