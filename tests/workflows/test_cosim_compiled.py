@@ -21,7 +21,7 @@ sys.path.insert(0, str(Path(__file__).parents[1] / "cosim"))  # the master's tes
 from cosim_system_helpers import drive  # noqa: E402
 
 from nnfmu.cli import app  # noqa: E402
-from nnfmu.cosim.master import CosimSettings  # noqa: E402
+from nnfmu.cosim.master import CosimSettings, CosimWarning  # noqa: E402
 from nnfmu.cosim.settings import CosimError  # noqa: E402
 from nnfmu.cosim.ssp import connect_by_name, write_ssd  # noqa: E402
 from nnfmu.data import load_measurement  # noqa: E402
@@ -85,6 +85,26 @@ def test_a_system_is_built_once_and_rebuilt_when_it_changes(
     assert [r.measurement.notes["built"] for r in (*runs, other)] == ["True", "False", "True"]
     assert len(list((tmp_path / "cache" / "system-fmus").iterdir())) == 2
     np.testing.assert_array_equal(runs[0].measurement["damper_force"], runs[1].measurement["damper_force"])
+
+
+def test_the_training_envelope_warning_comes_as_from_the_python_engine(
+    quarter_car: tuple[Path, Path], tmp_path: Path
+) -> None:
+    """A damper network driven past its training envelope: the compiled engine's run gives run_cosim's warning, word
+    for word as the Python engine's (downstream of the result, nothing differs)."""
+    ssd, drive_file = quarter_car
+    shutil.copyfile(ssd.parent / "car.fmu", tmp_path / "car.fmu")
+    onnx.save(linear_damper_graph(2400.0, velocity_range=(-0.05, 0.05)), tmp_path / "narrow.onnx")
+    damper = build_fmu(tmp_path / "narrow.onnx", BuildOptions(out=tmp_path / "narrow.fmu"))
+    system = connect_by_name("quarter car", ("vehicle", tmp_path / "car.fmu"), {"damper": damper}, tmp_path)
+    narrow = write_ssd(system, tmp_path / "SystemStructure.ssd")
+    said = {}
+    for engine in ("python", "compiled"):
+        with pytest.warns(CosimWarning) as caught:
+            run_cosim(narrow, drive_file, CosimSettings(step=H), engine=engine)
+        said[engine] = [str(w.message) for w in caught if "training envelope" in str(w.message)]
+    assert len(said["compiled"]) == 1 and "element 'damper': input 'velocity' reached" in said["compiled"][0]
+    assert said["compiled"] == said["python"]
 
 
 @pytest.mark.parametrize(
