@@ -107,6 +107,28 @@ def test_the_training_envelope_warning_comes_as_from_the_python_engine(
     assert said["compiled"] == said["python"]
 
 
+def test_a_part_failing_inside_is_a_cosim_error_naming_it(quarter_car: tuple[Path, Path], tmp_path: Path) -> None:
+    """The damper's output gain at 1e308 (set by the SSD): its force overflows, the car refuses the slope of its
+    damper-force input inside the system FMU, and the run ends in a CosimError naming the time, the failed call and,
+    from the system FMU's log, the element and its input."""
+    ssd, drive_file = quarter_car
+    for name in ("car.fmu", "damper.fmu"):
+        shutil.copyfile(ssd.parent / name, tmp_path / name)
+    system = connect_by_name(
+        "quarter car",
+        ("vehicle", tmp_path / "car.fmu"),
+        {"damper": tmp_path / "damper.fmu"},
+        tmp_path,
+        parameters={"damper": {"output_gain": 1e308}},
+    )
+    wild = write_ssd(system, tmp_path / "SystemStructure.ssd")
+    with pytest.raises(CosimError) as caught:
+        run_cosim(wild, drive_file, CosimSettings(step=H), engine="compiled")
+    message = str(caught.value)
+    assert "(compiled engine), step from t = " in message and "doStep failed with status 3" in message, message
+    assert "element 'vehicle'" in message and "input 'damper_force'" in message, message
+
+
 @pytest.mark.parametrize(
     ("settings", "message"),
     [
