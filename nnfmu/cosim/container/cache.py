@@ -1,10 +1,10 @@
 """System FMUs for `nnfmu cosim --engine compiled`, built once and kept: named by the hash of everything the build
 reads (each element's FMU bytes, connectors, parameters, wiring, times, the coupling settings, the step, the drive
-binding, nnfmu's version, the C templates, the container's Python modules and the host compiler), so a repeated run
-of the same system reuses its FMU and any change builds a new one. They live in the compiled helpers' cache folder
-(`nnfmu.cosim.inner_loop.cache_dir`), unpacked (opened in place: no extraction per run) under `system-fmus/`; at
-most KEPT of them, the least recently used removed after a build once unused for an hour (a run in another process
-may still be opening it)."""
+binding, nnfmu's version, the C templates, the co-simulation package's Python modules and the host compiler), so a
+repeated run of the same system reuses its FMU and any change builds a new one. They live in the compiled helpers'
+cache folder (`nnfmu.cosim.inner_loop.cache_dir`), unpacked (opened in place: no extraction per run) under
+`system-fmus/`; at most KEPT of them, the least recently used removed after a build once unused for an hour (a run
+in another process may still be opening it)."""
 
 from __future__ import annotations
 
@@ -42,15 +42,19 @@ def _file_sha256(path: Path) -> str:
 
 @functools.cache
 def _builder_sha256() -> str:
-    """What turns a plan into a binary: the C templates and the container's modules."""
+    """What turns a system into a binary: the C templates and the co-simulation package's modules (the master's
+    `_System` plans the system FMU), the engine's own two left out."""
     from nnfmu.fmu import GENERATION_TOOL, host_target
 
     target = host_target()
     digest = hashlib.sha256("\0".join((GENERATION_TOOL, *target.compiler, *target.flags)).encode())
     for path in sorted({templates_dir() / "c" / name for name in (*SOURCES[2], *HEADERS)}):
         digest.update(path.read_bytes())
-    for path in sorted(Path(__file__).parent.glob("*.py")):
-        digest.update(path.read_bytes())
+    package = Path(__file__).parents[1]
+    for path in sorted(package.rglob("*.py")):
+        if path.parent.name == "container" and path.stem in ("cache", "engine"):
+            continue
+        digest.update(path.relative_to(package).as_posix().encode() + b"\0" + path.read_bytes())
     return digest.hexdigest()
 
 
