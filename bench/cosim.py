@@ -18,6 +18,10 @@ The compiled engine (`compiled_*`): each system built into one system FMU (`nnfm
 drive, its slopes, doStep, every output), timed from loading the FMU's library to closing it (instantiation
 included); `compiled_*_matches_master` is the largest difference of any output from the Python master's run,
 relative to its peak (targets of issue 33: full vehicle >= 200x real time, quarter car >= 1000x).
+
+`nnfmu cosim --engine compiled` (`engine_compiled_*`): the whole `cosimulate_compiled` call, the same system FMU
+(cached: the first call builds it, `first_wall_s`, in this process's cache folder) opened by fmpy and stepped from C
+(templates/c/system_loop.c); `matches_master` as above.
 """
 
 from __future__ import annotations
@@ -149,6 +153,32 @@ def compiled_runs(
     return record
 
 
+def engine_runs(ssd: Path, drive: Measurement, duration: float, repeats: int, reference: Measurement | None) -> dict:
+    """`cosimulate_compiled` on `ssd`: the first call (the system FMU built, unless cached before) and the median of
+    `repeats` more (cached), whole calls; the largest difference of any output from the Python master's run."""
+    from nnfmu.cosim.container.engine import cosimulate_compiled
+
+    settings = CosimSettings(step=STEP, stop_time=duration, port_derivatives=False)
+    walls, result = [], None
+    with open_system(ssd) as system:
+        for _ in range(repeats + 1):
+            started = time.perf_counter()
+            result = cosimulate_compiled(system, drive, settings).measurement
+            walls.append(time.perf_counter() - started)
+    record = {"first_wall_s": round(walls[0], 3), "wall_s": [round(w, 3) for w in walls[1:]]}
+    record["median_wall_s"] = round(statistics.median(walls[1:]), 3)
+    record["median_loop_s"] = float(result.notes["wall_time_s"])
+    record["real_time_factor"] = round(duration / record["median_wall_s"], 1)
+    if reference is not None:
+        errors = {
+            c: float(np.max(np.abs(result[c] - reference[c])) / max(float(np.max(np.abs(reference[c]))), 1e-300))
+            for c in reference.names
+        }
+        worst = max(errors, key=errors.get)
+        record["matches_master"] = {"largest_relative_difference": errors[worst], "channel": worst}
+    return record
+
+
 def summary(name: str, fmus: int, walls: list[float], loops: list[float], duration: float, error: str) -> dict:
     """One system's timings: every run, medians, real-time factor (None if the run failed) and the error text."""
     wall = statistics.median(walls)
@@ -227,6 +257,10 @@ def main() -> None:
         for system, ssd in ssds.items():
             compiled[system] = compiled_runs(ssd, drive, duration, repeats, work, results[system])
             log(json.dumps({"compiled": system} | compiled[system]))
+        engine = {}
+        for system, ssd in ssds.items():
+            engine[system] = engine_runs(ssd, drive, duration, repeats, results[system])
+            log(json.dumps({"engine_compiled": system} | engine[system]))
         _, _, yardstick, error = timed_runs(linear, drive, duration, 1)
         if yardstick is None:
             raise SystemExit(f"the linear-bushing yardstick run failed: {error}")
@@ -245,6 +279,9 @@ def main() -> None:
                 "compiled_full_vehicle_matches_master": compiled["full-vehicle"].get("matches_master"),
                 "compiled_quarter_car_matches_master": compiled["quarter-car"].get("matches_master"),
                 "compiled": compiled,
+                "engine_compiled_full_vehicle_wall_s": engine["full-vehicle"]["median_wall_s"],
+                "engine_compiled_quarter_car_wall_s": engine["quarter-car"]["median_wall_s"],
+                "engine_compiled": engine,
                 "compiled_targets_s": COMPILED_TARGETS,
                 "real_time_factor": {
                     "full_vehicle": full["real_time_factor"],

@@ -11,6 +11,7 @@ __all__, __getattr__ = face(
     {
         "binding": ("DriveBinding", "bind_free_inputs", "free_inputs"),
         "container.build": ("build_system_fmu",),
+        "container.engine": ("check_compiled", "cosimulate_compiled"),
         "container.plan": ("SystemPlan",),
         "drive_inputs": ("DriveInputError",),
         "instances": ("InstancePool",),

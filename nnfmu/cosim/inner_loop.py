@@ -107,29 +107,39 @@ def cache_dir() -> Path:
     return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "nnfmu"
 
 
+def cached_library(source: Path, headers: tuple[Path, ...] = ()) -> Path | None:
+    """The shared library of the C file `source` (including `headers`), compiled on first use with the host
+    compiler into `cache_dir()` under the hash of the sources and the compiler command; None without a compiler."""
+    from nnfmu.fmu import CompilerError, compile_shared_library, host_target
+
+    try:
+        target = host_target()
+    except CompilerError:
+        return None
+    key = hashlib.sha256(
+        b"".join(path.read_bytes() for path in (source, *headers))
+        + "\0".join((*target.compiler, *target.flags)).encode()
+    ).hexdigest()
+    path = cache_dir() / f"{source.stem}-{key[:16]}{target.suffix}"
+    if not path.is_file():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with scratch_dir(".build-", path.parent) as scratch:
+            built = Path(scratch) / path.name
+            try:
+                compile_shared_library(target, [source], source.parent, built)
+            except CompilerError:
+                return None
+            os.replace(built, path)  # atomic: a concurrent master finds the whole library or none
+    return path
+
+
 def library() -> CDLL | None:
     """The compiled loop (compiled on first use, then from the cache); None when no host C compiler can build it."""
     global _LIBRARY
     if _LIBRARY is None:
-        from nnfmu.fmu import CompilerError, compile_shared_library, host_target
-
-        try:
-            target = host_target()
-        except CompilerError:
+        path = cached_library(SOURCE, (HEADER,))
+        if path is None:
             return None
-        key = hashlib.sha256(
-            SOURCE.read_bytes() + HEADER.read_bytes() + "\0".join((*target.compiler, *target.flags)).encode()
-        ).hexdigest()
-        path = cache_dir() / f"inner_loop-{key[:16]}{target.suffix}"
-        if not path.is_file():
-            path.parent.mkdir(parents=True, exist_ok=True)
-            with scratch_dir(".build-", path.parent) as scratch:
-                built = Path(scratch) / path.name
-                try:
-                    compile_shared_library(target, [SOURCE], SOURCE.parent, built)
-                except CompilerError:
-                    return None
-                os.replace(built, path)  # atomic: a concurrent master finds the whole library or none
         loaded = CDLL(str(path))
         loaded.nn_cosim_steps.argtypes = [c_void_p, c_int64, c_int64, c_double, c_double, c_void_p, c_void_p, c_void_p]
         loaded.nn_cosim_steps.restype = c_int

@@ -40,8 +40,9 @@ class InstancePool:
     def __len__(self) -> int:
         return sum(len(slaves) for slaves in self._idle.values())
 
-    def take(self, path: str | Path, instance_name: str) -> FmuSlave:
-        """A reset instance of the FMU at `path`, kept from an earlier run if there is one, else opened now."""
+    def take(self, path: str | Path, instance_name: str, unpacked: bool = False) -> FmuSlave:
+        """A reset instance of the FMU at `path` (with `unpacked`: a folder, `FmuSlave`), kept from an earlier run if
+        there is one, else opened now."""
         key = _key(Path(path), instance_name)
         idle = self._idle.get(key)
         if idle:
@@ -50,7 +51,7 @@ class InstancePool:
                 del self._idle[key]
             self.reused += 1
         else:
-            slave = FmuSlave(path, instance_name=instance_name)
+            slave = FmuSlave(path, instance_name=instance_name, unpacked=unpacked)
             self.opened += 1
         self._keys[id(slave)] = key
         return slave

@@ -45,28 +45,34 @@ def _fmi2_logger() -> object:
     return _FMI2_LOGGER
 
 
-def _remove_extracted(folder: str, sinks: dict[int, Messages], key: int) -> None:
-    """Forget an instance's FMI 2 message sink and delete its extracted FMU (a finalizer: holds no instance)."""
+def _remove_extracted(folder: str | None, sinks: dict[int, Messages], key: int) -> None:
+    """Forget an instance's FMI 2 message sink and delete its extracted FMU, if it extracted one (a finalizer: holds
+    no instance)."""
     sinks.pop(key, None)
-    shutil.rmtree(folder, ignore_errors=True)
+    if folder is not None:
+        shutil.rmtree(folder, ignore_errors=True)
 
 
 class FmuSlave:
     """An instantiated co-simulation FMU: set inputs and parameters by name, step, read outputs by name.
 
     The FMU is extracted to a private temporary folder that `close()` removes (or, for an instance its caller never
-    closed, garbage collection or the interpreter's exit); `messages` collects what the FMU logged as (status,
-    category, message).
+    closed, garbage collection or the interpreter's exit); with `unpacked`, `path` is a folder holding an FMU nnfmu
+    unpacked itself (the compiled engine's cache), used in place and never removed. `messages` collects what the
+    FMU logged as (status, category, message).
     """
 
-    def __init__(self, path: str | Path, instance_name: str = "instance", logging_on: bool = False) -> None:
+    def __init__(
+        self, path: str | Path, instance_name: str = "instance", logging_on: bool = False, unpacked: bool = False
+    ) -> None:
         from fmpy import extract, read_model_description
 
         from nnfmu.fmu import read_sample_period
         from nnfmu.safe_zip import check_zip
 
         self.path = Path(path)
-        check_zip(self.path)  # ArchiveError for a zip bomb or a member climbing out, before fmpy reads or extracts
+        if not unpacked:
+            check_zip(self.path)  # ArchiveError for a zip bomb or a member climbing out, before fmpy reads or extracts
         self.instance_name = instance_name
         self.description = read_model_description(str(self.path))
         self.fmi_version = 3 if self.description.fmiVersion.startswith("3") else 2
@@ -74,10 +80,10 @@ class FmuSlave:
         self.messages: Messages = []
         self._key = next(_FMI2_KEYS)  # routes an FMI 2 instance's log messages to `messages`
         with interrupts_deferred():  # the folder and its cleanup come together
-            self._unzip_dir = tempfile.mkdtemp(prefix="nnfmu-fmu-")
+            self._unzip_dir = None if unpacked else tempfile.mkdtemp(prefix="nnfmu-fmu-")
             self._cleanup = weakref.finalize(self, _remove_extracted, self._unzip_dir, _FMI2_SINKS, self._key)
         try:
-            directory = extract(str(self.path), unzipdir=self._unzip_dir)
+            directory = str(self.path) if unpacked else extract(str(self.path), unzipdir=self._unzip_dir)
             self.directory = Path(directory)
             self.sample_period = read_sample_period(Path(directory) / "modelDescription.xml")
             kwargs = dict(

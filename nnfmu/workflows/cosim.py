@@ -15,6 +15,7 @@ from nnfmu.cosim import (
     Progress,
     StepStudy,
     cosimulate,
+    cosimulate_compiled,
     open_system,
     save_result,
     study_lines,
@@ -25,9 +26,10 @@ from nnfmu.errors import SettingsError
 from nnfmu.workflows.training_range import training_range_lines
 from nnfmu.workflows.vehicle_binding import vehicle_binding
 
-__all__ = ["DEFAULT_TARGET", "CosimSettings", "CosimWarning", "run_cosim", "run_step_study", "study_lines"]
+__all__ = ["DEFAULT_TARGET", "ENGINES", "CosimSettings", "CosimWarning", "run_cosim", "run_step_study", "study_lines"]
 
 MASTERS = ("fmpy", "libcosim")
+ENGINES = ("python", "compiled")  # the fmpy master's loop in Python (C inner loop), or the system FMU stepped from C
 
 
 def run_cosim(
@@ -38,13 +40,17 @@ def run_cosim(
     progress: Progress | None = None,
     master: str = "fmpy",
     allow_outside: bool = False,
+    engine: str = "python",
 ) -> CosimResult:
     """Co-simulate the system (.ssd, folder or .ssp) on the drive file with `master` (fmpy, this package's master, or
-    libcosim, the cross-check); write the result to `out_path` when given. The system's FMUs may lie outside its
-    folder only if `allow_outside`. A network input the run drove outside its training envelope is a
-    `CosimWarning` (`training_range_lines`)."""
+    libcosim, the cross-check); write the result to `out_path` when given. The fmpy master runs on `engine`:
+    'python' (`cosimulate`) or 'compiled' (`cosimulate_compiled`: the system built once into a cached system FMU and
+    stepped from C; one-pass schemes only, the same result). The system's FMUs may lie outside its folder only if
+    `allow_outside`. A network input the run drove outside its training envelope is a `CosimWarning`
+    (`training_range_lines`)."""
     if master not in MASTERS:
         raise SettingsError(f"unknown master {master!r}; use {' or '.join(MASTERS)}")
+    check_engine(engine, master)
     drive = read_drive(drive_path)
     with open_system(ssd_path, allow_outside) as system:
         binding = vehicle_binding(system)
@@ -52,6 +58,8 @@ def run_cosim(
             from nnfmu.cosim import run_libcosim
 
             result = run_libcosim(ssd_path, drive, settings, binding, allow_outside)
+        elif engine == "compiled":
+            result = cosimulate_compiled(system, drive, settings, progress, binding=binding)
         else:
             result = cosimulate(system, drive, settings, progress, binding=binding)
         for line in training_range_lines(system, binding, result.measurement):
@@ -59,6 +67,16 @@ def run_cosim(
     if out_path is not None:
         save_result(result, out_path)
     return result
+
+
+def check_engine(engine: str, master: str = "fmpy") -> None:
+    """SettingsError for an unknown engine, or the compiled engine asked of another master than fmpy."""
+    if engine not in ENGINES:
+        raise SettingsError(f"unknown engine {engine!r}; use {' or '.join(ENGINES)}")
+    if engine == "compiled" and master != "fmpy":
+        raise SettingsError(
+            f"the compiled engine runs nnfmu's own coupling (master fmpy); master {master!r} runs its own algorithm"
+        )
 
 
 def run_step_study(

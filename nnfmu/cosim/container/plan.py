@@ -137,7 +137,8 @@ def plan_system(
             raise CosimError(
                 f"system {system.name!r}: element inputs set from port derivatives "
                 f"({', '.join(parts.derivatives.names())}); "
-                "a system FMU leaves them at their start values: plan it with port_derivatives=False"
+                "a system FMU leaves them at their start values: plan it with port_derivatives=False (the python "
+                "engine of `nnfmu cosim` sets them)"
             )
         return _plan(system, parts, settings, inner_step, binding, units, copy_to, extrapolate_drive)
     finally:

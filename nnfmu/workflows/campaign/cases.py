@@ -2,7 +2,8 @@
 
 A case's key is the SHA-256 of everything its rows depend on: the event (name; drive file bytes by hash, or every
 generator setting), the variant (name; every element's FMU bytes by hash, connectors, parameter values, wiring), the
-coupling settings with their defaults filled in, and the metric settings. Re-running a campaign finds a case's part
+coupling settings with their defaults filled in, the engine unless it is the Python master (so parts written before
+engines existed stay valid), and the metric settings. Re-running a campaign finds a case's part
 by this key, so an unchanged case is skipped and any change to its inputs runs it again.
 """
 
@@ -26,6 +27,7 @@ class Case:
     variant: VariantSpec
     coupling: dict[str, Any]
     metrics: MetricSpec
+    engine: str = "python"
 
     @property
     def blob_keys(self) -> tuple[str, ...]:
@@ -34,7 +36,13 @@ class Case:
         return drive + tuple(dict.fromkeys(e.fmu.sha256 for e in self.variant.elements))
 
 
-def case_key(event: EventSpec, variant: VariantSpec, resolved_coupling: dict[str, Any], metrics: MetricSpec) -> str:
+def case_key(
+    event: EventSpec,
+    variant: VariantSpec,
+    resolved_coupling: dict[str, Any],
+    metrics: MetricSpec,
+    engine: str = "python",
+) -> str:
     return json_sha256(
         {
             "format": PART_FORMAT,
@@ -43,6 +51,7 @@ def case_key(event: EventSpec, variant: VariantSpec, resolved_coupling: dict[str
             "coupling": resolved_coupling,
             "metrics": metrics.identity(),
         }
+        | ({"engine": engine} if engine != "python" else {})
     )
 
 
@@ -51,11 +60,12 @@ def expand_cases(campaign: Campaign) -> list[Case]:
     resolved = campaign.resolved_coupling()
     return [
         Case(
-            case_key(event, variant, resolved, campaign.metrics),
+            case_key(event, variant, resolved, campaign.metrics, campaign.engine),
             event,
             variant,
             dict(campaign.coupling),
             campaign.metrics,
+            campaign.engine,
         )
         for event in campaign.events
         for variant in campaign.variants

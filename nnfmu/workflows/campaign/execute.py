@@ -23,7 +23,16 @@ from pathlib import Path
 import numpy as np
 
 from nnfmu.atomic import atomic_path
-from nnfmu.cosim import Connection, Connector, CosimSettings, Element, InstancePool, SystemStructure, cosimulate
+from nnfmu.cosim import (
+    Connection,
+    Connector,
+    CosimSettings,
+    Element,
+    InstancePool,
+    SystemStructure,
+    cosimulate,
+    cosimulate_compiled,
+)
 from nnfmu.data import Measurement
 from nnfmu.data.drive_files import read_drive
 from nnfmu.errors import NnfmuError
@@ -193,13 +202,14 @@ def release_instances() -> None:
 
 
 def run_case(case: Case, blobs: Mapping[str, bytes], reuse_instances: bool = True) -> CaseOutcome:
-    """Co-simulate and score one case (on reset instances from this process's pool, or `reuse_instances` False on
-    freshly opened ones); any failure becomes a 'failed' outcome with its message."""
+    """Co-simulate and score one case on its engine (on reset instances from this process's pool, or
+    `reuse_instances` False on freshly opened ones); any failure becomes a 'failed' outcome with its message."""
     started = time.perf_counter()
     try:
         drive = load_drive(case.event, blobs)
         system = build_system(case, blobs)
-        result = cosimulate(
+        run = cosimulate_compiled if case.engine == "compiled" else cosimulate
+        result = run(
             system,
             drive,
             CosimSettings(**case.coupling),

@@ -40,7 +40,11 @@ def inputs(campaign: Campaign, cases: list[Case]) -> dict[str, Any]:
         "description": campaign.description,
         "events": [e.identity() for e in campaign.events],
         "variants": [v.identity() for v in campaign.variants],
-        "coupling": {"given": dict(campaign.coupling), "resolved": campaign.resolved_coupling()},
+        "coupling": {
+            "given": dict(campaign.coupling),
+            "resolved": campaign.resolved_coupling(),
+            "engine": campaign.engine,
+        },
         "metrics": campaign.metrics.identity() | {"reference": campaign.metrics.reference},
         "part_format": PART_FORMAT,
         "cases": [{"key": c.key, "event": c.event.name, "variant": c.variant.name} for c in cases],

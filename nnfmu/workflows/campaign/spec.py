@@ -4,6 +4,7 @@
 name = "damper valvings"                       # optional; default: the file's stem
 [coupling]                                     # nnfmu.cosim.CosimSettings fields, by name
 step = 1e-3
+engine = "python"                              # or "compiled": each variant as a cached system FMU (docs/campaigns.md)
 [metrics]
 channels = ["damper_force", "body_acceleration"]   # default: every output channel
 basquin_slope = 5.0                            # S-N exponent m of the pseudo-damage
@@ -47,7 +48,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from nnfmu.cosim import CosimSettings, Element, SspError, SystemStructure, check_against_fmus, open_system
+from nnfmu.cosim import (
+    CosimSettings,
+    Element,
+    SspError,
+    SystemStructure,
+    check_against_fmus,
+    check_compiled,
+    open_system,
+)
 from nnfmu.validate.damage import MAX_SLOPE
 from nnfmu.vehicle import DriveError, DriveSettings, KerbStrike, Pothole
 from nnfmu.workflows.campaign.errors import CampaignError
@@ -61,6 +70,8 @@ EVENT_KINDS = {"potholes": Pothole, "kerbs": KerbStrike}
 OFF_WHEN_ZERO = ("highpass", "lowpass")  # as on the command line: 0 switches the rig filter off
 MAX_CAMPAIGN_BYTES = 16 * 1024**2  # the campaign file itself
 MAX_CASES = 100_000  # events x variants of one campaign: each case is a co-simulation (a 10 s drive ~20 ms and up)
+ENGINES = ("python", "compiled")  # `nnfmu cosim --engine`: the master's loop in Python, or the system FMU from C
+DEFAULT_ENGINE = "python"  # faster for a campaign's typical run (docs/campaigns.md, Engines)
 
 
 @dataclass(frozen=True)
@@ -160,6 +171,7 @@ class Campaign:
     coupling: Mapping[str, Any]
     metrics: MetricSpec
     blobs: Mapping[str, bytes | Path] = field(repr=False)
+    engine: str = DEFAULT_ENGINE  # [coupling] engine: how each case's co-simulation runs (ENGINES)
 
     def resolved_coupling(self) -> dict[str, Any]:
         """Every CosimSettings field with its value for this campaign (the defaults filled in)."""
@@ -209,15 +221,22 @@ def _existing(base: Path, value: Any, where: str, allow_outside: bool, folder: b
     return path
 
 
-def _coupling(table: Mapping[str, Any], where: str) -> dict[str, Any]:
-    """The [coupling] table, checked by building CosimSettings from it (unknown fields named)."""
+def _coupling(table: Mapping[str, Any], where: str) -> tuple[dict[str, Any], str]:
+    """The [coupling] table as CosimSettings keywords, checked by building CosimSettings from them (unknown fields
+    named), and its `engine` (checked against the settings: the compiled engine steps one-pass schemes only)."""
     names = {f.name for f in dataclasses.fields(CosimSettings)}
-    _unknown(table, names, where)
+    _unknown(table, names | {"engine"}, where)
+    fields = {k: v for k, v in table.items() if k != "engine"}
+    engine = table.get("engine", DEFAULT_ENGINE)
+    if engine not in ENGINES:
+        raise CampaignError(f"{where}: engine {engine!r} is not one of {', '.join(ENGINES)}")
     try:
-        CosimSettings(**table)
+        settings = CosimSettings(**fields)
+        if engine == "compiled":
+            check_compiled(settings)
     except (TypeError, ValueError) as error:
         raise CampaignError(f"{where}: {error}") from None
-    return dict(table)
+    return fields, engine
 
 
 def _metrics(table: Mapping[str, Any], variants: list[str], where: str) -> MetricSpec:
@@ -458,6 +477,7 @@ def read_campaign(path: str | Path, allow_outside: bool = False) -> Campaign:
     name = raw.get("name", path.stem)
     if not isinstance(name, str) or not isinstance(description, str):
         raise CampaignError(f"{where}: 'name' and 'description' must be strings")
+    coupling, engine = _coupling(_table(raw.get("coupling", {}), f"{where}: [coupling]"), f"{where}: [coupling]")
     return Campaign(
         path=path,
         name=name,
@@ -465,7 +485,8 @@ def read_campaign(path: str | Path, allow_outside: bool = False) -> Campaign:
         sha256=bytes_sha256(text),
         events=tuple(events),
         variants=tuple(variants),
-        coupling=_coupling(_table(raw.get("coupling", {}), f"{where}: [coupling]"), f"{where}: [coupling]"),
+        coupling=coupling,
         metrics=_metrics(_table(raw.get("metrics", {}), f"{where}: [metrics]"), names, f"{where}: [metrics]"),
         blobs=blobs,
+        engine=engine,
     )

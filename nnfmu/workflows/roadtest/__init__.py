@@ -1,57 +1,30 @@
-"""Virtual road test simulator runs: quarter car and full vehicle with network FMUs vs the monolithic reference."""
+"""Virtual road test simulator runs: quarter car and full vehicle with network FMUs vs the monolithic reference.
 
-from nnfmu.workflows.roadtest.bushing_drive import BushingDriveSettings, VehicleBushingModels, train_vehicle_bushings
-from nnfmu.workflows.roadtest.damper_drive import VehicleDamperModels, train_vehicle_dampers
-from nnfmu.workflows.roadtest.envelope import Excursion, excursion
-from nnfmu.workflows.roadtest.runs import (
-    RoadTestResult,
-    RoadTestSettings,
-    SystemResult,
-    SystemRun,
-    run_road_test,
-    system_folder,
-)
-from nnfmu.workflows.roadtest.systems import (
-    BUSHING_MODELS,
-    DAMPER_MODELS,
-    SYSTEMS,
-    ComponentFmus,
-    RoadTestError,
-    build_component_fmus,
-    build_vehicle,
-    bushing_onnx,
-    write_system,
-)
-from nnfmu.workflows.roadtest.thesis import ThesisRow, amplitude_ratio, thesis_row
-from nnfmu.workflows.roadtest.truth_reference import Reference, actuator_inputs, monolithic_reference
+Each name loads its module on first use (`nnfmu.faces`): `nnfmu cosim` reads the training envelope through
+`roadtest.envelope`, and importing this package must not import the training side (torch) with it.
+"""
 
-__all__ = [
-    "BUSHING_MODELS",
-    "BushingDriveSettings",
-    "ComponentFmus",
-    "DAMPER_MODELS",
-    "Excursion",
-    "Reference",
-    "RoadTestError",
-    "RoadTestResult",
-    "RoadTestSettings",
-    "SYSTEMS",
-    "SystemResult",
-    "SystemRun",
-    "ThesisRow",
-    "VehicleBushingModels",
-    "VehicleDamperModels",
-    "actuator_inputs",
-    "amplitude_ratio",
-    "build_component_fmus",
-    "build_vehicle",
-    "bushing_onnx",
-    "excursion",
-    "monolithic_reference",
-    "run_road_test",
-    "system_folder",
-    "thesis_row",
-    "train_vehicle_bushings",
-    "train_vehicle_dampers",
-    "write_system",
-]
+from nnfmu.faces import face
+
+__all__, __getattr__ = face(
+    __name__,
+    {
+        "bushing_drive": ("BushingDriveSettings", "VehicleBushingModels", "train_vehicle_bushings"),
+        "damper_drive": ("VehicleDamperModels", "train_vehicle_dampers"),
+        "envelope": ("Excursion", "excursion"),
+        "runs": ("RoadTestResult", "RoadTestSettings", "SystemResult", "SystemRun", "run_road_test", "system_folder"),
+        "systems": (
+            "BUSHING_MODELS",
+            "DAMPER_MODELS",
+            "SYSTEMS",
+            "ComponentFmus",
+            "RoadTestError",
+            "build_component_fmus",
+            "build_vehicle",
+            "bushing_onnx",
+            "write_system",
+        ),
+        "thesis": ("ThesisRow", "amplitude_ratio", "thesis_row"),
+        "truth_reference": ("Reference", "actuator_inputs", "monolithic_reference"),
+    },
+)
