@@ -409,13 +409,11 @@ def demo(
     """Run the pipeline end to end on built-in data: rig data, networks, ONNX, FMUs, replay, road test, loop."""
     from rich.console import Console
 
-    from nnfmu.vehicle import kernel_compiled_in_background
-    from nnfmu.workflows.progress import StageClock
+    from nnfmu.workflows.demo_start import demo_started
 
     console = Console(markup=False)  # diagnosis test names carry brackets: test[velocity]
-    clock = StageClock(console.print)
     # the monolithic kernel starts compiling (first run) on the second core while this process loads its modules
-    with _user_errors(), _warnings_as_lines(), kernel_compiled_in_background():
+    with _user_errors(), _warnings_as_lines(), demo_started(console.print) as clock:
         with clock.stage("loading modules"):
             from nnfmu.workflows.demo import DemoSettings, run_demo
             from nnfmu.workflows.tables import COMPONENT_LEGEND, component_table, loop_table, stage_table
