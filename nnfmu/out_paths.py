@@ -118,8 +118,8 @@ def _listed(folder: Path) -> dict[str, tuple[int, str]] | None:
     return files
 
 
-def _digest(path: Path) -> str:
-    """SHA-256 of a file's bytes."""
+def file_digest(path: Path) -> str:
+    """SHA-256 of a file's bytes (hex), read a MiB at a time."""
     h = hashlib.sha256()
     with open(path, "rb") as f:
         for block in iter(lambda: f.read(1 << 20), b""):
@@ -142,7 +142,7 @@ def _unchanged(folder: Path, name: str, listed: dict[str, tuple[int, str]]) -> b
     if name not in listed or path.is_symlink() or not path.is_file():
         return False
     size, digest = listed[name]
-    return path.stat().st_size == size and _digest(path) == digest
+    return path.stat().st_size == size and file_digest(path) == digest
 
 
 def _foreign(folder: Path, listed: dict[str, tuple[int, str]]) -> list[Path]:
@@ -235,7 +235,9 @@ def replace_output_dir(staging: Path, out_dir: Path, kind: str) -> None:
     unchanged go, every other file and folder is moved into the new result. OutputPathError, with the old folder
     untouched, when the new result has a file where one of those is."""
     files = [p for p in _entries(staging) if (staging / p).is_file()]
-    lines = [kind, LISTED] + [f"{(staging / p).stat().st_size} {_digest(staging / p)} {p.as_posix()}" for p in files]
+    lines = [kind, LISTED] + [
+        f"{(staging / p).stat().st_size} {file_digest(staging / p)} {p.as_posix()}" for p in files
+    ]
     (staging / MARKER).write_text("\n".join(lines) + "\n", encoding="utf-8")
     check_stop()  # a run asked to stop publishes nothing, even where its interrupt was swallowed
     if not out_dir.exists():

@@ -133,21 +133,29 @@ def cached_library(source: Path, headers: tuple[Path, ...] = ()) -> Path | None:
     return path
 
 
+def load_steps_library(source: Path, headers: tuple[Path, ...], function: str) -> CDLL | None:
+    """`cached_library` of `source` loaded, with its stepping `function` typed: the master's loop and the compiled
+    engine's share one signature (context, first step, steps, t0, h, three arrays). None without a compiler."""
+    path = cached_library(source, headers)
+    if path is None:
+        return None
+    loaded = CDLL(str(path))
+    steps = getattr(loaded, function)
+    steps.argtypes = [c_void_p, c_int64, c_int64, c_double, c_double, c_void_p, c_void_p, c_void_p]
+    steps.restype = c_int
+    return loaded
+
+
 def library() -> CDLL | None:
     """The compiled loop (compiled on first use, then from the cache); None when no host C compiler can build it."""
     global _LIBRARY
     if _LIBRARY is None:
-        path = cached_library(SOURCE, (HEADER,))
-        if path is None:
-            return None
-        loaded = CDLL(str(path))
-        loaded.nn_cosim_steps.argtypes = [c_void_p, c_int64, c_int64, c_double, c_double, c_void_p, c_void_p, c_void_p]
-        loaded.nn_cosim_steps.restype = c_int
-        _LIBRARY = loaded
+        _LIBRARY = load_steps_library(SOURCE, (HEADER,), "nn_cosim_steps")
     return _LIBRARY
 
 
-def _address(function: object) -> int:
+def function_address(function: object) -> int:
+    """The address of a ctypes function (an FMU's FMI function handed to a C loop)."""
     return cast(function, c_void_p).value
 
 
@@ -173,15 +181,15 @@ class CompiledLoop:
             sources = np.ascontiguousarray(element.sources, dtype=np.int64)
             keep.append(sources)
             slot.instance = slave.fmu.component
-            slot.set_real, slot.get_real = _address(dll.fmi2SetReal), _address(dll.fmi2GetReal)
-            slot.do_step = _address(dll.fmi2DoStep)
+            slot.set_real, slot.get_real = function_address(dll.fmi2SetReal), function_address(dll.fmi2GetReal)
+            slot.do_step = function_address(dll.fmi2DoStep)
             slot.n_coupled, slot.n_driven = len(element.sources), len(element.driven)
             slot.sources = _pointer(sources)
             if inputs is not None:
                 slot.input_references, slot.inputs = cast(inputs.references, c_void_p).value, _pointer(inputs.values)
             if element.slopes is not None:
                 slopes = element.slopes
-                slot.set_slopes = _address(dll.fmi2SetRealInputDerivatives)
+                slot.set_slopes = function_address(dll.fmi2SetRealInputDerivatives)
                 slot.slope_references = cast(slopes.references, c_void_p).value
                 slot.slope_orders = cast(slopes.orders, c_void_p).value
                 slot.slopes = _pointer(slopes.values)

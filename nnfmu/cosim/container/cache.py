@@ -24,20 +24,13 @@ from nnfmu.cosim.container.model_description import SOURCES
 from nnfmu.cosim.inner_loop import cache_dir
 from nnfmu.cosim.settings import CosimSettings
 from nnfmu.cosim.ssp import SystemStructure
+from nnfmu.out_paths import file_digest
 from nnfmu.resources import templates_dir
 
 FOLDER = "system-fmus"
 KEPT = 32  # system FMUs kept in the cache (each about the size of its parts' FMUs)
 IN_USE_S = 3600.0  # [s] a system FMU used this recently is never removed
 STAMP = "modelDescription.xml"  # in every unpacked FMU; its time says when the FMU was last used
-
-
-def _file_sha256(path: Path) -> str:
-    digest = hashlib.sha256()
-    with open(path, "rb") as file:
-        for chunk in iter(lambda: file.read(1 << 20), b""):
-            digest.update(chunk)
-    return digest.hexdigest()
 
 
 @functools.cache
@@ -71,7 +64,7 @@ def system_key(system: SystemStructure, settings: CosimSettings, binding: DriveB
         "elements": [
             {
                 "name": e.name,
-                "fmu": _file_sha256(system.fmu_path(e)),
+                "fmu": file_digest(system.fmu_path(e)),
                 "connectors": [[c.name, c.kind] for c in e.connectors],
                 "parameters": {k: float(v) for k, v in e.parameters.items()},
             }

@@ -7,14 +7,14 @@ Python. The system FMU's master is the Python master's one-pass loop planned fro
 from __future__ import annotations
 
 import time as clock
-from ctypes import CDLL, Structure, byref, c_double, c_int, c_int64, c_void_p, cast
+from ctypes import CDLL, Structure, byref, c_int64, c_void_p
 
 import numpy as np
 
 from nnfmu.cosim.binding import DriveBinding, bind_free_inputs
 from nnfmu.cosim.container.cache import cached_system_fmu
 from nnfmu.cosim.drive_inputs import DriveInputs
-from nnfmu.cosim.inner_loop import cached_library
+from nnfmu.cosim.inner_loop import function_address, load_steps_library
 from nnfmu.cosim.instances import InstancePool
 from nnfmu.cosim.master import (
     DRIVE_BLOCK,
@@ -74,18 +74,10 @@ def _library() -> CDLL:
     """system_loop.c compiled (once per machine, cached); CosimError without a host C compiler."""
     global _LIBRARY
     if _LIBRARY is None:
-        path = cached_library(SOURCE)
-        if path is None:
+        _LIBRARY = load_steps_library(SOURCE, (), "ns_drive_steps")
+        if _LIBRARY is None:
             raise CosimError("the compiled engine needs a host C compiler (set CC or install gcc/clang)")
-        loaded = CDLL(str(path))
-        loaded.ns_drive_steps.argtypes = [c_void_p, c_int64, c_int64, c_double, c_double, c_void_p, c_void_p, c_void_p]
-        loaded.ns_drive_steps.restype = c_int
-        _LIBRARY = loaded
     return _LIBRARY
-
-
-def _address(function: object) -> int:
-    return cast(function, c_void_p).value
 
 
 def _logged(slave: FmuSlave) -> str:
@@ -139,10 +131,10 @@ def cosimulate_compiled(
         dll = slave.fmu.dll
         driver = _Driver(
             instance=slave.fmu.component,
-            set_real=_address(dll.fmi2SetReal),
-            get_real=_address(dll.fmi2GetReal),
-            set_slopes=_address(dll.fmi2SetRealInputDerivatives),
-            do_step=_address(dll.fmi2DoStep),
+            set_real=function_address(dll.fmi2SetReal),
+            get_real=function_address(dll.fmi2GetReal),
+            set_slopes=function_address(dll.fmi2SetRealInputDerivatives),
+            do_step=function_address(dll.fmi2DoStep),
             input_references=in_refs.ctypes.data,
             n_inputs=len(inputs),
             orders=orders.ctypes.data,
