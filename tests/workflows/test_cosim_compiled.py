@@ -186,3 +186,44 @@ def test_the_cosim_workflow_loads_no_torch() -> None:
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "False"
+
+
+SANITIZED_CC = "gcc -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer -g"
+RUN_COMPILED = """
+import sys
+from nnfmu.cosim.master import CosimSettings
+from nnfmu.workflows.cosim import run_cosim
+result = run_cosim(sys.argv[1], sys.argv[2], CosimSettings(step=float(sys.argv[3])), engine="compiled")
+print("steps", result.steps)
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="gcc (with its ASan and UBSan runtimes) is not installed")
+def test_the_engines_c_loop_and_system_fmu_run_clean_under_asan_and_ubsan(
+    quarter_car: tuple[Path, Path], tmp_path: Path
+) -> None:
+    """system_loop.c and the system FMU it steps, both compiled with ASan and UBSan (`CC`, a fresh cache), run the
+    quarter car in a Python whose process loads the ASan runtime first: no sanitizer report, every step taken."""
+    import os
+    import subprocess
+
+    ssd, drive_file = quarter_car
+
+    def runtime(name: str) -> str:
+        return subprocess.run(["gcc", f"-print-file-name={name}"], capture_output=True, text=True).stdout.strip()
+
+    environment = {
+        **os.environ,
+        "CC": SANITIZED_CC,
+        "NNFMU_CACHE": str(tmp_path / "cache"),
+        # libstdc++ beside it: ASan intercepts C++ throws, which the interpreter's extension modules make
+        "LD_PRELOAD": f"{runtime('libasan.so')} {runtime('libstdc++.so')}",
+        "ASAN_OPTIONS": "detect_leaks=0",  # the interpreter's own allocations outlive the run by design
+        "PYTHONPATH": os.pathsep.join([str(Path(__file__).parents[2]), os.environ.get("PYTHONPATH", "")]),
+    }
+    command = [sys.executable, "-c", RUN_COMPILED, str(ssd), str(drive_file), str(H)]
+    result = subprocess.run(command, capture_output=True, text=True, timeout=600, env=environment)
+    assert result.returncode == 0, result.stderr[-4000:]
+    assert f"steps {round(DURATION / H)}" in result.stdout
+    assert "AddressSanitizer" not in result.stderr and "runtime error" not in result.stderr, result.stderr[-4000:]
