@@ -39,7 +39,7 @@ from nnfmu.cosim import (
 )
 from nnfmu.data import Measurement
 from nnfmu.errors import NnfmuError
-from nnfmu.fmu import read_fmu_graph
+from nnfmu.fmu import StepGraphRecord, read_fmu_graph
 from nnfmu.workflows.vehicle_binding import vehicle_binding
 
 ROOT = Path("/")  # the base of an in-memory system: every element's source is its FMU's absolute path
@@ -51,9 +51,11 @@ class VirtualSystemError(NnfmuError, ValueError):
 
 @dataclass(frozen=True)
 class StepGraph:
-    """What an FMU carries: its step graph's bytes (None: the FMU records none) and its component description."""
+    """What an FMU carries: its step graph's bytes and record (None: the FMU records none) and its component
+    description."""
 
     data: bytes | None
+    record: StepGraphRecord | None
     component: Component | None
 
 
@@ -68,11 +70,15 @@ class FmuCache:
         stat = fmu.stat()
         key = (fmu, stat.st_size, stat.st_mtime_ns)
         if key not in self.found:
-            graph = read_fmu_graph(fmu)
-            data = graph[0] if graph is not None else None
+            data, record = read_fmu_graph(fmu) or (None, None)
             component = Component.from_onnx(onnx.load_from_string(data)) if data is not None else None
-            self.found[key] = StepGraph(data, component)
+            self.found[key] = StepGraph(data, record, component)
         return self.found[key]
+
+    def graph(self, fmu: Path) -> onnx.ModelProto | None:
+        """The step graph `fmu` carries (a fresh copy); None: it records none."""
+        data = self.read(fmu).data
+        return onnx.load_from_string(data) if data is not None else None
 
 
 @dataclass(frozen=True)
@@ -106,11 +112,12 @@ class VirtualSystem:
         vehicle: tuple[str, Path],
         components: Mapping[str, Path],
         parameters: Mapping[str, Mapping[str, float]] | None = None,
+        cache: FmuCache | None = None,
     ) -> VirtualSystem:
-        """A vehicle and its components wired by name (`connect_by_name`'s rule), nothing written."""
-        return cls.of(
-            connect_by_name(name, (vehicle[0], Path(vehicle[1]).resolve()), _absolute(components), ROOT, parameters)
-        )
+        """A vehicle and its components wired by name (`connect_by_name`'s rule), nothing written; `cache`: what
+        the FMUs carry, shared with other systems of the same FMUs."""
+        wired = connect_by_name(name, (vehicle[0], Path(vehicle[1]).resolve()), _absolute(components), ROOT, parameters)
+        return cls.of(wired, cache)
 
     @property
     def name(self) -> str:
@@ -140,12 +147,11 @@ class VirtualSystem:
 
     def step_graph(self, element: str) -> onnx.ModelProto | None:
         """The step graph the element's FMU carries (a fresh copy); None: the FMU records none."""
-        data = self.cache.read(self.fmu(element)).data
-        return onnx.load_from_string(data) if data is not None else None
+        return self.cache.graph(self.fmu(element))
 
-    def step_graph_bytes(self, element: str) -> bytes | None:
-        """The bytes of the step graph the element's FMU carries, as stored in the FMU; None: it records none."""
-        return self.cache.read(self.fmu(element)).data
+    def carried(self, element: str) -> StepGraph:
+        """What the element's FMU carries: its step graph's bytes as stored, its record and its description."""
+        return self.cache.read(self.fmu(element))
 
     def drive_binding(self) -> DriveBinding:
         """Which element's free inputs read which drive channels: the bound one, else the vehicle's actuators."""
@@ -220,9 +226,9 @@ class VirtualSystem:
 
     def _relative_to(self, folder: Path) -> SystemStructure:
         """The structure with each FMU inside `folder` (`local_fmu`), named relative to it."""
+        base = folder.resolve()
         elements = [
-            replace(e, source=os.path.relpath(local_fmu(Path(e.source), folder), folder))
-            for e in self.structure.elements
+            replace(e, source=os.path.relpath(local_fmu(Path(e.source), base), base)) for e in self.structure.elements
         ]
         return replace(self.structure, elements=elements, base=folder, path=None)
 
