@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from nnfmu.atomic import atomic_path
-from nnfmu.cosim import Connection, Connector, CosimSettings, Element, InstancePool, SystemStructure, cosimulate
+from nnfmu.cosim import Connection, Connector, CosimSettings, Element, InstancePool, SystemStructure
 from nnfmu.data import Measurement
 from nnfmu.data.drive_files import read_drive
 from nnfmu.errors import NnfmuError
@@ -35,7 +35,7 @@ from nnfmu.vehicle import generate_drive
 from nnfmu.workflows.campaign.cases import Case
 from nnfmu.workflows.campaign.hashing import json_sha256
 from nnfmu.workflows.campaign.spec import EventSpec, FileRef, drive_settings
-from nnfmu.workflows.vehicle_binding import vehicle_binding
+from nnfmu.workflows.system import VirtualSystem
 
 OK, FAILED = "ok", "failed"
 DRIVES_KEPT = 4  # drives a process keeps in memory: the cases of one event usually follow each other
@@ -118,8 +118,8 @@ def load_drive(event: EventSpec, blobs: Mapping[str, bytes]) -> Measurement:
     return drive
 
 
-def build_system(case: Case, blobs: Mapping[str, bytes]) -> SystemStructure:
-    """The variant's SystemStructure with every element's FMU at its materialised path."""
+def build_system(case: Case, blobs: Mapping[str, bytes]) -> VirtualSystem:
+    """The variant's system with every element's FMU at its materialised path."""
     variant = case.variant
     elements = [
         Element(
@@ -127,13 +127,15 @@ def build_system(case: Case, blobs: Mapping[str, bytes]) -> SystemStructure:
         )
         for e in variant.elements
     ]
-    return SystemStructure(
-        variant.system_name,
-        elements,
-        [Connection(*c) for c in variant.connections],
-        Path("/"),
-        variant.start_time,
-        variant.stop_time,
+    return VirtualSystem(  # sources already absolute, the cache's paths kept as `_message` strips them
+        SystemStructure(
+            variant.system_name,
+            elements,
+            [Connection(*c) for c in variant.connections],
+            Path("/"),
+            variant.start_time,
+            variant.stop_time,
+        )
     )
 
 
@@ -199,12 +201,8 @@ def run_case(case: Case, blobs: Mapping[str, bytes], reuse_instances: bool = Tru
     try:
         drive = load_drive(case.event, blobs)
         system = build_system(case, blobs)
-        result = cosimulate(
-            system,
-            drive,
-            CosimSettings(**case.coupling),
-            binding=vehicle_binding(system),
-            pool=instance_pool() if reuse_instances else None,
+        result = system.cosimulate(
+            drive, CosimSettings(**case.coupling), pool=instance_pool() if reuse_instances else None
         )
         rows = score(result.measurement, case)
     except Exception as error:  # the case's own failure: recorded, the campaign goes on
