@@ -2,7 +2,8 @@
 bit-for-bit comparison of two such runs (issue 35: the system object must leave every figure unchanged).
 
 Usage:
-  python bench/system_figures.py run FIXTURES OUT     # trains FIXTURES/models once (reused after), writes OUT/*.json
+  python bench/system_figures.py run FIXTURES OUT [road_test|campaign|vehicle_loop ...]
+      # trains FIXTURES/models and builds the campaign's FMUs once (reused after), writes OUT/<use case>.json
   python bench/system_figures.py compare BEFORE AFTER # exit status 1 and the differing keys where any figure differs
 
 Every run writes into the same scratch folder (FIXTURES/run), so the paths the outputs record are the same; run
@@ -68,18 +69,22 @@ def road_test(fixtures: Path, scratch: Path) -> dict[str, Any]:
     return {"road_test.json": figures, "csv": _digests(out, "results/**/*.csv")}
 
 
-def campaign(scratch: Path) -> dict[str, Any]:
-    """Two generated 1 s events x two damper variants (one a swapped FMU) of the campaigns' quarter car, serially."""
+def campaign(fixtures: Path, scratch: Path) -> dict[str, Any]:
+    """Two generated 1 s events x two damper variants (one a swapped FMU) of the campaigns' quarter car, serially;
+    its FMUs built once into `fixtures/campaign` (an FMU's bytes, which the case keys hash, differ per build)."""
     import pyarrow.parquet as pq
 
     from nnfmu.workflows.campaign import run_campaign
     from nnfmu.workflows.campaign.quarter_car import build_quarter_car_system
 
+    built = fixtures / "campaign"
+    if not (built / "SystemStructure.ssd").is_file():
+        build_quarter_car_system(built, {"linear": 2400.0, "firm": 3600.0})
     folder = scratch / "campaign"
-    paths = build_quarter_car_system(folder / "inputs", {"linear": 2400.0, "firm": 3600.0})
+    shutil.copytree(built, folder / "inputs")
     variants = "".join(
         f'[[variants]]\nname = "{name}"\nsystem = "inputs/SystemStructure.ssd"\n'
-        f'fmus = {{ damper = "inputs/{paths[name].name}" }}\n'
+        f'fmus = {{ damper = "inputs/damper-{name}.fmu" }}\n'
         for name in ("linear", "firm")
     )
     text = (
@@ -91,6 +96,7 @@ def campaign(scratch: Path) -> dict[str, Any]:
     run_campaign(folder / "campaign.toml", folder / "out", workers=0)
     table = pq.read_table(folder / "out" / "results.parquet").to_pylist()
     record = json.loads((folder / "out" / "campaign.json").read_text())
+    del record["run"]["table"]["sha256"]  # the table's bytes hold each case's wall time; its rows are compared above
     return {"results": _strip(table), "campaign.json": _strip(record)}
 
 
@@ -120,16 +126,18 @@ def vehicle_loop(fixtures: Path, scratch: Path) -> dict[str, Any]:
     return {"report.json": _strip(json.loads((folder / "out" / "report.json").read_text()))}
 
 
-def run(fixtures: Path, out: Path) -> None:
-    """Every figure into `out`/<use case>.json."""
+def run(fixtures: Path, out: Path, only: list[str]) -> None:
+    """Every figure (or those of the use cases named in `only`) into `out`/<use case>.json."""
     out.mkdir(parents=True, exist_ok=True)
     scratch = fixtures / "run"
     cases = {
         "road_test": lambda: road_test(fixtures, scratch),
-        "campaign": lambda: campaign(scratch),
+        "campaign": lambda: campaign(fixtures, scratch),
         "vehicle_loop": lambda: vehicle_loop(fixtures, scratch),
     }
     for name, make in cases.items():
+        if only and name not in only:
+            continue
         shutil.rmtree(scratch / name.replace("_test", "test"), ignore_errors=True)
         figures = _strip(make())
         (out / f"{name}.json").write_text(json.dumps(figures, indent=1, sort_keys=True, allow_nan=True))
@@ -161,9 +169,9 @@ def compare(before: Path, after: Path) -> int:
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 4 or sys.argv[1] not in ("run", "compare"):
+    if len(sys.argv) < 4 or sys.argv[1] not in ("run", "compare") or sys.argv[1] == "compare" and len(sys.argv) > 4:
         sys.exit(__doc__)
     if sys.argv[1] == "run":
-        run(Path(sys.argv[2]), Path(sys.argv[3]))
+        run(Path(sys.argv[2]), Path(sys.argv[3]), sys.argv[4:])
     else:
         sys.exit(compare(Path(sys.argv[2]), Path(sys.argv[3])))
