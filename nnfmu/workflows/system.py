@@ -99,9 +99,13 @@ class VirtualSystem:
 
     @classmethod
     @contextmanager
-    def open(cls, path: str | os.PathLike[str], allow_outside: bool = False) -> Iterator[VirtualSystem]:
+    def open(cls, path: str | os.PathLike[str] | VirtualSystem, allow_outside: bool = False) -> Iterator[VirtualSystem]:
         """The system of an `.ssd`, a folder holding one, or an `.ssp` (its FMUs valid inside the `with` only, as
-        the archive's extracted copy is removed after it); checked as `open_system` checks it."""
+        the archive's extracted copy is removed after it); checked as `open_system` checks it. A system already in
+        memory is itself."""
+        if isinstance(path, VirtualSystem):
+            yield path
+            return
         with open_system(path, allow_outside) as structure:
             yield cls.of(structure)
 
@@ -152,6 +156,15 @@ class VirtualSystem:
     def carried(self, element: str) -> StepGraph:
         """What the element's FMU carries: its step graph's bytes as stored, its record and its description."""
         return self.cache.read(self.fmu(element))
+
+    def read_from(self, path: Path) -> VirtualSystem:
+        """The system named as the file `path` it was written to (reports and messages name that file)."""
+        return replace(self, structure=replace(self.structure, path=path))
+
+    @property
+    def where(self) -> Path:
+        """The file the system was read from, for messages and reports (in memory only: `<its name>`)."""
+        return self.structure.path or Path(f"<{self.name}>")
 
     def drive_binding(self) -> DriveBinding:
         """Which element's free inputs read which drive channels: the bound one, else the vehicle's actuators."""

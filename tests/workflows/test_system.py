@@ -123,3 +123,14 @@ def test_written_ssd_and_ssp_reopen_as_the_same_system(car, drive, tmp_path) -> 
             assert reopened.parameters("damper") == firm.parameters("damper")
             assert reopened.component("damper") == firm.component("damper")
             np.testing.assert_array_equal(reopened.cosimulate(drive, SETTINGS).measurement["damper_force"], expected)
+
+
+def test_a_system_in_memory_opens_as_itself_and_names_its_file_once_written(car, tmp_path) -> None:
+    with VirtualSystem.open(car["system"]) as system:
+        assert system.where == car["system"]
+        built = VirtualSystem.by_name("car", ("vehicle", car["vehicle"]), {"damper": car["firm"]})
+        assert built.where == Path("<car>")
+        with VirtualSystem.open(built) as same:
+            assert same is built
+        written = built.read_from(built.write(tmp_path / "car"))
+        assert written.where == tmp_path / "car" / "SystemStructure.ssd" and built.where == Path("<car>")

@@ -160,19 +160,23 @@ def _check_record(target: Measurement, settings: IterateSettings, path: Path) ->
 
 def run_iterate(
     target_path: str | os.PathLike[str],
-    system_path: str | os.PathLike[str],
+    system_path: str | os.PathLike[str] | VirtualSystem,
     out_dir: str | os.PathLike[str],
     settings: IterateSettings | None = None,
     log: Log = lambda _: None,
 ) -> IterateResult:
     """Iterate a drive that makes the system's outputs match the target record's channels; write drive.csv (what
-    `nnfmu cosim --drive` reads), report.json and report.html into `out_dir`."""
+    `nnfmu cosim --drive` reads), report.json and report.html into `out_dir`; `system_path` may be a system in
+    memory."""
     settings = settings or IterateSettings()
-    target_path, system_path = Path(target_path), Path(system_path)
-    out = check_output_dir(out_dir, KIND, [target_path, system_path], replaces=True)
+    given = system_path
+    target_path = Path(target_path)
+    system_file = given.structure.path if isinstance(given, VirtualSystem) else Path(given)
+    out = check_output_dir(out_dir, KIND, [target_path, *([system_file] if system_file else [])], replaces=True)
     target = read_target(target_path)
     dt = _check_record(target, settings, target_path)
-    with VirtualSystem.open(system_path, settings.allow_outside) as system:
+    with VirtualSystem.open(given, settings.allow_outside) as system:
+        system_path = system_file or system.where
         binding = system.drive_binding()
         displacements, _ = actuator_channels(binding, system.structure)
         plant = SystemPlant(system.bind(binding), displacements, dt, settings.step)

@@ -143,6 +143,7 @@ class SystemResult:
     duration: float
     target: Target = Target()
     characterisations: dict[str, LinkedCharacterisation] = field(default_factory=dict)
+    systems: dict[str, VirtualSystem] = field(default_factory=dict)  # by damper model, each read from its SSD
 
     def to_dict(self) -> dict[str, object]:
         return {
@@ -172,6 +173,11 @@ class RoadTestResult:
 
     def reports(self) -> dict[str, Path]:
         return {s.system: s.report for s in self.systems}
+
+    def system(self, system: str, model: str) -> VirtualSystem:
+        """The system `system` co-simulated with damper `model`, in memory; RoadTestError if it was not run."""
+        self.ssd(system, model)
+        return next(s.systems[model] for s in self.systems if s.system == system)
 
     def ssd(self, system: str, model: str) -> Path:
         """The SSP system file of `system` co-simulated with damper `model`; RoadTestError if it was not run."""
@@ -315,6 +321,7 @@ def _run_system(
         for model, (damper, bushing) in parts.items()
     }
     ssds = {model: virtual.write(system_folder(out, system, model)) for model, virtual in systems.items()}
+    systems = {model: virtual.read_from(ssds[model]) for model, virtual in systems.items()}
     seconds: dict[str, float] = {}
     log(f"{system}: monolithic reference over {run.duration:g} s (truth physics, RK4 at {settings.reference_step:g} s)")
     reference: Reference = monolithic_reference(system, drive, vehicle_components(system), settings.reference_step)
@@ -389,6 +396,7 @@ def _run_system(
         run.duration,
         settings.target,
         {k: characterised[k] for k in networks if k in characterised},
+        systems,
     )
     write_system_report(
         outcome.to_dict(),

@@ -205,7 +205,7 @@ def _candidates(
 
 def run_vehicle_loop(
     measured: str | os.PathLike[str] | Measurement,
-    system: str | os.PathLike[str],
+    system: str | os.PathLike[str] | VirtualSystem,
     drive: str | os.PathLike[str] | Measurement,
     out_dir: str | os.PathLike[str],
     settings: VehicleLoopSettings = VehicleLoopSettings(),
@@ -229,7 +229,7 @@ def _untested_words(car: VirtualCar, element: str) -> str:
 
 def _run_vehicle_loop(
     measured: str | os.PathLike[str] | Measurement,
-    system: str | os.PathLike[str],
+    system: str | os.PathLike[str] | VirtualSystem,
     drive: str | os.PathLike[str] | Measurement,
     out_dir: str | os.PathLike[str],
     settings: VehicleLoopSettings,
@@ -238,10 +238,12 @@ def _run_vehicle_loop(
     graphs: Path,
 ) -> VehicleLoopReport:
     """`run_vehicle_loop` with the elements' step graphs written into `graphs`."""
-    inputs = [Path(p) for p in (measured, system, drive) if not isinstance(p, Measurement)]
+    system_file = system.structure.path if isinstance(system, VirtualSystem) else Path(system)
+    given = (measured, system_file, drive)
+    inputs = [Path(p) for p in given if p is not None and not isinstance(p, Measurement)]
     out_dir = check_output_dir(out_dir, "vehicle-loop", inputs, replaces=True)
     with VirtualSystem.open(system, settings.allow_outside) as virtual:
-        car = read_virtual_car(virtual, Path(virtual.structure.path or system), graphs, models, log)
+        car = read_virtual_car(virtual, virtual.structure.path or system_file or virtual.where, graphs, models, log)
         return _loop_on(car, measured, drive, out_dir, settings, log)
 
 

@@ -82,7 +82,7 @@ def read_virtual_car(
     onnx = {e: _step_graph(system, e, models.get(e), graphs, notes) for e in elements}
     for note in notes:
         log(f"warning: {note}")
-    return VirtualCar(ssd, system, binding.element, onnx, tuple(notes))
+    return VirtualCar(ssd, system.bind(binding), binding.element, onnx, tuple(notes))  # bound once for every replay
 
 
 def _readable(element: str, path: Path) -> None:
