@@ -101,16 +101,26 @@ def test_every_kind_declares_complete_channels_and_a_name_it_owns() -> None:
             assert all((c.force, c.force_unit, c.position, c.position_unit, c.rate, c.rate_unit)), (kind.name, c)
 
 
+def _car(fmus: dict[str, str]):
+    """A virtual car of a vehicle and the components `fmus` (element -> FMU file, never opened), graphs named."""
+    from nnfmu.cosim import Element, SystemStructure
+    from nnfmu.workflows.system import VirtualSystem
+    from nnfmu.workflows.vehicle_loop.system_files import VirtualCar
+
+    elements = [Element("vehicle", "v.fmu"), *(Element(e, fmu) for e, fmu in fmus.items())]
+    system = VirtualSystem.of(SystemStructure("car", elements, []))
+    return VirtualCar(Path("s.ssd"), system, "vehicle", dict.fromkeys(fmus, Path("g.onnx")))
+
+
 def test_an_example_kind_is_picked_up_by_the_registry_users(engine_mount: ComponentKind) -> None:
     from nnfmu.vehicle.dynamics.ports import component_channels
-    from nnfmu.workflows.vehicle_loop.system_files import VirtualCar
 
     assert kind_of("engine_mount_front") is engine_mount
     assert element_of_port("engine_mount_front_axial_force") == "engine_mount_front"
     assert component_channels("engine_mount_front") == [
         ("engine_mount_front_axial_force", "engine_mount_front_axial_displacement", "engine_mount_front_axial_velocity")
     ]
-    car = VirtualCar(Path("s.ssd"), "car", "vehicle", Path("v.fmu"), {}, {}, {})
+    car = _car({})
     assert car.kind("engine_mount_front") is engine_mount
     assert car.kind("damper_fl") is DAMPER
 
@@ -127,11 +137,9 @@ def test_the_vehicle_loop_tries_the_effects_a_kind_names(monkeypatch: pytest.Mon
     from dataclasses import replace
 
     from nnfmu.workflows.vehicle_loop.run import _candidates
-    from nnfmu.workflows.vehicle_loop.system_files import VirtualCar
 
     mount = replace(ENGINE_MOUNT, loop_effects=("gas_force",))
-    fmus = {"engine_mount_front": Path("m.fmu"), "damper_fl": Path("d.fmu")}
-    car = VirtualCar(Path("s.ssd"), "car", "vehicle", Path("v.fmu"), fmus, dict.fromkeys(fmus, Path("g.onnx")), {})
+    car = _car({"engine_mount_front": "m.fmu", "damper_fl": "d.fmu"})
     found, _ = _candidates(car, ["body_acceleration_fl"], replay=None)  # type: ignore[arg-type]
     assert sorted(found) == ["body_acceleration_fl:sensor_offset", "damper_fl:gas_force"]
     monkeypatch.setitem(KINDS, mount.name, mount)

@@ -22,6 +22,7 @@ __all__, __getattr__ = face(
         "settings": ("DEFAULT_STEP", "CosimError", "CosimSettings"),
         "slave": ("FmuSlave",),
         "ssp": (
+            "SSD_NAME",
             "Connection",
             "Connector",
             "Element",

@@ -450,8 +450,8 @@ def _link(source: Path, target: Path) -> None:
 
 
 def local_fmu(fmu: Path, base: Path) -> Path:
-    """`fmu` when it lies inside `base` (links followed); else its link or copy in `base/fmu/` (and its `<stem>.onnx`
-    step graph beside it where one exists), under a new name where another FMU of its name is there already."""
+    """`fmu` when it lies inside `base` (links followed); else its link or copy in `base/fmu/`, under a new name where
+    another FMU of its name is there already (an nnfmu FMU carries its own step graph: no ONNX goes with it)."""
     if base.resolve() in fmu.resolve().parents:
         return fmu
     folder = base / "fmu"
@@ -462,9 +462,6 @@ def local_fmu(fmu: Path, base: Path) -> Path:
             _link(fmu, target)
         elif not _same_bytes(fmu, target):
             continue
-        graph = fmu.with_suffix(".onnx")
-        if graph.is_file() and not target.with_suffix(".onnx").exists():
-            _link(graph, target.with_suffix(".onnx"))
         return target
     raise SspError(f"{folder}: 999 different FMUs named like {fmu.name} already; give the system a new folder")
 
@@ -477,8 +474,8 @@ def connect_by_name(
     parameters: Mapping[str, Mapping[str, float]] | None = None,
 ) -> SystemStructure:
     """A system of one vehicle and components wired by name; FMU sources are written relative to `base`, an FMU
-    outside `base` first linked (or copied) into `base/fmu/` with its `<stem>.onnx` step graph, so that the system
-    is self-contained (`open_system` loads FMUs only from inside a system's folder unless allowed).
+    outside `base` first linked (or copied) into `base/fmu/`, so that the system is self-contained (`open_system`
+    loads FMUs only from inside a system's folder unless allowed).
 
     A component element `E` with input or output `X` connects to the vehicle's output or input named `E_X` (the
     vehicle's channel naming: element 'damper_fl', port 'velocity' -> 'damper_fl_velocity'), else to one named `X`.

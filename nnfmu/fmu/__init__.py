@@ -25,6 +25,7 @@ __all__, __getattr__ = face(
         "step_graph": (
             "GRAPH_MEMBER",
             "StepGraphError",
+            "StepGraphRecord",
             "check_same_graph",
             "extract_fmu_graph",
             "load_fmu_graph",

@@ -23,6 +23,7 @@ from nnfmu.cosim import (
 )
 from nnfmu.data.drive_files import read_drive
 from nnfmu.errors import SettingsError
+from nnfmu.workflows.system import VirtualSystem
 from nnfmu.workflows.training_range import training_range_lines
 from nnfmu.workflows.vehicle_binding import vehicle_binding
 
@@ -52,17 +53,17 @@ def run_cosim(
         raise SettingsError(f"unknown master {master!r}; use {' or '.join(MASTERS)}")
     check_engine(engine, master)
     drive = read_drive(drive_path)
-    with open_system(ssd_path, allow_outside) as system:
-        binding = vehicle_binding(system)
+    with VirtualSystem.open(ssd_path, allow_outside) as opened:
+        system = opened.bind(opened.drive_binding())
         if master == "libcosim":
             from nnfmu.cosim import run_libcosim
 
-            result = run_libcosim(ssd_path, drive, settings, binding, allow_outside)
+            result = run_libcosim(ssd_path, drive, settings, system.drive_binding(), allow_outside)
         elif engine == "compiled":
-            result = cosimulate_compiled(system, drive, settings, progress, binding=binding)
+            result = cosimulate_compiled(system.structure, drive, settings, progress, binding=system.drive_binding())
         else:
-            result = cosimulate(system, drive, settings, progress, binding=binding)
-        for line in training_range_lines(system, binding, result.measurement):
+            result = system.cosimulate(drive, settings, progress=progress)
+        for line in training_range_lines(system, result.measurement):
             warnings.warn(line, CosimWarning, stacklevel=2)
     if out_path is not None:
         save_result(result, out_path)

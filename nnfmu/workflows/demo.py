@@ -329,8 +329,8 @@ def thesis_residual(
     drive_path = write_drive(drive, out / "lab_drive.csv")
     record = write_lab_car(car, drive, out / "lab_car.csv")
     log(f"vehicle loop: lab car {record} ({car.system}; what differs is in {record.name}.truth.json, unread)")
-    ssd = road.ssd(car.system, "damper-hysteresis")
-    report = run_vehicle_loop(record, ssd, drive_path, out / "loop", settings.vehicle_loop, log=log)
+    system = road.system(car.system, "damper-hysteresis")  # in memory: its FMUs' graphs already read
+    report = run_vehicle_loop(record, system, drive_path, out / "loop", settings.vehicle_loop, log=log)
     for name, pair in report.channels.items():
         if name.endswith("_force"):
             before, after = pair["before"], pair["after"]
@@ -362,7 +362,8 @@ def iterate_road_drive(
     )
     out.mkdir(parents=True, exist_ok=True)
     target = save_measurement(road_record, out / "road.csv")
-    result = run_iterate(target, road.ssd("quarter-car", "damper-hysteresis"), out / "drive", settings.iterate, log)
+    system = road.system("quarter-car", "damper-hysteresis")
+    result = run_iterate(target, system, out / "drive", settings.iterate, log)
     best = result.outcome.iterations[result.outcome.best]
     worst = max(best.metrics[c]["nrmse"] for c in result.channels)
     state = "converged" if result.converged else "not converged"

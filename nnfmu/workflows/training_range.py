@@ -9,22 +9,21 @@ The user learns it from the run itself, before blaming the coupling or the step.
 from __future__ import annotations
 
 import numpy as np
-import onnx
 
 from nnfmu.component import Component
-from nnfmu.cosim import DriveBinding, SystemStructure
+from nnfmu.cosim import DriveBinding
 from nnfmu.data import Measurement
-from nnfmu.fmu import StepGraphError, read_fmu_graph
+from nnfmu.fmu import StepGraphError
 from nnfmu.workflows.roadtest.envelope import excursion
+from nnfmu.workflows.system import VirtualSystem
 
 
-def _carried_component(system: SystemStructure, element: str) -> Component | None:
+def _carried_component(system: VirtualSystem, element: str) -> Component | None:
     """The component description of the step graph `element`'s FMU carries; None for an FMU without one."""
     try:
-        found = read_fmu_graph(system.fmu_path(element))
+        return system.component(element)
     except StepGraphError:
         return None  # an altered or unreadable graph: the run used the FMU's own binary, nothing to compare
-    return None if found is None else Component.from_onnx(onnx.load_from_string(found[0]))
 
 
 def _channel(binding: DriveBinding, element: str, connector: str) -> str:
@@ -32,12 +31,15 @@ def _channel(binding: DriveBinding, element: str, connector: str) -> str:
     return connector if element == binding.element else f"{element}_{connector}"
 
 
-def training_range_lines(system: SystemStructure, binding: DriveBinding, result: Measurement) -> list[str]:
-    """A line per network input whose signal in `result` left its training envelope: the range reached, how far
-    past the envelope, on what share of the run and from when."""
+def training_range_lines(system: VirtualSystem, result: Measurement) -> list[str]:
+    """A line per network input whose signal in `result` (a run on the system's drive binding) left its training
+    envelope: the range reached, how far past the envelope, on what share of the run and from when."""
     lines = []
-    feeds = {(c.end_element, c.end_connector): (c.start_element, c.start_connector) for c in system.connections}
-    for element in system.elements:
+    binding = system.drive_binding()
+    feeds = {
+        (c.end_element, c.end_connector): (c.start_element, c.start_connector) for c in system.structure.connections
+    }
+    for element in system.structure.elements:
         component = _carried_component(system, element.name)
         if component is None:
             continue

@@ -1,5 +1,5 @@
 """Where `nnfmu loop vehicle` gets each element's step graph: from its FMU; `--model` only with the same network;
-another network beside the FMU ignored, loudly; an FMU without a graph reported as not tested, naming the fix."""
+no ONNX found by its file name (beside the FMU); an FMU without a graph reported as not tested, naming the fix."""
 
 from __future__ import annotations
 
@@ -22,8 +22,16 @@ from nnfmu.fmu.step_graph import GRAPH_MEMBER, graph_digest
 from nnfmu.vehicle.drive import DriveSettings, generate_drive
 from nnfmu.workflows.roadtest import build_vehicle, write_system
 from nnfmu.workflows.roadtest.lab_car import LabCar, write_lab_car
+from nnfmu.workflows.system import VirtualSystem
 from nnfmu.workflows.vehicle_loop import VehicleLoopError
-from nnfmu.workflows.vehicle_loop.system_files import read_virtual_car
+from nnfmu.workflows.vehicle_loop.system_files import VirtualCar
+from nnfmu.workflows.vehicle_loop.system_files import read_virtual_car as read_car
+
+
+def read_virtual_car(ssd: Path, graphs: Path, models: dict | None = None, log=print) -> VirtualCar:
+    """The virtual car of the system file `ssd`."""
+    with VirtualSystem.open(ssd) as system:
+        return read_car(system, ssd, graphs, models, log)
 
 
 @pytest.fixture(scope="module")
@@ -57,7 +65,7 @@ def _system(parts: dict[str, Path], damper: Path, folder: Path, beside: Path | N
     return write_system("quarter-car", parts["vehicle"], copy, None, folder / "system")
 
 
-def test_the_graph_comes_from_the_fmu_and_another_network_beside_it_is_ignored_loudly(parts, tmp_path: Path) -> None:
+def test_the_graph_comes_from_the_fmu_and_an_onnx_beside_it_is_never_read(parts, tmp_path: Path) -> None:
     own = graph_digest(onnx.load(parts["folder"] / "hyst.onnx"))
     car = read_virtual_car(_system(parts, parts["damper"], tmp_path / "a"), tmp_path / "g1", log=lambda _: None)
     assert car.onnx["damper"] == tmp_path / "g1" / "damper.onnx" and car.graph_notes == ()
@@ -67,9 +75,10 @@ def test_the_graph_comes_from_the_fmu_and_another_network_beside_it_is_ignored_l
     ssd = _system(parts, parts["damper"], tmp_path / "b", beside=parts["folder"] / "other.onnx")
     car = read_virtual_car(ssd, tmp_path / "g2", log=said.append)
     assert graph_digest(onnx.load(car.onnx["damper"])) == own  # not the other network
-    (note,) = car.graph_notes
-    assert note.startswith("damper: ignored ") and "damper.onnx is not the network" in note
-    assert said == [f"warning: {note}"]
+    assert car.graph_notes == () and said == []
+    bare = _system(parts, parts["bare"], tmp_path / "c", beside=parts["folder"] / "hyst.onnx")
+    assert read_virtual_car(bare, tmp_path / "g3", log=said.append).onnx["damper"] is None  # not by its name
+    assert said == []
 
 
 def test_a_given_graph_must_be_the_fmus_network(parts, tmp_path: Path) -> None:

@@ -30,7 +30,6 @@ from nnfmu.cosim import (
     Element,
     InstancePool,
     SystemStructure,
-    cosimulate,
     cosimulate_compiled,
 )
 from nnfmu.data import Measurement
@@ -44,7 +43,7 @@ from nnfmu.vehicle import generate_drive
 from nnfmu.workflows.campaign.cases import Case
 from nnfmu.workflows.campaign.hashing import json_sha256
 from nnfmu.workflows.campaign.spec import EventSpec, FileRef, drive_settings
-from nnfmu.workflows.vehicle_binding import vehicle_binding
+from nnfmu.workflows.system import VirtualSystem
 
 OK, FAILED = "ok", "failed"
 DRIVES_KEPT = 4  # drives a process keeps in memory: the cases of one event usually follow each other
@@ -127,8 +126,8 @@ def load_drive(event: EventSpec, blobs: Mapping[str, bytes]) -> Measurement:
     return drive
 
 
-def build_system(case: Case, blobs: Mapping[str, bytes]) -> SystemStructure:
-    """The variant's SystemStructure with every element's FMU at its materialised path."""
+def build_system(case: Case, blobs: Mapping[str, bytes]) -> VirtualSystem:
+    """The variant's system with every element's FMU at its materialised path."""
     variant = case.variant
     elements = [
         Element(
@@ -136,13 +135,15 @@ def build_system(case: Case, blobs: Mapping[str, bytes]) -> SystemStructure:
         )
         for e in variant.elements
     ]
-    return SystemStructure(
-        variant.system_name,
-        elements,
-        [Connection(*c) for c in variant.connections],
-        Path("/"),
-        variant.start_time,
-        variant.stop_time,
+    return VirtualSystem(  # sources already absolute, the cache's paths kept as `_message` strips them
+        SystemStructure(
+            variant.system_name,
+            elements,
+            [Connection(*c) for c in variant.connections],
+            Path("/"),
+            variant.start_time,
+            variant.stop_time,
+        )
     )
 
 
@@ -208,14 +209,11 @@ def run_case(case: Case, blobs: Mapping[str, bytes], reuse_instances: bool = Tru
     try:
         drive = load_drive(case.event, blobs)
         system = build_system(case, blobs)
-        run = cosimulate_compiled if case.engine == "compiled" else cosimulate
-        result = run(
-            system,
-            drive,
-            CosimSettings(**case.coupling),
-            binding=vehicle_binding(system),
-            pool=instance_pool() if reuse_instances else None,
-        )
+        settings, pool = CosimSettings(**case.coupling), instance_pool() if reuse_instances else None
+        if case.engine == "compiled":
+            result = cosimulate_compiled(system.structure, drive, settings, pool=pool, binding=system.drive_binding())
+        else:
+            result = system.cosimulate(drive, settings, pool=pool)
         rows = score(result.measurement, case)
     except Exception as error:  # the case's own failure: recorded, the campaign goes on
         return CaseOutcome(

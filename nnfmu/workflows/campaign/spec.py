@@ -50,17 +50,14 @@ from typing import Any
 
 from nnfmu.cosim import (
     CosimSettings,
-    Element,
     SspError,
-    SystemStructure,
-    check_against_fmus,
     check_compiled,
-    open_system,
 )
 from nnfmu.validate.damage import MAX_SLOPE
 from nnfmu.vehicle import DriveError, DriveSettings, KerbStrike, Pothole
 from nnfmu.workflows.campaign.errors import CampaignError
 from nnfmu.workflows.campaign.hashing import bytes_sha256, file_bytes, file_sha256
+from nnfmu.workflows.system import VirtualSystem
 
 TOP_KEYS = ("name", "description", "coupling", "metrics", "drive", "events", "variants")
 METRIC_KEYS = ("channels", "basquin_slope", "slopes", "reference")
@@ -406,26 +403,13 @@ def _variant(
         for k, values in _table(entry.get("parameters", {}), f"{where}: parameters").items()
     }
     try:
-        with open_system(system_path, allow_outside) as system:
-            known = [e.name for e in system.elements]
-            for element in list(swaps) + list(parameters):
-                if element not in known:
-                    raise CampaignError(
-                        f"{where}: system {system_path} has no element {element!r} (has: {', '.join(known)})"
-                    )
-            elements = [
-                Element(
-                    e.name,
-                    str(swaps.get(e.name, system.fmu_path(e).resolve())),
-                    e.connectors,
-                    dict(e.parameters) | parameters.get(e.name, {}),
+        with VirtualSystem.open(system_path, allow_outside) as system:
+            unknown = [e for e in list(swaps) + list(parameters) if e not in system.elements]
+            if unknown:
+                raise CampaignError(
+                    f"{where}: system {system_path} has no element {unknown[0]!r} (has: {', '.join(system.elements)})"
                 )
-                for e in system.elements
-            ]
-            changed = SystemStructure(
-                system.name, elements, system.connections, Path("/"), system.start_time, system.stop_time
-            )
-            check_against_fmus(changed)
+            changed = system.swap(swaps).with_parameters(parameters).structure
             plans = tuple(
                 ElementPlan(
                     e.name,
@@ -433,12 +417,12 @@ def _variant(
                     tuple((c.name, c.kind) for c in e.connectors),
                     dict(e.parameters),
                 )
-                for e in elements
+                for e in changed.elements
             )
             wiring = tuple(
-                (c.start_element, c.start_connector, c.end_element, c.end_connector) for c in system.connections
+                (c.start_element, c.start_connector, c.end_element, c.end_connector) for c in changed.connections
             )
-            return VariantSpec(name, system.name, plans, wiring, system.start_time, system.stop_time)
+            return VariantSpec(name, changed.name, plans, wiring, changed.start_time, changed.stop_time)
     except SspError as error:
         raise CampaignError(f"{where}: {error}") from None
 

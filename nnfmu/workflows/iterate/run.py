@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from nnfmu.atomic import staging_dir
-from nnfmu.cosim import CosimSettings, DriveBinding, InstancePool, SystemStructure, cosimulate, open_system
+from nnfmu.cosim import CosimSettings, DriveBinding, InstancePool, SystemStructure
 from nnfmu.data import Measurement
 from nnfmu.data.drive_files import RPC_SUFFIXES, read_drive, write_drive
 from nnfmu.data.load import load_measurement
@@ -21,7 +21,7 @@ from nnfmu.workflows.iterate.loop import Log, Outcome, iterate
 from nnfmu.workflows.iterate.report import write_report
 from nnfmu.workflows.iterate.settings import MAX_SECONDS, IterateError, IterateSettings
 from nnfmu.workflows.iterate.signals import rates
-from nnfmu.workflows.vehicle_binding import vehicle_binding
+from nnfmu.workflows.system import VirtualSystem
 
 KIND = "iterate"
 DISPLACEMENT, VELOCITY = "_displacement", "_velocity"
@@ -65,13 +65,11 @@ def actuator_channels(binding: DriveBinding, system: SystemStructure) -> tuple[l
 
 
 class SystemPlant:
-    """The virtual car as a plant: a drive (n, m) every dt -> its outputs at the drive's times, co-simulated by the
-    master (instances kept in a pool between runs)."""
+    """The virtual car as a plant: a drive (n, m) every dt -> its outputs at the drive's times, co-simulated in
+    memory by the master on the system's drive binding (instances kept in a pool between runs)."""
 
-    def __init__(
-        self, system: SystemStructure, binding: DriveBinding, displacements: Sequence[str], dt: float, step: float
-    ) -> None:
-        self.system, self.binding, self.dt, self.step = system, binding, dt, step
+    def __init__(self, system: VirtualSystem, displacements: Sequence[str], dt: float, step: float) -> None:
+        self.system, self.dt, self.step = system, dt, step
         self.displacements = list(displacements)
         self.pool = InstancePool()
         self.channels: list[str] = []
@@ -90,13 +88,8 @@ class SystemPlant:
         """Every output of the system for drive `x`, at the drive's times (linear between communication points)."""
         drive = self.drive(x)
         steps = math.floor(float(drive.time[-1]) / self.step + 1e-9)
-        result = cosimulate(
-            self.system,
-            drive,
-            CosimSettings(step=self.step, stop_time=steps * self.step),
-            pool=self.pool,
-            binding=self.binding,
-        ).measurement
+        settings = CosimSettings(step=self.step, stop_time=steps * self.step)
+        result = self.system.cosimulate(drive, settings, pool=self.pool).measurement
         t = drive.time
         return Measurement.uniform(
             0.0,
@@ -167,22 +160,26 @@ def _check_record(target: Measurement, settings: IterateSettings, path: Path) ->
 
 def run_iterate(
     target_path: str | os.PathLike[str],
-    system_path: str | os.PathLike[str],
+    system_path: str | os.PathLike[str] | VirtualSystem,
     out_dir: str | os.PathLike[str],
     settings: IterateSettings | None = None,
     log: Log = lambda _: None,
 ) -> IterateResult:
     """Iterate a drive that makes the system's outputs match the target record's channels; write drive.csv (what
-    `nnfmu cosim --drive` reads), report.json and report.html into `out_dir`."""
+    `nnfmu cosim --drive` reads), report.json and report.html into `out_dir`; `system_path` may be a system in
+    memory."""
     settings = settings or IterateSettings()
-    target_path, system_path = Path(target_path), Path(system_path)
-    out = check_output_dir(out_dir, KIND, [target_path, system_path], replaces=True)
+    given = system_path
+    target_path = Path(target_path)
+    system_file = given.structure.path if isinstance(given, VirtualSystem) else Path(given)
+    out = check_output_dir(out_dir, KIND, [target_path, *([system_file] if system_file else [])], replaces=True)
     target = read_target(target_path)
     dt = _check_record(target, settings, target_path)
-    with open_system(system_path, settings.allow_outside) as system:
-        binding = vehicle_binding(system)
-        displacements, _ = actuator_channels(binding, system)
-        plant = SystemPlant(system, binding, displacements, dt, settings.step)
+    with VirtualSystem.open(given, settings.allow_outside) as system:
+        system_path = system_file or system.where
+        binding = system.drive_binding()
+        displacements, _ = actuator_channels(binding, system.structure)
+        plant = SystemPlant(system.bind(binding), displacements, dt, settings.step)
         try:
             probe = plant.outputs(np.zeros((max(2, round(PROBE_SECONDS / dt) + 1), len(displacements))))
             channels = _choose_channels(target, probe, settings, system_path)

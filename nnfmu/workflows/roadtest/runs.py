@@ -19,15 +19,13 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
-import onnx
 from fmpy import read_model_description
 
 from nnfmu.atomic import write_text_atomic
 from nnfmu.component import Component
-from nnfmu.cosim import DEFAULT_STEP, CosimSettings, cosimulate, open_system, replay_fmu
+from nnfmu.cosim import DEFAULT_STEP, CosimSettings, replay_fmu
 from nnfmu.data import Measurement, save_measurement
 from nnfmu.data.drive_files import write_drive
-from nnfmu.fmu import load_fmu_graph
 from nnfmu.validate import ChannelComparison, Target, ValidationSettings, compare, write_report
 from nnfmu.vehicle import DriveSettings, generate_drive
 from nnfmu.workflows.characterise.linked import LinkedCharacterisation, characterise_models
@@ -46,12 +44,12 @@ from nnfmu.workflows.roadtest.systems import (
     bushing_elements,
     check_models,
     damper_elements,
+    road_test_system,
     vehicle_components,
-    write_system,
 )
 from nnfmu.workflows.roadtest.thesis import ThesisRow, model_verdicts, thesis_row
 from nnfmu.workflows.roadtest.truth_reference import Reference, monolithic_reference
-from nnfmu.workflows.vehicle_binding import vehicle_binding
+from nnfmu.workflows.system import FmuCache, VirtualSystem
 
 COMPARED = {
     "quarter-car": (
@@ -145,6 +143,7 @@ class SystemResult:
     duration: float
     target: Target = Target()
     characterisations: dict[str, LinkedCharacterisation] = field(default_factory=dict)
+    systems: dict[str, VirtualSystem] = field(default_factory=dict)  # by damper model, each read from its SSD
 
     def to_dict(self) -> dict[str, object]:
         return {
@@ -174,6 +173,11 @@ class RoadTestResult:
 
     def reports(self) -> dict[str, Path]:
         return {s.system: s.report for s in self.systems}
+
+    def system(self, system: str, model: str) -> VirtualSystem:
+        """The system `system` co-simulated with damper `model`, in memory; RoadTestError if it was not run."""
+        self.ssd(system, model)
+        return next(s.systems[model] for s in self.systems if s.system == system)
 
     def ssd(self, system: str, model: str) -> Path:
         """The SSP system file of `system` co-simulated with damper `model`; RoadTestError if it was not run."""
@@ -210,16 +214,19 @@ def _settings(window: tuple[float, float], span: float) -> ValidationSettings:
     return ValidationSettings(window=window if window[1] <= span else None)
 
 
-def _cosim(ssd: Path, drive: Measurement, run: SystemRun) -> tuple[Measurement, float]:
+def _cosim(system: VirtualSystem, drive: Measurement, run: SystemRun) -> tuple[Measurement, float]:
+    """The system co-simulated in memory on `drive` as `run` says, and the wall time it took [s]."""
     started = time.perf_counter()
-    with open_system(ssd) as system:
-        settings = CosimSettings(step=run.step, iterations=run.iterations, tolerance=1e-6)
-        result = cosimulate(system, drive, settings, binding=vehicle_binding(system))
+    result = system.cosimulate(drive, CosimSettings(step=run.step, iterations=run.iterations, tolerance=1e-6))
     return result.measurement, time.perf_counter() - started
 
 
-def _network_ports(models: Mapping[str, Path], name: str) -> Component:
-    return Component.from_onnx(onnx.load(Path(models[name])))
+def _carried(cache: FmuCache, fmu: Path) -> Component:
+    """The component description the network FMU `fmu` carries (read once per road test, `cache`)."""
+    component = cache.read(fmu).component
+    if component is None:
+        raise RoadTestError(f"{fmu}: the network FMU records no step graph; rebuild it with nnfmu build")
+    return component
 
 
 def _excursions(run_name: str, elements: list[str], component: Component, m: Measurement) -> list[Excursion]:
@@ -286,7 +293,6 @@ def _network_errors(
 def _run_system(
     system: str,
     run: SystemRun,
-    models: Mapping[str, Path],
     fmus: ComponentFmus,
     truth: ComponentFmus,
     drive: Measurement,
@@ -294,30 +300,28 @@ def _run_system(
     out: Path,
     log: Log,
     characterised: Mapping[str, LinkedCharacterisation],
+    cache: FmuCache,
 ) -> SystemResult:
     """One system: FMUs and SSDs, reference, both damper networks and the truth physics co-simulated and compared,
     the error budget, the envelope checks, the report (linking the characterisations of the system's networks)."""
     drive = _stretch(drive, run.duration)
     bushings = bool(bushing_elements(system))
     stabilisers = (
-        bushing_stabilisers(load_fmu_graph(fmus.bushing), bushing_elements(system))
+        bushing_stabilisers(cache.graph(fmus.bushing), bushing_elements(system))
         if bushings and fmus.bushing is not None
         else {}
     )
     vehicle = build_vehicle(system, out / "fmu", run.step, stabilisers)
     parts = {model: (fmus.dampers[model], fmus.bushing) for model in DAMPER_MODELS}
     parts[TRUTH] = (truth.dampers["truth"], truth.bushing)
-    ssds = {
-        model: write_system(
-            system,
-            vehicle,
-            damper,
-            bushing if bushings else None,
-            system_folder(out, system, model),
-            run.filter_cutoff if model != TRUTH else None,
+    systems = {
+        model: road_test_system(
+            system, vehicle, damper, bushing if bushings else None, run.filter_cutoff if model != TRUTH else None, cache
         )
         for model, (damper, bushing) in parts.items()
     }
+    ssds = {model: virtual.write(system_folder(out, system, model)) for model, virtual in systems.items()}
+    systems = {model: virtual.read_from(ssds[model]) for model, virtual in systems.items()}
     seconds: dict[str, float] = {}
     log(f"{system}: monolithic reference over {run.duration:g} s (truth physics, RK4 at {settings.reference_step:g} s)")
     reference: Reference = monolithic_reference(system, drive, vehicle_components(system), settings.reference_step)
@@ -331,7 +335,7 @@ def _run_system(
     comparisons: dict[str, list[ChannelComparison]] = {}
     excursions: list[Excursion] = []
     for model in ssds:
-        result, seconds[model] = _cosim(ssds[model], drive, run)
+        result, seconds[model] = _cosim(systems[model], drive, run)
         log(f"{system} with {model}: co-simulated {run.duration:g} s at {run.step:g} s in {seconds[model]:.1f} s")
         cosims[model] = _on_reference(result, ref, channels, f"{system} co-simulation with {model}")
         save_measurement(cosims[model], results_dir / f"{model.replace(' ', '-')}.csv")
@@ -339,7 +343,10 @@ def _run_system(
         if model != TRUTH:
             excursions.extend(
                 _excursions(
-                    f"co-simulation with {model}", damper_elements(system), _network_ports(models, model), result
+                    f"co-simulation with {model}",
+                    damper_elements(system),
+                    _carried(cache, fmus.dampers[model]),
+                    result,
                 )
             )
     rows = [thesis_row(c, model) for model in DAMPER_MODELS for c in comparisons[model]]
@@ -355,13 +362,14 @@ def _run_system(
             _network_errors(system, model, fmus, ref, cosims[model], cosims[TRUTH], channels, validation),
         )
     ]
-    excursions.extend(_excursions("reference", damper_elements(system), _network_ports(models, DAMPER_MODELS[0]), ref))
+    reference_ports = _carried(cache, fmus.dampers[DAMPER_MODELS[0]])
+    excursions.extend(_excursions("reference", damper_elements(system), reference_ports, ref))
     if bushings and fmus.bushing is not None:
         excursions.extend(
             _excursions(
                 "reference",
                 bushing_elements(system),
-                Component.from_onnx(load_fmu_graph(fmus.bushing)),
+                _carried(cache, fmus.bushing),
                 ref,
             )
         )
@@ -388,6 +396,7 @@ def _run_system(
         run.duration,
         settings.target,
         {k: characterised[k] for k in networks if k in characterised},
+        systems,
     )
     write_system_report(
         outcome.to_dict(),
@@ -461,14 +470,15 @@ def run_road_test(
     drive_path = write_drive(drive, out / "drive.csv")
     log(f"drive file {drive_path}: ISO 8608 class {settings.road_class} at {settings.speed:g} m/s")
     fmus = build_component_fmus(models, out / "fmu", "full-vehicle" in runs)
-    period = _network_ports(models, DAMPER_MODELS[0]).sample_period
+    cache = FmuCache()  # each network FMU's step graph and description, read once
+    period = _carried(cache, fmus.dampers[DAMPER_MODELS[0]]).sample_period
     truth = build_truth_fmus(
         out / "fmu", period if period is not None else min(r.step for r in runs.values()), "full-vehicle" in runs
     )
     outcome = RoadTestResult(out=out, drive=drive_path)
     characterised = _characterise(fmus, out / "characterise", settings.characterise, log)
     for system, run in runs.items():
-        system_run = _run_system(system, run, models, fmus, truth, drive, settings, out, log, characterised)
+        system_run = _run_system(system, run, fmus, truth, drive, settings, out, log, characterised, cache)
         outcome.systems.append(system_run)
     outcome.seconds = time.perf_counter() - started
     outcome.summary = out / "road_test.json"

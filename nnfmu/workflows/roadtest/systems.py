@@ -21,7 +21,6 @@ from pathlib import Path
 import onnx
 
 from nnfmu.atomic import atomic_path
-from nnfmu.cosim import connect_by_name, write_ssd
 from nnfmu.data.rigs import BUSHING_CHANNELS
 from nnfmu.errors import NnfmuError
 from nnfmu.export.merge import merge_step_graphs
@@ -29,6 +28,7 @@ from nnfmu.fmu import BuildOptions, build_fmu
 from nnfmu.vehicle import CORNERS, FRONT_CORNERS, STABILISED, VehicleBuildSettings, build_vehicle_fmu, truth_laws
 from nnfmu.workflows.roadtest.truth_graphs import bushing_truth_graph, damper_truth_graph
 from nnfmu.workflows.roadtest.truth_reference import settled_state
+from nnfmu.workflows.system import FmuCache, VirtualSystem
 
 SYSTEMS = ("quarter-car", "full-vehicle")
 DAMPER_MODELS = ("damper-spline", "damper-hysteresis")
@@ -142,6 +142,25 @@ def build_vehicle(
     )
 
 
+def road_test_system(
+    system: str,
+    vehicle_fmu: Path,
+    damper_fmu: Path,
+    bushing_fmu: Path | None,
+    filter_cutoff: float | None = None,
+    cache: FmuCache | None = None,
+) -> VirtualSystem:
+    """The vehicle, its damper networks and (if `bushing_fmu` is given) its front LCA bushing FMUs joined by name,
+    in memory; each network FMU's output low-pass set to `filter_cutoff` [Hz] (0: off; None: the FMUs' own default,
+    nothing set); `cache`: what the FMUs carry, shared with the road test's other systems."""
+    components = {name: damper_fmu for name in damper_elements(system)}
+    if bushing_fmu is not None:
+        components |= {name: bushing_fmu for name in bushing_elements(system)}
+    parameters = {name: {"filter_cutoff": filter_cutoff} for name in components} if filter_cutoff is not None else {}
+    label = f"{system} with {damper_fmu.stem}" + (" and LCA bushing networks" if bushing_fmu is not None else "")
+    return VirtualSystem.by_name(label, ("vehicle", vehicle_fmu), components, parameters, cache)
+
+
 def write_system(
     system: str,
     vehicle_fmu: Path,
@@ -150,14 +169,5 @@ def write_system(
     folder: Path,
     filter_cutoff: float | None = None,
 ) -> Path:
-    """`folder/SystemStructure.ssd` joining the vehicle, its damper networks and (if `bushing_fmu` is given) its
-    front LCA bushing FMUs by name; each network FMU's output low-pass set to `filter_cutoff` [Hz] (0: off; None: the
-    FMUs' own default, nothing set)."""
-    components = {name: damper_fmu for name in damper_elements(system)}
-    if bushing_fmu is not None:
-        components |= {name: bushing_fmu for name in bushing_elements(system)}
-    parameters = {name: {"filter_cutoff": filter_cutoff} for name in components} if filter_cutoff is not None else {}
-    folder.mkdir(parents=True, exist_ok=True)
-    label = f"{system} with {damper_fmu.stem}" + (" and LCA bushing networks" if bushing_fmu is not None else "")
-    structure = connect_by_name(label, ("vehicle", vehicle_fmu), components, folder, parameters)
-    return write_ssd(structure, folder / "SystemStructure.ssd")
+    """`folder/SystemStructure.ssd` of `road_test_system` (its FMUs linked or copied into `folder`)."""
+    return road_test_system(system, vehicle_fmu, damper_fmu, bushing_fmu, filter_cutoff).write(folder)

@@ -73,8 +73,8 @@ def fix_by_terms(evidence: Evidence, onnx_path: Path, folder: Path) -> Fixed:
     """The element's network with the effect's terms at the coefficients fitted to the vehicle residual."""
     terms = evidence.candidate.fitted_terms(evidence.coefficients)
     element = evidence.candidate.component
-    fmu = term_fmu(onnx_path, terms, folder / f"{element}-{evidence.candidate.effect}", "vehicle loop fix")
+    graph, fmu = term_fmu(onnx_path, terms, folder / f"{element}-{evidence.candidate.effect}", "vehicle loop fix")
     listed = ", ".join(f"{t.coefficient:.4g} x {t.channel or '1'} on {t.output}" for t in terms)
     if evidence.candidate.joint_step is not None:
         listed = f"{evidence.coefficients[0]:+.1%} of its own stiffness: {listed}"
-    return Fixed(element, fmu, fmu.with_suffix(".onnx"), f"physical terms fitted to the vehicle residual: {listed}")
+    return Fixed(element, fmu, graph, f"physical terms fitted to the vehicle residual: {listed}")

@@ -5,23 +5,21 @@ its settling time."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from nnfmu.cosim import CosimSettings, cosimulate, open_system
+from nnfmu.cosim import CosimSettings
 from nnfmu.data import Measurement
 from nnfmu.validate import ChannelComparison, ValidationSettings, compare
-from nnfmu.workflows.vehicle_binding import vehicle_binding
+from nnfmu.workflows.system import VirtualSystem
 
 PSD_BAND = (0.5, 40.0)  # [Hz] where the PSD difference is read: the rig controller's band
 
 
-def replay_system(ssd: Path, drive: Measurement, step: float, allow_outside: bool = False) -> Measurement:
-    """Every output of the system co-simulated on `drive` at the communication `step` [s] (master defaults); its
-    FMUs may lie outside its folder if `allow_outside`."""
-    with open_system(ssd, allow_outside) as system:
-        return cosimulate(system, drive, CosimSettings(step=step), binding=vehicle_binding(system)).measurement
+def replay_system(system: VirtualSystem, drive: Measurement, step: float) -> Measurement:
+    """Every output of the system co-simulated in memory on `drive` at the communication `step` [s] (master
+    defaults)."""
+    return system.cosimulate(drive, CosimSettings(step=step)).measurement
 
 
 def on_record(result: Measurement, measured: Measurement, channels: list[str], settle: float) -> Measurement:

@@ -20,6 +20,7 @@ from nnfmu.fmu import FmuBuildError, load_onnx
 from nnfmu.kinds import DAMPER
 from nnfmu.out_paths import check_output_dir, replace_output_dir
 from nnfmu.stopping import check_stop
+from nnfmu.workflows.system import VirtualSystem
 from nnfmu.workflows.vehicle_loop.attribution import (
     SENSOR_OFFSET,
     Candidate,
@@ -41,7 +42,7 @@ from nnfmu.workflows.vehicle_loop.report import VehicleLoopReport, write_vehicle
 from nnfmu.workflows.vehicle_loop.residuals import ChannelError, channel_errors, on_record, replay_system, settled
 from nnfmu.workflows.vehicle_loop.sensitivity import PERTURBATION, Sensitivities, network_stiffness
 from nnfmu.workflows.vehicle_loop.settings import VehicleLoopError, VehicleLoopSettings
-from nnfmu.workflows.vehicle_loop.system_files import VirtualCar, read_virtual_car, swapped_system
+from nnfmu.workflows.vehicle_loop.system_files import VirtualCar, read_virtual_car
 
 Log = Callable[[str], None]
 MAX_ATTRIBUTION_BYTES = 2 * 1024**3  # the attribution's designs and their copies, checked before the sensitivities
@@ -204,7 +205,7 @@ def _candidates(
 
 def run_vehicle_loop(
     measured: str | os.PathLike[str] | Measurement,
-    system: str | os.PathLike[str],
+    system: str | os.PathLike[str] | VirtualSystem,
     drive: str | os.PathLike[str] | Measurement,
     out_dir: str | os.PathLike[str],
     settings: VehicleLoopSettings = VehicleLoopSettings(),
@@ -228,7 +229,7 @@ def _untested_words(car: VirtualCar, element: str) -> str:
 
 def _run_vehicle_loop(
     measured: str | os.PathLike[str] | Measurement,
-    system: str | os.PathLike[str],
+    system: str | os.PathLike[str] | VirtualSystem,
     drive: str | os.PathLike[str] | Measurement,
     out_dir: str | os.PathLike[str],
     settings: VehicleLoopSettings,
@@ -236,17 +237,32 @@ def _run_vehicle_loop(
     log: Log,
     graphs: Path,
 ) -> VehicleLoopReport:
-    """`run_vehicle_loop` with the elements' step graphs read into `graphs`."""
-    inputs = [Path(p) for p in (measured, system, drive) if not isinstance(p, Measurement)]
+    """`run_vehicle_loop` with the elements' step graphs written into `graphs`."""
+    system_file = system.structure.path if isinstance(system, VirtualSystem) else Path(system)
+    given = (measured, system_file, drive)
+    inputs = [Path(p) for p in given if p is not None and not isinstance(p, Measurement)]
     out_dir = check_output_dir(out_dir, "vehicle-loop", inputs, replaces=True)
-    car = read_virtual_car(system, graphs, models, log, settings.allow_outside)
+    with VirtualSystem.open(system, settings.allow_outside) as virtual:
+        car = read_virtual_car(virtual, virtual.structure.path or system_file or virtual.where, graphs, models, log)
+        return _loop_on(car, measured, drive, out_dir, settings, log)
+
+
+def _loop_on(
+    car: VirtualCar,
+    measured: str | os.PathLike[str] | Measurement,
+    drive: str | os.PathLike[str] | Measurement,
+    out_dir: Path,
+    settings: VehicleLoopSettings,
+    log: Log,
+) -> VehicleLoopReport:
+    """The loop on the virtual car `car` (`run_vehicle_loop`)."""
     _check_step_graphs(car)
     m = _load(measured, "measurement", _read_record)
     d = _load(drive, "drive", read_drive)
     _check_time_axes(m, d)
     step = settings.step_for(car.vehicle_fmu)
     log(f"replaying {car.name} on {d.source} at a {step:g} s step")
-    base = replay_system(car.ssd, d, step, settings.allow_outside)
+    base = replay_system(car.system, d, step)
     recorded = [c for c in m.names if f"derived:{c}" not in m.notes and not c.startswith("actuator_")]
     channels = [c for c in recorded if c in base.channels]
     ignored = [c for c in recorded if c not in channels]
@@ -273,8 +289,8 @@ def _run_vehicle_loop(
     out_dir.parent.mkdir(parents=True, exist_ok=True)
     with staging_dir(out_dir.parent, f".{out_dir.name}.staging-") as staging:
 
-        def replay(ssd: Path) -> Measurement:
-            return on_record(replay_system(ssd, d, step), m, channels, settings.settle)
+        def replay(system: VirtualSystem) -> Measurement:
+            return on_record(replay_system(system, d, step), m, channels, settings.settle)
 
         sensitivities = Sensitivities(car, staging / "sensitivity", replay, virtual, channels)
         columns: dict[str, list[np.ndarray]] = {}
@@ -328,8 +344,8 @@ def _run_vehicle_loop(
                 )
             else:
                 fixes.append(fix_by_terms(e, onnx_path, staging / "components"))
-        final, fmus = _fixed_system(car, fixes, staging, out_dir)
-        after_result = on_record(replay_system(final, d, step), m, channels, settings.settle)
+        fixed, final, fmus = _fixed_system(car, fixes, staging)
+        after_result = replay(fixed)
         corrected = Measurement(
             record.time,
             {c: record[c] - offsets.get(c, 0.0) for c in channels},
@@ -452,9 +468,9 @@ def _moved(fixed: Fixed, staging: Path, out_dir: Path) -> Fixed:
     return Fixed(fixed.element, final(fixed.fmu), final(fixed.onnx), fixed.method, fixed.loop)
 
 
-def _fixed_system(car: VirtualCar, fixes: list[Fixed], staging: Path, out_dir: Path) -> tuple[Path, dict[str, Path]]:
-    """staging/system/SystemStructure.ssd with every FMU copied beside it (the fixed ones in their elements'
-    places), and element -> FMU path in the staging folder."""
+def _fixed_system(car: VirtualCar, fixes: list[Fixed], staging: Path) -> tuple[VirtualSystem, Path, dict[str, Path]]:
+    """The fixed system, written as staging/system/SystemStructure.ssd with every FMU copied beside it (the fixed
+    ones in their elements' places), and element -> FMU path in the staging folder."""
     folder = staging / "system"
     (folder / "fmu").mkdir(parents=True, exist_ok=True)
     chosen = {name: fmu for name, fmu in car.fmus.items()} | {f.element: f.fmu for f in fixes}
@@ -468,5 +484,5 @@ def _fixed_system(car: VirtualCar, fixes: list[Fixed], staging: Path, out_dir: P
         fmus[element] = copies[source]
     vehicle = folder / "fmu" / car.vehicle_fmu.name
     shutil.copyfile(car.vehicle_fmu, vehicle)
-    moved = VirtualCar(car.ssd, car.name, car.vehicle, vehicle, dict(fmus), car.onnx, car.parameters, car.graph_notes)
-    return swapped_system(moved, {}, folder, "fixed by nnfmu loop vehicle"), fmus
+    fixed = car.swapped(fmus | {car.vehicle: vehicle}, "fixed by nnfmu loop vehicle")
+    return fixed, fixed.write(folder), fmus

@@ -15,9 +15,10 @@ from nnfmu.data import Measurement
 from nnfmu.data.rigs import BUSHING_CHANNELS
 from nnfmu.export.terms import OutputTerm, add_output_terms
 from nnfmu.fmu import BuildOptions, build_fmu
-from nnfmu.workflows.vehicle_loop.system_files import VirtualCar, swapped_system
+from nnfmu.workflows.system import VirtualSystem
+from nnfmu.workflows.vehicle_loop.system_files import VirtualCar
 
-Replay = Callable[[Path], Measurement]  # an SSD -> its channels on the record's time stamps
+Replay = Callable[[VirtualSystem], Measurement]  # a system -> its channels on the record's time stamps
 PERTURBATION = 0.1  # a bushing's stiffness sensitivity is measured 10 % stiffer than its network: small enough for
 # first order, large enough to stand out of the co-simulation's numerical noise (`bushing_candidates`' step)
 
@@ -41,16 +42,18 @@ def network_stiffness(replay: Measurement, element: str) -> dict[str, float]:
     return rates
 
 
-def term_fmu(source: Path, terms: tuple[OutputTerm, ...], out: Path, label: str) -> Path:
-    """The step graph `source` with `terms` added, as `out.onnx` and the FMU `out.fmu` (this machine's binaries)."""
+def term_fmu(source: Path, terms: tuple[OutputTerm, ...], out: Path, label: str) -> tuple[Path, Path]:
+    """The step graph `source` with `terms` added, as `out.onnx` and the FMU `out.fmu` (this machine's binaries);
+    returns both paths (graph, FMU)."""
     graph = add_output_terms(onnx.load(source), terms, f"{label}: {source.name} with added physical terms")
-    with atomic_path(out.with_suffix(".onnx")) as tmp:
+    onnx_path = out.with_suffix(".onnx")
+    with atomic_path(onnx_path) as tmp:
         onnx.save(graph, tmp)
-    return build_fmu(out.with_suffix(".onnx"), BuildOptions(out=out.with_suffix(".fmu"), platforms=("linux64",)))
+    return onnx_path, build_fmu(onnx_path, BuildOptions(out=out.with_suffix(".fmu"), platforms=("linux64",)))
 
 
 class Sensitivities:
-    """Builds each (step graph, terms) FMU once and replays each (element, terms) swap once, in `folder`."""
+    """Builds each (step graph, terms) FMU once in `folder` and replays each (element, terms) swap once, in memory."""
 
     def __init__(self, car: VirtualCar, folder: Path, replay: Replay, base: Measurement, channels: list[str]) -> None:
         self.car, self.folder, self.replay, self.base, self.channels = car, folder, replay, base, channels
@@ -60,15 +63,14 @@ class Sensitivities:
         key = (source, terms)
         if key not in self._fmus:
             name = f"{source.stem}-term{len(self._fmus)}"
-            self._fmus[key] = term_fmu(source, terms, self.folder / "fmu" / name, "sensitivity")
+            self._fmus[key] = term_fmu(source, terms, self.folder / "fmu" / name, "sensitivity")[1]
         return self._fmus[key]
 
     def _change(self, element: str, terms: tuple[OutputTerm, ...], label: str, per: float) -> np.ndarray:
         """The (n, C) change of the channels with `terms` added to `element`, divided by `per`."""
         source = self.car.onnx[element]
         assert source is not None
-        ssd = swapped_system(self.car, {element: self._fmu(source, terms)}, self.folder / f"{element}-{label}", label)
-        moved = self.replay(ssd)
+        moved = self.replay(self.car.swapped({element: self._fmu(source, terms)}, label))
         return np.column_stack([(moved[c] - self.base[c]) / per for c in self.channels])
 
     def columns(self, element: str, terms: tuple[OutputTerm, ...], joint_step: float | None = None) -> list[np.ndarray]:
