@@ -206,6 +206,19 @@ def test_no_public_name_of_a_face_is_also_one_of_its_modules() -> None:
         assert not clash, f"nnfmu.{part}: public names that are also module names: {clash}"
 
 
+def test_other_floors_import_the_diagnosis_only_through_its_package() -> None:
+    """`nnfmu.diagnosis`'s `__init__` lists what other floors may use (the effect registries, the diagnosis, the
+    held-out tests the vehicle loop shares); its modules stay its own."""
+    inside = sorted(
+        f"{name} -> {target}"
+        for name, targets in all_modules().items()
+        if top(name) != "diagnosis"
+        for target in targets
+        if target.startswith("nnfmu.diagnosis.")
+    )
+    assert not inside, "import nnfmu.diagnosis's public names instead:\n" + "\n".join(inside)
+
+
 # The one module that makes a jinja2 environment for HTML, and those that make one for other text (FMI XML, C).
 HTML_WRITER = "nnfmu.reports.html"
 OTHER_TEMPLATES = {"nnfmu.fmu.model_description", "nnfmu.fmu.native.config"}
