@@ -160,8 +160,8 @@ _COVERAGE: dict[str, Callable[[str, list[str], bool, dict[str, list[str]]], str]
 def _candidates(
     car: VirtualCar, channels: list[str], replay: Measurement
 ) -> tuple[dict[str, Candidate], dict[str, str]]:
-    """Every component element's candidate effects, the diagnosis registry's `SYSTEM_EFFECTS` its kind names (those
-    scaled by stiffness at its network's own along the virtual car's `replay`), a sensor offset per measured channel;
+    """Every component element's candidate effects, the diagnosis registry's `SYSTEM_EFFECTS` its kind names (one
+    scaled by stiffness: the network's own along the virtual car's `replay`), a sensor offset per measured channel;
     and the candidates that cannot be tested."""
     found: dict[str, Candidate] = {}
     untestable: dict[str, str] = {}

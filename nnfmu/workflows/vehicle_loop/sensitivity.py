@@ -19,7 +19,7 @@ from nnfmu.workflows.vehicle_loop.system_files import VirtualCar, swapped_system
 
 Replay = Callable[[Path], Measurement]  # an SSD -> its channels on the record's time stamps
 PERTURBATION = 0.1  # a bushing's stiffness sensitivity is measured 10 % stiffer than its network: small enough for
-# first order, large enough to stand out of the co-simulation's numerical noise (`bushing_candidates`' step)
+# first order, large enough to stand out of the co-simulation's numerical noise (a joint effect's step)
 
 
 def network_stiffness(
