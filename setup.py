@@ -6,4 +6,4 @@ nnfmu; it is added here by name and mapped in pyproject.toml's `package-dir`.
 
 from setuptools import find_packages, setup
 
-setup(packages=find_packages(include=["nnfmu*"]) + ["nnfmu.templates", "nnfmu.templates.c"])
+setup(packages=find_packages(include=["nnfmu*"]) + ["nnfmu.templates", "nnfmu.templates.c", "nnfmu.templates.reports"])

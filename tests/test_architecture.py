@@ -1,6 +1,6 @@
 """The import picture: stages import only downward, the CLI only the workflows floor, other floors reach `cosim`,
-`fmu` and `vehicle` only through their faces, and no module imports itself back through a circle
-(docs/architecture.md states the same rules)."""
+`fmu` and `vehicle` only through their faces, and no module imports itself back through a circle; HTML pages come from
+one writer (docs/architecture.md states the same rules)."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "nnfmu"
 FLOORS: tuple[tuple[str, ...], ...] = (
     ("errors", "stopping", "input_files", "faces"),
     ("atomic", "safe_zip", "resources", "physics", "component", "kinds"),
-    ("out_paths", "reference_stimulus"),
+    ("out_paths", "reference_stimulus", "reports"),
     ("data",),
     ("models",),
     ("export",),
@@ -204,3 +204,56 @@ def test_no_public_name_of_a_face_is_also_one_of_its_modules() -> None:
         face = importlib.import_module(f"nnfmu.{part}")
         clash = [n for n in face.__all__ if (PACKAGE / part / f"{n}.py").exists() or (PACKAGE / part / n).is_dir()]
         assert not clash, f"nnfmu.{part}: public names that are also module names: {clash}"
+
+
+def test_other_floors_import_the_diagnosis_only_through_its_package() -> None:
+    """`nnfmu.diagnosis`'s `__init__` lists what other floors may use (the effect registries, the diagnosis, the
+    held-out tests the vehicle loop shares); its modules stay its own."""
+    inside = sorted(
+        f"{name} -> {target}"
+        for name, targets in all_modules().items()
+        if top(name) != "diagnosis"
+        for target in targets
+        if target.startswith("nnfmu.diagnosis.")
+    )
+    assert not inside, "import nnfmu.diagnosis's public names instead:\n" + "\n".join(inside)
+
+
+# The one module that makes a jinja2 environment for HTML, and those that make one for other text (FMI XML, C).
+HTML_WRITER = "nnfmu.reports.html"
+OTHER_TEMPLATES = {"nnfmu.fmu.model_description", "nnfmu.fmu.native.config"}
+
+
+def html_writers(sources: dict[str, str]) -> list[str]:
+    """Modules of `sources` (name -> Python text) that write HTML themselves: one that makes a jinja2 `Environment`
+    (other than the report writer and the XML and C generators), or has `<html` or `<!doctype` in a string."""
+    found = []
+    for name, text in sources.items():
+        if name == HTML_WRITER:
+            continue
+        for node in ast.walk(ast.parse(text)):
+            if isinstance(node, ast.Call) and name not in OTHER_TEMPLATES:
+                called = node.func.attr if isinstance(node.func, ast.Attribute) else getattr(node.func, "id", "")
+                if called == "Environment":
+                    found.append(f"{name}: makes a jinja2 Environment")
+            if isinstance(node, ast.Constant) and isinstance(node.value, str):
+                if "<html" in node.value.lower() or "<!doctype" in node.value.lower():
+                    found.append(f"{name}: writes {node.value[:40]!r}")
+    return found
+
+
+def test_html_reports_come_from_the_one_writer() -> None:
+    """`nnfmu.reports.html` renders every HTML page (one environment, autoescape, StrictUndefined, atomic writes)
+    from the templates in `templates/reports/`; no other module builds a page, and no template lies elsewhere."""
+    sources = {module_name(path): path.read_text(encoding="utf-8") for path in sorted(PACKAGE.rglob("*.py"))}
+    assert not html_writers(sources), "HTML written outside nnfmu.reports.html:\n" + "\n".join(html_writers(sources))
+    templates = [*PACKAGE.rglob("*.html*"), *(PACKAGE.parent / "templates").rglob("*.html*")]
+    stray = [str(path) for path in templates if path.parent != PACKAGE.parent / "templates" / "reports"]
+    assert not stray, f"HTML templates outside templates/reports/: {stray}"
+
+
+def test_the_html_check_sees_a_page_built_by_hand() -> None:
+    """A guard on the check: a hand-built page and a module of its own environment are found, the writer is not."""
+    assert html_writers({"nnfmu.x": "page = '<!DOCTYPE html><html>'"}) == ["nnfmu.x: writes '<!DOCTYPE html><html>'"]
+    assert html_writers({"nnfmu.y": "import jinja2\njinja2.Environment()"}) == ["nnfmu.y: makes a jinja2 Environment"]
+    assert html_writers({HTML_WRITER: "import jinja2\njinja2.Environment()"}) == []

@@ -29,9 +29,7 @@ def test_wheel_ships_templates_and_package_data(tmp_path: Path) -> None:
     for template in (ROOT / "templates").rglob("*"):
         if template.is_file():
             assert f"nnfmu/templates/{template.relative_to(ROOT / 'templates').as_posix()}" in names
-    assert "nnfmu/validate/report.html.j2" in names
-    assert "nnfmu/workflows/campaign/summary.html.j2" in names
-    assert "nnfmu/workflows/loop/loop_report.html.j2" in names
+    assert {"nnfmu/templates/reports/base.html.j2", "nnfmu/templates/reports/validate.html.j2"} <= names
     assert {
         "nnfmu/diagnosis/__init__.py",
         "nnfmu/diagnosis/effects/__init__.py",

@@ -15,18 +15,6 @@ def _finite(x: float | None) -> float | None:
     return None if x is None or not math.isfinite(x) else float(x)
 
 
-# Below this a double-precision p-value is rounding noise (1 - CDF loses everything under the machine epsilon, 2.2e-16),
-# so it is shown as a bound, never as 0.
-P_VALUE_FLOOR = 1e-16
-
-
-def p_value_text(p: float | None) -> str:
-    """A p-value for a report: `3.2e-05`, `< 1e-16` at the floating-point floor (a computed 0 included), `–` if none."""
-    if p is None or not math.isfinite(p):
-        return "–"
-    return f"< {P_VALUE_FLOOR:g}" if p < P_VALUE_FLOOR else f"{p:.2g}"
-
-
 @dataclass(frozen=True)
 class EffectEvidence:
     """One effect's standing: variance explained out of sample alone and beyond the effects ranked above, the

@@ -30,7 +30,8 @@ class ComponentKind:
     """A component kind: its name, the prefix of its elements' names in a vehicle (`damper_fl`), its channels, the
     rig that records it (`nnfmu rig RIG`) and the rig types that rig offers, an example element, the characterisation
     it gets (`nnfmu characterise`; None: none), the training presets that apply, the vehicle loop's candidate effects
-    for it, and whether a lab car measures its own force and stroke (in-situ diagnosis)."""
+    for it (names in `nnfmu.diagnosis.SYSTEM_EFFECTS`), and whether a lab car measures its own force and stroke
+    (in-situ diagnosis)."""
 
     name: str
     prefix: str

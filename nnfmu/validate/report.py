@@ -14,19 +14,19 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-import jinja2
 import numpy as np
 
 import nnfmu
 from nnfmu.atomic import scratch_dir
+from nnfmu.reports.html import render
 from nnfmu.stopping import check_stop, interrupts_deferred
 from nnfmu.validate.compare import ChannelComparison
 from nnfmu.validate.metrics import DEFINITIONS
 from nnfmu.validate.plots import plot_channel
 from nnfmu.validate.summary import json_float
-from nnfmu.validate.verdict import Target, per_cent, verdict
+from nnfmu.validate.verdict import Target, verdict
 
-TEMPLATE = "report.html.j2"
+TEMPLATE = "validate.html.j2"
 SUMMARY_FILE = "summary.json"
 INDEX_FILE = "index.html"
 
@@ -83,22 +83,9 @@ def summary_document(
     }
 
 
-def _format_number(value: float | None) -> str:
-    return "n/a" if value is None else f"{value:.4g}"
-
-
 def render_html(summary: Mapping[str, Any]) -> str:
-    """`index.html` from the summary document, every value escaped by jinja2's autoescape."""
-    environment = jinja2.Environment(
-        loader=jinja2.FileSystemLoader(Path(__file__).resolve().parent),
-        autoescape=True,
-        trim_blocks=True,
-        lstrip_blocks=True,
-        undefined=jinja2.StrictUndefined,
-    )
-    environment.filters["number"] = _format_number
-    environment.filters["per_cent"] = per_cent
-    return environment.get_template(TEMPLATE).render(summary=summary)
+    """`index.html` from the summary document (`nnfmu.reports`: every value escaped)."""
+    return render(TEMPLATE, (summary["verdict"],), summary=summary)
 
 
 def write_report(

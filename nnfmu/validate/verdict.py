@@ -36,14 +36,6 @@ def percent(fraction: float) -> str:
     return f"{100 * fraction:.3g} %"
 
 
-def per_cent(value: object) -> str:
-    """A fraction as per cent for a `[%]` table cell (`0.02858` -> `2.858`), as headlines and the docs give errors;
-    None as `–`."""
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        return f"{100 * value:.4g}"
-    return "–" if value is None else str(value)
-
-
 def verdict(what: str, nrmse: float | None, target: Target, before: float | None = None, where: str = "") -> str:
     """`what` NRMSE (`where`, e.g. " on the test part") against `target` in one line; with `before`, the error
     before -> after."""

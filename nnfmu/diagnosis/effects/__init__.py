@@ -2,11 +2,14 @@
 (regressors for the diagnosis, a feature-spec extension for the retraining; see `base.Effect`), under a stable
 name. Grouped by physical family, one module each. Beside them, per record, every measured channel the model does
 not use is a candidate of its own, `input:<channel>` (`channels`); `effects_for` merges both for one diagnosis and
-`find_effect` looks either kind up by name."""
+`find_effect` looks either kind up by name. `SYSTEM_EFFECTS`: the effects the vehicle loop attributes in the
+co-simulation, each with its system half (`system.SystemEffect`: terms on a component's network, or a measured
+channel's own error); a component kind names those it may show (`ComponentKind.loop_effects`)."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TypeVar
 
 from nnfmu.data import Measurement
 from nnfmu.diagnosis.effects.backlash import Backlash
@@ -18,15 +21,19 @@ from nnfmu.diagnosis.effects.hysteresis import Hysteresis
 from nnfmu.diagnosis.effects.inertia import Inertia
 from nnfmu.diagnosis.effects.presliding import PreslidingFriction
 from nnfmu.diagnosis.effects.sensor import SensorOffset
+from nnfmu.diagnosis.effects.stiffness import Stiffness
 from nnfmu.diagnosis.effects.stop_family import StopFamily
+from nnfmu.diagnosis.effects.system import SystemEffect, Term
 from nnfmu.diagnosis.effects.temperature import Temperature
 from nnfmu.diagnosis.effects.viscoelastic import AmplitudeDependence, FrequencyDependence
 from nnfmu.diagnosis.errors import DiagnosisError
 
+Named = TypeVar("Named", Effect, SystemEffect)
 
-def _registry(*effects: Effect) -> dict[str, Effect]:
+
+def _registry(*effects: Named) -> dict[str, Named]:
     """Name -> effect in library order; a name given twice is a programming error."""
-    registry: dict[str, Effect] = {}
+    registry: dict[str, Named] = {}
     for effect in effects:
         if effect.name in registry:
             raise ValueError(f"two effects are named {effect.name!r}")
@@ -46,6 +53,10 @@ EFFECTS: dict[str, Effect] = _registry(
     AmplitudeDependence(),
     SensorOffset(),
 )
+
+# The vehicle loop's effects: a new one is its module (a `SystemEffect`, or an `Effect` that is one too) and a line
+# here.
+SYSTEM_EFFECTS: dict[str, SystemEffect] = _registry(GasForce(), Stiffness(), SensorOffset())
 
 
 def select_effects(names: tuple[str, ...] | None) -> list[Effect]:
@@ -86,12 +97,15 @@ def find_effect(name: str) -> Effect:
 
 __all__ = [
     "EFFECTS",
+    "SYSTEM_EFFECTS",
     "ChannelInput",
     "Effect",
     "Extension",
     "NoExtension",
     "Regressors",
     "StopFamily",
+    "SystemEffect",
+    "Term",
     "channel_effects",
     "effects_for",
     "find_effect",

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+
 import numpy as np
 
 from nnfmu.data import Measurement
@@ -16,14 +18,19 @@ from nnfmu.diagnosis.effects.base import (
     with_delays,
 )
 from nnfmu.diagnosis.effects.shared import derived_note
+from nnfmu.diagnosis.effects.system import SystemEffect, Term
 from nnfmu.diagnosis.settings import DiagnosisSettings
 from nnfmu.diagnosis.signals import EffectSignals
+from nnfmu.kinds import KindChannel
 from nnfmu.models.features import FeatureSpec
 
+PROBE_PRELOAD = -100.0  # [N] the preload (pushing out: tension positive) and
+PROBE_RATE = 2000.0  # [N/m] the gas rate the vehicle loop probes its sensitivities with
 
-class GasForce(Effect):
+
+class GasForce(Effect, SystemEffect):
     """A constant and the displacement; the extension taps the displacement (the network's bias holds the
-    preload)."""
+    preload). In the system: a preload and a rate times the stroke on the force of the kind's first channel."""
 
     name = "gas_force"
     description = "gas spring: preload and displacement dependence"
@@ -44,4 +51,12 @@ class GasForce(Effect):
         displacement = channel(spec, "displacement")
         return need(self.name, displacement, measurement) or extended(
             self.name, spec, with_delays(spec, displacement, (0,)), f"{displacement} at delay 0"
+        )
+
+    def terms(self, channels: Sequence[KindChannel], stiffness: Mapping[str, float]) -> tuple[Term, ...]:
+        """-preload + rate x on the first channel's force (a damper's stroke), at the probe values."""
+        stroke = channels[0]
+        return (
+            Term(stroke.force, None, PROBE_PRELOAD, stroke.force_unit),
+            Term(stroke.force, stroke.position, PROBE_RATE, stroke.position_unit),
         )

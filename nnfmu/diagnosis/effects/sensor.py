@@ -2,22 +2,28 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+
 import numpy as np
 
 from nnfmu.data import Measurement
 from nnfmu.diagnosis.effects.base import Effect, Extension, NoExtension, Regressors
+from nnfmu.diagnosis.effects.system import SystemEffect, Term
 from nnfmu.diagnosis.settings import DiagnosisSettings
 from nnfmu.diagnosis.signals import EffectSignals
+from nnfmu.kinds import KindChannel
 from nnfmu.models.features import FeatureSpec
 
 
-class SensorOffset(Effect):
+class SensorOffset(Effect, SystemEffect):
     """A constant and a linear drift over the record. No extension, by design: the measurement, not the
-    component, is at fault (the network's bias already holds a constant offset)."""
+    component, is at fault (the network's bias already holds a constant offset). In the system: a constant in one
+    measured channel alone."""
 
     name = "sensor_offset"
     description = "load-cell offset or slow drift"
     requires = ()
+    on_channel = True
 
     def regressors(self, signals: EffectSignals, settings: DiagnosisSettings) -> Regressors:
         t = signals.time - signals.time[0]
@@ -36,3 +42,7 @@ class SensorOffset(Effect):
             "component; correct the measurement (the network's bias already holds a "
             "constant offset)",
         )
+
+    def terms(self, channels: Sequence[KindChannel], stiffness: Mapping[str, float]) -> tuple[Term, ...]:
+        """None: the offset is the measured channel's, fitted on it directly."""
+        return ()

@@ -13,16 +13,16 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import jinja2
 import numpy as np
 import pyarrow as pa
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from nnfmu.atomic import atomic_path, write_text_atomic
+from nnfmu.atomic import atomic_path
+from nnfmu.reports.html import write_html
 from nnfmu.workflows.campaign.execute import FAILED, OK
 
-TEMPLATE = "summary.html.j2"
+TEMPLATE = "campaign.html.j2"
 SUMMARY = "summary.html"
 RATIO_PLOT = "damage_ratio.png"
 WORST_PLOT = "worst_events.png"
@@ -162,12 +162,6 @@ def write_summary(out: Path, table: pa.Table, reference: str, context: dict[str,
     d = digest(table, reference)
     plot_programme(d, out / RATIO_PLOT)
     plot_worst(d, out / WORST_PLOT)
-    environment = jinja2.Environment(
-        loader=jinja2.PackageLoader("nnfmu.workflows.campaign", "."), autoescape=True, undefined=jinja2.StrictUndefined
+    return write_html(
+        out / SUMMARY, TEMPLATE, (verdict(d),), d=d, ratio_plot=RATIO_PLOT, worst_plot=WORST_PLOT, **context
     )
-    html = environment.get_template(TEMPLATE).render(
-        d=d, verdict=verdict(d), ratio_plot=RATIO_PLOT, worst_plot=WORST_PLOT, **context
-    )
-    path = out / SUMMARY
-    write_text_atomic(path, html)
-    return path

@@ -1,7 +1,7 @@
 """The characterisation report: CSV tables, PNG figures, `summary.json` and `index.html` in one folder.
 
 The HTML shows each section's figures side by side and its tables with the deviation per test point; every table is
-also a CSV file beside it. Values are escaped by jinja2's autoescape.
+also a CSV file beside it. The page is `nnfmu.reports`' (every value escaped).
 """
 
 from __future__ import annotations
@@ -12,13 +12,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import jinja2
-
 import nnfmu
+from nnfmu.reports.html import write_html
 from nnfmu.validate.summary import json_float
 from nnfmu.workflows.characterise.tables import Row, write_csv
 
-TEMPLATE = "report.html.j2"
+TEMPLATE = "characterise.html.j2"
 SUMMARY_FILE = "summary.json"
 INDEX_FILE = "index.html"
 MAX_HTML_ROWS = 200  # longer tables (work diagrams, loops) are linked as CSV only
@@ -32,14 +31,6 @@ class Section:
     text: list[str] = field(default_factory=list)
     images: list[str] = field(default_factory=list)
     tables: dict[str, Sequence[Row]] = field(default_factory=dict)
-
-
-def _number(value: Any) -> str:
-    if value is None:
-        return ""
-    if isinstance(value, str):
-        return value
-    return f"{value:.4g}"
 
 
 def _json_rows(rows: Sequence[Row]) -> list[dict[str, Any]]:
@@ -74,13 +65,5 @@ def write_report(folder: Path, title: str, context: dict[str, str], notes: list[
         "sections": shown,
     }
     (folder / SUMMARY_FILE).write_text(json.dumps(summary, indent=1, allow_nan=False), encoding="utf-8")
-    environment = jinja2.Environment(
-        loader=jinja2.FileSystemLoader(Path(__file__).resolve().parent),
-        autoescape=True,
-        trim_blocks=True,
-        lstrip_blocks=True,
-        undefined=jinja2.StrictUndefined,
-    )
-    environment.filters["number"] = _number
-    (folder / INDEX_FILE).write_text(environment.get_template(TEMPLATE).render(summary=summary), encoding="utf-8")
+    write_html(folder / INDEX_FILE, TEMPLATE, summary=summary)
     return folder / INDEX_FILE

@@ -3,8 +3,6 @@ pseudo-damage ratio; convergence; coherence of the FRF) and a self-contained rep
 
 from __future__ import annotations
 
-import base64
-import html
 import io
 import json
 import math
@@ -17,6 +15,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
 from nnfmu.data import Measurement
+from nnfmu.reports.html import inline_png, write_html
 from nnfmu.validate.spectra import welch_psd
 from nnfmu.workflows.iterate.loop import RMS_ALARM_DB, Outcome
 from nnfmu.workflows.iterate.settings import IterateSettings
@@ -110,12 +109,14 @@ def _figure(height: float = 3.2) -> tuple[Figure, object]:
 def _inline(figure: Figure) -> str:
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png")
-    return f'<img alt="figure" src="data:image/png;base64,{base64.b64encode(buffer.getvalue()).decode()}">'
+    return inline_png(buffer.getvalue())
 
 
 def _figures(
     outcome: Outcome, target: np.ndarray, dt: float, channels: Sequence[str], units: dict[str, str]
-) -> list[str]:
+) -> list[tuple[str, str]]:
+    """(title, inline PNG address) per figure: the error per iteration, each channel's target and response with
+    their PSDs, the identification's coherence."""
     best = outcome.iterations[outcome.best]
     parts = []
     figure, axes = _figure()
@@ -160,23 +161,7 @@ def _figures(
     axes.set_ylim(0, 1.05)
     axes.legend(fontsize=8)
     parts.append(("Coherence of the identification", _inline(figure)))
-    return [f"<h2>{html.escape(title)}</h2>\n{image}" for title, image in parts]
-
-
-def _table(report: dict[str, object], channels: Sequence[str]) -> str:
-    rows = []
-    for item in report["iterations"]:  # type: ignore[union-attr]
-        cells = "".join(
-            f"<td>{item['channels'][c]['nrmse']:.4f} / {item['channels'][c]['rms_ratio_db']:+.2f} dB / "
-            f"{item['channels'][c]['pseudo_damage_ratio'] or float('nan'):.3f}</td>"
-            for c in channels
-        )
-        rows.append(f"<tr><td>{item['iteration']}</td><td>{item['step_taken']:.3g}</td>{cells}</tr>")
-    head = "".join(f"<th>{html.escape(c)}</th>" for c in channels)
-    return (
-        "<table><tr><th>iteration</th><th>step</th>" + head + "</tr>\n" + "\n".join(rows) + "</table>"
-        "<p>cells: NRMSE / RMS ratio / pseudo-damage ratio</p>"
-    )
+    return parts
 
 
 def write_report(
@@ -190,21 +175,16 @@ def write_report(
     record: Measurement,
     system: Path,
 ) -> None:
-    """report.json and report.html into `folder` (a staging folder: plain writes)."""
+    """report.json and the self-contained report.html into `folder` (a staging folder)."""
     report = report_dict(outcome, channels, actuators, settings, record, system)
     (folder / "report.json").write_text(json.dumps(report, indent=2) + "\n", encoding="utf-8")
-    status = "converged" if outcome.converged else "not converged"
-    body = "\n".join(
-        [
-            "<!DOCTYPE html><html><head><meta charset='utf-8'><title>nnfmu iterate</title>",
-            "<style>body{font-family:sans-serif;max-width:1000px;margin:auto}td,th{border:1px solid #ccc;"
-            "padding:2px 6px;font-size:13px}table{border-collapse:collapse}</style></head><body>",
-            f"<h1>Drive iteration: {html.escape(status)}</h1>",
-            f"<p>target {html.escape(str(record.source))}; system {html.escape(str(system))}; best iteration "
-            f"{report['best_iteration']}; {report['seconds']} s</p>",
-            _table(report, channels),
-            *_figures(outcome, target, dt, channels, dict(record.units)),
-            "</body></html>",
-        ]
+    write_html(
+        folder / "report.html",
+        "iterate.html.j2",
+        status="converged" if outcome.converged else "not converged",
+        source=str(record.source),
+        system=str(system),
+        report=report,
+        channels=list(channels),
+        figures=_figures(outcome, target, dt, channels, dict(record.units)),
     )
-    (folder / "report.html").write_text(body, encoding="utf-8")

@@ -5,8 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from nnfmu.diagnosis import Diagnosis, DiagnosisError
-from nnfmu.diagnosis.effects import find_effect
+from nnfmu.diagnosis import Diagnosis, DiagnosisError, find_effect
 from nnfmu.validate.verdict import Target, percent, verdict
 from nnfmu.workflows.loop.results import Iteration
 

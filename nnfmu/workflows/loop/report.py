@@ -6,7 +6,6 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import jinja2
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
@@ -15,14 +14,13 @@ import nnfmu
 from nnfmu.atomic import write_text_atomic
 from nnfmu.data import Measurement
 from nnfmu.data.units import base_name
-from nnfmu.diagnosis.evidence import p_value_text
 from nnfmu.models.features import FeatureSpec
+from nnfmu.reports.html import write_html
 from nnfmu.validate import welch_psd
 from nnfmu.validate.plots import axis_label, new_axes, psd_unit
-from nnfmu.validate.verdict import per_cent
 from nnfmu.workflows.loop.results import LoopReport
 
-TEMPLATE = "loop_report.html.j2"
+TEMPLATE = "loop.html.j2"
 LOOP_WINDOW = 2.0  # s of the first test block drawn in the force-velocity and force-displacement loops
 MAX_SCATTER = 4000  # points per residual scatter
 
@@ -121,12 +119,6 @@ def plot_residual_psd(
     return path
 
 
-def _number(value: object) -> str:
-    if isinstance(value, (int, float)) and value is not None:
-        return f"{value:.4g}"
-    return "–" if value is None else str(value)
-
-
 def write_loop_report(
     folder: Path,
     report: LoopReport,
@@ -160,14 +152,7 @@ def write_loop_report(
     plots["residual PSD before/after"] = "residual_psd.png"
     document = {**report.to_dict(), "nnfmu_version": nnfmu.__version__, "plots": plots}
     write_text_atomic(folder / "report.json", json.dumps(document, indent=1, allow_nan=False))
-    environment = jinja2.Environment(
-        loader=jinja2.PackageLoader("nnfmu.workflows.loop", "."), autoescape=True, undefined=jinja2.StrictUndefined
-    )
-    environment.filters["number"] = _number
-    environment.filters["per_cent"] = per_cent
-    environment.filters["p_value"] = p_value_text
-    html = environment.get_template(TEMPLATE).render(report=document)
-    write_text_atomic(folder / "report.html", html)
+    write_html(folder / "report.html", TEMPLATE, (document["summary"],), report=document)
 
 
 def _test_ranges(test_rows: np.ndarray) -> list[tuple[int, int]]:

@@ -11,8 +11,7 @@ from dataclasses import replace
 import numpy as np
 
 from nnfmu.data import Measurement
-from nnfmu.diagnosis import Diagnosis, EffectEvidence, Extension, NoExtension, find_effect
-from nnfmu.diagnosis.ranking import GainTest
+from nnfmu.diagnosis import Diagnosis, EffectEvidence, Extension, GainTest, NoExtension, find_effect
 from nnfmu.models.features import FeatureSpec
 from nnfmu.models.retrain import Retrained, retrain
 from nnfmu.models.trained import TrainedModel

@@ -11,16 +11,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import jinja2
-
-from nnfmu.atomic import write_text_atomic
+from nnfmu.reports.html import write_html
 from nnfmu.workflows.characterise.linked import LinkedCharacterisation
 
-TEMPLATE = "road_test_report.html.j2"
-
-
-def _number(value: float | None) -> str:
-    return "n/a" if value is None else f"{value:.4g}"
+TEMPLATE = "roadtest.html.j2"
 
 
 def write_system_report(
@@ -32,21 +26,17 @@ def write_system_report(
 ) -> Path:
     """Render `summary` (a `SystemResult.to_dict()`) with `context` lines and links to `model_reports` and to each
     network's `characterisations` (or why it has none) into `path`."""
-    environment = jinja2.Environment(
-        loader=jinja2.FileSystemLoader(Path(__file__).resolve().parent),
-        autoescape=True,
-        trim_blocks=True,
-        lstrip_blocks=True,
-        undefined=jinja2.StrictUndefined,
-    )
-    environment.filters["number"] = _number
     links = {model: os.path.relpath(report, path.parent) for model, report in model_reports.items()}
     characterised = {
         network: {"link": found.link(path), "reason": found.reason}
         for network, found in (characterisations or {}).items()
     }
-    html = environment.get_template(TEMPLATE).render(
-        summary=summary, context=context, links=links, characterisations=characterised
+    return write_html(
+        path,
+        TEMPLATE,
+        summary["verdicts"],
+        summary=summary,
+        context=context,
+        links=links,
+        characterisations=characterised,
     )
-    write_text_atomic(path, html)
-    return path

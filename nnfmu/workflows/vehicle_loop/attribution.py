@@ -1,22 +1,22 @@
 """Attribute the vehicle residual to (component, effect) pairs and sensor offsets by the evidence in every measured
 channel at once.
 
-Candidates: each component element's effect as parameterised physical terms on its network's output (a damper's
-`gas_force`: a preload and a rate times its displacement; a bushing's `stiffness`: a rate times each deflection or
-rotation on its own force or torque),
-and a `sensor_offset` per measured channel (a constant in that channel alone). A component effect moves several
-channels consistently; its sensitivity is measured in the co-simulation: the network FMU with one term added at a
-known coefficient, swapped into the system and replayed, gives the change of every channel per unit coefficient
-(first order in the coefficient). The residual (measured - virtual, each channel divided by the measured channel's
-standard deviation, so every channel counts in fractions of its own signal) is then explained by the candidates'
-columns, all channels stacked, out of sample: the record's blocks are halved at random (`fold_mask`), each half
-predicted by the fit on the other. The test is the component diagnosis's (Diebold-Mariano on the held-out squared
-errors, summed over channels at each instant, with the Newey-West long-run variance), Bonferroni over the
-candidates. Forward selection: of the candidates significant and above `min_explained`, the one lowering an
-information criterion most is named (its held-out gain against ln(n_eff) per fitted parameter, `_delta_bic`: a
-gas force's two coefficients are charged twice an offset's one); the rest are tested again beyond it. A sensor
-offset and a gas preload both shift their load cell; only the preload also lifts the corner (displacement, LCA
-angle), so the two part here.
+Candidates: the effects of the diagnosis's `SYSTEM_EFFECTS` that each component element's kind names
+(`ComponentKind.loop_effects`), as parameterised physical terms on its network's output (a damper's `gas_force`: a
+preload and a rate times its displacement; a bushing's `stiffness`: a rate times each deflection or rotation on its
+own force or torque), and each measured channel's own error (`sensor_offset`: a constant in that channel alone). A
+component effect moves several channels consistently; its sensitivity is measured in the co-simulation: the network
+FMU with one term added at a known coefficient, swapped into the system and replayed, gives the change of every
+channel per unit coefficient (first order in the coefficient). The residual (measured - virtual, each channel
+divided by the measured channel's standard deviation, so every channel counts in fractions of its own signal) is
+then explained by the candidates' columns, all channels stacked, out of sample: the record's blocks are halved at
+random (`fold_mask`), each half predicted by the fit on the other. The test is the component diagnosis's
+(Diebold-Mariano on the held-out squared errors, summed over channels at each instant, with the Newey-West long-run
+variance), Bonferroni over the candidates. Forward selection: of the candidates significant and above
+`min_explained`, the one lowering an information criterion most is named (its held-out gain against ln(n_eff) per
+fitted parameter, `_delta_bic`: a gas force's two coefficients are charged twice an offset's one); the rest are
+tested again beyond it. A sensor offset and a gas preload both shift their load cell; only the preload also lifts
+the corner (displacement, LCA angle), so the two part here.
 
 One physical cause before several offsets: when sensor offsets were named, stories with physical causes first are
 tried against the named one: each physical candidate left out in place of two or more named offsets (the named
@@ -34,18 +34,19 @@ Every named candidate carries `why`: the rivals it beat in its round and by how 
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import stats
 
-from nnfmu.data.rigs import BUSHING_CHANNELS
-from nnfmu.diagnosis.correlation import newey_west_variance
-from nnfmu.diagnosis.ranking import cross_fit_errors, extend_base, fold_mask
+from nnfmu.diagnosis import SYSTEM_EFFECTS, SystemEffect, cross_fit_errors, extend_base, fold_mask, newey_west_variance
 from nnfmu.export.terms import OutputTerm
+from nnfmu.kinds import BUSHING, KindChannel
 
-SENSOR_OFFSET = "sensor_offset"
+# The registry's error of one measured channel, fitted as a constant in that channel alone (looked up: the import
+# fails if the registry loses it).
+SENSOR_OFFSET = SYSTEM_EFFECTS["sensor_offset"].name
 BIC_TIE = 2.0  # stories whose BIC differ by less are a tie ("not worth more than a bare mention", Kass & Raftery
 # 1995): the one with fewer sensor offsets is named
 ALIKE = 0.9  # a rival explaining at least this share of what the named candidate explains, with predictions this
@@ -77,29 +78,27 @@ class Candidate:
         return f"{self.component}:{self.effect}"
 
 
-def damper_candidates(element: str) -> list[Candidate]:
-    """A damper's candidate effects as terms on its force (tension positive): the gas spring pushes out with its
-    preload and more on compression, -preload + rate x."""
-    return [
-        Candidate(
-            element,
-            "gas_force",
-            (OutputTerm("force", None, -100.0, "N"), OutputTerm("force", "displacement", 2000.0, "m")),
-        )
-    ]
+def component_candidate(
+    element: str,
+    effect: SystemEffect,
+    channels: Sequence[KindChannel],
+    stiffness: Mapping[str, float],
+    step: float,
+) -> Candidate | None:
+    """`effect` on the component `element` of these kind `channels` as terms on its network's output (the element's
+    own `stiffness` per channel, force or torque output -> N/m or N.m/rad, where the effect scales by it), a joint
+    basis measured at `step` (a fraction) of it; None where the effect offers no terms."""
+    terms = tuple(OutputTerm(t.output, t.channel, t.coefficient, t.unit) for t in effect.terms(channels, stiffness))
+    if not terms:
+        return None
+    return Candidate(element, effect.name, terms, joint_step=step if effect.joint else None)
 
 
 def bushing_candidates(element: str, stiffness: Mapping[str, float], step: float) -> list[Candidate]:
-    """A bushing's candidate effects: `stiffness` (aged rubber stiffens every channel alike), the element's own
-    stiffness per channel (`stiffness`: force or torque output -> N/m or N.m/rad) times that channel's deflection or
-    rotation on its own output, all channels one basis whose fitted amplitude is the fraction of stiffness added;
-    its sensitivity measured at `step` (a fraction) of it."""
-    terms = tuple(
-        OutputTerm(ch.force, ch.position, stiffness[ch.force], ch.position_unit)
-        for ch in BUSHING_CHANNELS.values()
-        if ch.force in stiffness
-    )
-    return [Candidate(element, "stiffness", terms, joint_step=step)] if terms else []
+    """A bushing's `stiffness` candidate (aged rubber stiffens every channel alike: one amplitude on the element's
+    own stiffness per channel), none where no channel's stiffness is known."""
+    made = component_candidate(element, SYSTEM_EFFECTS["stiffness"], BUSHING.channels, stiffness, step)
+    return [made] if made is not None else []
 
 
 def offset_candidate(channel: str) -> Candidate:

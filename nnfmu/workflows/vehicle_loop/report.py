@@ -9,15 +9,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import jinja2
 import numpy as np
 
 import nnfmu
 from nnfmu.atomic import write_text_atomic
 from nnfmu.data import Measurement
-from nnfmu.diagnosis.evidence import p_value_text
+from nnfmu.reports.html import write_html
 from nnfmu.validate.plots import axis_label, new_axes
-from nnfmu.validate.verdict import per_cent
 
 if TYPE_CHECKING:
     from nnfmu.diagnosis import Diagnosis
@@ -25,7 +23,7 @@ if TYPE_CHECKING:
     from nnfmu.workflows.vehicle_loop.fix import Fixed
     from nnfmu.workflows.vehicle_loop.residuals import ChannelError
 
-TEMPLATE = "vehicle_report.html.j2"
+TEMPLATE = "vehicle_loop.html.j2"
 WINDOW = 3.0  # [s] of the record drawn in a time-history plot, from its settled start
 
 
@@ -105,12 +103,6 @@ class VehicleLoopReport:
         }
 
 
-def _number(value: object) -> str:
-    if isinstance(value, (int, float)):
-        return f"{value:.4g}"
-    return "–" if value is None else str(value)
-
-
 def plot_channel(
     name: str, measured: Measurement, before: Measurement, after: Measurement, corrected: Measurement, path: Path
 ) -> Path:
@@ -165,12 +157,4 @@ def write_vehicle_report(
         ).name
     document = {**report.to_dict(), "nnfmu_version": nnfmu.__version__, "plots": plots}
     write_text_atomic(folder / "report.json", json.dumps(document, indent=1, allow_nan=False))
-    environment = jinja2.Environment(
-        loader=jinja2.PackageLoader("nnfmu.workflows.vehicle_loop", "."),
-        autoescape=True,
-        undefined=jinja2.StrictUndefined,
-    )
-    environment.filters["number"] = _number
-    environment.filters["per_cent"] = per_cent
-    environment.filters["p_value"] = p_value_text
-    write_text_atomic(folder / "report.html", environment.get_template(TEMPLATE).render(report=document))
+    write_html(folder / "report.html", TEMPLATE, (document["summary"],), report=document)

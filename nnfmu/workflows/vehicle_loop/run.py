@@ -16,6 +16,7 @@ import numpy as np
 from nnfmu.atomic import scratch_dir, staging_dir
 from nnfmu.data import DataError, Measurement, load_measurement
 from nnfmu.data.drive_files import RPC_SUFFIXES, read_drive
+from nnfmu.diagnosis import SYSTEM_EFFECTS
 from nnfmu.fmu import FmuBuildError, load_onnx
 from nnfmu.kinds import DAMPER
 from nnfmu.out_paths import check_output_dir, replace_output_dir
@@ -26,8 +27,7 @@ from nnfmu.workflows.vehicle_loop.attribution import (
     Candidate,
     Evidence,
     attribute,
-    bushing_candidates,
-    damper_candidates,
+    component_candidate,
     offset_candidate,
 )
 from nnfmu.workflows.vehicle_loop.fix import (
@@ -158,42 +158,23 @@ _COVERAGE: dict[str, Callable[[str, list[str], bool, dict[str, list[str]]], str]
 }
 
 
-def _gas_force(element: str, replay: Measurement) -> tuple[list[Candidate], str | None]:
-    """A damper's gas force candidate."""
-    return damper_candidates(element), None
-
-
-def _stiffness(element: str, replay: Measurement) -> tuple[list[Candidate], str | None]:
-    """A bushing's stiffness candidate, its rates its network's own along `replay`; or why it cannot be tested."""
-    made = bushing_candidates(element, network_stiffness(replay, element), PERTURBATION)
-    return made, None if made else "no deflection and force of the element in the replay to scale by"
-
-
-# The candidate builders of the effects a component kind names (`ComponentKind.loop_effects`).
-_LOOP_EFFECTS: dict[str, Callable[[str, Measurement], tuple[list[Candidate], str | None]]] = {
-    "gas_force": _gas_force,
-    "stiffness": _stiffness,
-}
-
-
 def _candidates(
     car: VirtualCar, channels: list[str], replay: Measurement
 ) -> tuple[dict[str, Candidate], dict[str, str]]:
-    """Every component element's candidate effects, those its kind names (a bushing's rates scaled to its network's
-    own stiffness along the virtual car's `replay`), a sensor offset per measured channel; and the candidates that
-    cannot be tested."""
+    """Every component element's candidate effects, the diagnosis registry's `SYSTEM_EFFECTS` its kind names (one
+    scaled by stiffness: the network's own along the virtual car's `replay`), a sensor offset per measured channel;
+    and the candidates that cannot be tested."""
     found: dict[str, Candidate] = {}
     untestable: dict[str, str] = {}
     for element in car.fmus:
         kind = car.kind(element)
-        made: list[Candidate] = []
-        for effect in kind.loop_effects if kind is not None else ():
-            some, why = _LOOP_EFFECTS[effect](element, replay)
-            made += some
-            if why is not None:
-                untestable[f"{element}:{effect}"] = why
-        for c in made:
-            if car.onnx[element] is None:
+        for name in kind.loop_effects if kind is not None else ():
+            effect = SYSTEM_EFFECTS[name]
+            stiffness = network_stiffness(replay, element, kind.channels) if effect.scaled_by_stiffness else {}
+            c = component_candidate(element, effect, kind.channels, stiffness, PERTURBATION)
+            if c is None:
+                untestable[f"{element}:{name}"] = effect.untestable
+            elif car.onnx[element] is None:
                 untestable[c.key] = "no ONNX step graph of the element"
             else:
                 found[c.key] = c

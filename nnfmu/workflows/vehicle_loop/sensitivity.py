@@ -4,7 +4,7 @@ system and replayed on the lab's drive; the change of every channel divided by t
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -12,23 +12,25 @@ import onnx
 
 from nnfmu.atomic import atomic_path
 from nnfmu.data import Measurement
-from nnfmu.data.rigs import BUSHING_CHANNELS
 from nnfmu.export.terms import OutputTerm, add_output_terms
 from nnfmu.fmu import BuildOptions, build_fmu
+from nnfmu.kinds import BUSHING, KindChannel
 from nnfmu.workflows.system import VirtualSystem
 from nnfmu.workflows.vehicle_loop.system_files import VirtualCar
 
 Replay = Callable[[VirtualSystem], Measurement]  # a system -> its channels on the record's time stamps
 PERTURBATION = 0.1  # a bushing's stiffness sensitivity is measured 10 % stiffer than its network: small enough for
-# first order, large enough to stand out of the co-simulation's numerical noise (`bushing_candidates`' step)
+# first order, large enough to stand out of the co-simulation's numerical noise (a joint effect's step)
 
 
-def network_stiffness(replay: Measurement, element: str) -> dict[str, float]:
-    """The bushing element's own stiffness per channel (force or torque output -> N/m or N.m/rad): the least-squares
-    fit F = k x + c v + F0 of its network's output on its deflection (or rotation) and rate along the virtual car's
-    replay `replay`; channels the replay lacks or whose fitted k is not positive are left out."""
+def network_stiffness(
+    replay: Measurement, element: str, channels: Sequence[KindChannel] = BUSHING.channels
+) -> dict[str, float]:
+    """The element's own stiffness per channel of its kind (force or torque output -> N/m or N.m/rad): the
+    least-squares fit F = k x + c v + F0 of its network's output on its deflection (or rotation) and rate along the
+    virtual car's replay `replay`; channels the replay lacks or whose fitted k is not positive are left out."""
     rates = {}
-    for ch in BUSHING_CHANNELS.values():
+    for ch in channels:
         names = [f"{element}_{n}" for n in (ch.position, ch.rate, ch.force)]
         if not all(n in replay for n in names):
             continue
