@@ -28,6 +28,8 @@ ENVELOPE_FRACTIONS = (0.01, 0.02, 0.05)  # sine amplitudes, as fractions of the 
 FREQUENCIES = (10.0,)  # [Hz] a network's loop direction at small amplitude hardly changes with frequency
 SETTLE = 0.3  # [s] run before the measured cycles (the networks' memory: high-passes up to 0.1 s)
 MEASURED = 0.2  # [s] of whole cycles over which the energy is summed
+STATELESS_PERIOD = 1e-3  # [s] the samples a stateless graph is evaluated at (the master's default step)
+MAX_SAMPLES = 20_000  # a graph sampled faster than (SETTLE + MEASURED) / this is not checked (bounded work)
 ACTIVE_SINE = -0.01  # sin(loss angle) below this (-0.57 deg): the channel gives energy back, beyond rounding
 
 
@@ -54,11 +56,10 @@ def cycle_energy(
     graph: onnx.ModelProto, position: str, rate: str, force: str, amplitude: float, frequency: float
 ) -> Cycle:
     """Energy [J] `graph`'s output `force` absorbs per cycle of a sine on `position` (`rate` its derivative), the other
-    inputs 0, summed over MEASURED s of whole cycles after SETTLE s (trapezoids of force over the sampled motion)."""
+    inputs 0, at its sample period, summed over MEASURED s of whole cycles after SETTLE s (trapezoids of force over
+    the sampled motion)."""
     component = Component.from_onnx(graph)
-    period = component.sample_period
-    if period is None:
-        raise ValueError(f"{component.name}: a stateless graph has no sample period to run sine cycles at")
+    period = component.sample_period or STATELESS_PERIOD
     n = round((SETTLE + MEASURED) / period) + 1
     t = np.arange(n) * period
     x = amplitude * np.sin(2.0 * np.pi * frequency * t)
@@ -77,8 +78,12 @@ def cycle_energy(
 
 def active_cycles(graph: onnx.ModelProto, frequencies: Sequence[float] = FREQUENCIES) -> list[Cycle]:
     """The sine tests (`ENVELOPE_FRACTIONS` of each bushing channel's position envelope x `frequencies`) in which
-    `graph` gives energy back, over every bushing channel it computes from a position and rate with an envelope."""
+    `graph` gives energy back, over every bushing channel it computes from a position and rate with an envelope
+    (a stateless graph evaluated every STATELESS_PERIOD; none checked where that needs over MAX_SAMPLES samples)."""
     component = Component.from_onnx(graph)
+    period = component.sample_period or STATELESS_PERIOD
+    if (SETTLE + MEASURED) / period > MAX_SAMPLES:
+        return []
     ports = {port.name: port for port in component.inputs}
     outputs = {port.name for port in component.outputs}
     found = []
@@ -93,8 +98,8 @@ def active_cycles(graph: onnx.ModelProto, frequencies: Sequence[float] = FREQUEN
         for fraction in ENVELOPE_FRACTIONS:
             for frequency in frequencies:
                 amplitude = fraction * reach
-                if amplitude * 2.0 * np.pi * frequency > rate_reach:
-                    continue  # extrapolation: the envelope check's business
+                if amplitude * 2.0 * np.pi * frequency > rate_reach or frequency * period > 0.25:
+                    continue  # extrapolation (the envelope check's business), or too few samples per cycle
                 cycle = cycle_energy(graph, channel.position, channel.rate, channel.force, amplitude, frequency)
                 if cycle.loss_sine < ACTIVE_SINE:
                     found.append(cycle)

@@ -16,7 +16,7 @@ REACH = 1.5e-3  # [m] position envelope
 RATE_REACH = 0.08  # [m/s] rate envelope
 
 
-def radial_element(damping: float) -> onnx.ModelProto:
+def radial_element(damping: float, sample_period: float | None = 1e-3) -> onnx.ModelProto:
     """Step graph radial_displacement [m], radial_velocity [m/s] -> radial_force = k x + c v [N], T = 1 ms."""
     names = ("radial_displacement", "radial_velocity", "radial_force")
     graph = GraphBuilder(reserved=names)
@@ -31,7 +31,7 @@ def radial_element(damping: float) -> onnx.ModelProto:
             Port("radial_velocity", "m/s", min=-RATE_REACH, max=RATE_REACH),
         ],
         outputs=[Port("radial_force", "N")],
-        sample_period=1e-3,
+        sample_period=sample_period,
         description="synthetic radial element",
     ).attach_to(model)
     return model
@@ -57,3 +57,8 @@ def test_an_element_giving_energy_back_is_named_with_its_cycle():
     assert cycles and all(c.channel == "radial_force" and c.energy < 0.0 for c in cycles)
     (line,) = passivity_warnings("radial", radial_element(-6000.0))
     assert line.startswith("radial: not passive: radial_force:") and "gives back" in line
+
+
+def test_a_stateless_element_giving_energy_back_is_named_too():
+    assert active_cycles(radial_element(-6000.0, sample_period=None))
+    assert active_cycles(radial_element(6000.0, sample_period=None)) == []
