@@ -8,7 +8,8 @@ MODELS_DIR holds <preset>.onnx of the damper and bushing presets (e.g. `nnfmu de
 vehicle). Per channel: the largest difference of the two runs relative to the channel's peak; for the worst channel
 the time the difference first passes 1e-12 and 0.1 of its peak and the exponential growth rate between the two (a
 Lyapunov-like exponent: a stable loop's difference stays near rounding). Plus, for the bushing networks, the sine
-tests in which a channel gives energy back (`nnfmu.workflows.passivity`), the cause docs/limits.md names.
+tests in which a channel gives energy back (`nnfmu.workflows.passivity`; the networks of MODELS_DIR, whichever
+bushings ran), the cause docs/passivity.md names. Results: bench/results/ulp-sensitivity.jsonl.
 """
 
 from __future__ import annotations
