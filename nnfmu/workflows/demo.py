@@ -418,6 +418,8 @@ def _components(
             log(f"{preset}: training on {lab.name}")
             trained = train_from_file(lab, settings.request(preset, rig), out / "models" / f"{preset}.onnx", progress)
             log(f"{preset}: trained in {trained.seconds:.1f} s; building and replaying its FMU")
+            for line in trained.warnings:  # the passivity check's too: a quick network may give energy back
+                log(f"{preset}: warning: {line}")
             fmu = build_fmu(trained.path, BuildOptions(out=out / "fmu" / f"{preset}.fmu"))
             output = trained.model.spec.output
             replayed = replay_fmu(fmu, measured)

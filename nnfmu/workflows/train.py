@@ -10,6 +10,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Literal
 
+import onnx
+
 from nnfmu.data import Measurement, load_measurement
 from nnfmu.data.errors import DataError
 from nnfmu.data.inertia import compensate_inertia
@@ -23,6 +25,7 @@ from nnfmu.models.presets import COMMAND, Preset, bind_command, custom_spec, get
 from nnfmu.models.selection import SelectionResult, SelectionSettings, select_inputs
 from nnfmu.models.train import Architecture, Progress, SizeTrial, TrainResult, TrainSettings, train_model
 from nnfmu.models.trained import TrainedModel
+from nnfmu.workflows.passivity import passivity_warnings
 
 
 @dataclass(frozen=True)
@@ -211,7 +214,7 @@ def train_from_file(
         export=export,
         trials=result.trials,
         selection=selection,
-        warnings=[*mass_warnings, *result.warnings],
+        warnings=[*mass_warnings, *result.warnings, *passivity_warnings(preset.name, onnx.load(export.path))],
         seconds=time.perf_counter() - started,
         data_notes=list(measurement.notes.values()),
         feature_choice=feature_choice,

@@ -30,6 +30,7 @@ from nnfmu.validate import ChannelComparison, Target, ValidationSettings, compar
 from nnfmu.vehicle import DriveSettings, generate_drive
 from nnfmu.workflows.characterise.linked import LinkedCharacterisation, characterise_models
 from nnfmu.workflows.characterise.settings import CharacteriseSettings
+from nnfmu.workflows.passivity import passivity_warnings
 from nnfmu.workflows.roadtest.budget import BudgetRow, budget_rows
 from nnfmu.workflows.roadtest.envelope import Excursion, excursion
 from nnfmu.workflows.roadtest.report import write_system_report
@@ -306,11 +307,10 @@ def _run_system(
     the error budget, the envelope checks, the report (linking the characterisations of the system's networks)."""
     drive = _stretch(drive, run.duration)
     bushings = bool(bushing_elements(system))
-    stabilisers = (
-        bushing_stabilisers(cache.graph(fmus.bushing), bushing_elements(system))
-        if bushings and fmus.bushing is not None
-        else {}
-    )
+    graph = cache.graph(fmus.bushing) if bushings and fmus.bushing is not None else None
+    stabilisers = bushing_stabilisers(graph, bushing_elements(system)) if graph is not None else {}
+    for line in passivity_warnings(BUSHING_NETWORK, graph) if graph is not None else []:
+        log(f"warning: {line}")
     vehicle = build_vehicle(system, out / "fmu", run.step, stabilisers)
     parts = {model: (fmus.dampers[model], fmus.bushing) for model in DAMPER_MODELS}
     parts[TRUTH] = (truth.dampers["truth"], truth.bushing)
