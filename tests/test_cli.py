@@ -125,6 +125,7 @@ def _vehicle_cosim_and_loop_chain(dyno: Path, onnx_path: Path, damper_fmu: Path,
     assert refused.exit_code != 0 and "velocity" in refused.output and not (tmp_path / "refused").exists()
 
 
+@pytest.mark.slow
 def test_vehicle_build_takes_a_quarter_car_file_and_refuses_what_does_not_fit(tmp_path: Path) -> None:
     """The packaged quarter-car file builds a quarter car on its own corner; a different corner, or a full vehicle from
     it, is refused naming the file, and no FMU is left."""

@@ -60,6 +60,7 @@ def refused(result, path: object) -> None:
     assert "error:" in result.output and str(path) in result.output, result.output
 
 
+@pytest.mark.slow
 def test_loop_refuses_a_folder_holding_its_inputs_and_deletes_nothing(work: Path) -> None:
     before = snapshot(work)
     result = invoke("loop", work / "dyno.csv", "--model", work / "model.onnx", "--out", work, "--max-effects", "0")
@@ -77,6 +78,7 @@ def test_loop_refuses_the_current_folder(work: Path, monkeypatch: pytest.MonkeyP
     assert not [p for p in work.parent.iterdir() if ".old-" in p.name or ".staging-" in p.name]
 
 
+@pytest.mark.slow
 def test_loop_refuses_a_foreign_folder_and_replaces_its_own_earlier_result(work: Path, tmp_path: Path) -> None:
     foreign = tmp_path / "someone"
     foreign.mkdir()
@@ -131,6 +133,7 @@ def test_a_file_output_that_is_a_folder_empty_or_under_a_file_is_refused(work: P
     assert under.read_text() == "a file" and not any(folder.iterdir())
 
 
+@pytest.mark.slow
 def test_validate_refuses_an_existing_file_and_a_foreign_folder(work: Path, tmp_path: Path) -> None:
     target = tmp_path / "report.html"
     target.write_text("someone's page")

@@ -48,6 +48,7 @@ def ours(folder: Path) -> list[Path]:
     return [p for p in folder.iterdir() if p.name != ".ses"]
 
 
+@pytest.mark.slow
 def test_sigterm_during_a_build_leaves_no_temporaries(tmp_path: Path) -> None:
     model = tmp_path / "damper.onnx"
     onnx.save(linear_damper_graph(2400.0, name="damper"), model)
@@ -185,6 +186,7 @@ app()
 """
 
 
+@pytest.mark.slow
 def test_sigterm_swallowed_by_a_library_still_stops_the_run_with_nothing_written(tmp_path: Path) -> None:
     """A SIGTERM whose KeyboardInterrupt a library swallows (a bare `except:`) left the run to finish with exit 0 and
     a complete result (`loop vehicle` ran on 25 s after a SIGTERM): the request is remembered and nothing is

@@ -76,6 +76,7 @@ def order(errors: list[float]) -> list[float]:
     return [errors[0] / errors[1], errors[1] / errors[2]]
 
 
+@pytest.mark.slow
 def test_the_default_coupling_is_second_order_for_motions_forces_and_accelerations(systems) -> None:
     default = errors(systems)
     for name, e in default.items():

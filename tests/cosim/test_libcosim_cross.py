@@ -27,6 +27,7 @@ def _relative(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.max(np.abs(a - b)) / np.max(np.abs(b)))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("h", [1e-3, 2e-3])
 def test_libcosim_equals_fmpy_jacobi(systems: dict[float, Path], h: float) -> None:
     settings = CosimSettings(step=h, **LIBCOSIM)

@@ -57,6 +57,7 @@ def errors(systems: dict[float, Path]) -> dict[str, list[float]]:
     }
 
 
+@pytest.mark.slow
 def test_gauss_seidel_and_jacobi_converge_to_first_order(errors: dict[str, list[float]]) -> None:
     for name in ("gauss-seidel", "jacobi"):
         e = errors[name]

@@ -102,6 +102,7 @@ def _errors(ssd: Path, drive: Measurement, exact: dict[str, np.ndarray], derivat
     return {c: float(np.sqrt(np.mean((m[c] - exact[c][k]) ** 2)) / np.std(exact[c][k])) for c in CHANNELS}
 
 
+@pytest.mark.slow
 def test_derivatives_cut_the_coupling_error(case) -> None:
     ssd, drive, exact = case
     fitted = _errors(ssd, drive, exact, derivatives=False)

@@ -48,6 +48,7 @@ def front_right(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Vehicle
     ), settings
 
 
+@pytest.mark.slow
 def test_a_quarter_car_reads_its_own_corners_channels(front_right: tuple[Path, VehicleBuildSettings]) -> None:
     ssd, settings = front_right
     t = np.arange(2001) * H

@@ -88,6 +88,7 @@ def test_the_stamps_scatter_beyond_the_old_jitter_but_within_the_clock_bound() -
     assert time[-1] > 64.0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["mts", "csv"])
 def test_float32_stamps_are_accepted_with_a_note_and_the_fitted_base(files: dict[str, Path], kind: str) -> None:
     m = load_measurement(files[kind], required=("force", "velocity"))

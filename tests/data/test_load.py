@@ -362,6 +362,7 @@ def _corrupt_channel_offset(path):
     path.write_bytes(bytes(data))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("damage", ["truncated", "channel offset"])
 def test_corrupt_mdf_gives_only_the_error_line_on_the_command_line(tmp_path, damage):
     path = save_measurement(_measurement(), tmp_path / "rig.mf4")

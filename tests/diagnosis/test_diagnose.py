@@ -45,6 +45,7 @@ def run(missing: tuple[str, ...], drop: tuple[str, ...] = ()):
     return diagnose(m, predicted, "force", ["velocity"], DiagnosisSettings())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("effect", ["gas_force", "temperature", "seal_friction", "inertia", "hysteresis"])
 def test_the_missing_effect_ranks_first_and_significant(effect):
     d = run((effect,))

@@ -3,6 +3,8 @@
 import subprocess
 import sys
 
+import pytest
+
 # An import hook makes `import torch` (and fmpy) fail; then the library diagnoses a residual and extends a spec.
 # (Not `sys.modules["torch"] = None`: scipy treats a present-but-None entry as an array library.)
 SCRIPT = """
@@ -19,6 +21,7 @@ import numpy as np
 from nnfmu.data import Measurement
 from nnfmu.diagnosis import EFFECTS, DiagnosisSettings, Extension, diagnose
 from nnfmu.models.features import FeatureSpec, Tap
+import pytest
 
 t = np.arange(4000) * 1e-3
 v = np.cos(2 * np.pi * 2 * t)
@@ -36,6 +39,7 @@ for stage in ("torch", "fmpy", "nnfmu.fmu", "nnfmu.cosim", "nnfmu.export", "nnfm
 """
 
 
+@pytest.mark.slow
 def test_diagnose_and_extend_without_torch() -> None:
     run = subprocess.run([sys.executable, "-c", SCRIPT], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr

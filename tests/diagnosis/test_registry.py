@@ -185,6 +185,7 @@ def test_added_features_equal_their_onnx_nodes_sample_by_sample(effect, variant)
     assert np.all(np.std(numpy_features[:, added], axis=0) > 0)  # each added column varies: a real check
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("effect", "variant"), CASES)
 def test_the_exported_step_graph_of_an_extended_network_reproduces_its_numpy_prediction(
     effect, variant, tmp_path: Path

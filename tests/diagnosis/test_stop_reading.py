@@ -58,6 +58,7 @@ def play_case(seed: int):
     return diagnose(m, clean["force"], "force", ["velocity"])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_a_seal_with_presliding_stiffness_is_named_presliding_friction_not_backlash(seed):
     # the model lacks the seal altogether (a velocity-history model of the valve): the stop family explains most
@@ -98,6 +99,7 @@ def test_a_damper_without_play_is_not_diagnosed_with_play(model):
     assert d.to_dict()["stop_reading"]["shape"] == "unsupported"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_a_damper_behind_mount_play_is_named_backlash(seed):
     d = play_case(seed)

@@ -115,6 +115,7 @@ def mlp_gru_step_model(hidden: int = 4) -> tuple[onnx.ModelProto, list[str]]:
     return make_model(nodes, inputs, ["force", "state_next"], constants), list(inputs)
 
 
+@pytest.mark.slow
 @needs_gcc
 def test_state_loop_matches_reference_over_steps(tmp_path: Path) -> None:
     """Feed state_next back as state for 20 samples; each sample equals the ONNX reference within 1e-9."""

@@ -107,6 +107,7 @@ def rand(rng: np.random.Generator, *shape: int, dtype=np.float64) -> np.ndarray:
 UNARY_OPS = ["Neg", "Abs", "Exp", "Log", "Sqrt", "Tanh", "Sigmoid", "Relu", "LeakyRelu", "Softplus"]
 
 
+@pytest.mark.slow
 @needs_gcc
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
 @pytest.mark.parametrize("op", UNARY_OPS)

@@ -118,6 +118,7 @@ def reference() -> Reference:
 
 
 # ----- outputs are the graph's ---------------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_at_default_parameters_the_fmu_is_its_graph(combo, built, master, reference):
     """What a plain master gets: no parameter set, every output within 1e-12 of its peak of onnxruntime's graph."""
     backend, fmi = combo
@@ -623,6 +624,7 @@ def test_graph_without_a_sample_period_is_evaluated_once_per_step(combo, built, 
         np.testing.assert_allclose(got, reference.simulate(inputs, h, cutoff=5.0), rtol=RTOL, atol=ATOL)
 
 
+@pytest.mark.slow
 def test_default_output_and_generic_description_of_a_plain_graph(combo, master, tmp_path, monkeypatch):
     """Without --out the FMU lands in exported/<ONNX file name>.fmu (its model identifier stays the graph's); a graph
     without metadata gets one port per element and, without a sample period, the filter runs at the step size of
@@ -655,6 +657,7 @@ def test_default_output_and_generic_description_of_a_plain_graph(combo, master, 
         np.testing.assert_allclose(m.get_real(["y[0]", "y[1]"]), y, rtol=1e-14, atol=1e-15)
 
 
+@pytest.mark.slow
 def test_hostile_names_are_sanitised_and_escaped(combo, built, master):
     backend, fmi = combo
     m = master(built("hostile", backend, fmi, name='my "model" */'))
@@ -682,6 +685,7 @@ def test_unreadable_or_missing_onnx_files_are_refused_naming_the_file(tmp_path, 
     assert sorted(p.name for p in tmp_path.iterdir()) == ["junk.onnx"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("backend", ["native", "pythonfmu"])
 def test_the_in_memory_entry_leaves_the_graph_alone_and_names_it_in_errors(tmp_path, backend):
     model = delay_step_graph()

@@ -127,6 +127,7 @@ def test_platform_names_are_checked_before_anything_is_built(delay_onnx, tmp_pat
     not (ARM64_SYSROOT / "lib" / "ld-linux-aarch64.so.1").is_file(),
     reason="no aarch64 glibc for qemu-user (Debian: libc6-arm64-cross)",
 )
+@pytest.mark.slow
 @pytest.mark.parametrize("fmi", [2, 3])
 def test_aarch64_linux_binary_under_qemu_gives_the_x86_64_linux_outputs(cross_fmus, tmp_path, fmi):
     _, token, n_in, n_out = counts(cross_fmus[fmi])

@@ -42,6 +42,7 @@ def run_in_libcosim(fmu_path, inputs: np.ndarray) -> tuple[np.ndarray, list[bool
     return np.array(rows), flags
 
 
+@pytest.mark.slow
 def test_libcosim_matches_fmpy_and_onnxruntime(filtered_fmus, open_fmu):
     rng = np.random.default_rng(17)
     inputs = np.column_stack([rng.uniform(-1.2, 1.2, 2_000), rng.uniform(-0.1, 0.1, 2_000)])

@@ -37,6 +37,7 @@ def damper_fmus(tmp_path_factory: pytest.TempPathFactory) -> dict[int, Path]:
     }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fmi", [2, 3])
 @pytest.mark.parametrize("h", [1e308, 1e6])
 def test_a_step_of_too_many_samples_is_refused_at_once_naming_the_limit(damper_fmus, open_fmu, fmi, h):

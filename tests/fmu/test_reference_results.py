@@ -55,6 +55,7 @@ def _replace(fmu: Path, files: dict[str, bytes], target: Path, drop: tuple[str, 
     return target
 
 
+@pytest.mark.slow
 def test_export_stores_the_first_held_out_inputs_as_stimulus(network):
     model = onnx.load(network["onnx"])
     stimulus = ReferenceStimulus.from_onnx(model)
@@ -122,6 +123,7 @@ def test_fmu_with_one_weight_changed_fails_naming_the_output(network, tmp_path):
     assert "axial_force" in result.output and "FAIL" in result.output
 
 
+@pytest.mark.slow
 def test_merged_graph_fmu_carries_the_parts_stimuli_and_passes(tmp_path):
     parts = [
         onnx.load(export_network(FORCE, tmp_path / "force.onnx", 3)),

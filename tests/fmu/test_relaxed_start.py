@@ -42,6 +42,7 @@ def networks(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("fmi", "backend"), [(2, "native"), (3, "native"), (2, "pythonfmu")])
 def test_fmu_started_deflected_equals_the_relaxed_step_graph(networks, tmp_path, fmi, backend):
     inputs = deflected(300)
@@ -83,6 +84,7 @@ def test_relaxed_step_graph_equals_the_trained_model_from_the_same_start(network
     np.testing.assert_allclose(model.predict(inputs.channels), graph, rtol=1e-9, atol=1e-9 * np.max(np.abs(graph)))
 
 
+@pytest.mark.slow
 def test_the_same_network_from_rest_starts_loaded(networks, tmp_path):
     """Without the option the FMU starts every slot at zero: the stop operator is loaded by the deflection and the
     low-pass rises from zero, so the outputs differ at the start (what a car standing on the bushing must not see)."""

@@ -22,6 +22,7 @@ def _description(fmu: Path, folder: Path) -> Path:
     return folder / "modelDescription.xml"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("backend", ["native", "pythonfmu"])
 @pytest.mark.parametrize("fmi_version", [2, 3])
 def test_the_fmu_carries_its_sample_period(tmp_path: Path, fmi_version: int, backend: str) -> None:

@@ -44,6 +44,7 @@ def semiactive(tmp_path_factory) -> dict[str, tuple[Path, object, object]]:
         ("cdc", "current", "A", 3),
     ],
 )
+@pytest.mark.slow
 def test_the_command_is_an_fmu_input_with_its_unit_and_fmpy_replays_onnxruntime(
     semiactive, open_fmu, tmp_path, damper_type, channel, unit, fmi
 ):

@@ -25,6 +25,7 @@ from nnfmu.fmu.step_graph import (
 )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("backend", ["native", "pythonfmu"])
 @pytest.mark.parametrize("fmi_version", [2, 3])
 def test_the_fmu_carries_its_own_step_graph_and_description(tmp_path: Path, fmi_version: int, backend: str) -> None:

@@ -21,6 +21,7 @@ def test_step_graph_fmu_validates(delay_fmus, fmi):
     assert validate_fmu(str(delay_fmus[fmi])) == []
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fmi", [2, 3])
 def test_generic_and_hostile_fmus_validate(generic_onnx, tmp_path, fmi):
     hostile = tmp_path / "hostile.onnx"
@@ -76,6 +77,7 @@ def test_xml_escapes_hostile_text(tmp_path):
     assert "*/ <graph>" not in config and config.count("*/") == config.count("/*")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fmi", [2, 3])
 def test_hostile_units_and_descriptions_in_nnfmu_metadata(tmp_path, fmi):
     model = delay_step_graph()

@@ -113,6 +113,7 @@ def _assert_wine_gives_linux_outputs(
     assert_same_outputs(on_linux.stdout, on_wine.stdout, n_out, what)
 
 
+@pytest.mark.slow
 @needs_mingw
 @needs_wine
 @pytest.mark.parametrize("fmi", [2, 3])
@@ -177,6 +178,7 @@ def test_unknown_platform_and_platforms_for_pythonfmu_are_refused(delay_onnx, tm
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 @needs_mingw
 def test_platforms_choose_the_binaries(delay_onnx, tmp_path):
     only_windows = build_fmu(delay_onnx, BuildOptions(out=tmp_path / "w.fmu", fmi_version=3, platforms=("win64",)))

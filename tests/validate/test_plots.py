@@ -55,6 +55,7 @@ def _comparison(name: str, unit: str, scale: float, seconds: float = 20.0):
         ("bushing_fl_front_radial_displacement", "m", 0.05),  # a two-line rainflow title,
     ],
 )
+@pytest.mark.slow
 def test_every_label_of_each_channel_plot_lies_inside_its_figure(name, unit, scale, tmp_path, monkeypatch):
     """Fixed margins replace constrained layout: title, tick labels, offsets, axis labels and legend all fit."""
     drawn = []

@@ -74,6 +74,7 @@ def test_html_escapes_hostile_names_and_context(tmp_path):
     assert "drive &lt;file&gt;" in html and "belgian &amp; block" in html
 
 
+@pytest.mark.slow
 def test_failure_while_plotting_leaves_the_earlier_report_untouched(tmp_path, monkeypatch):
     out = tmp_path / "report"
     write_report(comparisons(), out, "first", {})

@@ -38,6 +38,7 @@ def test_the_verdict_line_names_error_target_and_source():
         Target(-0.1)
 
 
+@pytest.mark.slow
 def test_the_validation_report_has_a_verdict_in_html_and_json(tmp_path):
     reference = measurement(damper_force=FORCE, spring_force=FORCE)
     result = measurement(damper_force=FORCE * 1.01, spring_force=FORCE * 1.09)

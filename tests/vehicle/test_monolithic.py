@@ -103,6 +103,7 @@ def _assert_equal_to_peak(compiled: dict, generic: dict, tolerance: float = 1e-9
     "effects",
     [("hysteresis", "seal_friction"), ("hysteresis", "seal_friction", "temperature"), ("gas_force", "temperature"), ()],
 )
+@pytest.mark.slow
 def test_compiled_quarter_car_equals_the_generic_path(
     params: VehicleParameters, paths: PathCount, effects: tuple[str, ...]
 ) -> None:
@@ -115,6 +116,7 @@ def test_compiled_quarter_car_equals_the_generic_path(
     assert 500.0 < np.max(np.abs(generic["damper_force"])) < 5000.0  # the damper works hard enough to matter
 
 
+@pytest.mark.slow
 def test_compiled_full_vehicle_equals_the_generic_path(paths: PathCount) -> None:
     """The road test's full-vehicle reference (stabilised LCA bushings; every damper and bushing channel on its truth
     law, Maxwell branches and Jenkins friction elements included) is the same on both paths."""

@@ -105,6 +105,7 @@ def test_zoh_discretisation_equals_cont2discrete(params: QuarterCarParameters) -
     assert not disc.Bd1.any()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("hold", ["zoh", "foh"])
 def test_discrete_simulation_equals_a_fine_rk45_solution(params: QuarterCarParameters, hold: str) -> None:
     """ZOH is exact for held inputs, FOH for inputs linear between samples: both against RK45 at tight tolerances."""
@@ -138,6 +139,7 @@ def test_discrete_simulation_equals_a_fine_rk45_solution(params: QuarterCarParam
         assert np.max(np.abs(result[name] - ref[:, i])) <= 1e-6 * scale, name
 
 
+@pytest.mark.slow
 def test_spline_damper_sub_stepping_converges(params: QuarterCarParameters) -> None:
     """With the nonlinear spline damper built in, the predictor-corrector error falls with the square of the
     sub-step."""
@@ -160,6 +162,7 @@ def test_spline_damper_sub_stepping_converges(params: QuarterCarParameters) -> N
     assert errors[2] < 1e-3 * np.max(np.abs(fine))
 
 
+@pytest.mark.slow
 def test_a_linear_spline_reproduces_the_linear_damper(params: QuarterCarParameters) -> None:
     c = params.damper.damping
     spline = replace(params.damper, model="spline", velocity=(-2.0, 0.0, 2.0), force=(-2 * c, 0.0, 2 * c))

@@ -180,6 +180,7 @@ def test_spline_terms_reproduce_the_spline_table_and_its_extension() -> None:
         ("full-vehicle", {k: "stabilised" if k.startswith("bushing") else "reference" for k in ALL_REFERENCE}),
     ],
 )
+@pytest.mark.slow
 def test_step_graph_in_onnxruntime_equals_the_model(model: str, components: dict[str, str], period: float) -> None:
     """Sample by sample against the model's own stepping; at 0.5 ms the graph unrolls 5 predictor-corrector
     sub-steps of the spline dampers."""
@@ -204,6 +205,7 @@ def test_initial_state_is_the_static_equilibrium() -> None:
         np.testing.assert_allclose(result[name], result[name][0], rtol=1e-12, atol=1e-15)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("settle", [True, False])
 @pytest.mark.parametrize("kind", ["external", "reference"])
 def test_quarter_car_fmu_equals_the_model(quarter_car_fmus: dict[str, Path], kind: str, settle: bool) -> None:
@@ -260,6 +262,7 @@ def test_vehicle_fmu_does_not_filter_its_outputs(quarter_car_fmus: dict[str, Pat
         assert slave.get_real(["filter_cutoff"])[0] == 0.0
 
 
+@pytest.mark.slow
 def test_full_vehicle_with_reference_components_runs_alone_and_equals_simulate(tmp_path: Path) -> None:
     settings = VehicleBuildSettings(components=ALL_REFERENCE, fmi_version=3)
     path = build_vehicle_fmu("full-vehicle", tmp_path / "full_vehicle.fmu", settings)
@@ -272,6 +275,7 @@ def test_full_vehicle_with_reference_components_runs_alone_and_equals_simulate(t
     _assert_close(got, simulate(vehicle, inputs, SimulationSettings(dt=T, hold="foh"), x0=x0), vehicle.output_names)
 
 
+@pytest.mark.slow
 def test_full_vehicle_with_external_components_has_every_port_with_its_unit(tmp_path: Path) -> None:
     path = build_vehicle_fmu("full-vehicle", tmp_path / "external.fmu", VehicleBuildSettings())
     assert validate_fmu(str(path)) == []

@@ -45,6 +45,7 @@ def test_run_cosim_writes_csv_and_mdf_with_units(system: Path, tmp_path: Path) -
         run_cosim(system, drive_file, CosimSettings(step=1e-3), master="simulink")
 
 
+@pytest.mark.slow
 def test_a_vehicle_binds_only_its_actuator_ports(tmp_path: Path) -> None:
     params = DEFAULTS_DIR / "midsize_sedan_quarter_car_fl.toml"
     settings = VehicleBuildSettings(params_path=params, components={"damper": "reference"}, sample_period=1e-3)

@@ -57,6 +57,7 @@ def largest_difference(result, reference) -> float:  # noqa: ANN001 (Measurement
     return max(float(np.max(np.abs(result[c] - reference[c])) / np.max(np.abs(reference[c]))) for c in reference.names)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scheme", SCHEMES, ids=lambda s: ",".join(f"{k}={v}" for k, v in s.items()) or "default")
 def test_the_compiled_engine_gives_the_python_engines_result(quarter_car: tuple[Path, Path], scheme: dict) -> None:
     ssd, drive_file = quarter_car
@@ -73,6 +74,7 @@ def test_the_compiled_engine_gives_the_python_engines_result(quarter_car: tuple[
     assert np.ptp(result["damper_force"]) > 100.0  # [N] the damper did work: the comparison means something
 
 
+@pytest.mark.slow
 def test_a_system_is_built_once_and_rebuilt_when_it_changes(
     quarter_car: tuple[Path, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -87,6 +89,7 @@ def test_a_system_is_built_once_and_rebuilt_when_it_changes(
     np.testing.assert_array_equal(runs[0].measurement["damper_force"], runs[1].measurement["damper_force"])
 
 
+@pytest.mark.slow
 def test_the_training_envelope_warning_comes_as_from_the_python_engine(
     quarter_car: tuple[Path, Path], tmp_path: Path
 ) -> None:
@@ -107,6 +110,7 @@ def test_the_training_envelope_warning_comes_as_from_the_python_engine(
     assert said["compiled"] == said["python"]
 
 
+@pytest.mark.slow
 def test_a_part_failing_inside_is_a_cosim_error_naming_it(quarter_car: tuple[Path, Path], tmp_path: Path) -> None:
     """The damper's output gain at 1e308 (set by the SSD): its force overflows, the car refuses the slope of its
     damper-force input inside the system FMU, and the run ends in a CosimError naming the time, the failed call and,
@@ -177,6 +181,7 @@ def test_the_cli_runs_the_compiled_engine_and_refuses_what_it_cannot(
     assert not (tmp_path / "r2.csv").exists() and not (tmp_path / "r3.csv").exists()
 
 
+@pytest.mark.slow
 def test_the_cosim_workflow_loads_no_torch() -> None:
     """`nnfmu cosim` (either engine) checks the training envelope through `workflows.roadtest`, whose package must not
     bring the training side (torch) with it: that import cost a 2 s full-vehicle run 4 s of CPU."""

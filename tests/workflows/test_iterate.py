@@ -85,6 +85,7 @@ def _nrmse(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.sqrt(np.mean((a - b) ** 2)) / np.sqrt(np.mean(b**2)))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", ["linear", "spline"])
 def test_iteration_recovers_the_road_responses_and_the_drive_in_band(
     cars: dict[str, Path], model: str, tmp_path: Path
@@ -126,6 +127,7 @@ def test_iteration_recovers_the_road_responses_and_the_drive_in_band(
     assert "<img" in result.files["html"].read_text(encoding="utf-8")
 
 
+@pytest.mark.slow
 def test_tight_actuator_limits_are_never_exceeded(cars: dict[str, Path], tmp_path: Path) -> None:
     _road_record(cars["linear"], _road_drive(), tmp_path / "road.csv")
     from nnfmu.workflows.iterate import ActuatorLimits

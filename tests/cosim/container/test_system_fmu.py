@@ -120,6 +120,7 @@ def worst(result: dict[str, np.ndarray], reference: dict[str, np.ndarray], strid
 SCHEMES = [{}, {"scheme": "jacobi"}, {"order": "components-first", "refresh": False}]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("settings", SCHEMES, ids=lambda s: ",".join(f"{k}={v}" for k, v in s.items()) or "default")
 def test_the_system_fmu_gives_the_masters_numbers_at_its_step(at_h: Path, tmp_path: Path, settings: dict) -> None:
     result, _ = run(build(at_h, tmp_path / "car.fmu", **settings))
@@ -130,6 +131,7 @@ def test_the_system_fmu_gives_the_masters_numbers_at_its_step(at_h: Path, tmp_pa
     assert np.ptp(result["damper_force"]) > 100.0  # [N] the damper did work: the comparison means something
 
 
+@pytest.mark.slow
 def test_fmi3_parts_are_stepped_as_the_master_steps_them(at_h_fmi3: Path, tmp_path: Path) -> None:
     """The quarter car and damper as FMI 3 FMUs inside the FMI 2 system FMU: the master's numbers at its step (the
     FMI 3 car holds its inputs over the step in both, as the master warns)."""
@@ -142,6 +144,7 @@ def test_fmi3_parts_are_stepped_as_the_master_steps_them(at_h_fmi3: Path, tmp_pa
     assert np.ptp(result["damper_force"]) > 100.0
 
 
+@pytest.mark.slow
 def test_the_system_fmu_sub_steps_as_the_master_at_the_inner_step(at_quarter_h: Path, tmp_path: Path) -> None:
     """H = 4 h: the master's run at h, every fourth sample, to rounding; the master's run at H differs by far more."""
     result, _ = run(build(at_quarter_h, tmp_path / "car.fmu", inner_step=H / 4))
@@ -150,6 +153,7 @@ def test_the_system_fmu_sub_steps_as_the_master_at_the_inner_step(at_quarter_h: 
     assert worst(result, coarse)["damper_force"] > 1e-4  # sub-stepping changed the result measurably
 
 
+@pytest.mark.slow
 def test_without_input_derivatives_the_drive_is_extrapolated_from_the_step_before(
     at_quarter_h: Path, tmp_path: Path
 ) -> None:
@@ -181,6 +185,7 @@ def test_the_system_fmu_validates_and_runs_in_fmpys_own_loop(at_h: Path, tmp_pat
     assert np.all(np.isfinite(result["damper_force"])) and np.ptp(result["damper_force"]) > 100.0
 
 
+@pytest.mark.slow
 def test_an_fmi3_system_fmu_validates_and_steps_as_the_fmi2_one_without_slopes(at_h: Path, tmp_path: Path) -> None:
     """`--fmi 3`: fmpy's validation finds no problem; FMI 3 co-simulation has no input derivatives, so it always
     extrapolates the drive from the step before, and gives the FMI 2 system FMU's numbers when that is given no
@@ -257,6 +262,7 @@ def test_parameters_reach_the_part_by_element_name(at_h: Path, tmp_path: Path) -
         slave.close()
 
 
+@pytest.mark.slow
 def test_the_cli_builds_one(at_h: Path, tmp_path: Path) -> None:
     out = tmp_path / "cli.fmu"
     done = subprocess.run(

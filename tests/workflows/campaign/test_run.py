@@ -87,6 +87,7 @@ def test_scores_match_their_definitions(quarter_car, tmp_path):
     assert rows[("firm", "damper_force")]["damage_ratio"] > 1.0  # a firmer damper carries larger forces
 
 
+@pytest.mark.slow
 def test_an_interrupted_campaign_resumes_from_its_parts(quarter_car, tmp_path):
     path = write_campaign(tmp_path, campaign_text(quarter_car, events=3))
     whole = run_campaign(path, tmp_path / "whole", workers=0)
@@ -105,6 +106,7 @@ def test_an_interrupted_campaign_resumes_from_its_parts(quarter_car, tmp_path):
     assert again.skipped == 6 and again.engine.workers == 0
 
 
+@pytest.mark.slow
 def test_a_resumed_campaign_runs_again_the_cases_whose_part_is_truncated_swapped_or_changed(quarter_car, tmp_path):
     """A truncated part was a traceback that blocked resuming; a part copied over another case's, or with a row
     duplicated, was merged (duplicate rows, exit 0). Each is named in a warning and its case runs again."""
@@ -129,6 +131,7 @@ def test_a_resumed_campaign_runs_again_the_cases_whose_part_is_truncated_swapped
     assert metrics_of(read_rows(tmp_path / "out")) == expected
 
 
+@pytest.mark.slow
 def test_changed_inputs_rerun_only_their_cases_and_failed_cases_rerun_on_request(quarter_car, tmp_path):
     path = write_campaign(tmp_path, campaign_text(quarter_car, events=2, variants=("linear", "unstable")))
     first = run_campaign(path, tmp_path / "out", workers=0)
@@ -142,6 +145,7 @@ def test_changed_inputs_rerun_only_their_cases_and_failed_cases_rerun_on_request
     assert table.num_rows == 6 * 3 and set(table.column("variant").to_pylist()) == {"linear", "unstable", "firm"}
 
 
+@pytest.mark.slow
 def test_hostile_names_are_shown_as_they_are(quarter_car, tmp_path):
     """Names with markup and math characters reach the table unchanged and the summary escaped."""
     text = campaign_text(quarter_car, events=1).replace('name = "C-20"', 'name = "$x^{2}$ <b>pot</b>"')
@@ -198,6 +202,7 @@ def test_the_batch_command_refuses_a_folder_it_did_not_write(quarter_car, tmp_pa
     assert (foreign / "summary.html").read_text() == "someone's page"
 
 
+@pytest.mark.slow
 def test_reused_instances_give_the_results_of_fresh_ones(quarter_car, tmp_path):
     """Cases run on reset FMU instances score exactly as on freshly opened ones, failed cases among them (whose
     instances are closed, not kept)."""

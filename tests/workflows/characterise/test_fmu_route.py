@@ -84,6 +84,7 @@ def _rows(path: Path) -> list[dict[str, str]]:
         return list(csv.DictReader(stream))
 
 
+@pytest.mark.slow
 def test_the_linear_bushing_from_its_onnx_has_the_closed_form_stiffness(models: dict[str, Path], tmp_path: Path):
     settings = CharacteriseSettings(
         bushing=BushingTestSettings(frequencies=(1.0, 10.0, 100.0), settle_cycles=1, quasi_static_frequency=1.0)
@@ -209,6 +210,7 @@ def test_a_bushing_rigs_sine_record_beside_the_truth_bushing(models: dict[str, P
     assert {"measured_axial_displacement [m]", "measured_axial_force [N]"} <= set(loop[0])
 
 
+@pytest.mark.slow
 def test_a_semi_active_damper_gets_a_family_of_curves_per_command(tmp_path: Path) -> None:
     """force = (c0 + c1·voltage)·velocity, its voltage input trained over 0-5 V: five levels by default."""
     graph = GraphBuilder(reserved=["velocity", "voltage", "force"])

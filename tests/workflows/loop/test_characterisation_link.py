@@ -6,6 +6,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
+
 from nnfmu.data.rigs import RigOptions, simulate_rig
 from nnfmu.export import export_onnx
 from nnfmu.models import Architecture, TrainSettings, get_preset, train_model
@@ -16,6 +18,7 @@ from nnfmu.workflows.loop import LoopSettings, run_loop
 SETTINGS = LoopSettings(max_effects=0, characterise=QUICK_SETTINGS)
 
 
+@pytest.mark.slow
 def test_the_loop_report_links_the_models_characterisation(tmp_path: Path) -> None:
     m = simulate_rig("damper", RigOptions(duration=8.0, excitation="random", noise=0.5)).measurement
     trained = train_model(
