@@ -116,7 +116,11 @@ def loaded(pid: int, library: str) -> bool:
 
 @pytest.mark.parametrize(
     "moment, parent_ignores",
-    [("at once", False), ("while torch loads", False), ("while torch loads", True)],
+    [
+        ("at once", False),
+        pytest.param("while torch loads", False, marks=pytest.mark.slow),
+        pytest.param("while torch loads", True, marks=pytest.mark.slow),
+    ],
 )
 def test_sigterm_stops_train_at_any_moment_with_130_or_143_and_nothing_left(
     tiny_record: Path, tmp_path: Path, moment: str, parent_ignores: bool

@@ -27,6 +27,8 @@ from nnfmu.fmu.errors import CompilerError
 from nnfmu.fmu.native import toolchain
 from nnfmu.fmu.options import BuildOptions
 
+pytestmark = pytest.mark.slow  # every platform's binaries built and run under wine and qemu
+
 ZIG = importlib.util.find_spec("ziglang") is not None
 MINGW = shutil.which(toolchain.WIN64_COMPILER)
 QEMU = shutil.which("qemu-aarch64")

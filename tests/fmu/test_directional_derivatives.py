@@ -25,6 +25,8 @@ from nnfmu.fmu.native.toolchain import host_target
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.models.features import Difference, Highpass, Lowpass, LowpassSquare, SmoothSign, Stop, Tap
 
+pytestmark = pytest.mark.slow  # its networks exported and built for both FMI versions, 10 s of fixtures
+
 SEED = 7
 N_STEPS = 40
 # Every derived feature of the exporter (Relu of the stop operator, Sqrt-free squares, tanh of the smooth sign,

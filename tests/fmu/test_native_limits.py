@@ -19,6 +19,8 @@ from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.errors import FmuBuildError
 from nnfmu.fmu.options import BuildOptions
 
+pytestmark = pytest.mark.slow  # its FMUs built for FMI 2 and 3 with the win64 DLL, 11-15 s of fixtures
+
 T = SAMPLE_PERIOD
 ERROR = 3
 
