@@ -254,9 +254,7 @@ def _single(m: Measurement, channel: str, label: str) -> Measurement:
     return Measurement(time=m.time, channels={label: m[channel]}, units={label: m.units[channel]}, source=m.source)
 
 
-def close_the_loop(
-    out: Path, settings: DemoSettings, log: Callable[[str], None], progress: Progress | None = None
-) -> LoopReport:
+def close_the_loop(out: Path, settings: DemoSettings, log: Callable[[str], None]) -> LoopReport:
     """A damper record with `UNDECLARED_EFFECTS` on, `LOOP_PRESET` (which lacks their inputs) trained on the loop's
     fit blocks only, and `run_loop` on the whole record (its diagnosis and test blocks were not fitted)."""
     lab, _ = write_rig(
@@ -280,7 +278,7 @@ def close_the_loop(
         train = TrainSettings(seed=settings.seed, restarts=1, max_epochs=QUICK_LOOP_EPOCHS)
     log(f"loop: training {LOOP_PRESET} on the fit blocks of {lab.name}")
     first = export_onnx(
-        train_model(fit, preset.spec, architecture, train, progress).model,
+        train_model(fit, preset.spec, architecture, train).model,
         out / "models" / f"{LOOP_PRESET}-loop-start.onnx",
     ).path  # an input: not in the loop's folder
     log(f"loop: {lab} has {', '.join(UNDECLARED_EFFECTS)}, which {first.name} was not given; running the loop")
