@@ -12,6 +12,9 @@ test's drive over DURATION_S, default 5 s):
   min(3 s, DURATION_S), outputs every 0.1 ms: the same NRMSE and the error's peak frequency (no alias: 10 kHz output);
 - `parameter_file_stabilisers`: the vehicle's stabilised ports on the parameter file's bushing elements instead of
   those fitted to the networks (inner step 0.1 ms);
+- `truth_law_for_bushing_channels`: the bushing FMU with the truth law's axial force, radial force, both, or both
+  torque channels in the networks' places (the other channels networks, merged as the road test merges them), inner
+  step 0.1 ms;
 - `bushing_sine_energy`: each channel of the merged bushing network driven alone by a sine at FREQUENCY_HZ (default:
   where the 0.1 ms run's error peaks; 5 % and 20 % of the reference's RMS deflection of bushing_fl_front, the mean
   not removed), stepped at 1 ms (its samples) and
@@ -55,8 +58,11 @@ from nnfmu.cosim.master import CosimSettings, cosimulate
 from nnfmu.cosim.ssp import open_system
 from nnfmu.data import Measurement
 from nnfmu.data.rigs import BUSHING_CHANNELS
+from nnfmu.export.merge import merge_step_graphs
+from nnfmu.fmu.build import build_fmu
+from nnfmu.fmu.options import BuildOptions
 from nnfmu.validate import compare
-from nnfmu.vehicle import DriveSettings, generate_drive
+from nnfmu.vehicle import DriveSettings, generate_drive, truth_laws
 from nnfmu.workflows.roadtest.stabilisers import bushing_stabilisers
 from nnfmu.workflows.roadtest.systems import (
     build_component_fmus,
@@ -65,12 +71,19 @@ from nnfmu.workflows.roadtest.systems import (
     vehicle_components,
     write_system,
 )
+from nnfmu.workflows.roadtest.truth_graphs import bushing_truth_graph
 from nnfmu.workflows.roadtest.truth_reference import monolithic_reference
 
 SWEEP = (1e-4, 2e-4, 5e-4, 1e-3)  # [s] inner steps (and vehicle sample periods)
 ELEMENT = "bushing_fl_front"
 AMPLITUDES = (0.05, 0.2)  # sine amplitudes as fractions of the reference's RMS deflection
 MASTER_SPAN = 3.0  # [s] of nnfmu's Python master at 0.1 ms
+PRESETS = {  # the bushing presets by channel (`nnfmu.workflows.roadtest.systems.BUSHING_MODELS`)
+    "axial": "bushing-axial-force",
+    "radial": "bushing-radial-force",
+    "axial_rotation": "bushing-axial-torque",
+    "conical_rotation": "bushing-conical-torque",
+}
 
 
 def body_errors(result: Measurement, reference: Measurement) -> dict[str, float]:
@@ -134,6 +147,19 @@ def loss_sine(fmu: Path, channel, amplitude: float, frequency: float, step: floa
     return round(energy / (np.pi * amplitude * first), 3)
 
 
+def channel_swap(models: dict[str, Path], chosen: tuple[str, ...], folder: Path) -> Path:
+    """The bushing FMU with the truth law's channels `chosen` (keys of BUSHING_CHANNELS) and the networks' others,
+    merged into one step graph as the road test merges the networks (host binary only)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    laws = truth_laws([f"bushing_{BUSHING_CHANNELS[key].force}" for key in chosen])
+    truth = bushing_truth_graph({key: laws[f"bushing_{BUSHING_CHANNELS[key].force}"].truth for key in chosen}, H)
+    networks = [onnx.load(models[preset]) for key, preset in PRESETS.items() if key not in chosen]
+    onnx.save(
+        merge_step_graphs([truth, *networks], "lca_bushing", f"truth law for {', '.join(chosen)}"), folder / "b.onnx"
+    )
+    return build_fmu(folder / "b.onnx", BuildOptions(out=folder / "lca-bushing.fmu", platforms=("host",)))
+
+
 def main() -> None:
     duration = float(sys.argv[2]) if len(sys.argv) > 2 else 5.0
     loads = [os.getloadavg()[0]]
@@ -149,11 +175,12 @@ def main() -> None:
         units = dict(reference.units)
         log(f"prepared at {time.perf_counter() - wall_start:.1f} s")
 
-        sweep, ssd_fine = {}, None
+        sweep, ssd_fine, vehicle_fine = {}, None, None
         for h in SWEEP:
             vehicle = build_vehicle(SYSTEM, work / f"vehicle-{h:g}", h, stabilisers)
             ssd = write_system(SYSTEM, vehicle, fmus.dampers[DAMPER], fmus.bushing, work / f"system-{h:g}")
             ssd_fine = ssd if h == FINE else ssd_fine
+            vehicle_fine = vehicle if h == FINE else vehicle_fine
             values, _ = plain_loop(system_fmu(ssd, work / f"system-{h:g}.fmu", h), drive, duration)
             result = as_measurement(values, units, f"inner step {h:g} s")
             sweep[f"{h * 1e3:g} ms"] = {
@@ -184,6 +211,14 @@ def main() -> None:
         ssd = write_system(SYSTEM, plain_vehicle, fmus.dampers[DAMPER], fmus.bushing, work / "parameter-file")
         values, _ = plain_loop(system_fmu(ssd, work / "parameter-file.fmu", FINE), drive, duration)
         parameter_file = body_errors(as_measurement(values, units, "parameter-file stabilisers"), reference)
+
+        swaps = {}
+        for chosen in (("axial",), ("radial",), ("axial", "radial"), ("axial_rotation", "conical_rotation")):
+            fmu = channel_swap(models, chosen, work / f"swap-{'+'.join(chosen)}")
+            ssd = write_system(SYSTEM, vehicle_fine, fmus.dampers[DAMPER], fmu, work / f"swap-{'+'.join(chosen)}")
+            values, _ = plain_loop(system_fmu(ssd, work / f"swap-{'+'.join(chosen)}.fmu", FINE), drive, duration)
+            swaps[" + ".join(chosen)] = body_errors(as_measurement(values, units, "swap"), reference)
+            log(f"truth law for {chosen}: {json.dumps(swaps[' + '.join(chosen)])}")
 
         frequency = float(sys.argv[3]) if len(sys.argv) > 3 else sweep["0.1 ms"]["error_peak_hz"]
         energy = {}
@@ -222,6 +257,7 @@ def main() -> None:
                 "inner_step_sweep": sweep,
                 "python_master_0.1ms": master,
                 "parameter_file_stabilisers_0.1ms": parameter_file,
+                "truth_law_for_bushing_channels_0.1ms": swaps,
                 "oscillation_hz": frequency,
                 "bushing_sine_energy_loss_angle_sine": energy,
                 "bushing_between_samples": between,
