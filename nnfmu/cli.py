@@ -322,7 +322,7 @@ def train(
     ),
     input_cutoff: Optional[float] = typer.Option(
         None,
-        help="Low-pass [Hz] of the input channels, zero phase, before the features (transducer noise above the rig's band); 0: none; default: the preset's (bushings and damper-hysteresis 100 Hz, other dampers none).",
+        help="Low-pass [Hz] of the input channels, zero phase, before the features (transducer noise above the rig's band); 0: none; default: the preset's (bushings 100 Hz, dampers none).",
     ),
 ) -> None:
     """Train a component network on rig data and export it as a verified ONNX step graph."""

@@ -53,11 +53,10 @@ def test_input_channels_follow_the_rig_names():
     assert hysteresis.thesis_spec.taps == (Tap("velocity", (0, 1)),) and hysteresis.thesis.hidden == (5,)
     assert hysteresis.spec.channels == ["velocity"] and hysteresis.output == "force"
     # the default's history enters as rates (differences) and fading memory (high-passes), not as delayed or
-    # smoothed copies of the velocity; it trains on the velocity low-passed above the dyno's band
+    # smoothed copies of the velocity
     assert hysteresis.spec.taps == (Tap("velocity"),)
     kinds = [d.kind for d in hysteresis.spec.derived]
     assert kinds == ["difference", "difference", "smooth_sign", "highpass", "highpass"]
-    assert hysteresis.settings.input_cutoff == 100.0
     assert [d.kind for d in get_preset("damper-spline").spec.derived] == ["smooth_sign", "smooth_sign"]
 
 
