@@ -46,7 +46,7 @@ HYSTERESIS_DIFFERENCES = (2, 8)
 # velocity. Measured on the default lab dyno record (70 s, seed 0, 2 kg fixture taken out), each network run open loop
 # along a compact quarter car's damper motion (bench/user_path.py's car and drive) against the dyno's law: force
 # NRMSE 2.22 % with the differences alone, 1.44 % with these high-passes; on held-out random dyno motion (seed 1,
-# noisy inputs) 1.52 % and 0.96 %. Trained on a noise-free record, the differences alone still gave 1.98 % along the
+# noisy inputs) 1.52 % and 0.96 % (docs/masters.md). Trained on a noise-free record, the differences alone still gave 1.98 % along the
 # car: the memory, not the sensor noise, was short. Trained on the velocity low-passed at 100 Hz the high-passes
 # gave 1.68 % along the car, but a network that learns the fixture's m·a from them (`--moving-mass 0`) then meets the
 # raw transducer noise it never saw in training: 3.5 % held out (bench/networks.py), so the dampers keep no low-pass.
