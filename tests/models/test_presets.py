@@ -52,9 +52,11 @@ def test_input_channels_follow_the_rig_names():
     hysteresis = get_preset("damper-hysteresis")
     assert hysteresis.thesis_spec.taps == (Tap("velocity", (0, 1)),) and hysteresis.thesis.hidden == (5,)
     assert hysteresis.spec.channels == ["velocity"] and hysteresis.output == "force"
-    # the default's history enters as rates (differences), not as delayed copies of the velocity
+    # the default's history enters as rates (differences) and fading memory (high-passes), not as delayed or
+    # smoothed copies of the velocity
     assert hysteresis.spec.taps == (Tap("velocity"),)
-    assert [d.kind for d in hysteresis.spec.derived] == ["difference", "difference", "smooth_sign"]
+    kinds = [d.kind for d in hysteresis.spec.derived]
+    assert kinds == ["difference", "difference", "smooth_sign", "highpass", "highpass"]
     assert [d.kind for d in get_preset("damper-spline").spec.derived] == ["smooth_sign", "smooth_sign"]
 
 
@@ -76,6 +78,20 @@ def test_default_bushing_memory_is_not_collinear_with_the_position():
         lowpass_bank = FeatureSpec(spec.taps, spec.output, tuple(Lowpass(position, tau=t) for t in MEMORY_TAUS))
         assert largest_correlation(lowpass_bank, record) > 0.999
         assert largest_correlation(spec, record) < 0.99
+
+
+def test_default_damper_memory_is_not_collinear_with_the_velocity():
+    """The hysteresis preset's fading memory enters as velocity high-passes: low-passes at the same time constants
+    would be near-copies of the velocity itself on a dyno record."""
+    record = simulate_rig("damper", RigOptions(seed=0, duration=10.0, excitation="random")).measurement
+    spec = get_preset("damper-hysteresis").spec
+    taus = [d.tau for d in spec.derived if d.kind == "highpass"]
+    assert taus
+    for tau in taus:
+        lowpass = FeatureSpec(spec.taps, spec.output, (Lowpass("velocity", tau=tau),))
+        highpass = FeatureSpec(spec.taps, spec.output, (Highpass("velocity", tau=tau),))
+        assert largest_correlation(lowpass, record) > 0.95
+        assert largest_correlation(highpass, record) < 0.5
 
 
 def test_every_preset_is_listed_and_unknown_names_are_refused():

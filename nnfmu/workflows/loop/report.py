@@ -4,6 +4,7 @@ force-displacement loops before/after, PSD of the residual before/after) and `re
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +24,12 @@ from nnfmu.workflows.loop.results import LoopReport
 TEMPLATE = "loop.html.j2"
 LOOP_WINDOW = 2.0  # s of the first test block drawn in the force-velocity and force-displacement loops
 MAX_SCATTER = 4000  # points per residual scatter
+LONG_NUMBER = re.compile(r"\d+\.\d{4,}(?:e[-+]?\d+)?")  # a fitted parameter printed in full in a feature's name
+
+
+def short_feature_name(name: str) -> str:
+    """A feature's name with its fitted parameters to 3 significant digits, so that it fits under a plot axis."""
+    return LONG_NUMBER.sub(lambda number: f"{float(number.group()):.3g}", name)
 
 
 def feature_unit(spec: FeatureSpec, name: str, units: dict[str, str]) -> str:
@@ -59,7 +66,7 @@ def plot_residual_vs_features(
     for i, name in enumerate(names):
         axes = figure.add_subplot(1, len(names), i + 1)
         axes.plot(values[pick, spec.feature_names.index(name)], residual[pick], ".", markersize=2, alpha=0.5)
-        axes.set_xlabel(axis_label(name, feature_unit(spec, name, m.units)), parse_math=False)
+        axes.set_xlabel(axis_label(short_feature_name(name), feature_unit(spec, name, m.units)), parse_math=False)
         axes.set_ylabel(axis_label(f"residual {report.output}", unit), parse_math=False)
         axes.grid(True, alpha=0.3)
     figure.suptitle(f"residual before {effect} was added vs its features (diagnosis part)")

@@ -15,7 +15,7 @@ from nnfmu.diagnosis import Diagnosis
 from nnfmu.diagnosis.evidence import EffectEvidence
 from nnfmu.validate.verdict import Target
 from nnfmu.workflows.loop.headline import headline
-from nnfmu.workflows.loop.report import write_loop_report
+from nnfmu.workflows.loop.report import short_feature_name, write_loop_report
 from nnfmu.workflows.loop.results import Iteration, LoopReport
 
 DETAILS = (
@@ -136,3 +136,12 @@ def test_the_report_tables_give_nrmse_in_per_cent_as_the_headline_does(tmp_path)
     assert "0.02858" not in html and "0.02251" not in html
     assert "warm 2.13, fresh 2.47" in html
     assert json.loads((tmp_path / "report.json").read_text(encoding="utf-8"))["error_before"]["nrmse"] == 0.02858
+
+
+def test_a_fitted_parameter_in_a_feature_name_is_shortened_for_its_axis():
+    """A fitted scale printed in full ran past the figure's edge; 3 significant digits fit, set values stay as given."""
+    assert (
+        short_feature_name("smooth_sign(velocity, scale=0.00502061833090149)") == "smooth_sign(velocity, scale=0.00502)"
+    )
+    assert short_feature_name("highpass(velocity, tau=0.001)") == "highpass(velocity, tau=0.001)"
+    assert short_feature_name("stop(x, radius=1.2345678e-05)") == "stop(x, radius=1.23e-05)"

@@ -24,8 +24,9 @@ from nnfmu.data.rigs import RigOptions, simulate_rig
 from nnfmu.diagnosis import Extension
 from nnfmu.diagnosis.ranking import GainTest
 from nnfmu.export import export_onnx, run_step_graph
-from nnfmu.models import Architecture, TrainSettings, get_preset, train_model
-from nnfmu.models.features import Difference, FeatureSpec, SmoothSign
+from nnfmu.models import Architecture, TrainSettings, train_model
+from nnfmu.models.features import Difference, FeatureSpec, SmoothSign, Tap
+from nnfmu.models.presets import SEAL_FRICTION_VELOCITY
 from nnfmu.models.retrain import Retrained
 from nnfmu.out_paths import replace_output_dir
 from nnfmu.workflows.loop import LoopError, LoopReport, LoopSettings, run_loop, training_part
@@ -50,7 +51,17 @@ HEATING = 40.0  # s: the oil heats ~9 K, enough fade to stand out of a small net
 SETTINGS = LoopSettings(max_effects=3, max_epochs=60, extra_hidden=(0, 4), lm_max_samples=4000)
 
 FULL = ("hysteresis", "seal_friction", "inertia")  # every effect a velocity-history network represents
-HISTORY = get_preset("damper-hysteresis").spec  # velocity, its differences over 2 and 8 ms, the friction sign
+# The first models' velocity history, written out so the loop's tests do not move with the preset: velocity, its
+# differences over 2 and 8 samples, the friction sign (the damper-hysteresis preset before its velocity high-passes).
+HISTORY = FeatureSpec(
+    taps=(Tap("velocity"),),
+    output="force",
+    derived=(
+        Difference("velocity", delay=2),
+        Difference("velocity", delay=8),
+        SmoothSign("velocity", scale=SEAL_FRICTION_VELOCITY),
+    ),
+)
 NO_SIGN = FeatureSpec(
     taps=HISTORY.taps, output="force", derived=tuple(d for d in HISTORY.derived if not isinstance(d, SmoothSign))
 )
