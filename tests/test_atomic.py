@@ -5,12 +5,22 @@ from __future__ import annotations
 
 import signal
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 from nnfmu import atomic
 from nnfmu.stopping import interrupts_deferred
+
+
+@pytest.fixture(autouse=True)
+def python_sigint_handler() -> Iterator[None]:
+    """These tests raise SIGINT in the worker itself, so they need Python's own handler: in one CI run an earlier test
+    in the same xdist worker left another disposition behind, and the raised SIGINT never arrived."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous if previous is not None else signal.default_int_handler)
 
 
 def interrupt_right_after(monkeypatch: pytest.MonkeyPatch, name: str) -> None:
