@@ -25,6 +25,7 @@ from nnfmu.data.rigs import (
     simulate_vehicle_damper_dyno,
 )
 from nnfmu.data.rigs.excitation import random_motion
+from nnfmu.data.rigs.vehicle_dyno import sine_peak_velocities
 
 RATE = 1000.0
 ELEMENTS = ("damper_fl", "damper_rl")
@@ -87,6 +88,30 @@ def test_the_record_keeps_the_lab_sine_series_and_replaces_only_the_random_part(
     assert vehicle.truth["options"]["excitation"] == "vehicle"
     assert vehicle.truth["excitation"]["drive"]["elements"] == list(ELEMENTS)
     assert not np.array_equal(recorded["displacement"][sine_end:], lab_recorded["displacement"][sine_end:])
+
+
+def test_the_sine_series_stops_at_the_first_level_covering_the_cars_fastest_stroke() -> None:
+    lab = DamperDyno().peak_velocities
+    t = np.arange(int(20 * RATE)) / RATE
+    # slow strokes: 10 mm at 5 Hz (0.314 m/s peak rate) and 5 mm at 4 Hz; margin 1.2 -> 0.377 m/s -> levels to 0.4
+    slow = Measurement(
+        t,
+        {
+            "damper_fl_displacement": 0.01 * np.sin(2 * np.pi * 5.0 * t),
+            "damper_rl_displacement": 0.005 * np.sin(2 * np.pi * 4.0 * t),
+        },
+        {"damper_fl_displacement": "m", "damper_rl_displacement": "m"},
+        source="slow.csv",
+    )
+    assert sine_peak_velocities(slow, ELEMENTS, 1.2, lab) == (0.05, 0.1, 0.2, 0.3, 0.4)
+    assert sine_peak_velocities(slow, ELEMENTS, 1.0, lab) == (0.05, 0.1, 0.2, 0.3, 0.4)  # 0.314 m/s
+    assert sine_peak_velocities(slow, ELEMENTS, 2.0, lab) == (0.05, 0.1, 0.2, 0.3, 0.4, 0.6, 0.8)  # 0.628 m/s
+    assert sine_peak_velocities(slow, ELEMENTS, 20.0, lab) == lab  # past the fastest level: all of them
+    run = simulate_vehicle_damper_dyno(slow, ELEMENTS, RigOptions(duration=45.0, seed=2), DriveDesign(margin=1.2))
+    sine = run.truth["excitation"]["parts"][0]
+    assert [round(level["peak_rate"], 9) for level in sine["levels"]] == [0.05, 0.1, 0.2, 0.3, 0.4]
+    recorded = run.measurement["velocity"][: int(sine["end_s"] * 1000.0)]
+    assert 0.39 < np.max(np.abs(recorded)) < 0.42  # the top level, the transducer's 2 mm/s noise on it
 
 
 def test_bad_sources_and_bands_are_refused_naming_them(source: Measurement) -> None:
