@@ -10,7 +10,7 @@ with inner step h = 0.1 ms. It runs in two plain masters that know nothing of nn
 `simulate_fmu` (no input derivatives). The reference is the monolithic full vehicle with the truth laws (RK4 at
 0.1 ms, `monolithic_reference`, as the road test's) on the same drive (ISO 8608 class C at 20 m/s, seed 0, faded
 in over 0.5 s, the road test's drive generator). The networks' own error is the road test's `nrmse_network`
-(`nnfmu.workflows.roadtest.budget`, computed by the road test's own `_network_errors`): a damper network's FMU
+(`nnfmu.workflows.roadtest.budget`, computed by the road test's own `network_errors`): a damper network's FMU
 replayed open loop on the reference's own motion of its damper against the reference's truth-law force; for a
 body acceleration, the co-simulation with the networks against the one with the truth laws as FMUs, both on nnfmu's
 master at 1 ms as in the road test. Reported per damper force (4) and body acceleration (4 corners, heave, roll,
@@ -57,7 +57,7 @@ from nnfmu.data import Measurement
 from nnfmu.validate import ValidationSettings, compare
 from nnfmu.vehicle import DriveSettings, generate_drive
 from nnfmu.workflows.passivity import passivity_warnings
-from nnfmu.workflows.roadtest.runs import _network_errors
+from nnfmu.workflows.roadtest import network_errors
 from nnfmu.workflows.roadtest.stabilisers import bushing_stabilisers
 from nnfmu.workflows.roadtest.systems import (
     build_component_fmus,
@@ -278,7 +278,7 @@ def main() -> None:
         runs["nnfmu master at 1 ms (road test), truth"] = road["truth"]
         errors = {name: nrmse(run, reference, validation) for name, run in runs.items()}
 
-        network = _network_errors(
+        network = network_errors(
             SYSTEM, DAMPER, fmus, reference, road["networks"], road["truth"], list(CHANNELS), validation
         )
         own = {c: float(network[c].metrics.nrmse) for c in CHANNELS}

@@ -30,7 +30,7 @@ from nnfmu.fmu.options import BuildOptions
 from nnfmu.validate import compare
 from nnfmu.vehicle import DriveSettings, generate_drive
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
-from nnfmu.workflows.roadtest.runs import _open_loop
+from nnfmu.workflows.roadtest import open_loop_replay
 from nnfmu.workflows.roadtest.truth_reference import monolithic_reference, settled_state
 
 pytestmark = [
@@ -100,7 +100,7 @@ def test_a_fine_inner_step_brings_a_plain_master_within_the_networks_own_error(t
             )
         result = plain_fmpy_loop(tmp_path / f"system-{inner:g}.fmu", drive)
         errors[inner] = {c.name: c.metrics.nrmse for c in compare(result, reference, list(CHANNELS))}
-    own = compare(_open_loop(damper, reference, "damper"), reference, ["damper_force"])[0].metrics.nrmse
+    own = compare(open_loop_replay(damper, reference, "damper"), reference, ["damper_force"])[0].metrics.nrmse
     for channel in CHANNELS:
         assert errors[FINE][channel] < errors[H][channel], (channel, errors)
     assert errors[FINE]["damper_force"] <= 1.5 * own, (errors, own)
