@@ -10,7 +10,7 @@ with inner step h = 0.1 ms. It runs in two plain masters that know nothing of nn
 `simulate_fmu` (no input derivatives). The reference is the monolithic full vehicle with the truth laws (RK4 at
 0.1 ms, `monolithic_reference`, as the road test's) on the same drive (ISO 8608 class C at 20 m/s, seed 0, faded
 in over 0.5 s, the road test's drive generator). The networks' own error is the road test's `nrmse_network`
-(`nnfmu.workflows.roadtest.budget`, computed by the road test's own `_network_errors`): a damper network's FMU
+(`nnfmu.workflows.roadtest.budget`, computed by the road test's own `network_errors`): a damper network's FMU
 replayed open loop on the reference's own motion of its damper against the reference's truth-law force; for a
 body acceleration, the co-simulation with the networks against the one with the truth laws as FMUs, both on nnfmu's
 master at 1 ms as in the road test. Reported per damper force (4) and body acceleration (4 corners, heave, roll,
@@ -36,7 +36,6 @@ import json
 import os
 import platform
 import resource
-import shutil
 import sys
 import tempfile
 import time
@@ -44,22 +43,23 @@ from pathlib import Path
 
 import numpy as np
 import onnx
-from fmpy import extract, read_model_description, simulate_fmu
-from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import FMU2Slave
+from fmpy import simulate_fmu
 from road_test import models_in  # bench/ is on the path when a bench script runs
 
-from nnfmu.cosim.container.build import build_system_fmu
-from nnfmu.cosim.drive_inputs import DriveInputs
-from nnfmu.cosim.master import CosimSettings, cosimulate
-from nnfmu.cosim.ssp import open_system
-from nnfmu.data import Measurement
-from nnfmu.validate import ValidationSettings, compare
-from nnfmu.vehicle import DriveSettings, generate_drive
-from nnfmu.workflows.passivity import passivity_warnings
-from nnfmu.workflows.roadtest.runs import _network_errors
-from nnfmu.workflows.roadtest.stabilisers import bushing_stabilisers
-from nnfmu.workflows.roadtest.systems import (
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests" / "cosim"))  # the plain loop, test-made
+from plain_master import plain_run, port_names  # noqa: E402
+
+from nnfmu.cosim.container.build import build_system_fmu  # noqa: E402
+from nnfmu.cosim.drive_inputs import DriveInputs  # noqa: E402
+from nnfmu.cosim.master import CosimSettings, cosimulate  # noqa: E402
+from nnfmu.cosim.ssp import open_system  # noqa: E402
+from nnfmu.data import Measurement  # noqa: E402
+from nnfmu.validate import ValidationSettings, compare  # noqa: E402
+from nnfmu.vehicle import DriveSettings, generate_drive  # noqa: E402
+from nnfmu.workflows.passivity import passivity_warnings  # noqa: E402
+from nnfmu.workflows.roadtest import network_errors  # noqa: E402
+from nnfmu.workflows.roadtest.stabilisers import bushing_stabilisers  # noqa: E402
+from nnfmu.workflows.roadtest.systems import (  # noqa: E402
     build_component_fmus,
     build_truth_fmus,
     build_vehicle,
@@ -67,8 +67,8 @@ from nnfmu.workflows.roadtest.systems import (
     vehicle_components,
     write_system,
 )
-from nnfmu.workflows.roadtest.truth_reference import monolithic_reference
-from nnfmu.workflows.system import FmuCache
+from nnfmu.workflows.roadtest.truth_reference import monolithic_reference  # noqa: E402
+from nnfmu.workflows.system import FmuCache  # noqa: E402
 
 SYSTEM = "full-vehicle"
 DAMPER = "damper-hysteresis"
@@ -95,56 +95,22 @@ def cpu_seconds() -> float:
 def plain_loop(
     fmu: Path, drive: Measurement, duration: float, slopes: bool = False
 ) -> tuple[dict[str, np.ndarray], float]:
-    """The system FMU stepped at H by a hand-written fmpy loop (no nnfmu code inside): instantiate, drive at t_0 set
-    in Initialization Mode, then per step the drive at t_n, doStep(t_n, H) and every output read; no input
-    derivatives unless `slopes` (a diagnostic, not a plain master: the drive's slope over each step,
-    (u_{n+1} - u_n) / H, set with fmi2SetRealInputDerivatives). Returns the outputs at t_0 .. t_N and the loop's wall
-    time [s]."""
-    description = read_model_description(str(fmu))
-    variables = {v.name: v for v in description.modelVariables}
-    inputs = [v.name for v in description.modelVariables if v.causality == "input"]
-    outputs = [v.name for v in description.modelVariables if v.causality == "output"]
-    steps = round(duration / H)
-    u = DriveInputs(drive, inputs).table(np.arange(steps + 1) * H)  # prepared before the loop
-    vr_in = [variables[n].valueReference for n in inputs]
-    vr_out = [variables[n].valueReference for n in outputs]
-    unzipped = extract(str(fmu))
-    slave = FMU2Slave(
-        guid=description.guid,
-        unzipDirectory=unzipped,
-        modelIdentifier=description.coSimulation.modelIdentifier,
-        instanceName="car",
-    )
+    """The system FMU stepped at H by the tests' hand-written fmpy loop (`plain_run`, no nnfmu code inside):
+    instantiate, drive at t_0 set in Initialization Mode, then per step the drive at t_n, doStep(t_n, H) and every
+    output read; no input derivatives unless `slopes` (a diagnostic, not a plain master: the drive's slope over each
+    step, (u_{n+1} - u_n) / H, set with fmi2SetRealInputDerivatives). Returns the outputs at t_0 .. t_N and the
+    loop's wall time [s] (the FMU's unpacking included)."""
+    inputs, outputs = port_names(fmu, "input"), port_names(fmu, "output")
+    u = DriveInputs(drive, inputs).table(np.arange(round(duration / H) + 1) * H)  # prepared before the loop
     started = time.perf_counter()
-    try:
-        slave.instantiate()
-        slave.setupExperiment(startTime=0.0)
-        slave.enterInitializationMode()
-        slave.setReal(vr_in, list(u[0]))
-        slave.exitInitializationMode()
-        rows = [slave.getReal(vr_out)]
-        for n in range(steps):
-            slave.setReal(vr_in, list(u[n]))
-            if slopes:
-                slave.setRealInputDerivatives(vr_in, [1] * len(vr_in), list((u[n + 1] - u[n]) / H))
-            try:
-                slave.doStep(currentCommunicationPoint=n * H, communicationStepSize=H)
-            except FMICallException as error:
-                raise RuntimeError(f"{fmu.name}: doStep from t = {n * H:.3f} s failed ({error})") from error
-            rows.append(slave.getReal(vr_out))
-        slave.terminate()
-        slave.freeInstance()
-    finally:
-        shutil.rmtree(unzipped, ignore_errors=True)
+    table = plain_run(fmu, dict(zip(inputs, u.T)), H, outputs, at_start=True, slopes=slopes, instance="car")
     wall = time.perf_counter() - started
-    table = np.array(rows)
     return {name: table[:, i] for i, name in enumerate(outputs)}, wall
 
 
 def fmpy_simulate(fmu: Path, drive: Measurement, duration: float) -> dict[str, np.ndarray]:
     """The system FMU run by fmpy's own `simulate_fmu` at H (the drive as fmpy's input table, at its samples)."""
-    description = read_model_description(str(fmu))
-    inputs = [v.name for v in description.modelVariables if v.causality == "input"]
+    inputs = port_names(fmu, "input")
     times = np.arange(round(duration / H) + 1) * H
     u = DriveInputs(drive, inputs).table(times)
     signals = np.zeros(len(times), dtype=[("time", float)] + [(n, float) for n in inputs])
@@ -278,7 +244,7 @@ def main() -> None:
         runs["nnfmu master at 1 ms (road test), truth"] = road["truth"]
         errors = {name: nrmse(run, reference, validation) for name, run in runs.items()}
 
-        network = _network_errors(
+        network = network_errors(
             SYSTEM, DAMPER, fmus, reference, road["networks"], road["truth"], list(CHANNELS), validation
         )
         own = {c: float(network[c].metrics.nrmse) for c in CHANNELS}

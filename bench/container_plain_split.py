@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import sys
 import tempfile
 import time
@@ -50,8 +49,7 @@ from container_plain import (  # bench/ is on the path when a bench script runs
     rounded,
     system_fmu,
 )
-from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Slave
+from plain_master import plain_run, port_names  # tests/cosim is on the path once container_plain is imported
 from road_test import models_in
 
 from nnfmu.cosim.master import CosimSettings, cosimulate
@@ -101,36 +99,11 @@ def peak_frequency(time_: np.ndarray, values: np.ndarray, reference: Measurement
 
 
 def stepped(fmu: Path, inputs: dict[str, np.ndarray], step: float, outputs: list[str]) -> np.ndarray:
-    """`fmu` stepped at `step` [s] from t = 0 with `inputs` (one value per step end); `outputs` at every step end."""
-    description = read_model_description(str(fmu))
-    variables = {v.name: v for v in description.modelVariables}
-    names = [v.name for v in description.modelVariables if v.causality == "input"]
+    """`fmu` stepped at `step` [s] from t = 0 with `inputs` (one value per step end, 0 for an input not given) by the
+    tests' plain fmpy loop (`plain_run`); `outputs` at every step end."""
     n = len(next(iter(inputs.values())))
-    u = np.column_stack([inputs.get(name, np.zeros(n)) for name in names])
-    vr_in, vr_out = [variables[x].valueReference for x in names], [variables[x].valueReference for x in outputs]
-    unzipped = extract(str(fmu))
-    slave = FMU2Slave(
-        guid=description.guid,
-        unzipDirectory=unzipped,
-        modelIdentifier=description.coSimulation.modelIdentifier,
-        instanceName="bushing",
-    )
-    try:
-        slave.instantiate()
-        slave.setupExperiment(startTime=0.0)
-        slave.enterInitializationMode()
-        slave.setReal(vr_in, list(u[0]))
-        slave.exitInitializationMode()
-        rows = [slave.getReal(vr_out)]
-        for k in range(1, n):
-            slave.setReal(vr_in, list(u[k]))
-            slave.doStep(currentCommunicationPoint=(k - 1) * step, communicationStepSize=step)
-            rows.append(slave.getReal(vr_out))
-        slave.terminate()
-        slave.freeInstance()
-    finally:
-        shutil.rmtree(unzipped, ignore_errors=True)
-    return np.array(rows)
+    given = {name: inputs.get(name, np.zeros(n)) for name in port_names(fmu, "input")}
+    return plain_run(fmu, given, step, outputs, instance="bushing")
 
 
 def loss_sine(fmu: Path, channel, amplitude: float, frequency: float, step: float) -> float:

@@ -11,13 +11,17 @@ monolithically as the reference: the yardstick of "precision that survives the u
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
-from nnfmu.data.rigs import DamperTruth
+sys.path.insert(0, str(Path(__file__).parents[1] / "cosim"))  # the plain fmpy replay of the co-simulation tests
+from plain_master import plain_replay, port_names  # noqa: E402
+
+from nnfmu.data.rigs import DamperTruth  # noqa: E402
 
 M_S, M_U, K_S, K_T = 400.0, 40.0, 20e3, 200e3  # the vendor car's defaults (vendor_fmu.REALS)
 _FREQUENCIES = np.geomspace(0.7, 25.0, 24)
@@ -68,29 +72,14 @@ def monolithic(truth: DamperTruth, duration: float, dt: float) -> np.ndarray:
 
 
 def replay(damper_fmu: Path, velocity: np.ndarray, displacement: np.ndarray, h: float) -> np.ndarray:
-    """Damper force [N] at t = k h of `damper_fmu` (fmpy alone) fed the motion sample k before the step ending at
-    t_k: the open loop, the FMU's own error with no coupling in it."""
-    damper, dv = _open_with(damper_fmu, "damper", {"velocity": velocity[0], "displacement": displacement[0]})
-    names = [name for name in ("velocity", "displacement") if name in dv]
+    """Damper force [N] at t = k h of `damper_fmu` (fmpy alone, `plain_replay`) fed the motion sample k before the
+    step ending at t_k: the open loop, the FMU's own error with no coupling in it."""
     motion = {"velocity": velocity, "displacement": displacement}
-    force = np.empty(len(velocity))
-    force[0] = damper.getReal([dv["force"]])[0]
-    for k in range(1, len(velocity)):
-        damper.setReal([dv[name] for name in names], [motion[name][k] for name in names])
-        damper.doStep((k - 1) * h, h)
-        force[k] = damper.getReal([dv["force"]])[0]
-    damper.terminate()
-    damper.freeInstance()
-    return force
+    return plain_replay(damper_fmu, {name: motion[name] for name in port_names(damper_fmu, "input")}, h, "force")
 
 
 def _open(path: Path, name: str) -> tuple[FMU2Slave, dict[str, int]]:
     """An initialised FMI 2 instance of `path` at its default parameters, and its value references by name."""
-    return _open_with(path, name, {})
-
-
-def _open_with(path: Path, name: str, inputs: dict[str, float]) -> tuple[FMU2Slave, dict[str, int]]:
-    """Like `_open`, with those of `inputs` the FMU has set during initialisation."""
     md = read_model_description(path)
     slave = FMU2Slave(
         guid=md.guid, unzipDirectory=extract(path), modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name
@@ -99,9 +88,6 @@ def _open_with(path: Path, name: str, inputs: dict[str, float]) -> tuple[FMU2Sla
     slave.instantiate()
     slave.setupExperiment(startTime=0.0)
     slave.enterInitializationMode()
-    given = [name for name in inputs if name in references]
-    if given:
-        slave.setReal([references[name] for name in given], [inputs[name] for name in given])
     slave.exitInitializationMode()
     return slave, references
 

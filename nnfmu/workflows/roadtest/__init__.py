@@ -12,6 +12,7 @@ __all__, __getattr__ = face(
         "bushing_drive": ("BushingDriveSettings", "VehicleBushingModels", "train_vehicle_bushings"),
         "damper_drive": ("VehicleDamperModels", "train_vehicle_dampers"),
         "envelope": ("Excursion", "excursion"),
+        "open_loop": ("network_errors", "open_loop_replay"),
         "runs": ("RoadTestResult", "RoadTestSettings", "SystemResult", "SystemRun", "run_road_test", "system_folder"),
         "systems": (
             "BUSHING_MODELS",

@@ -25,8 +25,9 @@ from nnfmu.fmu import BuildOptions, build_fmu
 from nnfmu.validate import ChannelComparison, ValidationSettings, compare
 from nnfmu.vehicle import DriveSettings, generate_drive
 from nnfmu.workflows.roadtest.envelope import Excursion, excursion
+from nnfmu.workflows.roadtest.open_loop import fmu_ports, open_loop_replay
 from nnfmu.workflows.roadtest.record_training import train_on_record
-from nnfmu.workflows.roadtest.runs import RoadTestSettings, _open_loop, _ports
+from nnfmu.workflows.roadtest.runs import RoadTestSettings
 from nnfmu.workflows.roadtest.systems import (
     BUSHING_MODELS,
     RoadTestError,
@@ -137,10 +138,10 @@ def replay_bushing_networks(
     the networks' envelope."""
     merged = bushing_onnx(models, Path(folder) / "lca-bushing.onnx")
     fmu = build_fmu(merged, BuildOptions(out=Path(folder) / "lca-bushing.fmu"))
-    outputs = list(_ports(fmu, "output"))
+    outputs = list(fmu_ports(fmu, "output"))
     comparisons = {
         element: compare(
-            _open_loop(fmu, reference, element),
+            open_loop_replay(fmu, reference, element),
             reference,
             [f"{element}_{name}" for name in outputs],
             ValidationSettings(),

@@ -19,11 +19,10 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
-from fmpy import read_model_description
 
 from nnfmu.atomic import write_text_atomic
 from nnfmu.component import Component
-from nnfmu.cosim import DEFAULT_STEP, CosimSettings, replay_fmu
+from nnfmu.cosim import DEFAULT_STEP, CosimSettings
 from nnfmu.data import Measurement, save_measurement
 from nnfmu.data.drive_files import write_drive
 from nnfmu.validate import ChannelComparison, Target, ValidationSettings, compare, write_report
@@ -33,6 +32,7 @@ from nnfmu.workflows.characterise.settings import CharacteriseSettings
 from nnfmu.workflows.passivity import passivity_warnings
 from nnfmu.workflows.roadtest.budget import BudgetRow, budget_rows
 from nnfmu.workflows.roadtest.envelope import Excursion, excursion
+from nnfmu.workflows.roadtest.open_loop import network_errors
 from nnfmu.workflows.roadtest.report import write_system_report
 from nnfmu.workflows.roadtest.stabilisers import bushing_stabilisers
 from nnfmu.workflows.roadtest.systems import (
@@ -238,59 +238,6 @@ def _excursions(run_name: str, elements: list[str], component: Component, m: Mea
     ]
 
 
-def _ports(fmu: Path, causality: str) -> dict[str, str]:
-    """Real variables of `fmu` with `causality`, name -> unit."""
-    return {
-        v.name: v.unit or ""
-        for v in read_model_description(str(fmu)).modelVariables
-        if v.causality == causality and v.type in ("Real", "Float64")
-    }
-
-
-def _open_loop(fmu: Path, reference: Measurement, element: str) -> Measurement:
-    """The FMU of `element` replayed along the reference's motion of that element (its inputs `element_<input>`);
-    outputs named `element_<output>`."""
-    inputs = _ports(fmu, "input")
-    motion = Measurement(
-        reference.time,
-        {name: reference[f"{element}_{name}"] for name in inputs},
-        inputs,
-        source=f"{element} motion in {reference.source}",
-    )
-    replayed = replay_fmu(fmu, motion)
-    return Measurement(
-        replayed.time,
-        {f"{element}_{k}": v for k, v in replayed.channels.items()},
-        {f"{element}_{k}": u for k, u in replayed.units.items()},
-        source=f"{fmu.name} replayed on the {element} motion",
-    )
-
-
-def _network_errors(
-    system: str,
-    model: str,
-    fmus: ComponentFmus,
-    ref: Measurement,
-    cosim: Measurement,
-    truth: Measurement,
-    channels: list[str],
-    validation: ValidationSettings,
-) -> dict[str, ChannelComparison]:
-    """Each channel's network error (`budget`): a network's output replayed open loop along the reference motion of
-    its element against the reference, else the network co-simulation against the truth co-simulation."""
-    networks = {element: fmus.dampers[model] for element in damper_elements(system)}
-    networks |= {element: fmus.bushing for element in bushing_elements(system) if fmus.bushing is not None}
-    found: dict[str, ChannelComparison] = {}
-    for element, fmu in networks.items():
-        outputs = _ports(fmu, "output")
-        mine = [c for c in channels if c.startswith(f"{element}_") and c.removeprefix(f"{element}_") in outputs]
-        if mine:
-            found |= {c.name: c for c in compare(_open_loop(fmu, ref, element), ref, mine, validation)}
-    rest = [c for c in channels if c not in found]
-    found |= {c.name: c for c in compare(cosim, truth, rest, validation)} if rest else {}
-    return found
-
-
 def _run_system(
     system: str,
     run: SystemRun,
@@ -359,7 +306,7 @@ def _run_system(
             model,
             comparisons[model],
             comparisons[TRUTH],
-            _network_errors(system, model, fmus, ref, cosims[model], cosims[TRUTH], channels, validation),
+            network_errors(system, model, fmus, ref, cosims[model], cosims[TRUTH], channels, validation),
         )
     ]
     reference_ports = _carried(cache, fmus.dampers[DAMPER_MODELS[0]])

@@ -17,8 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Slave
+from plain_master import plain_run, port_names  # tests/cosim/conftest.py puts tests/cosim on the path
 
 from nnfmu.cosim.container.build import build_system_fmu
 from nnfmu.cosim.drive_inputs import DriveInputs
@@ -30,7 +29,7 @@ from nnfmu.fmu.options import BuildOptions
 from nnfmu.validate import compare
 from nnfmu.vehicle import DriveSettings, generate_drive
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
-from nnfmu.workflows.roadtest.runs import _open_loop
+from nnfmu.workflows.roadtest import open_loop_replay
 from nnfmu.workflows.roadtest.truth_reference import monolithic_reference, settled_state
 
 pytestmark = [
@@ -46,39 +45,12 @@ CHANNELS = ("damper_force", "body_acceleration")
 
 
 def plain_fmpy_loop(fmu: Path, drive: Measurement) -> Measurement:
-    """`fmu` stepped at H over DURATION by fmpy's FMU2Slave alone: the drive at t_n set, doStep(t_n, H), CHANNELS
-    read; no input derivatives."""
-    description = read_model_description(str(fmu))
-    variables = {v.name: v for v in description.modelVariables}
-    inputs = [v.name for v in description.modelVariables if v.causality == "input"]
-    steps = round(DURATION / H)
-    times = np.arange(steps + 1) * H
+    """`fmu` stepped at H over DURATION by fmpy's FMU2Slave alone (`plain_run`): the drive at t_n set,
+    doStep(t_n, H), CHANNELS read; no input derivatives."""
+    inputs = port_names(fmu, "input")
+    times = np.arange(round(DURATION / H) + 1) * H
     u = DriveInputs(drive, inputs).table(times)  # as nnfmu cosim binds it (rates derived), before the loop
-    vr_in = [variables[n].valueReference for n in inputs]
-    vr_out = [variables[n].valueReference for n in CHANNELS]
-    unzipped = extract(str(fmu))
-    slave = FMU2Slave(
-        guid=description.guid,
-        unzipDirectory=unzipped,
-        modelIdentifier=description.coSimulation.modelIdentifier,
-        instanceName="car",
-    )
-    try:
-        slave.instantiate()
-        slave.setupExperiment(startTime=0.0)
-        slave.enterInitializationMode()
-        slave.setReal(vr_in, list(u[0]))
-        slave.exitInitializationMode()
-        rows = [slave.getReal(vr_out)]
-        for n in range(steps):
-            slave.setReal(vr_in, list(u[n]))
-            slave.doStep(currentCommunicationPoint=n * H, communicationStepSize=H)
-            rows.append(slave.getReal(vr_out))
-        slave.terminate()
-        slave.freeInstance()
-    finally:
-        shutil.rmtree(unzipped, ignore_errors=True)
-    table = np.array(rows)
+    table = plain_run(fmu, dict(zip(inputs, u.T)), H, CHANNELS, at_start=True, instance="car")
     units = {"damper_force": "N", "body_acceleration": "m/s^2"}
     return Measurement(times, {c: table[:, i] for i, c in enumerate(CHANNELS)}, units, f"{fmu.name} in fmpy")
 
@@ -100,7 +72,7 @@ def test_a_fine_inner_step_brings_a_plain_master_within_the_networks_own_error(t
             )
         result = plain_fmpy_loop(tmp_path / f"system-{inner:g}.fmu", drive)
         errors[inner] = {c.name: c.metrics.nrmse for c in compare(result, reference, list(CHANNELS))}
-    own = compare(_open_loop(damper, reference, "damper"), reference, ["damper_force"])[0].metrics.nrmse
+    own = compare(open_loop_replay(damper, reference, "damper"), reference, ["damper_force"])[0].metrics.nrmse
     for channel in CHANNELS:
         assert errors[FINE][channel] < errors[H][channel], (channel, errors)
     assert errors[FINE]["damper_force"] <= 1.5 * own, (errors, own)
