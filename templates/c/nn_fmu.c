@@ -102,14 +102,12 @@ NNStatus nn_set_debug_logging(NNInstance *instance, int logging_on, size_t n_cat
     return NN_OK;
 }
 
-int nn_allowed(NNInstance *instance, const char *function, unsigned allowed) {
-    if (instance->mode & allowed) return 1;
+int nn_refuse_mode(NNInstance *instance, const char *function) {
     nn_log(instance, NN_ERROR, NN_LOG_ERROR, "%s must not be called in state %s", function, mode_name(instance->mode));
     return 0;
 }
 
-int nn_check_array(const NNInstance *instance, const char *function, const void *array, size_t n, const char *what) {
-    if (n == 0 || array) return 1;
+int nn_refuse_null(const NNInstance *instance, const char *function, size_t n, const char *what) {
     nn_log(instance, NN_ERROR, NN_LOG_ERROR, "%s: %s is NULL but %lu values were requested", function, what,
            (unsigned long)n);
     return 0;
@@ -189,7 +187,7 @@ static NNStatus evaluate(NNInstance *instance, const double *start, const double
     int i;
     int extrapolating = 0;
 
-    memset(instance->graph_in, 0, sizeof instance->graph_in);
+    /* graph_in's entries outside these maps stay 0 from calloc: nothing else writes graph_in */
     for (i = 0; i < NN_N_INPUTS; i++) instance->graph_in[nn_input_graph_index[i]] = knot[i];
     if (NN_INTERPOLATES_INPUTS) {
         for (i = 0; i < NN_N_INPUTS; i++) instance->graph_in[nn_input_start_graph_index[i]] = start[i];
@@ -373,7 +371,16 @@ NNStatus nn_set_real(NNInstance *instance, unsigned vr, double value) {
 
 NNStatus nn_set_reals(NNInstance *instance, const unsigned vr[], size_t n, const double value[]) {
     size_t i;
-    for (i = 0; i < n; i++) {
+    /* A master's call every step: finite inputs, stored as nn_set_real would store them, without a call per value;
+     * from the first other value on (a parameter, an output, a non-finite value) value by value. */
+    for (i = 0; i < n && in_range(vr[i], NN_VR_FIRST_INPUT, NN_N_INPUTS) && isfinite(value[i]); i++) {
+        instance->data.input[vr[i] - NN_VR_FIRST_INPUT] = value[i];
+    }
+    if (i > 0) {
+        instance->data.inputs_set = 1;
+        instance->preview_stale = 1;
+    }
+    for (; i < n; i++) {
         NNStatus status = nn_set_real(instance, vr[i], value[i]);
         if (status != NN_OK) return status;
     }

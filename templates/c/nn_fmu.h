@@ -95,9 +95,21 @@ __attribute__((format(printf, 4, 5)))
 #endif
 void nn_log(const NNInstance *instance, NNStatus status, NNCategory category, const char *format, ...);
 
-/* 1 if `instance` may be used in one of the `allowed` modes, else logs why not (naming `function`) and returns 0. */
-int nn_allowed(NNInstance *instance, const char *function, unsigned allowed);
-int nn_check_array(const NNInstance *instance, const char *function, const void *array, size_t n, const char *what);
+/* What nn_allowed and nn_check_array log when they refuse a call; they return 0. */
+int nn_refuse_mode(NNInstance *instance, const char *function);
+int nn_refuse_null(const NNInstance *instance, const char *function, size_t n, const char *what);
+
+/* 1 if `instance` may be used in one of the `allowed` modes, else logs why not (naming `function`) and returns 0.
+ * Inline, as nn_check_array: every FMI call of every step makes these checks. */
+static inline int nn_allowed(NNInstance *instance, const char *function, unsigned allowed) {
+    return (instance->mode & allowed) ? 1 : nn_refuse_mode(instance, function);
+}
+
+/* 1 unless `array` is NULL while `n` values are asked for, else logs which (naming `function`) and returns 0. */
+static inline int nn_check_array(const NNInstance *instance, const char *function, const void *array, size_t n,
+                                 const char *what) {
+    return (n == 0 || array) ? 1 : nn_refuse_null(instance, function, n, what);
+}
 
 NNStatus nn_get_real(NNInstance *instance, unsigned vr, double *value);
 NNStatus nn_set_real(NNInstance *instance, unsigned vr, double value);

@@ -190,7 +190,7 @@ def in_order(a: np.ndarray, b: np.ndarray, bias: np.ndarray) -> np.ndarray:
 
 
 GEMM_FORMS = {  # how B reaches the Gemm, and what the generated C must show for it
-    "sparse constant": r"acc\[\d+\] \+= x0\[",  # only the nonzero products, written out
+    "sparse constant": r"acc\[\d+\] = 0\.0 \+ x0\[",  # only the nonzero products, each output's one expression
     "dense constant": "b_by_rows",  # transB: copied row by row for the side-by-side sums
     "run-time input": r"acc\[c\] \+= a_j \* x1\[",
 }

@@ -4,8 +4,9 @@ tangents by the product rule (terms of constant operands, such as weights, left 
 A Gemm sums each output's products in the order of the inner index, as the plain loop does, but keeps one accumulator
 per output column and adds the columns side by side (each output's sum is one chain of dependent additions; side by
 side the processor overlaps them), and with a mostly-zero constant B (a vehicle's output and stabiliser matrices)
-writes out only its nonzero products, in the same order: the sums are those of the plain loop bit for bit for finite
-operands (leaving out a product 0 * a only changes a result where a is infinite or NaN).
+writes out only its nonzero products, each output's as one expression 0 + p_1 + p_2 + ... in the order of the inner
+index (its sum stays in a register): the sums are those of the plain loop bit for bit for finite operands (leaving out
+a product 0 * a only changes a result where a is infinite or NaN).
 """
 
 from __future__ import annotations
@@ -106,16 +107,25 @@ class Gemm(Emitter):
         ]
         if side_by_side:
             lines = [f"for (int r = 0; r < {m}; ++r) {{", f"    {ctype} acc[{n}];"]
-            lines += [f"    for (int c = 0; c < {n}; ++c) {{", f"        acc[c] = {c_literal(0.0, dtype)};", "    }"]
             nonzero = _written_out(b_value, b_row, b_col, k, n)
             if nonzero is not None:
+                # each output's sum as one expression, 0 + p_1 + p_2 + ... (C adds left to right: the order of the
+                # loop), kept in a register instead of stored and loaded again after every product
                 row = _index(a_row, "r", 0, "")
+                products: list[list[str]] = [[] for _ in range(n)]
+                for j, c in nonzero:
+                    products[c].append(f"{x_a}[{row} + {a_col * j}] * {x_b}[{b_row * j + b_col * c}]")
                 lines += [
-                    f"    acc[{c}] += {x_a}[{row} + {a_col * j}] * {x_b}[{b_row * j + b_col * c}];" for j, c in nonzero
+                    f"    acc[{c}] = {' + '.join([c_literal(0.0, dtype), *terms])};" for c, terms in enumerate(products)
                 ]
                 if not nonzero:
                     lines += [f"    (void){x_a};", f"    (void){x_b};"]
             else:
+                lines += [
+                    f"    for (int c = 0; c < {n}; ++c) {{",
+                    f"        acc[c] = {c_literal(0.0, dtype)};",
+                    "    }",
+                ]
                 b_read = f"{x_b}[{_index(b_row, 'j', b_col, 'c')}]"
                 if b_value is not None and b_col != 1 and k * n <= MAX_REORDERED:
                     lines = [*_by_rows(b_value, k, n, ctype, dtype), f"(void){x_b};", *lines]
