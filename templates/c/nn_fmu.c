@@ -187,7 +187,7 @@ static NNStatus evaluate(NNInstance *instance, const double *start, const double
     int i;
     int extrapolating = 0;
 
-    /* graph_in's entries outside these maps stay 0 from calloc: nothing else writes graph_in */
+    /* graph_in's entries outside these maps stay 0: calloc'd, and the directional derivatives write only these maps */
     for (i = 0; i < NN_N_INPUTS; i++) instance->graph_in[nn_input_graph_index[i]] = knot[i];
     if (NN_INTERPOLATES_INPUTS) {
         for (i = 0; i < NN_N_INPUTS; i++) instance->graph_in[nn_input_start_graph_index[i]] = start[i];
