@@ -214,7 +214,7 @@ def rig(
     drive_from: Optional[Path] = typer.Option(
         None,
         "--drive-from",
-        help="A vehicle result (co-simulation or monolithic reference) whose bushing deflections (bushing rig) or damper strokes (damper dyno: after its sine series) the drive is derived from.",
+        help="A vehicle result (co-simulation or monolithic reference) whose bushing deflections (bushing rig) or damper strokes (damper dyno: after its sine series, run up to the first level at or above --margin times the car's fastest stroke rate [m/s]) the drive is derived from.",
     ),
     element: Optional[list[str]] = typer.Option(
         None,
