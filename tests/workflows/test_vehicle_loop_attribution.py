@@ -93,3 +93,31 @@ def test_a_cause_and_an_offset_the_channels_cannot_place_are_both_named_and_the_
     (offset,) = [e for e in found.named if e.candidate.effect == "sensor_offset"]
     other = ({"damper_force:sensor_offset", "damper_displacement:sensor_offset"} - {offset.candidate.key}).pop()
     assert other in offset.alike  # in its place the other offset tells the same story
+
+
+def test_an_offset_that_only_cancels_a_causes_side_effect_does_not_make_the_story() -> None:
+    """A load-cell offset, and a small model error on the force that the gas force's rate term happens to fit (too
+    small to name the gas force beyond the offset, enough to lower a story's BIC). Physical first, the gas preload
+    needs a stroke-sensor offset to cancel the corner lift it predicts, an offset that explains nothing by itself,
+    or the load-cell offset, beyond which the gas force adds too little: the named load-cell offset stays."""
+    t = np.arange(N) * 1e-3
+    wobble = np.sin(2 * np.pi * 3 * t)
+    residual, candidates, columns = _problem((0.0, 0.4, 0.0), {})
+    residual[:, 1] += 0.008 * wobble  # the network's own error, shaped like the rate term
+    candidates["damper:gas_force"] = Candidate("damper", "gas_force", (OutputTerm("force", None, -100.0, "N"),) * 2)
+    rate = np.zeros((N, 3))
+    rate[:, 1] = wobble
+    columns["damper:gas_force"] = [_columns((-0.8, 0.4, 0.0)), rate]
+    designs = {k: stack(v) for k, v in columns.items()}
+    fold = np.tile(np.arange(N) % 100 < 50, 3)
+    selection = Selection(residual.ravel(order="F"), designs, fold, N, 0.01, 0.005, 3)
+    assert selection.explains_beyond(["damper:gas_force"], "damper_displacement:sensor_offset")  # it cancels the lift
+    assert not selection.explains_beyond([], "damper_displacement:sensor_offset")  # and explains nothing alone
+    assert not selection.explains_beyond(["damper_force:sensor_offset"], "damper:gas_force")
+    assert (
+        selection.bic(["damper:gas_force", "damper_displacement:sensor_offset"])
+        < selection.bic(["damper_force:sensor_offset"]) - 2
+    )
+    named = ["damper_force:sensor_offset"]
+    story, replaced = one_cause(named, candidates, selection, {})
+    assert not replaced and story == named

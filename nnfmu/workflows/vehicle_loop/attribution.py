@@ -22,13 +22,14 @@ One physical cause before several offsets: when sensor offsets were named, stori
 tried against the named one: each physical candidate left out in place of two or more named offsets (the named
 physical candidates and it, then those offsets still significant beyond them, by the same forward rule; it must
 keep fewer offsets), and the physical candidates selected first with every offset considered beyond them (no more
-offsets than named). The stories are compared by
-an information criterion charging each fitted parameter, BIC = n_eff ln(SSE / n_eff) + k ln(n_eff) (SSE of the
-held-out errors of all channels, n_eff the residual's effective sample count, k the fitted coefficients: one per
-offset, two for a gas force); the lower wins, a tie (within `BIC_TIE`) goes to the physical cause: two offsets that
-happen to satisfy the car's static balance give way to the one gas force that explains both, and where the channels
-cannot tell the stories apart (one deflection sensor: preload, load-cell and stroke offsets are three knobs for two
-static numbers) the report says so.
+offsets than named). Every offset such a story keeps must explain the residual by itself as well: an offset that
+explains something only beyond the causes is cancelling their own prediction in a channel that showed nothing.
+The stories are compared by an information criterion charging each fitted parameter, BIC = n_eff ln(SSE / n_eff) + k
+ln(n_eff) (SSE of the held-out errors of all channels, n_eff the residual's effective sample count, k the fitted
+coefficients: one per offset, two for a gas force); the lower wins, a tie (within `BIC_TIE`) goes to the physical cause:
+two offsets that happen to satisfy the car's static balance give way to the one gas force that explains both, and where
+the channels cannot tell the stories apart (one deflection sensor: preload, load-cell and stroke offsets are three knobs
+for two static numbers) the report says so.
 Every named candidate carries `why`: the rivals it beat in its round and by how much, or the comparison of stories.
 """
 
@@ -275,6 +276,12 @@ class Selection:
         tests |= {k: _gain(self.target, base, self.designs[k], self.fold, self.n) for k in remaining if k not in tests}
         return chosen, tests
 
+    def explains_beyond(self, named: list[str], key: str) -> bool:
+        """Whether `key` explains the residual beyond `named` (significant and at least `min_explained`, held out),
+        as forward selection would name it."""
+        explained, p_value, _ = self.gain(named, key)
+        return p_value < self.threshold and explained >= self.min_explained
+
     def bic(self, keys: list[str]) -> float:
         """BIC of the story `keys` (module docstring): held-out SSE of all channels, the residual's effective sample
         count, one charge per fitted coefficient."""
@@ -311,7 +318,12 @@ def one_cause(
 ) -> tuple[list[str], bool]:
     """Stories where physical causes come before offsets, against the named one when it holds offsets (module
     docstring): each physical candidate left out in place of two or more named offsets (fewer offsets), and the
-    physical candidates selected first with the offsets beyond them (no more offsets). The lowest BIC wins, the
+    physical candidates selected first with the offsets beyond them (no more offsets). An offset a story keeps must
+    explain the residual by itself too: one that explains only beyond the causes cancels what they predict in a
+    channel that showed nothing (a gas preload's corner lift cancelled by a stroke-sensor offset, standing in for a
+    load-cell offset), which is evidence for neither. Each cause must explain the residual beyond the rest of its
+    story, as forward selection would name it: else the story is the offsets' with a cause that adds nothing. The
+    lowest BIC wins, the
     physical story winning ties (within `BIC_TIE`); returns the story and whether it changed, the winner's reason in
     `why`."""
     offset = {k for k in selection.designs if candidates[k].effect == SENSOR_OFFSET}
@@ -334,8 +346,12 @@ def one_cause(
     for start, pool, most in stories:
         reasons: dict[str, str] = {}
         story, _ = selection.select(start, pool, reasons)
-        if len([k for k in story if k in offset]) > most:
-            continue
+        kept = [k for k in story if k in offset]
+        if len(kept) > most or not all(selection.explains_beyond([], k) for k in kept):
+            continue  # too many offsets, or one that only cancels what the causes predict
+        causes = [k for k in story if k not in offset]
+        if not all(selection.explains_beyond([k for k in story if k != c], c) for c in causes):
+            continue  # a cause adding nothing beyond the rest of its story
         score = selection.bic(story)
         if score < best_bic:
             best, best_bic, best_reasons = story, score, reasons
