@@ -22,8 +22,9 @@ One physical cause before several offsets: when sensor offsets were named, stori
 tried against the named one: each physical candidate left out in place of two or more named offsets (the named
 physical candidates and it, then those offsets still significant beyond them, by the same forward rule; it must
 keep fewer offsets), and the physical candidates selected first with every offset considered beyond them (no more
-offsets than named). Every offset such a story keeps must explain the residual by itself as well: an offset that
-explains something only beyond the causes is cancelling their own prediction in a channel that showed nothing.
+offsets than named). Every offset such a story keeps must explain the residual by itself as well (an offset that
+explains something only beyond the causes is cancelling their own prediction in a channel that showed nothing), and
+every cause must explain it beyond the rest of its story.
 The stories are compared by an information criterion charging each fitted parameter, BIC = n_eff ln(SSE / n_eff) + k
 ln(n_eff) (SSE of the held-out errors of all channels, n_eff the residual's effective sample count, k the fitted
 coefficients: one per offset, two for a gas force); the lower wins, a tie (within `BIC_TIE`) goes to the physical cause:
@@ -264,7 +265,7 @@ class Selection:
         remaining = [k for k in pool if k not in chosen]
         while remaining and len(chosen) < self.max_named:
             tests |= {k: _gain(self.target, base, self.designs[k], self.fold, self.n) for k in remaining}
-            good = [k for k in remaining if tests[k][1] < self.threshold and tests[k][0] >= self.min_explained]
+            good = [k for k in remaining if self.passes(tests[k])]
             if not good:
                 break
             best = min(good, key=lambda k: _delta_bic(tests[k], self.designs[k].shape[1]))
@@ -276,11 +277,14 @@ class Selection:
         tests |= {k: _gain(self.target, base, self.designs[k], self.fold, self.n) for k in remaining if k not in tests}
         return chosen, tests
 
+    def passes(self, test: tuple[float, ...]) -> bool:
+        """Whether a held-out test (explained, p-value, ...) is significant and explains at least `min_explained`:
+        forward selection's rule for naming a candidate."""
+        return test[1] < self.threshold and test[0] >= self.min_explained
+
     def explains_beyond(self, named: list[str], key: str) -> bool:
-        """Whether `key` explains the residual beyond `named` (significant and at least `min_explained`, held out),
-        as forward selection would name it."""
-        explained, p_value, _ = self.gain(named, key)
-        return p_value < self.threshold and explained >= self.min_explained
+        """Whether `key` explains the residual beyond `named` by forward selection's rule (`passes`)."""
+        return self.passes(self.gain(named, key))
 
     def bic(self, keys: list[str]) -> float:
         """BIC of the story `keys` (module docstring): held-out SSE of all channels, the residual's effective sample
