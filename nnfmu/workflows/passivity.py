@@ -6,10 +6,14 @@ energy back. Coupled to the vehicle's stiff LCA modes (150-250 Hz) such a channe
 grows by itself until the network turns dissipative at larger amplitude, and stays an irregular, chaotic oscillation
 whose history depends on the input's last bit (docs/passivity.md).
 
-`active_cycles` drives each channel of a step graph alone with x = A sin(2 pi f t), v = dx/dt at its sample period
-(the other inputs 0), for amplitudes A a few fractions of its position envelope and the frequencies given, whenever
-the rate amplitude stays inside the rate envelope, and returns those cycles in which the channel gives energy back.
-Torch-free: onnxruntime through `run_step_graph`.
+`active_cycles` drives each channel of a step graph alone with x = x0 + A sin(2 pi f t), v = dx/dt at its sample
+period (the other inputs 0), about the middle x0 of its position envelope (a bushing's working point: a vehicle-derived
+record is deflected under the car's weight), for amplitudes A fractions of the envelope's half-width and frequencies
+from the rig's band up to the vehicle's arm modes, whenever the rate amplitude stays inside the rate envelope, and
+returns those cycles in which the channel gives energy back. Above the rig's band (a drive to 40 Hz) a network is
+fitted to nothing, so its loss angle there is whatever its features extrapolate: the road test's axial force network
+with a 1 ms high-pass in its memory absorbed energy at 10 Hz and gave it back at 200 Hz, where the full vehicle then
+oscillated when exchanged every 0.1 ms. Torch-free: onnxruntime through `run_step_graph`.
 """
 
 from __future__ import annotations
@@ -24,8 +28,10 @@ from nnfmu.component import Component
 from nnfmu.data.rigs import BUSHING_CHANNELS
 from nnfmu.export.step_runner import run_step_graph
 
-ENVELOPE_FRACTIONS = (0.01, 0.02, 0.05)  # sine amplitudes, as fractions of the position envelope's smaller side
-FREQUENCIES = (10.0,)  # [Hz] a network's loop direction at small amplitude hardly changes with frequency
+ENVELOPE_FRACTIONS = (0.01, 0.02, 0.05, 0.1, 0.2)  # sine amplitudes, as fractions of the envelope's half-width
+# [Hz] inside the rig's band, and the front LCA's stiff modes (150-250 Hz) a network only extrapolates to; those above
+# a quarter of the sample rate are left out (too few samples per cycle)
+FREQUENCIES = (10.0, 100.0, 200.0)
 SETTLE = 0.3  # [s] run before the measured cycles (the networks' memory: high-passes up to 0.1 s)
 MEASURED = 0.2  # [s] of whole cycles over which the energy is summed
 STATELESS_PERIOD = 1e-3  # [s] the samples a stateless graph is evaluated at (the master's default step)
@@ -53,16 +59,22 @@ class Cycle:
 
 
 def cycle_energy(
-    graph: onnx.ModelProto, position: str, rate: str, force: str, amplitude: float, frequency: float
+    graph: onnx.ModelProto,
+    position: str,
+    rate: str,
+    force: str,
+    amplitude: float,
+    frequency: float,
+    centre: float = 0.0,
 ) -> Cycle:
-    """Energy [J] `graph`'s output `force` absorbs per cycle of a sine on `position` (`rate` its derivative), the other
-    inputs 0, at its sample period, summed over MEASURED s of whole cycles after SETTLE s (trapezoids of force over
-    the sampled motion)."""
+    """Energy [J] `graph`'s output `force` absorbs per cycle of a sine about `centre` on `position` (`rate` its
+    derivative), the other inputs 0, at its sample period, summed over MEASURED s of whole cycles after SETTLE s
+    (trapezoids of force over the sampled motion)."""
     component = Component.from_onnx(graph)
     period = component.sample_period or STATELESS_PERIOD
     n = round((SETTLE + MEASURED) / period) + 1
     t = np.arange(n) * period
-    x = amplitude * np.sin(2.0 * np.pi * frequency * t)
+    x = centre + amplitude * np.sin(2.0 * np.pi * frequency * t)
     inputs = {port.name: np.zeros(n) for port in component.inputs}
     inputs[position] = x
     inputs[rate] = amplitude * 2.0 * np.pi * frequency * np.cos(2.0 * np.pi * frequency * t)
@@ -71,14 +83,14 @@ def cycle_energy(
     xs, fs = x[kept], f[kept]
     cycles = MEASURED * frequency
     energy = float(np.sum(0.5 * (fs[1:] + fs[:-1]) * np.diff(xs)) / cycles)
-    first = 2.0 * abs(np.mean(fs[:-1] * np.exp(-2j * np.pi * frequency * t[kept][:-1])))  # first-harmonic force
+    first = 2.0 * abs(np.mean((fs[:-1] - fs.mean()) * np.exp(-2j * np.pi * frequency * t[kept][:-1])))  # 1st harmonic
     scale = np.pi * amplitude * first
     return Cycle(force, amplitude, frequency, energy, energy / scale if scale > 0 else 0.0)
 
 
 def active_cycles(graph: onnx.ModelProto, frequencies: Sequence[float] = FREQUENCIES) -> list[Cycle]:
-    """The sine tests (`ENVELOPE_FRACTIONS` of each bushing channel's position envelope x `frequencies`) in which
-    `graph` gives energy back, over every bushing channel it computes from a position and rate with an envelope
+    """The sine tests (about the middle of each bushing channel's position envelope, `ENVELOPE_FRACTIONS` of its
+    half-width x `frequencies`) in which `graph` gives energy back, over every bushing channel it computes from a position and rate with an envelope
     (a stateless graph evaluated every STATELESS_PERIOD; none checked where that needs over MAX_SAMPLES samples)."""
     component = Component.from_onnx(graph)
     period = component.sample_period or STATELESS_PERIOD
@@ -93,14 +105,14 @@ def active_cycles(graph: onnx.ModelProto, frequencies: Sequence[float] = FREQUEN
             continue
         if None in (position.min, position.max, rate.min, rate.max):
             continue
-        reach = min(abs(position.min), abs(position.max))
+        centre, half_width = 0.5 * (position.min + position.max), 0.5 * (position.max - position.min)
         rate_reach = min(abs(rate.min), abs(rate.max))
         for fraction in ENVELOPE_FRACTIONS:
             for frequency in frequencies:
-                amplitude = fraction * reach
+                amplitude = fraction * half_width
                 if amplitude * 2.0 * np.pi * frequency > rate_reach or frequency * period > 0.25:
                     continue  # extrapolation (the envelope check's business), or too few samples per cycle
-                cycle = cycle_energy(graph, channel.position, channel.rate, channel.force, amplitude, frequency)
+                cycle = cycle_energy(graph, channel.position, channel.rate, channel.force, amplitude, frequency, centre)
                 if cycle.loss_sine < ACTIVE_SINE:
                     found.append(cycle)
     return found
