@@ -37,8 +37,8 @@ AUTO_HIDDEN = (3, 5, 7, 9, 12)
 GRU_HIDDEN = (8,)
 # Time constants [s] of the default bushing high-pass memory bank: one per decade, corners (16 and 1.6 Hz) inside the
 # rigs' band (random drive to the controller's 40 Hz). No 1 ms branch: its 160 Hz corner lies above the band, where
-# highpass(x, 1 ms) ~ 1 ms · v is a copy of the velocity, so the record cannot tell the two apart and their split decides
-# the loss angle above the band alone. The road test's axial force network with it gave energy back at the arm's
+# highpass(x, 1 ms) ~ 1 ms · v is a copy of the velocity, so the record cannot tell the two apart and their split
+# decides the loss angle above the band alone. The road test's axial force network with it gave energy back at the arm's
 # ~200 Hz mode (sine about its working point, 15 um: loss angle -10 deg) and the full vehicle stepped at 0.1 ms
 # oscillated there (body accelerations 10-25 % NRMSE); without it the same record gave the same test NRMSE (0.70 %),
 # every 50-300 Hz sine absorbed energy, and the body accelerations came to 1.1-1.4 % (docs/passivity.md).

@@ -90,8 +90,9 @@ def cycle_energy(
 
 def active_cycles(graph: onnx.ModelProto, frequencies: Sequence[float] = FREQUENCIES) -> list[Cycle]:
     """The sine tests (about the middle of each bushing channel's position envelope, `ENVELOPE_FRACTIONS` of its
-    half-width x `frequencies`) in which `graph` gives energy back, over every bushing channel it computes from a position and rate with an envelope
-    (a stateless graph evaluated every STATELESS_PERIOD; none checked where that needs over MAX_SAMPLES samples)."""
+    half-width x `frequencies`) in which `graph` gives energy back, over every bushing channel it computes from a
+    position and rate with an envelope (a stateless graph evaluated every STATELESS_PERIOD; none checked where that
+    needs over MAX_SAMPLES samples)."""
     component = Component.from_onnx(graph)
     period = component.sample_period or STATELESS_PERIOD
     if (SETTLE + MEASURED) / period > MAX_SAMPLES:
