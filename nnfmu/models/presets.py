@@ -41,7 +41,8 @@ GRU_HIDDEN = (8,)
 # decides the loss angle above the band alone. The road test's axial force network with it gave energy back at the arm's
 # ~200 Hz mode (sine about its working point, 15 um: loss angle -10 deg) and the full vehicle stepped at 0.1 ms
 # oscillated there (body accelerations 10-25 % NRMSE); without it the same record gave the same test NRMSE (0.70 %),
-# every 50-300 Hz sine absorbed energy, and the body accelerations came to 1.1-1.4 % (docs/passivity.md).
+# every 100-300 Hz sine about the working point absorbed energy, and the body accelerations came to 1.1-1.4 %
+# (docs/passivity.md). On the lab bench (bench/networks.py) the bushing presets lost 2-17 % without it.
 MEMORY_TAUS = (0.01, 0.1)
 # Default damper-hysteresis velocity differences [samples]: the thesis's time-delay idea as rates, so that at 1 kHz
 # they cover the valve's lag behind the velocity (~1-4 ms, series compliance) and the acceleration (inertia).
