@@ -68,10 +68,16 @@ def largest_correlation(spec: FeatureSpec, record) -> float:
     return float(correlation.max())
 
 
-def test_default_bushing_memory_is_not_collinear_with_the_position():
+@pytest.fixture(scope="module")
+def bushing_lab_record():
+    """10 s of the bushing rig's lab record (seed 0), shared by the memory-bank tests."""
+    return simulate_rig("bushing", RigOptions(seed=0, duration=10.0)).measurement
+
+
+def test_default_bushing_memory_is_not_collinear_with_the_position(bushing_lab_record):
     """The high-pass bank leaves no pair of inputs as collinear as the low-pass bank it replaced (nets that difference
     near-copies need large opposite weights)."""
-    record = simulate_rig("bushing", RigOptions(seed=0, duration=10.0)).measurement
+    record = bushing_lab_record
     for name in ("bushing-axial-force", "bushing-radial-force", "bushing-axial-torque", "bushing-conical-torque"):
         spec = get_preset(name).spec
         position, rate = (t.channel for t in spec.taps)
@@ -80,11 +86,11 @@ def test_default_bushing_memory_is_not_collinear_with_the_position():
         assert largest_correlation(highpass_bank, record) < min(0.9, largest_correlation(lowpass_bank, record))
 
 
-def test_no_bushing_memory_branch_copies_the_rate():
+def test_no_bushing_memory_branch_copies_the_rate(bushing_lab_record):
     """Every high-pass of the bushing memory bank has its corner inside the rig's band: a branch whose corner lies above
     it (1 ms: 160 Hz) is ~tau times the rate there (correlation 0.98 on the lab record), so the record cannot split
     the two and the split sets the network's loss angle above the band (docs/passivity.md)."""
-    record = simulate_rig("bushing", RigOptions(seed=0, duration=10.0)).measurement
+    record = bushing_lab_record
     for name in ("bushing-axial-force", "bushing-radial-force", "bushing-axial-torque", "bushing-conical-torque"):
         spec = get_preset(name).spec
         position, rate = (t.channel for t in spec.taps)

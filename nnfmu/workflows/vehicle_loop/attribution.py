@@ -327,9 +327,8 @@ def one_cause(
     channel that showed nothing (a gas preload's corner lift cancelled by a stroke-sensor offset, standing in for a
     load-cell offset), which is evidence for neither. Each cause must explain the residual beyond the rest of its
     story, as forward selection would name it: else the story is the offsets' with a cause that adds nothing. The
-    lowest BIC wins, the
-    physical story winning ties (within `BIC_TIE`); returns the story and whether it changed, the winner's reason in
-    `why`."""
+    lowest BIC wins, the physical story winning ties (within `BIC_TIE`); returns the story and whether it changed,
+    the winner's reason in `why`."""
     offset = {k for k in selection.designs if candidates[k].effect == SENSOR_OFFSET}
     offsets = [k for k in named if k in offset]
     if not offsets:
