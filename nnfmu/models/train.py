@@ -4,13 +4,17 @@ early stopping on validation, hidden size fixed or chosen by validation error, m
 from __future__ import annotations
 
 import math
+import os
+import threading
 from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field, replace
 from typing import Literal
 
 import numpy as np
 import torch
+from threadpoolctl import threadpool_limits
 
 from nnfmu.data.denoise import lowpass_channels
 from nnfmu.data.errors import DataError
@@ -312,28 +316,33 @@ def _fit_gru(
     return log.finish(reason)
 
 
+def new_network(kind: NetworkKind, n_in: int, hidden: int, seed: int) -> MLP | GRUNet:
+    """A network at its seeded random initialisation (torch's global generator: one thread at a time)."""
+    torch.manual_seed(seed)
+    return GRUNet(n_in, hidden) if kind == "gru" else MLP(n_in, hidden)
+
+
 def fit_network(
+    network: MLP | GRUNet,
     data: PreparedData,
-    kind: NetworkKind,
-    hidden: int,
     settings: TrainSettings,
     seed: int,
     on_epoch: Callable[[int, int], None] = lambda epoch, total: None,
-) -> tuple[MLP | GRUNet, FitHistory]:
-    """One training run from a seeded random initialisation; the network returned holds its best validation epoch."""
-    torch.manual_seed(seed)
-    n_in = data.x.shape[1]
-    network: MLP | GRUNet = GRUNet(n_in, hidden) if kind == "gru" else MLP(n_in, hidden)
-    method = _resolve_optimizer(kind, n_in, hidden, settings.optimizer)
+) -> FitHistory:
+    """One training run of `network` from its initial weights; it ends holding its best validation epoch's."""
+    hidden = network.gru.hidden_size if isinstance(network, GRUNet) else network.hidden.out_features
+    method = _resolve_optimizer(
+        "gru" if isinstance(network, GRUNet) else "mlp", data.x.shape[1], hidden, settings.optimizer
+    )
     run_settings = replace(settings, seed=seed)
     if isinstance(network, GRUNet):
-        return network, _fit_gru(network, data, run_settings, on_epoch)
+        return _fit_gru(network, data, run_settings, on_epoch)
     if method == "lm":
         lm = LMSettings(max_epochs=settings.max_epochs, patience=settings.patience)
         train = _strided(*data.rows("train"), settings.lm_max_samples)
         validation = _strided(*data.rows("validation"), settings.lm_max_samples)
-        return network, fit_lm(network, train, validation, lm, on_epoch)
-    return network, _fit_mlp_gradient(network, data, run_settings, method, on_epoch)
+        return fit_lm(network, train, validation, lm, on_epoch)
+    return _fit_mlp_gradient(network, data, run_settings, method, on_epoch)
 
 
 def predict_scaled(network: MLP | GRUNet, x: torch.Tensor) -> np.ndarray:
@@ -356,9 +365,81 @@ def evaluate(network: MLP | GRUNet, data: PreparedData) -> dict[str, SplitMetric
 def fit_best(
     data: PreparedData, architecture: Architecture, settings: TrainSettings, progress: Progress | None = None
 ) -> tuple[MLP | GRUNet, FitHistory, list[SizeTrial], int]:
-    """Every hidden size x every restart; returns the chosen network, its history, each size's trial and the size."""
-    with _torch_threads(TRAINING_THREADS):
-        return _fit_best(data, architecture, settings, progress)
+    """Every hidden size x every restart; returns the chosen network, its history, each size's trial and the size.
+
+    The runs are independent (each from its own seeded initialisation), so they go side by side on up to one thread
+    per core: numpy's BLAS and element-wise loops and torch's operations release the GIL. The result does not depend
+    on how many run at once.
+    """
+    runs = [(hidden, restart) for hidden in architecture.hidden for restart in range(settings.restarts)]
+    seeds = [restart_seed(settings.seed, hidden, restart) for hidden, restart in runs]
+    networks = [new_network(architecture.kind, data.x.shape[1], h, seed) for (h, _), seed in zip(runs, seeds)]
+    labels = [f"{architecture.kind} hidden {h}, restart {r + 1}/{settings.restarts}" for h, r in runs]
+    tracker = _RunsProgress(labels, progress)
+    with _torch_threads(TRAINING_THREADS), threadpool_limits(limits=1, user_api="blas"):
+        with ThreadPoolExecutor(max_workers=parallel_fits(len(runs)), thread_name_prefix="nnfmu-fit") as pool:
+            futures = [
+                pool.submit(tracker.run, i, fit_network, network, data, settings, seed, tracker.on_epoch(i))
+                for i, (network, seed) in enumerate(zip(networks, seeds))
+            ]
+            try:
+                histories = [future.result() for future in futures]
+            except BaseException:
+                tracker.abort()
+                pool.shutdown(cancel_futures=True)
+                raise
+    trials: list[SizeTrial] = []
+    kept: dict[int, tuple[MLP | GRUNet, FitHistory]] = {}
+    for hidden in architecture.hidden:
+        mine = [i for i, (h, _) in enumerate(runs) if h == hidden]
+        best = min(mine, key=lambda i: histories[i].best_validation_loss)  # the first restart on a tie
+        trials.append(SizeTrial(hidden, histories[best].best_validation_loss, runs[best][1]))
+        kept[hidden] = (networks[best], histories[best])
+    lowest = min(t.validation_mse for t in trials)
+    chosen = next(t.hidden for t in trials if t.validation_mse <= lowest * (1.0 + settings.hidden_tolerance))
+    network, history = kept[chosen]
+    return network, history, trials, chosen
+
+
+def parallel_fits(runs: int) -> int:
+    """Training runs at once: one per core this process may use, at most `runs`."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    return max(1, min(runs, cores))
+
+
+class _RunsProgress:
+    """The share done of runs going side by side, reported as one fraction under a lock; `abort` makes every run
+    stop at its next epoch (a run that failed or was interrupted ends the search)."""
+
+    def __init__(self, labels: list[str], progress: Progress | None) -> None:
+        self._labels = labels
+        self._progress = progress
+        self._done = [0.0] * len(labels)
+        self._lock = threading.Lock()
+        self._aborted = threading.Event()
+
+    def on_epoch(self, run: int) -> Callable[[int, int], None]:
+        def report(epoch: int, total: int) -> None:
+            if self._aborted.is_set():
+                raise KeyboardInterrupt("training stopped: another run of the search failed or was interrupted")
+            if self._progress is not None:
+                with self._lock:
+                    self._done[run] = epoch / total
+                    self._progress(self._labels[run], sum(self._done) / len(self._done))
+
+        return report
+
+    def run(self, run: int, fit: Callable[..., FitHistory], *args: object) -> FitHistory:
+        """`fit(*args)`, then run number `run` reported done."""
+        history = fit(*args)
+        if self._progress is not None:
+            with self._lock:
+                self._done[run] = 1.0
+                self._progress(self._labels[run], sum(self._done) / len(self._done))
+        return history
+
+    def abort(self) -> None:
+        self._aborted.set()
 
 
 @contextmanager
@@ -370,41 +451,6 @@ def _torch_threads(count: int) -> Iterator[None]:
         yield
     finally:
         torch.set_num_threads(before)
-
-
-def _fit_best(
-    data: PreparedData, architecture: Architecture, settings: TrainSettings, progress: Progress | None
-) -> tuple[MLP | GRUNet, FitHistory, list[SizeTrial], int]:
-    """`fit_best`'s search, run under the caller's thread setting."""
-    runs = len(architecture.hidden) * settings.restarts
-    trials: list[SizeTrial] = []
-    kept: dict[int, tuple[MLP | GRUNet, FitHistory]] = {}
-    run = 0
-    for hidden in architecture.hidden:
-        best: tuple[float, int, MLP | GRUNet, FitHistory] | None = None
-        for restart in range(settings.restarts):
-            label = f"{architecture.kind} hidden {hidden}, restart {restart + 1}/{settings.restarts}"
-
-            def on_epoch(epoch: int, total: int, label: str = label, run: int = run) -> None:
-                if progress is not None:
-                    progress(label, (run + epoch / total) / runs)
-
-            network, history = fit_network(
-                data, architecture.kind, hidden, settings, restart_seed(settings.seed, hidden, restart), on_epoch
-            )
-            loss = history.best_validation_loss
-            if best is None or loss < best[0]:
-                best = (loss, restart, network, history)
-            run += 1
-            if progress is not None:
-                progress(label, run / runs)
-        assert best is not None
-        trials.append(SizeTrial(hidden=hidden, validation_mse=best[0], best_restart=best[1]))
-        kept[hidden] = (best[2], best[3])
-    lowest = min(t.validation_mse for t in trials)
-    chosen = next(t.hidden for t in trials if t.validation_mse <= lowest * (1.0 + settings.hidden_tolerance))
-    network, history = kept[chosen]
-    return network, history, trials, chosen
 
 
 def train_model(
