@@ -11,6 +11,7 @@ from torch.func import functional_call, jacrev
 
 from nnfmu.component import Component
 from nnfmu.data.measurement import Measurement
+from nnfmu.models import train as train_module
 from nnfmu.models.features import FeatureSpec, Tap
 from nnfmu.models.lm import LMSettings, fit_lm, mlp_jacobian
 from nnfmu.models.networks import MLP
@@ -139,6 +140,45 @@ def test_training_is_deterministic_for_a_seed():
     assert any(
         not torch.equal(a, b) for a, b in zip(first.model.network.parameters(), other.model.network.parameters())
     )
+
+
+@pytest.mark.parametrize("optimizer", ["lm", "adam"])
+def test_a_search_gives_the_same_network_however_many_runs_go_side_by_side(monkeypatch, optimizer):
+    # Runs are seeded alone and their histories gathered in order: one thread at a time or one per run, the same
+    # weights, the same chosen size and the same per-size validation errors.
+    m = lagged_damper(1500)
+    spec = FeatureSpec(taps=(Tap("velocity", (0, 4)),), output="force")
+    settings = TrainSettings(max_epochs=12, restarts=2, seed=3, optimizer=optimizer)
+    results = []
+    for threads in (1, 6):
+        monkeypatch.setattr(train_module, "parallel_fits", lambda runs, threads=threads: min(runs, threads))
+        results.append(train_model(m, spec, Architecture("mlp", (2, 3, 4)), settings))
+    one, many = results
+    assert [t.validation_mse for t in one.trials] == [t.validation_mse for t in many.trials]
+    assert one.model.settings["hidden"] == many.model.settings["hidden"]
+    for a, b in zip(one.model.network.parameters(), many.model.network.parameters()):
+        assert torch.equal(a, b)
+
+
+def test_an_interrupted_run_stops_the_whole_search(monkeypatch):
+    # A stop in one run (Ctrl-C reaching a worker, a failing fit) ends the search with that error at once: the runs
+    # still going stop at their next epoch and the ones not started never start.
+    started: list[int] = []
+    fit = train_module.fit_network
+
+    def interrupted(network, data, settings, seed, on_epoch):
+        started.append(seed)
+        if len(started) == 1:
+            raise KeyboardInterrupt("stop asked for")
+        return fit(network, data, settings, seed, on_epoch)
+
+    monkeypatch.setattr(train_module, "fit_network", interrupted)
+    monkeypatch.setattr(train_module, "parallel_fits", lambda runs: 1)
+    m = lagged_damper(1500)
+    spec = FeatureSpec(taps=(Tap("velocity", (0, 4)),), output="force")
+    with pytest.raises(KeyboardInterrupt, match="stop asked for"):
+        train_model(m, spec, Architecture("mlp", (2, 3)), TrainSettings(max_epochs=5, restarts=3))
+    assert len(started) == 1
 
 
 def test_delays_capture_the_lag_a_static_map_cannot():
