@@ -393,7 +393,7 @@ def demo(
     seed: int = typer.Option(0, help="Seed of the rig records and the training."),
     quick: bool = typer.Option(
         False,
-        help="Short records and trainings, every stage in about 1-1.5 min on 2 idle cores: checks every stage runs, not results to quote.",
+        help="Short records and trainings, every stage in about half a minute on 2 idle cores: checks every stage runs, not results to quote.",
     ),
     lab_bushings: bool = typer.Option(
         False,

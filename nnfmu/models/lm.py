@@ -4,8 +4,8 @@ Each epoch solves the damped Gauss–Newton system (JᵀJ + mu·I) δ = Jᵀr fo
 J of the residuals r written out by hand for tanh-hidden/linear-output nets (exact, and far faster than autograd per
 sample). mu shrinks tenfold after a step that lowers the training loss and grows tenfold until one does. The
 arithmetic is numpy's float64 on one BLAS thread: JᵀJ as a symmetric rank-k product (half a general product's work),
-the Jacobian written into one buffer reused every epoch, and an accepted trial's hidden activations reused for the
-next Jacobian.
+arrays held sample-last (features x samples) so element-wise work runs along long rows, the Jacobian written into one
+buffer reused every epoch, and an accepted trial's hidden activations reused for the next Jacobian.
 """
 
 from __future__ import annotations
@@ -125,9 +125,7 @@ def _fit(
     params = list(network.parameters())
     perceptron = _Perceptron(train[0].detach().numpy(), network.hidden.weight.shape[0])
     y = train[1].detach().numpy()
-    x_val, y_val = validation[0].detach().numpy(), validation[1].detach().numpy()
-
-    x_val = np.ascontiguousarray(x_val.T)
+    x_val, y_val = np.ascontiguousarray(validation[0].detach().numpy().T), validation[1].detach().numpy()
 
     def validation_mse(weights: np.ndarray) -> float:
         return float(np.mean((perceptron.activations(weights, x_val)[1] - y_val) ** 2))

@@ -81,10 +81,11 @@ MOVING_MASS_BY_RIG: dict[str, float] = {"damper": DamperParams().moving_mass}
 # temperature (there) and nothing else (50: 3.47 %, the same).
 QUICK_EPOCHS = 8
 QUICK_LOOP_EPOCHS = 30
-# What `announcement` promises, as measured (README: measured times): in a fresh clone and venv with the machine's
-# other jobs paused the quick run took 1 min 16 s wall on its first run (bytecode, kernel and caches made), 57 s after.
-QUICK_MINUTES = "1-1.5 min"
-FULL_MINUTES = "10 min"
+# What `announcement` promises, as measured (README: measured times): in a fresh clone with empty caches and the
+# machine otherwise idle, the quick run took 27 s wall both on its first run and after, the full run 4 min 33 s on its
+# first and 4 min 27 s after (2026-11-28, Levenberg-Marquardt in numpy with a search's runs side by side).
+QUICK_MINUTES = "half a minute"
+FULL_MINUTES = "4-5 min"
 PRESETS_BY_RIG: dict[str, tuple[str, ...]] = {
     "damper": ("damper-spline", "damper-hysteresis"),
     "bushing": ("bushing-axial-force", "bushing-radial-force", "bushing-axial-torque", "bushing-conical-torque"),
