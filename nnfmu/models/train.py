@@ -20,7 +20,7 @@ from nnfmu.data.denoise import lowpass_channels
 from nnfmu.data.errors import DataError
 from nnfmu.data.measurement import Measurement
 from nnfmu.errors import SettingsError
-from nnfmu.models.features import FeatureSpec
+from nnfmu.models.features import FeatureSpec, Stop
 from nnfmu.models.lm import LMSettings, fit_lm
 from nnfmu.models.metrics import SplitMetrics, max_abs_weight, network_warning, split_metrics
 from nnfmu.models.networks import MLP, GRUNet
@@ -42,6 +42,15 @@ LM_MAX_WEIGHTS = 400
 # descheduled thread (OpenMP spinning): 40 LM epochs of the 4-12-1 damper net cost 13.4 s CPU and 179 s wall with 2
 # threads at load 22 on 2 cores, 1.4 s CPU and 27 s wall with 1 (measured on branch h/lmtrain, 2026-11-27).
 TRAINING_THREADS = 1
+# A stop operator whose play the training split moves on fewer than this share of its samples is left out of the
+# spec: it only copies its channel less the record's first value (the play never leaves where the record started), so
+# a network using it ties its static force to the record's starting point instead of to where a relaxed start puts
+# it. Road test (28 Nov): stops of 25-400 um in the axial force preset, trained on the vehicle-derived record, whose
+# axial motion slips the 200 and 400 um ones never and the 100 um one on 1.1 % of its samples; relaxed at the rear
+# bushing's working point (7 um from the record's start) the network gave 102 N where the truth gives 116.5 N, and
+# the car's arm settled 6.5 um along its axis in the first 20 ms (front bushing axial force +7.3 N throughout, NRMSE
+# 6.4 %); with the stops that slip (12.5-50 um: 17-61 % of the samples) the offset was gone.
+MIN_STOP_SLIP = 0.02
 # Hidden units per layer at most: component networks have tens; a batch of activations is samples x hidden floats
 MAX_HIDDEN = 1024
 
@@ -150,13 +159,15 @@ class SizeTrial:
 
 @dataclass
 class TrainResult:
-    """The trained model, its splits, each tried hidden size's validation error, the kept fit's history, warnings."""
+    """The trained model, its splits, each tried hidden size's validation error, the kept fit's history, warnings, and
+    notes on what the training changed in the spec (stop operators left out)."""
 
     model: TrainedModel
     splits: Splits
     trials: list[SizeTrial]
     history: FitHistory
     warnings: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
 
 
 def prepare_data(measurement: Measurement, spec: FeatureSpec, fractions: SplitFractions) -> PreparedData:
@@ -453,6 +464,21 @@ def _torch_threads(count: int) -> Iterator[None]:
         torch.set_num_threads(before)
 
 
+def idle_stops(spec: FeatureSpec, data: PreparedData) -> list[tuple[Stop, float]]:
+    """The spec's stop operators whose play moves on fewer than MIN_STOP_SLIP of the training samples, each with the
+    share it moves on (its output sits at ±radius while the play is dragged)."""
+    rows = data.splits.index("train")
+    names = spec.feature_names
+    idle = []
+    for feature in spec.derived:
+        if isinstance(feature, Stop):
+            output = data.features[rows, names.index(feature.name)]
+            share = float(np.mean(np.abs(output) >= feature.radius * (1.0 - 1e-9)))
+            if share < MIN_STOP_SLIP:
+                idle.append((feature, share))
+    return idle
+
+
 def train_model(
     measurement: Measurement,
     spec: FeatureSpec,
@@ -461,8 +487,21 @@ def train_model(
     progress: Progress | None = None,
 ) -> TrainResult:
     """Train a network predicting `spec.output` from `spec`'s features of `measurement` (its inputs low-passed at
-    `settings.input_cutoff`); metrics on every split."""
-    data = prepare_data(lowpass_channels(measurement, spec.channels, settings.input_cutoff), spec, settings.splits)
+    `settings.input_cutoff`), leaving out stop operators the record hardly slips (`idle_stops`); metrics on every
+    split."""
+    inputs = lowpass_channels(measurement, spec.channels, settings.input_cutoff)
+    data = prepare_data(inputs, spec, settings.splits)
+    idle = idle_stops(spec, data)
+    notes = [
+        f"{stop.name} left out: the record's training part moves its play on {share:.1%} of its samples (under "
+        f"{MIN_STOP_SLIP:.0%}), so it would only copy {stop.channel} less its first value and tie the network's "
+        "static force to where the record starts"
+        for stop, share in idle
+    ]
+    if idle:
+        left_out = {stop.name for stop, _ in idle}
+        spec = replace(spec, derived=tuple(d for d in spec.derived if d.name not in left_out))
+        data = prepare_data(inputs, spec, settings.splits)
     network, history, trials, hidden = fit_best(data, architecture, settings, progress)
     metrics = evaluate(network, data)
     train_part = data.splits.index("train")
@@ -491,4 +530,4 @@ def train_model(
             "source": measurement.source,
         },
     )
-    return TrainResult(model=model, splits=data.splits, trials=trials, history=history, warnings=warnings)
+    return TrainResult(model=model, splits=data.splits, trials=trials, history=history, warnings=warnings, notes=notes)

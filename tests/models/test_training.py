@@ -12,7 +12,7 @@ from torch.func import functional_call, jacrev
 from nnfmu.component import Component
 from nnfmu.data.measurement import Measurement
 from nnfmu.models import train as train_module
-from nnfmu.models.features import FeatureSpec, Tap
+from nnfmu.models.features import FeatureSpec, Stop, Tap
 from nnfmu.models.lm import LMSettings, fit_lm, mlp_jacobian
 from nnfmu.models.networks import MLP
 from nnfmu.models.splits import SplitFractions, contiguous_splits
@@ -179,6 +179,29 @@ def test_an_interrupted_run_stops_the_whole_search(monkeypatch):
     with pytest.raises(KeyboardInterrupt, match="stop asked for"):
         train_model(m, spec, Architecture("mlp", (2, 3)), TrainSettings(max_epochs=5, restarts=3))
     assert len(started) == 1
+
+
+def test_a_stop_the_record_never_slips_is_left_out_and_said():
+    # The record moves +-30 um about 100 um: the 5 um stop's play is dragged most of the time, the 80 um one's never
+    # (its output is the position less its first value, and would tie the network to where the record starts).
+    n = 3000
+    t = np.arange(n) * T
+    x = 100e-6 + 30e-6 * np.sin(2 * np.pi * 2.0 * t) * np.sin(2 * np.pi * 0.3 * t)
+    v = np.gradient(x, T)
+    m = Measurement(
+        time=t,
+        channels={"x": x, "v": v, "force": 1e6 * x + 20.0 * np.tanh(v / 1e-4)},
+        units={"x": "m", "v": "m/s", "force": "N"},
+        source="synthetic bushing",
+    )
+    small, large = Stop("x", radius=5e-6), Stop("x", radius=80e-6)
+    spec = FeatureSpec(taps=(Tap("x"), Tap("v")), output="force", derived=(small, large), relaxed_start=True)
+    quick = (Architecture("mlp", (2,)), TrainSettings(max_epochs=5, restarts=1))
+    result = train_model(m, spec, *quick)
+    assert [d.name for d in result.model.spec.derived] == [small.name]
+    assert result.model.network.hidden.in_features == 3
+    assert len(result.notes) == 1 and large.name in result.notes[0] and "0.0%" in result.notes[0]
+    assert train_model(m, FeatureSpec(taps=(Tap("x"), Tap("v")), output="force", derived=(small,)), *quick).notes == []
 
 
 def test_delays_capture_the_lag_a_static_map_cannot():
