@@ -7,7 +7,7 @@ import math
 import os
 import threading
 from collections.abc import Callable, Iterator
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor, as_completed
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field, replace
 from typing import Literal
@@ -389,16 +389,18 @@ def fit_best(
     tracker = _RunsProgress(labels, progress)
     with _torch_threads(TRAINING_THREADS), threadpool_limits(limits=1, user_api="blas"):
         with ThreadPoolExecutor(max_workers=parallel_fits(len(runs)), thread_name_prefix="nnfmu-fit") as pool:
-            futures = [
-                pool.submit(tracker.run, i, fit_network, network, data, settings, seed, tracker.on_epoch(i))
-                for i, (network, seed) in enumerate(zip(networks, seeds))
-            ]
+            futures = {
+                i: pool.submit(tracker.run, i, fit_network, networks[i], data, settings, seeds[i], tracker.on_epoch(i))
+                for i in range(len(runs))
+            }
             try:
-                histories = [future.result() for future in futures]
+                for future in as_completed(futures.values()):
+                    future.result()  # the first run to fail ends the search
             except BaseException:
                 tracker.abort()
                 pool.shutdown(cancel_futures=True)
                 raise
+    histories = [futures[i].result() for i in range(len(runs))]
     trials: list[SizeTrial] = []
     kept: dict[int, tuple[MLP | GRUNet, FitHistory]] = {}
     for hidden in architecture.hidden:
