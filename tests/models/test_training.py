@@ -3,6 +3,9 @@ workflow run that writes a verified ONNX file."""
 
 from __future__ import annotations
 
+import threading
+import time
+
 import numpy as np
 import onnx
 import pytest
@@ -179,6 +182,37 @@ def test_an_interrupted_run_stops_the_whole_search(monkeypatch):
     with pytest.raises(KeyboardInterrupt, match="stop asked for"):
         train_model(m, spec, Architecture("mlp", (2, 3)), TrainSettings(max_epochs=5, restarts=3))
     assert len(started) == 1
+
+
+def test_a_run_failing_while_an_earlier_one_still_runs_ends_the_search(monkeypatch):
+    # Two threads: the first run is still going when the second fails. The search ends with that error without
+    # waiting for the first to finish its fit, and the runs not yet started do not run to the end.
+    started: list[int] = []
+    failed = threading.Event()
+    fit = train_module.fit_network
+
+    def second_fails(network, data, settings, seed, on_epoch):
+        started.append(seed)
+        if len(started) == 2:
+            failed.set()
+            raise RuntimeError("the second run failed")
+        if len(started) == 1:  # a long run: it waits for the failure, then takes 50 ms an epoch
+            failed.wait(timeout=30)
+
+            def slow(epoch: int, total: int) -> None:
+                time.sleep(0.05)
+                on_epoch(epoch, total)
+
+            return fit(network, data, settings, seed, slow)
+        return fit(network, data, settings, seed, on_epoch)
+
+    monkeypatch.setattr(train_module, "fit_network", second_fails)
+    monkeypatch.setattr(train_module, "parallel_fits", lambda runs: 2)
+    m = lagged_damper(1500)
+    spec = FeatureSpec(taps=(Tap("velocity", (0, 4)),), output="force")
+    with pytest.raises(RuntimeError, match="the second run failed"):
+        train_model(m, spec, Architecture("mlp", (2, 3, 4)), TrainSettings(max_epochs=200, patience=200, restarts=2))
+    assert len(started) < 6
 
 
 def test_a_stop_the_record_never_slips_is_left_out_and_said():
