@@ -377,7 +377,7 @@ def train(
             "hidden size by validation MSE (scaled): "
             + ", ".join(f"{trial.hidden}: {trial.validation_mse:.3g}" for trial in outcome.trials)
         )
-    for note in outcome.data_notes:
+    for note in [*outcome.data_notes, *outcome.training_notes]:
         console.print(f"note: {note}")
     for warning in outcome.warnings:
         console.print(Text("warning: ", style="yellow") + Text(warning))

@@ -81,9 +81,9 @@ MOVING_MASS_BY_RIG: dict[str, float] = {"damper": DamperParams().moving_mass}
 # temperature (there) and nothing else (50: 3.47 %, the same).
 QUICK_EPOCHS = 8
 QUICK_LOOP_EPOCHS = 30
-# What `announcement` promises, as measured (README: measured times): in a fresh clone with empty caches and the
-# machine otherwise idle, the quick run took 27 s wall both on its first run and after, the full run 4 min 33 s on its
-# first and 4 min 27 s after (2026-11-28, Levenberg-Marquardt in numpy with a search's runs side by side).
+# What `announcement` promises, as measured (README: measured times) on 2 otherwise idle cores building linux
+# binaries only: the quick run 27-29 s wall, the full run 4 min 27 s - 4 min 45 s (2026-11-28, Levenberg-Marquardt in
+# numpy with a search's runs side by side; the upper figures with the axial force preset's stop operators).
 QUICK_MINUTES = "half a minute"
 FULL_MINUTES = "4-5 min"
 PRESETS_BY_RIG: dict[str, tuple[str, ...]] = {
@@ -420,6 +420,8 @@ def _components(
             log(f"{preset}: training on {lab.name}")
             trained = train_from_file(lab, settings.request(preset, rig), out / "models" / f"{preset}.onnx", progress)
             log(f"{preset}: trained in {trained.seconds:.1f} s; building and replaying its FMU")
+            for note in trained.training_notes:
+                log(f"{preset}: note: {note}")
             for line in trained.warnings:  # the passivity check's too: a quick network may give energy back
                 log(f"{preset}: warning: {line}")
             fmu = build_fmu(trained.path, BuildOptions(out=out / "fmu" / f"{preset}.fmu"))

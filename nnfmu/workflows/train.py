@@ -66,8 +66,8 @@ class TrainRequest:
 @dataclass
 class TrainOutcome:
     """Result of one `train` run: the written model, its metrics per split, export check, input ranking, timing,
-    and the notes the loader left on the data (time base, channel names, derived rates) and the training on the spec
-    (stop operators left out); `feature_choice` the
+    the notes the loader left on the data (time base, channel names, derived rates) and those the training left on
+    the feature spec (stop operators left out); `feature_choice` the
     validation MSE (scaled) of each of the preset's candidate feature sets where it offers several (else empty)."""
 
     path: Path
@@ -79,6 +79,7 @@ class TrainOutcome:
     warnings: list[str]
     seconds: float
     data_notes: list[str]
+    training_notes: list[str] = field(default_factory=list)
     feature_choice: list[tuple[FeatureSpec, float]] = field(default_factory=list)
 
 
@@ -217,7 +218,8 @@ def train_from_file(
         selection=selection,
         warnings=[*mass_warnings, *result.warnings, *passivity_warnings(preset.name, onnx.load(export.path))],
         seconds=time.perf_counter() - started,
-        data_notes=[*measurement.notes.values(), *result.notes],
+        data_notes=list(measurement.notes.values()),
+        training_notes=result.notes,
         feature_choice=feature_choice,
     )
 

@@ -17,7 +17,7 @@ def train_on_record(
     log: Callable[[str], None],
 ) -> dict[str, Path]:
     """Each preset trained on the record `rig` with `request(preset)` into `folder/<preset>.onnx`; its training time
-    [s] goes into `seconds`; returns the ONNX file per preset."""
+    [s] goes into `seconds` and its notes on the feature spec into `log`; returns the ONNX file per preset."""
     models: dict[str, Path] = {}
     for preset in presets:
         trained = train_from_file(rig, request(preset), folder / f"{preset}.onnx")
@@ -27,4 +27,6 @@ def train_on_record(
             f"{preset} on the vehicle-derived record: trained in {trained.seconds:.1f} s, test-split NRMSE "
             f"{trained.metrics['test'].nrmse:.2%}"
         )
+        for note in trained.training_notes:
+            log(f"{preset}: note: {note}")
     return models
