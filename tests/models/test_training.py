@@ -3,6 +3,7 @@ workflow run that writes a verified ONNX file."""
 
 from __future__ import annotations
 
+import re
 import threading
 import time
 
@@ -350,3 +351,31 @@ def test_workflow_compensates_the_dyno_moving_mass_before_training(tmp_path):
     compensated = measured["force"] - inertia
     assert outcome.model.target_scaler.hi == pytest.approx(compensated.max(), rel=0.02)  # fitted to force - m·a
     assert plain.model.target_scaler.hi == pytest.approx(measured["force"].max(), rel=1e-12)
+
+
+def test_the_axial_force_preset_on_a_small_motion_keeps_the_stops_it_slips_and_says_which_it_left_out(tmp_path):
+    """A bushing moved ±60 um about its working point (as in a car): the preset's 100-400 um stops never slip and are
+    left out, named in the outcome's training notes; the 25 and 50 um ones stay in the exported graph."""
+    from nnfmu.data import save_measurement
+    from nnfmu.workflows.train import TrainRequest, train_from_file
+
+    n = 4000
+    t = np.arange(n) * T
+    x = 110e-6 + 60e-6 * np.sin(2 * np.pi * 3.0 * t) * np.sin(2 * np.pi * 0.25 * t)
+    v = np.gradient(x, T)
+    record = Measurement(
+        time=t,
+        channels={"axial_displacement": x, "axial_velocity": v, "axial_force": 1.3e6 * x + 800.0 * v},
+        units={"axial_displacement": "m", "axial_velocity": "m/s", "axial_force": "N"},
+        source="synthetic bushing in a car",
+    )
+    data = save_measurement(record, tmp_path / "bushing.csv")
+    request = TrainRequest(preset="bushing-axial-force", hidden=(3,), restarts=1, max_epochs=5)
+    outcome = train_from_file(data, request, tmp_path / "axial.onnx")
+    kept = [d.name for d in outcome.model.spec.derived if isinstance(d, Stop)]
+    assert kept == ["stop(axial_displacement, radius=2.5e-05)", "stop(axial_displacement, radius=5e-05)"]
+    assert [note.split(" left out")[0] for note in outcome.training_notes] == [
+        f"stop(axial_displacement, radius={r})" for r in ("0.0001", "0.0002", "0.0004")
+    ]
+    metadata = {p.key: p.value for p in onnx.load(outcome.path).metadata_props}["nnfmu.component"]
+    assert sorted(set(re.findall(r"stop\(axial_displacement, radius=[0-9.e-]+\)", metadata))) == sorted(kept)
