@@ -37,9 +37,10 @@ Progress = Callable[[str, float], None]
 
 # Levenberg–Marquardt solves a (weights x weights) system per epoch; above this many weights Adam is cheaper.
 LM_MAX_WEIGHTS = 400
-# torch intra-op threads while fitting: the networks' matrices are small (tens of thousands of rows x tens of
-# columns), so a second thread gains little on idle cores, and on loaded ones every small operation waits for a
-# descheduled thread (OpenMP spinning): 40 LM epochs of the 4-12-1 damper net cost 13.4 s CPU and 179 s wall with 2
+# torch intra-op threads while fitting with Adam, L-BFGS or the GRU (Levenberg-Marquardt runs in numpy, its BLAS held
+# to one thread): the networks' matrices are small (tens of thousands of rows x tens of columns), so a second thread
+# gains little on idle cores, and on loaded ones every small operation waits for a descheduled thread (OpenMP
+# spinning): 40 LM epochs of the 4-12-1 damper net, when LM ran in torch, cost 13.4 s CPU and 179 s wall with 2
 # threads at load 22 on 2 cores, 1.4 s CPU and 27 s wall with 1 (measured on branch h/lmtrain, 2026-11-27).
 TRAINING_THREADS = 1
 # A stop operator whose play the training split moves on fewer than this share of its samples is left out of the
@@ -389,18 +390,18 @@ def fit_best(
     tracker = _RunsProgress(labels, progress)
     with _torch_threads(TRAINING_THREADS), threadpool_limits(limits=1, user_api="blas"):
         with ThreadPoolExecutor(max_workers=parallel_fits(len(runs)), thread_name_prefix="nnfmu-fit") as pool:
-            futures = {
-                i: pool.submit(tracker.run, i, fit_network, networks[i], data, settings, seeds[i], tracker.on_epoch(i))
+            futures = [
+                pool.submit(tracker.run, i, fit_network, networks[i], data, settings, seeds[i], tracker.on_epoch(i))
                 for i in range(len(runs))
-            }
+            ]
             try:
-                for future in as_completed(futures.values()):
+                for future in as_completed(futures):
                     future.result()  # the first run to fail ends the search
             except BaseException:
                 tracker.abort()
                 pool.shutdown(cancel_futures=True)
                 raise
-    histories = [futures[i].result() for i in range(len(runs))]
+    histories = [future.result() for future in futures]
     trials: list[SizeTrial] = []
     kept: dict[int, tuple[MLP | GRUNet, FitHistory]] = {}
     for hidden in architecture.hidden:
