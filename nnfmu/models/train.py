@@ -436,21 +436,21 @@ class _RunsProgress:
         def report(epoch: int, total: int) -> None:
             if self._aborted.is_set():
                 raise KeyboardInterrupt("training stopped: another run of the search failed or was interrupted")
-            if self._progress is not None:
-                with self._lock:
-                    self._done[run] = epoch / total
-                    self._progress(self._labels[run], sum(self._done) / len(self._done))
+            self._report(run, epoch / total)
 
         return report
 
     def run(self, run: int, fit: Callable[..., FitHistory], *args: object) -> FitHistory:
         """`fit(*args)`, then run number `run` reported done."""
         history = fit(*args)
+        self._report(run, 1.0)
+        return history
+
+    def _report(self, run: int, done: float) -> None:
         if self._progress is not None:
             with self._lock:
-                self._done[run] = 1.0
+                self._done[run] = done
                 self._progress(self._labels[run], sum(self._done) / len(self._done))
-        return history
 
     def abort(self) -> None:
         self._aborted.set()
