@@ -374,10 +374,30 @@ def evaluate(network: MLP | GRUNet, data: PreparedData) -> dict[str, SplitMetric
     return {name: split_metrics(output[i], data.target[i], data.target_scaler, largest) for name, i in index.items()}
 
 
+@dataclass
+class Search:
+    """Every run of a hidden-size search: each size's best restart (`trials`), the size chosen, and the runs in the
+    order to fall back on (`ranked`: network, history, hidden size): the chosen network, then the others by their
+    validation error."""
+
+    trials: list[SizeTrial]
+    hidden: int
+    ranked: list[tuple[MLP | GRUNet, FitHistory, int]]
+
+
 def fit_best(
     data: PreparedData, architecture: Architecture, settings: TrainSettings, progress: Progress | None = None
 ) -> tuple[MLP | GRUNet, FitHistory, list[SizeTrial], int]:
-    """Every hidden size x every restart; returns the chosen network, its history, each size's trial and the size.
+    """Every hidden size x every restart; returns the chosen network, its history, each size's trial and the size."""
+    found = search(data, architecture, settings, progress)
+    network, history, hidden = found.ranked[0]
+    return network, history, found.trials, hidden
+
+
+def search(
+    data: PreparedData, architecture: Architecture, settings: TrainSettings, progress: Progress | None = None
+) -> Search:
+    """Every hidden size x every restart, the chosen size the smallest within `hidden_tolerance` of the best.
 
     The runs are independent (each from its own seeded initialisation), so they go side by side on up to one thread
     per core: numpy's BLAS and element-wise loops and torch's operations release the GIL. The result does not depend
@@ -411,8 +431,10 @@ def fit_best(
         kept[hidden] = (networks[best], histories[best])
     lowest = min(t.validation_mse for t in trials)
     chosen = next(t.hidden for t in trials if t.validation_mse <= lowest * (1.0 + settings.hidden_tolerance))
-    network, history = kept[chosen]
-    return network, history, trials, chosen
+    first = next(i for i in range(len(runs)) if networks[i] is kept[chosen][0])
+    others = sorted((i for i in range(len(runs)) if i != first), key=lambda i: histories[i].best_validation_loss)
+    ranked = [(networks[i], histories[i], runs[i][0]) for i in (first, *others)]
+    return Search(trials=trials, hidden=chosen, ranked=ranked)
 
 
 def parallel_fits(runs: int) -> int:
@@ -482,16 +504,22 @@ def idle_stops(spec: FeatureSpec, data: PreparedData) -> list[tuple[Stop, float]
     return idle
 
 
+# Why a trained model is refused (one line per reason; empty: accepted), e.g. a bushing network giving energy back.
+Acceptance = Callable[[TrainedModel], list[str]]
+
+
 def train_model(
     measurement: Measurement,
     spec: FeatureSpec,
     architecture: Architecture = Architecture(),
     settings: TrainSettings = TrainSettings(),
     progress: Progress | None = None,
+    accept: Acceptance | None = None,
 ) -> TrainResult:
     """Train a network predicting `spec.output` from `spec`'s features of `measurement` (its inputs low-passed at
     `settings.input_cutoff`), leaving out stop operators the record hardly slips (`idle_stops`); metrics on every
-    split."""
+    split. With `accept`, a chosen network it refuses gives way to the search's next best it accepts (the notes say
+    which and why); when it accepts none, the chosen one is kept."""
     inputs = lowpass_channels(measurement, spec.channels, settings.input_cutoff)
     data = prepare_data(inputs, spec, settings.splits)
     idle = idle_stops(spec, data)
@@ -505,7 +533,36 @@ def train_model(
         left_out = {stop.name for stop, _ in idle}
         spec = replace(spec, derived=tuple(d for d in spec.derived if d.name not in left_out))
         data = prepare_data(inputs, spec, settings.splits)
-    network, history, trials, hidden = fit_best(data, architecture, settings, progress)
+    found = search(data, architecture, settings, progress)
+    chosen = _trained(measurement, spec, architecture, settings, data, found, *found.ranked[0])
+    if accept is not None and (refused := accept(chosen.model)):
+        for network, history, hidden in found.ranked[1:]:
+            candidate = _trained(measurement, spec, architecture, settings, data, found, network, history, hidden)
+            if not accept(candidate.model):
+                notes.append(
+                    f"the search's choice (hidden {found.hidden}, validation MSE "
+                    f"{chosen.history.best_validation_loss:.3g}) was refused: {refused[0]}; kept the best network "
+                    f"that passes (hidden {hidden}, validation MSE {history.best_validation_loss:.3g})"
+                )
+                candidate.notes = notes
+                return candidate
+        notes.append(f"none of the search's {len(found.ranked)} networks passes: {refused[0]}; kept its choice")
+    chosen.notes = notes
+    return chosen
+
+
+def _trained(
+    measurement: Measurement,
+    spec: FeatureSpec,
+    architecture: Architecture,
+    settings: TrainSettings,
+    data: PreparedData,
+    found: Search,
+    network: MLP | GRUNet,
+    history: FitHistory,
+    hidden: int,
+) -> TrainResult:
+    """One network of the search as a trained model with its metrics on every split and its warnings."""
     metrics = evaluate(network, data)
     train_part = data.splits.index("train")
     warnings = [w for w in [network_warning(network, data.x, data.y)] if w]
@@ -525,7 +582,7 @@ def train_model(
             "hidden": hidden,
             "hidden_candidates": list(architecture.hidden),
             "optimizer_used": _resolve_optimizer(architecture.kind, n_in, hidden, settings.optimizer),
-            "validation_mse_by_hidden": {str(t.hidden): t.validation_mse for t in trials},
+            "validation_mse_by_hidden": {str(t.hidden): t.validation_mse for t in found.trials},
             "best_epoch": history.best_epoch,
             "epochs_run": len(history.train_loss) - 1,
             "stop_reason": history.stop_reason,
@@ -533,4 +590,4 @@ def train_model(
             "source": measurement.source,
         },
     )
-    return TrainResult(model=model, splits=data.splits, trials=trials, history=history, warnings=warnings, notes=notes)
+    return TrainResult(model=model, splits=data.splits, trials=found.trials, history=history, warnings=warnings)

@@ -7,6 +7,7 @@ import os
 import re
 import time
 from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
 from typing import Literal
 
@@ -18,12 +19,22 @@ from nnfmu.data.inertia import compensate_inertia
 from nnfmu.data.moving_mass import estimate_moving_mass
 from nnfmu.errors import SettingsError
 from nnfmu.export import ExportResult, export_onnx
+from nnfmu.export.metadata import build_component
+from nnfmu.export.step_graph import build_step_graph
 from nnfmu.models.features import FeatureSpec
 from nnfmu.models.metrics import SplitMetrics
 from nnfmu.models.networks import GRUNet
 from nnfmu.models.presets import COMMAND, Preset, bind_command, custom_spec, get_preset, recurrent
 from nnfmu.models.selection import SelectionResult, SelectionSettings, select_inputs
-from nnfmu.models.train import Architecture, Progress, SizeTrial, TrainResult, TrainSettings, train_model
+from nnfmu.models.train import (
+    Acceptance,
+    Architecture,
+    Progress,
+    SizeTrial,
+    TrainResult,
+    TrainSettings,
+    train_model,
+)
 from nnfmu.models.trained import TrainedModel
 from nnfmu.workflows.passivity import passivity_warnings
 
@@ -198,7 +209,9 @@ def train_from_file(
         candidates += [
             bind_command(custom_spec(v, request.output), measurement.channels, str(data)) for v in preset.variants
         ]
-    spec, result, feature_choice = _fit_candidates(measurement, candidates, architecture, settings, progress)
+    # A bushing network that gives energy back yields to the search's next best that does not (docs/passivity.md)
+    accept = partial(_passivity_refusals, preset.name)
+    spec, result, feature_choice = _fit_candidates(measurement, candidates, architecture, settings, progress, accept)
     block = max(result.splits.test, key=lambda part: part.stop - part.start)
     test = measurement.slice(block.start, block.stop)
     export = export_onnx(
@@ -224,6 +237,14 @@ def train_from_file(
     )
 
 
+def _passivity_refusals(name: str, model: TrainedModel) -> list[str]:
+    """`passivity_warnings` of a trained model's step graph, built in memory (nothing written): what training asks
+    before it keeps a network."""
+    graph = build_step_graph(model, name, f"{name}: passivity check")
+    build_component(model, name, f"{name}: passivity check").attach_to(graph)
+    return passivity_warnings(name, graph)
+
+
 def network_description(preset: Preset, model: TrainedModel) -> str:
     """What the model is and its real layout, e.g. `damper force with hysteresis ... history: 4-12-1 tanh MLP`: the
     preset's words without the thesis's layout it names (`(thesis 2-5-1 ...)`), which the trained network need not
@@ -243,6 +264,7 @@ def _fit_candidates(
     architecture: Architecture,
     settings: TrainSettings,
     progress: Progress | None,
+    accept: Acceptance,
 ) -> tuple[FeatureSpec, TrainResult, list[tuple[FeatureSpec, float]]]:
     """Train on every candidate feature set; keep the one whose chosen network has the lowest validation MSE (the
     first on a tie). Returns it, its result and each candidate's validation MSE (empty for a single candidate)."""
@@ -250,7 +272,7 @@ def _fit_candidates(
     scores: list[tuple[FeatureSpec, float]] = []
     for i, candidate in enumerate(candidates):
         stage = _stage(progress, i / len(candidates), (i + 1) / len(candidates))
-        result = train_model(measurement, candidate, architecture, settings, stage)
+        result = train_model(measurement, candidate, architecture, settings, stage, accept)
         mse = min(t.validation_mse for t in result.trials)
         scores.append((candidate, mse))
         if best is None or mse < best[0]:

@@ -216,6 +216,28 @@ def test_a_run_failing_while_an_earlier_one_still_runs_ends_the_search(monkeypat
     assert len(started) < 6
 
 
+def test_a_refused_choice_gives_way_to_the_next_best_network_the_check_accepts():
+    # The acceptance check (in `nnfmu train`: passivity) sees the search's choice first; refused, the next run by
+    # validation error is tried, and the notes say what was refused and why. Refusing all keeps the choice.
+    m = lagged_damper(1500)
+    spec = FeatureSpec(taps=(Tap("velocity", (0, 4)),), output="force")
+    architecture, settings = Architecture("mlp", (2, 3)), TrainSettings(max_epochs=12, restarts=2, seed=3)
+    plain = train_model(m, spec, architecture, settings)
+    seen: list[float] = []
+
+    def refuse_the_first(model):
+        seen.append(model.metrics["validation"]["mse_scaled"])
+        return ["too lively"] if len(seen) == 1 else []
+
+    kept = train_model(m, spec, architecture, settings, accept=refuse_the_first)
+    assert len(seen) == 2 and seen[0] == plain.model.metrics["validation"]["mse_scaled"]
+    assert kept.model.metrics["validation"]["mse_scaled"] == seen[1] != seen[0]
+    assert "refused: too lively" in kept.notes[0] and "kept the best network that passes" in kept.notes[0]
+    refused = train_model(m, spec, architecture, settings, accept=lambda model: ["never"])
+    assert refused.model.metrics == plain.model.metrics
+    assert refused.notes == ["none of the search's 4 networks passes: never; kept its choice"]
+
+
 def test_a_stop_the_record_never_slips_is_left_out_and_said():
     # The record moves +-30 um about 100 um: the 5 um stop's play is dragged most of the time, the 80 um one's never
     # (its output is the position less its first value, and would tie the network to where the record starts).
