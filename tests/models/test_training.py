@@ -396,7 +396,8 @@ def test_the_axial_force_preset_on_a_small_motion_keeps_the_stops_it_slips_and_s
     outcome = train_from_file(data, request, tmp_path / "axial.onnx")
     kept = [d.name for d in outcome.model.spec.derived if isinstance(d, Stop)]
     assert kept == ["stop(axial_displacement, radius=2.5e-05)", "stop(axial_displacement, radius=5e-05)"]
-    assert [note.split(" left out")[0] for note in outcome.training_notes] == [
+    # (a five-epoch network may also be refused by the passivity check: that note is not about the stops)
+    assert [note.split(" left out")[0] for note in outcome.training_notes if " left out" in note] == [
         f"stop(axial_displacement, radius={r})" for r in ("0.0001", "0.0002", "0.0004")
     ]
     metadata = {p.key: p.value for p in onnx.load(outcome.path).metadata_props}["nnfmu.component"]
