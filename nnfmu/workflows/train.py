@@ -210,7 +210,7 @@ def train_from_file(
             bind_command(custom_spec(v, request.output), measurement.channels, str(data)) for v in preset.variants
         ]
     # A bushing network that gives energy back yields to the search's next best that does not (docs/passivity.md)
-    accept = partial(_passivity_refusals, preset.name)
+    accept = partial(passivity_refusals, preset.name)
     spec, result, feature_choice = _fit_candidates(measurement, candidates, architecture, settings, progress, accept)
     block = max(result.splits.test, key=lambda part: part.stop - part.start)
     test = measurement.slice(block.start, block.stop)
@@ -237,9 +237,9 @@ def train_from_file(
     )
 
 
-def _passivity_refusals(name: str, model: TrainedModel) -> list[str]:
-    """`passivity_warnings` of a trained model's step graph, built in memory (nothing written): what training asks
-    before it keeps a network."""
+def passivity_refusals(name: str, model: TrainedModel) -> list[str]:
+    """`passivity_warnings` of a trained model's step graph, built in memory (nothing written): what `nnfmu train`
+    asks before it keeps a network (`train_model`'s `accept`)."""
     graph = build_step_graph(model, name, f"{name}: passivity check")
     build_component(model, name, f"{name}: passivity check").attach_to(graph)
     return passivity_warnings(name, graph)
