@@ -1,8 +1,9 @@
 """Benchmark of the network presets on the rig simulators; prints one JSON document.
 
 For every preset: train with the preset's defaults on the simulator's lab record (default effects, realistic
-noise, seed 0), keeping the search's best network that passes the passivity check as `nnfmu train` does, then run the model sample by sample from rest over held-out band-limited random excitation (seed 1)
-and compare it with the true, noise-free output of the same run (and with the noisy measured output).
+noise, seed 0), keeping the search's best network that passes the passivity check as `nnfmu train` does, then run
+the model sample by sample from rest over held-out band-limited random excitation (seed 1) and compare it with the
+true, noise-free output of the same run (and with the noisy measured output).
 damper-spline is trained on the dyno's sine series instead and judged as a dyno report would: its force at each
 test velocity (rebound +v and jounce -v) against the peak force per sine level of a noise-free sine test, the error
 given in % of the largest peak force (target <= 1 %). A dyno report lists the force at peak velocity, where the
