@@ -423,15 +423,15 @@ def search(
                 raise
     histories = [future.result() for future in futures]
     trials: list[SizeTrial] = []
-    kept: dict[int, tuple[MLP | GRUNet, FitHistory]] = {}
+    best_run: dict[int, int] = {}  # hidden size -> its best restart's run
     for hidden in architecture.hidden:
         mine = [i for i, (h, _) in enumerate(runs) if h == hidden]
         best = min(mine, key=lambda i: histories[i].best_validation_loss)  # the first restart on a tie
         trials.append(SizeTrial(hidden, histories[best].best_validation_loss, runs[best][1]))
-        kept[hidden] = (networks[best], histories[best])
+        best_run[hidden] = best
     lowest = min(t.validation_mse for t in trials)
     chosen = next(t.hidden for t in trials if t.validation_mse <= lowest * (1.0 + settings.hidden_tolerance))
-    first = next(i for i in range(len(runs)) if networks[i] is kept[chosen][0])
+    first = best_run[chosen]
     others = sorted((i for i in range(len(runs)) if i != first), key=lambda i: histories[i].best_validation_loss)
     ranked = [(networks[i], histories[i], runs[i][0]) for i in (first, *others)]
     return Search(trials=trials, hidden=chosen, ranked=ranked)
@@ -519,7 +519,7 @@ def train_model(
     """Train a network predicting `spec.output` from `spec`'s features of `measurement` (its inputs low-passed at
     `settings.input_cutoff`), leaving out stop operators the record hardly slips (`idle_stops`); metrics on every
     split. With `accept`, a chosen network it refuses gives way to the search's next best it accepts (the notes say
-    which and why); when it accepts none, the chosen one is kept."""
+    which and why); when it accepts none, the chosen one is kept with the refusals among its warnings."""
     inputs = lowpass_channels(measurement, spec.channels, settings.input_cutoff)
     data = prepare_data(inputs, spec, settings.splits)
     idle = idle_stops(spec, data)
@@ -547,6 +547,7 @@ def train_model(
                 candidate.notes = notes
                 return candidate
         notes.append(f"none of the search's {len(found.ranked)} networks passes: {refused[0]}; kept its choice")
+        chosen.warnings.extend(refused)
     chosen.notes = notes
     return chosen
 

@@ -11,8 +11,6 @@ from functools import partial
 from pathlib import Path
 from typing import Literal
 
-import onnx
-
 from nnfmu.data import Measurement, load_measurement
 from nnfmu.data.errors import DataError
 from nnfmu.data.inertia import compensate_inertia
@@ -229,7 +227,7 @@ def train_from_file(
         export=export,
         trials=result.trials,
         selection=selection,
-        warnings=[*mass_warnings, *result.warnings, *passivity_warnings(preset.name, onnx.load(export.path))],
+        warnings=[*mass_warnings, *result.warnings],
         seconds=time.perf_counter() - started,
         data_notes=list(measurement.notes.values()),
         training_notes=result.notes,

@@ -25,6 +25,8 @@ from nnfmu.models.train import Architecture, TrainSettings, train_model
 from nnfmu.models.trained import data_hash
 
 T = 0.001
+# The lagged damper's force from its velocity now and 4 samples ago: a small spec the search tests train quickly
+LAGGED_VELOCITY = FeatureSpec(taps=(Tap("velocity", (0, 4)),), output="force")
 
 
 def lagged_damper(n: int = 3000, seed: int = 0, lag: float = 0.004) -> Measurement:
@@ -133,7 +135,7 @@ def test_contiguous_splits():
 
 def test_training_is_deterministic_for_a_seed():
     m = lagged_damper(1500)
-    spec = FeatureSpec(taps=(Tap("velocity", (0, 4)),), output="force")
+    spec = LAGGED_VELOCITY
     settings = TrainSettings(max_epochs=15, restarts=2, seed=3)
     first = train_model(m, spec, Architecture("mlp", (3,)), settings)
     second = train_model(m, spec, Architecture("mlp", (3,)), settings)
@@ -151,7 +153,7 @@ def test_a_search_gives_the_same_network_however_many_runs_go_side_by_side(monke
     # Runs are seeded alone and their histories gathered in order: one thread at a time or one per run, the same
     # weights, the same chosen size and the same per-size validation errors.
     m = lagged_damper(1500)
-    spec = FeatureSpec(taps=(Tap("velocity", (0, 4)),), output="force")
+    spec = LAGGED_VELOCITY
     settings = TrainSettings(max_epochs=12, restarts=2, seed=3, optimizer=optimizer)
     results = []
     for threads in (1, 6):
@@ -179,7 +181,7 @@ def test_an_interrupted_run_stops_the_whole_search(monkeypatch):
     monkeypatch.setattr(train_module, "fit_network", interrupted)
     monkeypatch.setattr(train_module, "parallel_fits", lambda runs: 1)
     m = lagged_damper(1500)
-    spec = FeatureSpec(taps=(Tap("velocity", (0, 4)),), output="force")
+    spec = LAGGED_VELOCITY
     with pytest.raises(KeyboardInterrupt, match="stop asked for"):
         train_model(m, spec, Architecture("mlp", (2, 3)), TrainSettings(max_epochs=5, restarts=3))
     assert len(started) == 1
@@ -210,7 +212,7 @@ def test_a_run_failing_while_an_earlier_one_still_runs_ends_the_search(monkeypat
     monkeypatch.setattr(train_module, "fit_network", second_fails)
     monkeypatch.setattr(train_module, "parallel_fits", lambda runs: 2)
     m = lagged_damper(1500)
-    spec = FeatureSpec(taps=(Tap("velocity", (0, 4)),), output="force")
+    spec = LAGGED_VELOCITY
     with pytest.raises(RuntimeError, match="the second run failed"):
         train_model(m, spec, Architecture("mlp", (2, 3, 4)), TrainSettings(max_epochs=200, patience=200, restarts=2))
     assert len(started) < 6
@@ -220,7 +222,7 @@ def test_a_refused_choice_gives_way_to_the_next_best_network_the_check_accepts()
     # The acceptance check (in `nnfmu train`: passivity) sees the search's choice first; refused, the next run by
     # validation error is tried, and the notes say what was refused and why. Refusing all keeps the choice.
     m = lagged_damper(1500)
-    spec = FeatureSpec(taps=(Tap("velocity", (0, 4)),), output="force")
+    spec = LAGGED_VELOCITY
     architecture, settings = Architecture("mlp", (2, 3)), TrainSettings(max_epochs=12, restarts=2, seed=3)
     plain = train_model(m, spec, architecture, settings)
     seen: list[float] = []
@@ -236,6 +238,7 @@ def test_a_refused_choice_gives_way_to_the_next_best_network_the_check_accepts()
     refused = train_model(m, spec, architecture, settings, accept=lambda model: ["never"])
     assert refused.model.metrics == plain.model.metrics
     assert refused.notes == ["none of the search's 4 networks passes: never; kept its choice"]
+    assert refused.warnings[-1] == "never"  # the kept choice carries its refusal
 
 
 def test_a_stop_the_record_never_slips_is_left_out_and_said():
