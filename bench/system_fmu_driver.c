@@ -2,11 +2,13 @@
  * tool (Simulink, a C master) would: per step the drive and its slopes, doStep, every output.
  * Usage: system_fmu_driver LIBRARY GUID RESOURCE_URI N_INPUTS N_OUTPUTS STEPS H DRIVE_FILE OUT_FILE
  * DRIVE_FILE: (STEPS + 1) x N_INPUTS doubles (native byte order), OUT_FILE receives (STEPS + 1) x N_OUTPUTS.
- * Prints the seconds of the stepping loop, and of the whole run from dlopen to the library closed. */
+ * Prints the seconds of the stepping loop, and of the FMU's whole run from dlopen to the library closed; reading the
+ * drive file, touching the output table's pages and writing OUT_FILE are the driver's own work and not timed. */
 #define _POSIX_C_SOURCE 199309L
 #include <dlfcn.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 
 #include "fmi2Functions.h"
@@ -33,7 +35,7 @@ static double seconds(void) {
 
 int main(int argc, char **argv) {
     fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
-    double started = seconds(), looped, h, *u, *y, *slope;
+    double opened, looped, h, *u, *y, *slope;
     long steps, k, i, n_in, n_out;
     fmi2ValueReference *in_vr, *out_vr;
     fmi2Integer *order;
@@ -60,6 +62,8 @@ int main(int argc, char **argv) {
         order[i] = 1;
     }
     for (i = 0; i < n_out; i++) out_vr[i] = (fmi2ValueReference)(n_in + i);
+    memset(y, 0, sizeof(double) * (size_t)((steps + 1) * n_out)); /* the table's pages, before the clock starts */
+    opened = seconds();
     lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
     if (!lib) {
         fprintf(stderr, "%s\n", dlerror());
@@ -97,11 +101,12 @@ int main(int argc, char **argv) {
         fmi2FreeInstance(c);
     }
     dlclose(lib);
+    opened = seconds() - opened;
     file = fopen(argv[9], "wb");
     if (!file || fwrite(y, sizeof(double), (size_t)((steps + 1) * n_out), file) != (size_t)((steps + 1) * n_out))
         return 2;
     fclose(file);
-    printf("%.6f %.6f\n", looped, seconds() - started);
+    printf("%.6f %.6f\n", looped, opened);
     free(u);
     free(y);
     free(slope);
