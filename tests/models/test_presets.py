@@ -8,7 +8,7 @@ import pytest
 from nnfmu.data.rigs import RigOptions, simulate_rig
 from nnfmu.errors import SettingsError
 from nnfmu.models.features import FeatureSpec, Highpass, Lowpass, Tap
-from nnfmu.models.presets import MEMORY_TAUS, PRESETS, custom_spec, get_preset, memory_bank
+from nnfmu.models.presets import FAST_MEMORY_TAUS, MEMORY_TAUS, PRESETS, custom_spec, get_preset, memory_bank
 from nnfmu.models.train import TrainSettings
 from nnfmu.workflows.train import TrainRequest, resolve
 
@@ -34,16 +34,17 @@ def test_thesis_network_sizes(name, output, n_in, hidden):
 
 def test_input_channels_follow_the_rig_names():
     assert get_preset("damper-spline").spec.taps == (Tap("velocity"),)
-    for name, channels in [
-        ("bushing-axial-force", ["axial_displacement", "axial_velocity"]),
-        ("bushing-radial-force", ["radial_displacement", "radial_velocity"]),
-        ("bushing-axial-torque", ["axial_rotation", "axial_angular_velocity"]),
-        ("bushing-conical-torque", ["conical_rotation", "conical_angular_velocity"]),
+    for name, channels, taus in [
+        ("bushing-axial-force", ["axial_displacement", "axial_velocity"], MEMORY_TAUS),
+        ("bushing-radial-force", ["radial_displacement", "radial_velocity"], FAST_MEMORY_TAUS),
+        ("bushing-axial-torque", ["axial_rotation", "axial_angular_velocity"], FAST_MEMORY_TAUS),
+        ("bushing-conical-torque", ["conical_rotation", "conical_angular_velocity"], MEMORY_TAUS),
     ]:
         preset = get_preset(name)
         assert preset.thesis_spec.channels == channels and preset.spec.channels == channels
-        # the default adds the high-pass memory bank of the position channel
-        assert preset.spec.derived[: len(MEMORY_TAUS)] == tuple(Highpass(channels[0], tau=t) for t in MEMORY_TAUS)
+        # the default adds the high-pass memory bank of the position channel (with a 3 ms branch where it gains)
+        assert preset.spec.derived[: len(taus)] == tuple(Highpass(channels[0], tau=t) for t in taus)
+        assert preset.spec.derived[len(taus)].kind != "highpass"
         assert preset.spec.taps == (Tap(channels[0]), Tap(channels[1]))
     assert get_preset("bushing-axial-torque").thesis_spec.taps == (
         Tap("axial_rotation", (0, 1)),
@@ -87,17 +88,24 @@ def test_default_bushing_memory_is_not_collinear_with_the_position(bushing_lab_r
 
 
 def test_no_bushing_memory_branch_copies_the_rate(bushing_lab_record):
-    """Every high-pass of the bushing memory bank has its corner inside the rig's band: a branch whose corner lies above
-    it (1 ms: 160 Hz) is ~tau times the rate there (correlation 0.98 on the lab record), so the record cannot split
-    the two and the split sets the network's loss angle above the band (docs/passivity.md)."""
+    """A high-pass whose corner lies far above the rig's band (1 ms: 160 Hz) is ~tau times the rate there (correlation
+    0.98 on the lab record), so the record cannot split the two and the split sets the network's loss angle above the
+    band (docs/passivity.md): the default bank's corners lie inside the band (correlation under 0.9). The 3 ms branch
+    (53 Hz, 0.92) is only in the radial and torsional presets, where the passivity check refused fewer of the search's
+    runs with it than without (2 of 45 against 14 of 45 radial, none of 27 torsional either way;
+    bench/passivity_runs.py)."""
     record = bushing_lab_record
+    with_fast_branch = {"bushing-radial-force", "bushing-axial-torque"}
     for name in ("bushing-axial-force", "bushing-radial-force", "bushing-axial-torque", "bushing-conical-torque"):
         spec = get_preset(name).spec
         position, rate = (t.channel for t in spec.taps)
-        for branch in (d for d in spec.derived if d.kind == "highpass"):
+        highpasses = [d for d in spec.derived if d.kind == "highpass"]
+        assert [h.tau for h in highpasses] == list(FAST_MEMORY_TAUS if name in with_fast_branch else MEMORY_TAUS)
+        for branch in highpasses:
             pair = FeatureSpec((Tap(position), Tap(rate)), spec.output, (branch,))
             columns = pair.features({c: record[c] for c in pair.channels}, record.sample_period)
-            assert abs(np.corrcoef(columns[:, 1], columns[:, 2])[0, 1]) < 0.9, (name, branch.tau)
+            limit = 0.9 if branch.tau in MEMORY_TAUS else 0.95
+            assert abs(np.corrcoef(columns[:, 1], columns[:, 2])[0, 1]) < limit, (name, branch.tau)
 
 
 def test_default_damper_memory_is_not_collinear_with_the_velocity():
