@@ -25,6 +25,8 @@ from nnfmu.component import Component
 from nnfmu.cosim import DEFAULT_STEP, CosimSettings
 from nnfmu.data import Measurement, save_measurement
 from nnfmu.data.drive_files import write_drive
+from nnfmu.data.rigs import BUSHING_CHANNELS
+from nnfmu.errors import NnfmuError
 from nnfmu.validate import ChannelComparison, Target, ValidationSettings, compare, write_report
 from nnfmu.vehicle import DriveSettings, generate_drive
 from nnfmu.workflows.characterise.linked import LinkedCharacterisation, characterise_models
@@ -222,6 +224,24 @@ def _cosim(system: VirtualSystem, drive: Measurement, run: SystemRun) -> tuple[M
     return result.measurement, time.perf_counter() - started
 
 
+def _unfit_stabilisers(system: str, stabilisers: Mapping[str, tuple[float, float]], error: Exception) -> str:
+    """Why the truth physics' co-simulation can fail where the vehicle's ports carry elements fitted to the networks,
+    with the fitted element of each bushing channel (the same for every bushing)."""
+    elements = []
+    for channel in BUSHING_CHANNELS.values():
+        fitted = next((e for port, e in stabilisers.items() if port.endswith(f"_{channel.force}")), None)
+        if fitted is not None:
+            force, position = channel.force_unit, channel.position_unit
+            elements.append(f"{channel.force} {fitted[0]:.4g} {force}/{position}, {fitted[1]:.4g} {force}.s/{position}")
+    return (
+        f"{system}: the co-simulation with the truth physics as FMUs (the coupling's reference) failed: {error}. "
+        "The vehicle's stabilised bushing ports carry elements fitted to the bushing networks "
+        f"({'; '.join(elements)}); a network far from the bushing's own incremental stiffness and damping (an "
+        "under-trained one, say) makes them unfit, and the loop can then diverge with the truth physics in it too: "
+        "train the bushing networks further and check their test error (docs/known-limits.md)"
+    )
+
+
 def _carried(cache: FmuCache, fmu: Path) -> Component:
     """The component description the network FMU `fmu` carries (read once per road test, `cache`)."""
     component = cache.read(fmu).component
@@ -282,7 +302,12 @@ def _run_system(
     comparisons: dict[str, list[ChannelComparison]] = {}
     excursions: list[Excursion] = []
     for model in ssds:
-        result, seconds[model] = _cosim(systems[model], drive, run)
+        try:
+            result, seconds[model] = _cosim(systems[model], drive, run)
+        except NnfmuError as error:  # the master's CosimError, an FMU's FmiStatusError
+            if model != TRUTH or not stabilisers:
+                raise
+            raise RoadTestError(_unfit_stabilisers(system, stabilisers, error)) from error
         log(f"{system} with {model}: co-simulated {run.duration:g} s at {run.step:g} s in {seconds[model]:.1f} s")
         cosims[model] = _on_reference(result, ref, channels, f"{system} co-simulation with {model}")
         save_measurement(cosims[model], results_dir / f"{model.replace(' ', '-')}.csv")

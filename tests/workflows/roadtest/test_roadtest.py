@@ -11,6 +11,7 @@ import numpy as np
 import onnx
 import pytest
 
+from nnfmu.cosim import CosimError
 from nnfmu.cosim.master import CosimSettings, cosimulate
 from nnfmu.cosim.ssp import open_system
 from nnfmu.data.rigs import RigOptions, write_rig
@@ -31,6 +32,7 @@ from nnfmu.workflows.roadtest import (
     actuator_inputs,
     build_vehicle,
     run_road_test,
+    runs,
     write_system,
 )
 from nnfmu.workflows.roadtest.runs import COMPARED
@@ -209,3 +211,32 @@ def test_missing_models_are_named(tmp_path: Path) -> None:
         run_road_test(tmp_path, {p: tmp_path / "x.onnx" for p in DAMPER_MODELS}, RoadTestSettings(quarter_car=None))
     with pytest.raises(RoadTestError, match="not found"):
         run_road_test(tmp_path, {p: tmp_path / "x.onnx" for p in DAMPER_MODELS}, RoadTestSettings(full_vehicle=None))
+
+
+@pytest.mark.slow
+def test_a_failed_truth_physics_run_names_the_elements_fitted_to_the_networks(
+    trained: dict[str, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The truth physics' co-simulation runs on the stabilisers fitted to the bushing networks: when it fails (an
+    under-trained radial network's fitted damping let it diverge within 0.1 s in CI), the error says so and names the
+    fitted elements, not only the truth FMU that gave up."""
+    real = runs._cosim
+
+    def failing(system, drive, run):
+        if system.fmu(bushing_elements("full-vehicle")[0]).name.startswith("truth"):
+            raise CosimError("bushing_fl_front (truth-bushing.fmu): output 'axial_force' of sample 90 is inf")
+        return real(system, drive, run)
+
+    monkeypatch.setattr(runs, "_cosim", failing)
+    settings = RoadTestSettings(
+        quarter_car=None, full_vehicle=SystemRun(0.3, channels=FULL_VEHICLE_CHANNELS), characterise=None, fade_in=0.1
+    )
+    with pytest.raises(RoadTestError) as caught:
+        run_road_test(tmp_path, trained, settings, log=lambda _: None)
+    message = str(caught.value)
+    assert (
+        message.startswith("full-vehicle: the co-simulation with the truth physics") and "truth-bushing.fmu" in message
+    )
+    for fitted in ("axial_force", "radial_force", "axial_torque", "conical_torque"):
+        assert f"; {fitted} " in f"; {message.split('networks (')[1]}", fitted
+    assert " N/m, " in message and " N.m.s/rad" in message and "train the bushing networks further" in message
