@@ -1,21 +1,21 @@
 """Benchmark of `nnfmu characterise` on trained networks against the rigs' truth physics; the last stdout line is JSON.
 
-The demo's damper-hysteresis and bushing-axial-force networks are trained on the simulated lab records (damper dyno:
-70 s, sine series then random stroke, default effects hysteresis, seal friction, inertia, the dyno's 2 kg moving
-mass taken out as `nnfmu demo` does; bushing rig: 60 s random drive, viscoelastic and friction; seed 0, realistic
-noise), `--quick` as `nnfmu demo --quick` trains them (one start, the thesis's hidden size, 8 Levenberg-Marquardt
-epochs). Each network is then characterised through its FMU at the standard tests, and the same tests are run on
-the truth law directly (10 integration steps per sample; the damper's without its inertia, which the network was
-trained without). Per test point: the deviation from the truth, beside the network's own error (test-split NRMSE and
-RMS error of the output). The damper is also characterised beside its lab record's sine series (`--measured`).
-The bushing's own error is its FMU's RMS force error on a held-out noise-free random record (30 s, seed 1); a
-dynamic-stiffness point is within it when the RMS of its first-harmonic force deviation |K*model − K*truth|·x/√2 is
-at most that; each point says whether it lies inside the network's training envelope, and the quasi-static loop is
-compared with the truth's along the same motion (force at the largest deflections, loop area, RMS difference).
-`--work DIR` keeps the trained network there and reuses it on the next run (the JSON's `network` says how it was
-trained).
+The demo's damper-hysteresis network and its bushing networks (one per channel: axial force, radial force, axial
+torque, conical torque; `--channels` picks) are trained on the simulated lab records (damper dyno: 70 s, sine series
+then random stroke, default effects hysteresis, seal friction, inertia, the dyno's 2 kg moving mass taken out as
+`nnfmu demo` does; bushing rig: 60 s random drive, viscoelastic and friction; seed 0, realistic noise), `--quick` as
+`nnfmu demo --quick` trains them (one start, the thesis's hidden size, 8 Levenberg-Marquardt epochs). Each network is
+then characterised through its FMU at the standard tests, and the same tests are run on the truth law directly (10
+integration steps per sample; the damper's without its inertia, which the network was trained without). Per test
+point: the deviation from the truth, beside the network's own error (test-split NRMSE and RMS error of the output).
+The damper is also characterised beside its lab record's sine series (`--measured`). The bushing's own error is its
+FMU's RMS force error on a held-out noise-free random record (30 s, seed 1); a dynamic-stiffness point is within it
+when the RMS of its first-harmonic force deviation |K*model − K*truth|·x/√2 is at most that; each point says whether
+it lies inside the network's training envelope, and the quasi-static loop is compared with the truth's along the same
+motion (force at the largest deflections, loop area, RMS difference). `--work DIR` keeps the trained network there and
+reuses it on the next run (the JSON's `network` says how it was trained).
 
-Usage: python bench/characterise.py [--quick] [--only damper|bushing] [--work DIR] [--out FILE]
+Usage: python bench/characterise.py [--quick] [--only damper|bushing] [--channels KEY ...] [--work DIR] [--out FILE]
 """
 
 from __future__ import annotations
@@ -33,6 +33,7 @@ import numpy as np
 from nnfmu.data import load_measurement
 from nnfmu.data.inertia import compensate_inertia
 from nnfmu.data.rigs import (
+    BUSHING_CHANNELS,
     DEFAULT_EFFECTS,
     BushingChannelTruth,
     BushingParams,
@@ -51,6 +52,12 @@ from nnfmu.workflows.train import TrainRequest, train_from_file
 
 T = 1e-3
 QUICK_EPOCHS = 8  # nnfmu demo --quick
+BUSHING_PRESETS = {  # the demo's network of each bushing channel
+    "axial": "bushing-axial-force",
+    "radial": "bushing-radial-force",
+    "axial_rotation": "bushing-axial-torque",
+    "conical_rotation": "bushing-conical-torque",
+}
 
 
 def _request(preset: str, quick: bool, moving_mass: float) -> TrainRequest:
@@ -148,7 +155,7 @@ def _own_error(onnx_path: Path, seconds: float = 30.0) -> dict:
     }
 
 
-def _loop_compare(onnx_path: Path, plan, truth: BushingChannelTruth) -> dict:
+def _loop_compare(onnx_path: Path, plan, truth: BushingChannelTruth, channel: BushingChannelPorts) -> dict:
     """The quasi-static loop of the model (through its FMU) against the truth's along the same motion: force at the
     largest deflection each way, the loop's area (energy per cycle) and the RMS force difference over the cycle."""
     from nnfmu.workflows.characterise.bushing import channel_inputs
@@ -168,32 +175,37 @@ def _loop_compare(onnx_path: Path, plan, truth: BushingChannelTruth) -> dict:
     top, bottom = int(np.argmax(x)), int(np.argmin(x))
     return {
         "frequency_Hz": plan.loop.frequency,
-        "amplitude_m": plan.loop.amplitude,
-        "force_at_max_deflection_N": {"model": float(f[top]), "truth": float(f_truth[top])},
-        "force_at_min_deflection_N": {"model": float(f[bottom]), "truth": float(f_truth[bottom])},
+        f"amplitude_{channel.position_unit}": plan.loop.amplitude,
+        f"force_at_max_deflection_{channel.force_unit}": {"model": float(f[top]), "truth": float(f_truth[top])},
+        f"force_at_min_deflection_{channel.force_unit}": {"model": float(f[bottom]), "truth": float(f_truth[bottom])},
         "loop_area_J": {"model": area(f), "truth": area(f_truth)},
-        "rms_difference_N": float(np.sqrt(np.mean((f - f_truth) ** 2))),
+        f"rms_difference_{channel.force_unit}": float(np.sqrt(np.mean((f - f_truth) ** 2))),
     }
 
 
-def bench_bushing(quick: bool, folder: Path) -> dict:
-    onnx_path = folder / "bushing-axial-force.onnx"
+def bench_bushing(quick: bool, folder: Path, key: str) -> dict:
+    """Bushing channel `key` (a `BUSHING_CHANNELS` key): its preset trained on the lab record, characterised through
+    its FMU and compared with the channel's truth law point by point, beside the network's own error."""
+    preset = BUSHING_PRESETS[key]
+    onnx_path = folder / f"{preset}.onnx"
     if onnx_path.is_file():  # a kept work folder: the network trained before (its error recorded beside it)
-        own = json.loads((folder / "bushing-axial-force.json").read_text(encoding="utf-8"))
+        own = json.loads((folder / f"{preset}.json").read_text(encoding="utf-8"))
     else:
-        _data, onnx_path, own = _train("bushing", "bushing-axial-force", quick, folder)
-        (folder / "bushing-axial-force.json").write_text(json.dumps(own), encoding="utf-8")
+        _data, onnx_path, own = _train("bushing", preset, quick, folder)
+        (folder / f"{preset}.json").write_text(json.dumps(own), encoding="utf-8")
     own = own | _own_error(onnx_path)
     settings = CharacteriseSettings()
-    characterise(onnx_path, folder / "bushing_report", settings=settings, log=lambda _: None)
-    rows = _csv(folder / "bushing_report" / "dynamic_stiffness.csv")
-    channel = BushingChannelPorts("axial", "axial_displacement", "axial_velocity", "axial_force", "m", "N")
+    characterise(onnx_path, folder / f"{preset}_report", settings=settings, log=lambda _: None)
+    rows = _csv(folder / f"{preset}_report" / "dynamic_stiffness.csv")
+    spec = BUSHING_CHANNELS[key]
+    channel = BushingChannelPorts(key, spec.position, spec.rate, spec.force, spec.position_unit, spec.force_unit)
     plan = channel_plan(channel, settings.bushing)
-    law = BushingChannelTruth(BushingParams().axial)
-    truth = read_channel("axial", bushing_truth_runs(law, plan.stiffness, T))
+    law = BushingChannelTruth(getattr(BushingParams(), key))
+    truth = read_channel(key, bushing_truth_runs(law, plan.stiffness, T))
+    position, force, stiffness = channel.position_unit, channel.force_unit, channel.stiffness_unit
     points = []
     for row, p in zip(rows, truth, strict=True):
-        model_k = row["dynamic_stiffness [N/m]"]
+        model_k = row[f"dynamic_stiffness [{stiffness}]"]
         k_model = model_k * np.exp(1j * np.radians(row["loss_angle [deg]"]))
         k_truth = p.dynamic_stiffness * np.exp(1j * np.radians(p.loss_angle))
         # the first-harmonic force the model gets wrong at this point, as an RMS beside the network's own RMS error
@@ -201,24 +213,26 @@ def bench_bushing(quick: bool, folder: Path) -> dict:
         points.append(
             {
                 "frequency_Hz": p.frequency,
-                "amplitude_m": p.amplitude,
-                "dynamic_stiffness_N/m": {"model": model_k, "truth": p.dynamic_stiffness},
+                f"amplitude_{position}": p.amplitude,
+                f"dynamic_stiffness_{stiffness}": {"model": model_k, "truth": p.dynamic_stiffness},
                 "loss_angle_deg": {"model": row["loss_angle [deg]"], "truth": p.loss_angle},
                 "stiffness_deviation_%": 100 * (model_k - p.dynamic_stiffness) / p.dynamic_stiffness,
                 "loss_angle_deviation_deg": row["loss_angle [deg]"] - p.loss_angle,
-                "first_harmonic_force_deviation_rms_N": harmonic_rms,
+                f"first_harmonic_force_deviation_rms_{force}": harmonic_rms,
                 "deviation_over_own_error": harmonic_rms / own["heldout_rms_error"],
                 "within_own_error": harmonic_rms <= own["heldout_rms_error"],
                 "training_envelope": row["training_envelope"],
             }
         )
+    inside = [p for p in points if p["training_envelope"] == "inside"]
     return {
         "network": own,
-        "channel": "axial",
+        "channel": key,
         "own_error_rule": "a point is within the network's own error when the RMS of its first-harmonic force "
         "deviation |K*model - K*truth|·x/√2 is at most the network's RMS error on the held-out noise-free record",
+        "inside_envelope_within_own_error": [sum(p["within_own_error"] for p in inside), len(inside)],
         "points_vs_truth": points,
-        "quasi_static_loop": _loop_compare(onnx_path, plan, law),
+        "quasi_static_loop": _loop_compare(onnx_path, plan, law, channel),
     }
 
 
@@ -242,13 +256,18 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--out", type=Path, help="also write the JSON document here")
     parser.add_argument("--only", choices=("damper", "bushing"), help="characterise one component only")
     parser.add_argument("--work", type=Path, help="keep the work folder here; a network trained there is reused")
+    parser.add_argument(
+        "--channels", nargs="+", choices=tuple(BUSHING_PRESETS), default=list(BUSHING_PRESETS), help="bushing channels"
+    )
     args = parser.parse_args(argv)
     started = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="nnfmu_characterise_") as tmp:
         work = args.work or Path(tmp)
         work.mkdir(parents=True, exist_ok=True)
         damper = bench_damper(args.quick, work) if args.only != "bushing" else None
-        bushing = bench_bushing(args.quick, work) if args.only != "damper" else None
+        bushing = (
+            {key: bench_bushing(args.quick, work, key) for key in args.channels} if args.only != "damper" else None
+        )
     document = {
         "benchmark": "nnfmu characterise on trained networks against the rigs' truth physics",
         "machine": {"python": platform.python_version(), "platform": platform.platform()},
