@@ -91,9 +91,9 @@ def test_no_bushing_memory_branch_copies_the_rate(bushing_lab_record):
     """A high-pass whose corner lies far above the rig's band (1 ms: 160 Hz) is ~tau times the rate there (correlation
     0.98 on the lab record), so the record cannot split the two and the split sets the network's loss angle above the
     band (docs/passivity.md): the default bank's corners lie inside the band (correlation under 0.9). The 3 ms branch
-    (53 Hz, 0.92) is only in the radial and torsional presets, where the passivity check refused fewer of the search's
-    runs with it than without (2 of 45 against 14 of 45 radial, none of 27 torsional either way;
-    bench/passivity_runs.py)."""
+    (53 Hz, 0.92) is only in the radial and torsional presets, where the passivity check refused no more of the
+    search's runs with it than without (radial with the stops to 40 um: 2 of 45 against 14; to 640 um: 6 of 45 either
+    way; torsional: none of 27 either way; bench/passivity_runs.py)."""
     record = bushing_lab_record
     with_fast_branch = {"bushing-radial-force", "bushing-axial-torque"}
     for name in ("bushing-axial-force", "bushing-radial-force", "bushing-axial-torque", "bushing-conical-torque"):
