@@ -48,11 +48,12 @@ GRU_HIDDEN = (8,)
 MEMORY_TAUS = (0.01, 0.1)
 # The radial and torsional (axial torque) presets' bank: a 3 ms branch besides (corner 53 Hz, next to the rubber's
 # fastest relaxation, 2 ms in the rigs' truth). On the lab bench (bench/networks.py) it brings their held-out error from
-# 1.56 to 1.42 % and 1.45 to 1.39 %; on the road test's vehicle-derived record the test-split NRMSE from 1.37 to 1.38 %
-# and 1.19 to 1.16 %, every network passing the passivity check on both records, and the road test's channels within 0.1
-# points (front radial deflection 4.32 -> 4.23 %, axial torque 0.54 -> 0.50 %, radial force 4.39 -> 4.44 %). Not taken
-# for the axial force (energy given back at the arm's 200-250 Hz mode, largest weight 90) nor the conical torque (lab
-# 2.24 -> 2.04 %, but the road test's conical torque 3.16 -> 3.30 % and radial force to 4.59 %).
+# 1.56 to 1.42 % (the radial stops then ending at 40 um; with RADIAL_STOP_RADII 1.26 to 1.21 %) and 1.45 to 1.39 %; on
+# the road test's vehicle-derived record the test-split NRMSE from 1.37 to 1.38 % and 1.19 to 1.16 %, every network
+# passing the passivity check on both records, and the road test's channels within 0.1 points (front radial deflection
+# 4.32 -> 4.23 %, axial torque 0.54 -> 0.50 %, radial force 4.39 -> 4.44 %). Not taken for the axial force (energy given
+# back at the arm's 200-250 Hz mode, largest weight 90) nor the conical torque (lab 2.24 -> 2.04 %, but the road test's
+# conical torque 3.16 -> 3.30 % and radial force to 4.59 %).
 FAST_MEMORY_TAUS = (0.003, *MEMORY_TAUS)
 # Default damper-hysteresis velocity differences [samples]: the thesis's time-delay idea as rates, so that at 1 kHz
 # they cover the valve's lag behind the velocity (~1-4 ms, series compliance) and the acceleration (inertia).
