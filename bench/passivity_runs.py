@@ -64,13 +64,11 @@ def main() -> None:
                 row = {"preset": name, "variant": variant, "seed": seed} | checked_runs(name, features, lab, seed)
                 print(json.dumps(row), file=sys.stderr, flush=True)
                 rows.append(row)
-    totals = {
-        f"{r['preset']}/{r['variant']}": [
-            sum(x["refused"] for x in rows if (x["preset"], x["variant"]) == (r["preset"], r["variant"])),
-            sum(x["runs"] for x in rows if (x["preset"], x["variant"]) == (r["preset"], r["variant"])),
-        ]
-        for r in rows
-    }
+    totals: dict[str, list[int]] = {}
+    for row in rows:
+        refused_and_runs = totals.setdefault(f"{row['preset']}/{row['variant']}", [0, 0])
+        refused_and_runs[0] += row["refused"]
+        refused_and_runs[1] += row["runs"]
     print(json.dumps({"record": "bushing rig, lab drive, seed 0", "rows": rows, "refused_of_runs": totals}))
 
 
