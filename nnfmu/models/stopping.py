@@ -3,7 +3,6 @@ epochs without improvement (the thesis's guard against over-fitting)."""
 
 from __future__ import annotations
 
-import copy
 import math
 from dataclasses import dataclass
 
@@ -31,7 +30,7 @@ class EarlyStopping:
             self.best_loss = validation_loss
             self.best_epoch = epoch
             self.epochs_without_improvement = 0
-            self._best_state = copy.deepcopy(network.state_dict())
+            self._best_state = {name: value.detach().clone() for name, value in network.state_dict().items()}
             return False
         self.epochs_without_improvement += 1
         return self.epochs_without_improvement >= self.patience

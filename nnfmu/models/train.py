@@ -401,7 +401,8 @@ def search(
 
     The runs are independent (each from its own seeded initialisation), so they go side by side on up to one thread
     per core: numpy's BLAS and element-wise loops and torch's operations release the GIL. The result does not depend
-    on how many run at once.
+    on how many run at once, nor on their order: the largest networks (the longest runs) start first, so no core ends
+    the search alone with one.
     """
     runs = [(hidden, restart) for hidden in architecture.hidden for restart in range(settings.restarts)]
     seeds = [restart_seed(settings.seed, hidden, restart) for hidden, restart in runs]
@@ -410,10 +411,12 @@ def search(
     tracker = _RunsProgress(labels, progress)
     with _torch_threads(TRAINING_THREADS), threadpool_limits(limits=1, user_api="blas"):
         with ThreadPoolExecutor(max_workers=parallel_fits(len(runs)), thread_name_prefix="nnfmu-fit") as pool:
-            futures = [
-                pool.submit(tracker.run, i, fit_network, networks[i], data, settings, seeds[i], tracker.on_epoch(i))
-                for i in range(len(runs))
-            ]
+            longest_first = sorted(range(len(runs)), key=lambda i: -runs[i][0])
+            submitted = {
+                i: pool.submit(tracker.run, i, fit_network, networks[i], data, settings, seeds[i], tracker.on_epoch(i))
+                for i in longest_first
+            }
+            futures = [submitted[i] for i in range(len(runs))]
             try:
                 for future in as_completed(futures):
                     future.result()  # the first run to fail ends the search

@@ -166,6 +166,21 @@ def test_a_search_gives_the_same_network_however_many_runs_go_side_by_side(monke
         assert torch.equal(a, b)
 
 
+def test_the_largest_networks_start_first(monkeypatch):
+    # The longest runs go first, so that no core is left finishing one alone at the end of the search.
+    started: list[int] = []
+    fit = train_module.fit_network
+
+    def recorded(network, data, settings, seed, on_epoch):
+        started.append(network.hidden.out_features)
+        return fit(network, data, settings, seed, on_epoch)
+
+    monkeypatch.setattr(train_module, "fit_network", recorded)
+    monkeypatch.setattr(train_module, "parallel_fits", lambda runs: 1)
+    train_model(lagged_damper(1500), LAGGED_VELOCITY, Architecture("mlp", (2, 4, 3)), TrainSettings(max_epochs=2))
+    assert started == [4, 4, 4, 3, 3, 3, 2, 2, 2]
+
+
 def test_an_interrupted_run_stops_the_whole_search(monkeypatch):
     # A stop in one run (Ctrl-C reaching a worker, a failing fit) ends the search with that error at once: the runs
     # still going stop at their next epoch and the ones not started never start.
