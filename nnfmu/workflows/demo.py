@@ -82,9 +82,10 @@ MOVING_MASS_BY_RIG: dict[str, float] = {"damper": DamperParams().moving_mass}
 QUICK_EPOCHS = 8
 QUICK_LOOP_EPOCHS = 30
 # What `announcement` promises, as measured (README: measured times) on 2 otherwise idle cores building linux
-# binaries only: the quick run 27-31 s wall, the full run 4 min 27 s - 5 min 04 s (2026-11-28, Levenberg-Marquardt in
+# binaries only: the quick run 27-35 s wall, the full run 4 min 27 s - 5 min 04 s (2026-11-28, Levenberg-Marquardt in
 # numpy with a search's runs side by side; the upper figures with the axial force preset's stop operators, the
-# passivity pick, the radial and axial torque presets' 3 ms memory branch and the wider radial and conical stops).
+# passivity pick, the radial and axial torque presets' 3 ms memory branch and the wider radial and conical stops;
+# 4 min 48 s and 4 min 51 s once the search started its largest networks first).
 QUICK_MINUTES = "half a minute"
 FULL_MINUTES = "4-5 min"
 PRESETS_BY_RIG: dict[str, tuple[str, ...]] = {
