@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import onnx
 import pytest
+from plain_master import plain_replay, port_names  # tests/cosim, put on the path by this folder's conftest
 from typer.testing import CliRunner
 
 from nnfmu.cli import app
@@ -33,8 +34,9 @@ from nnfmu.workflows.characterise import (
     characterise,
 )
 from nnfmu.workflows.characterise.bushing import read_channel
-from nnfmu.workflows.characterise.damper import damper_tests, read_damper
-from nnfmu.workflows.characterise.signals import SineTest
+from nnfmu.workflows.characterise.damper import damper_inputs, damper_tests, read_damper
+from nnfmu.workflows.characterise.model import TestRun, model_under_test
+from nnfmu.workflows.characterise.signals import SineTest, sine_motion
 from nnfmu.workflows.characterise.truth import bushing_truth_runs, damper_truth_runs
 from nnfmu.workflows.roadtest.truth_graphs import bushing_truth_graph, damper_truth_graph
 
@@ -115,6 +117,31 @@ def test_the_truth_damper_fmu_reproduces_the_truth_law(models: dict[str, Path], 
     assert float(gas["gas_force [N]"]) == pytest.approx(truth.gas_friction[None].gas_force, abs=0.1)
     assert float(gas["friction [N]"]) == pytest.approx(truth.gas_friction[None].friction, abs=0.1)
     assert len(_rows(tmp_path / "out" / "work_diagrams.csv")) > 100
+
+
+def test_the_characteristic_is_what_a_plain_fmpy_loop_gets_from_the_fmu(models: dict[str, Path], tmp_path: Path):
+    """The characteristic's forces equal those read from the same sines replayed by fmpy alone at the FMU's defaults
+    (tests/cosim/plain_master.py: no nnfmu code in the loop), so the report states what a user's master gets."""
+    characterise(models["damper"], tmp_path / "out", settings=CharacteriseSettings(damper=DAMPER), log=lambda _: None)
+    rows = _rows(tmp_path / "out" / "characteristic.csv")
+    runs = []
+    with model_under_test(models["damper"]) as model:
+        inputs = damper_inputs(model.kind, 293.15)
+    assert set(inputs) == set(port_names(models["damper"], "input"))
+    for test in damper_tests(DAMPER, [None]):
+        motion = sine_motion(test, T)
+        signals = {"position": motion.position, "rate": motion.rate}
+        force = plain_replay(
+            models["damper"], {name: signals[signal] for name, (signal, _) in inputs.items()}, T, "force"
+        )
+        runs.append(TestRun(test, motion, force))
+    plain = read_damper(runs)
+    for row, point in zip(rows, plain.points, strict=True):
+        assert float(row["rebound_force [N]"]) == pytest.approx(point.rebound_force, rel=1e-9)
+        assert float(row["jounce_force [N]"]) == pytest.approx(point.jounce_force, rel=1e-9)
+    (gas,) = _rows(tmp_path / "out" / "gas_friction.csv")
+    assert float(gas["gas_force [N]"]) == pytest.approx(plain.gas_friction[None].gas_force, rel=1e-9, abs=1e-9)
+    assert float(gas["friction [N]"]) == pytest.approx(plain.gas_friction[None].friction, rel=1e-9, abs=1e-9)
 
 
 def test_the_truth_bushing_fmu_reproduces_the_truth_law(models: dict[str, Path], tmp_path: Path) -> None:
