@@ -33,7 +33,7 @@ from nnfmu.workflows.characterise import (
     DamperTestSettings,
     characterise,
 )
-from nnfmu.workflows.characterise.bushing import read_channel
+from nnfmu.workflows.characterise.bushing import channel_inputs, channel_plan, read_channel
 from nnfmu.workflows.characterise.damper import damper_inputs, damper_tests, read_damper
 from nnfmu.workflows.characterise.model import TestRun, model_under_test
 from nnfmu.workflows.characterise.signals import SineTest, sine_motion
@@ -160,6 +160,27 @@ def test_the_truth_bushing_fmu_reproduces_the_truth_law(models: dict[str, Path],
     assert [float(r["amplitude [m]"]) for r in rows] == pytest.approx([t.amplitude for t in tests], rel=1e-9)
     # the progressive spring (k3 x^3) at the full vehicle range stiffens the channel by a fifth at 2 Hz
     assert float(rows[2]["dynamic_stiffness [N/m]"]) > 1.15 * float(rows[0]["dynamic_stiffness [N/m]"])
+
+
+def test_the_dynamic_stiffness_is_what_a_plain_fmpy_loop_gets_from_the_fmu(models: dict[str, Path], tmp_path: Path):
+    """|K*| and loss angle equal those read from the same sines replayed by fmpy alone at the FMU's defaults."""
+    settings = BushingTestSettings(frequencies=(2.0, 20.0), amplitude_fractions=(0.2, 1.0), settle_cycles=2)
+    characterise(models["bushing"], tmp_path / "out", settings=CharacteriseSettings(bushing=settings), log=print)
+    rows = _rows(tmp_path / "out" / "dynamic_stiffness.csv")
+    with model_under_test(models["bushing"]) as model:
+        (channel,) = model.kind.channels
+        inputs = channel_inputs(model.kind, channel)
+        plan = channel_plan(channel, settings)
+    assert set(inputs) == set(port_names(models["bushing"], "input"))
+    runs = []
+    for test in plan.stiffness:
+        motion = sine_motion(test, T)
+        signals = {"position": motion.position, "rate": motion.rate, "zero": np.zeros_like(motion.time)}
+        drive = {name: signals[signal] for name, (signal, _) in inputs.items()}
+        runs.append(TestRun(test, motion, plain_replay(models["bushing"], drive, T, channel.force)))
+    for row, point in zip(rows, read_channel(channel.key, runs), strict=True):
+        assert float(row["dynamic_stiffness [N/m]"]) == pytest.approx(point.dynamic_stiffness, rel=1e-9)
+        assert float(row["loss_angle [deg]"]) == pytest.approx(point.loss_angle, abs=1e-8)
 
 
 def _dyno_record(path: Path, effects: tuple[str, ...]) -> Path:
