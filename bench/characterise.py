@@ -101,7 +101,7 @@ def bench_damper(quick: bool, folder: Path) -> dict:
     effects = tuple(e for e in DEFAULT_EFFECTS["damper"] if e != "inertia")
     tests = damper_tests(settings.damper, [None])
     truth = read_damper(damper_truth_runs(DamperTruth(DamperParams(), effects), tests, T))
-    own = own | _damper_own_error(onnx_path, mass)
+    own = own | _own_error(onnx_path, "damper", mass)
     points = []
     for row, p in zip(rows, truth.points, strict=True):
         rebound = row["rebound_force [N]"] - p.rebound_force
@@ -144,51 +144,32 @@ def bench_damper(quick: bool, folder: Path) -> dict:
     }
 
 
-def _damper_own_error(onnx_path: Path, moving_mass: float, seconds: float = 30.0) -> dict:
-    """The damper network's own error on a held-out noise-free random dyno record (seed 1, the dyno's "random"
-    drive), through its FMU: the RMS of its force less the record's force with the fixture's m·a taken out, as in
-    training."""
+def _own_error(onnx_path: Path, kind: str, moving_mass: float = 0.0, seconds: float = 30.0) -> dict:
+    """The network's own error on a held-out noise-free random record of rig `kind` (seed 1, the rig's "random" drive
+    inside the lab envelope), through its FMU as the characterisation runs it: the RMS of its force less the record's
+    (a damper's with the fixture's `moving_mass` times acceleration taken out, as in training), beside the record
+    force's RMS."""
     from nnfmu.cosim.replay import replay_fmu
     from nnfmu.workflows.characterise.model import model_under_test
 
     with tempfile.TemporaryDirectory(prefix="nnfmu_heldout_") as tmp:
         options = RigOptions(seed=1, duration=seconds, noise=0.0, excitation="random")
-        data, _truth = write_rig("damper", Path(tmp) / "heldout.csv", options)
-        measured = compensate_inertia(load_measurement(data), moving_mass, "force")
+        data, _truth = write_rig(kind, Path(tmp) / "heldout.csv", options)
+        measured = load_measurement(data)
     with model_under_test(onnx_path) as model:
-        prediction = np.asarray(replay_fmu(model.fmu, measured)["force"])
-    target = np.asarray(measured["force"])
+        output = "force" if kind == "damper" else model.kind.channels[0].force
+        prediction = np.asarray(replay_fmu(model.fmu, measured)[output])
+    if moving_mass:
+        measured = compensate_inertia(measured, moving_mass, output)
+    target = np.asarray(measured[output])
     rms = float(np.sqrt(np.mean((prediction - target) ** 2)))
     spread = float(np.sqrt(np.mean((target - target.mean()) ** 2)))
+    taken_out = f", {moving_mass:g} kg m·a taken out" if moving_mass else ""
     return {
-        "heldout_clean_record": f"damper dyno, random drive, {seconds:g} s, seed 1, no sensor noise, "
-        f"{moving_mass:g} kg m·a taken out",
+        "heldout_clean_record": f"{kind} rig, random drive, {seconds:g} s, seed 1, no sensor noise{taken_out}",
         "heldout_rms_error": rms,
         "heldout_truth_rms": spread,
         "heldout_nrmse_%": 100 * rms / spread,
-    }
-
-
-def _own_error(onnx_path: Path, seconds: float = 30.0) -> dict:
-    """The network's own error on a held-out noise-free random record (seed 1, the rig's "random" drive inside the
-    lab envelope): the RMS of its force less the truth's, beside the truth force's RMS."""
-    from nnfmu.cosim.replay import replay_fmu
-    from nnfmu.workflows.characterise.model import model_under_test
-
-    with tempfile.TemporaryDirectory(prefix="nnfmu_heldout_") as tmp:
-        options = RigOptions(seed=1, duration=seconds, noise=0.0, excitation="random")
-        data, _truth = write_rig("bushing", Path(tmp) / "heldout.csv", options)
-        measured = load_measurement(data)
-    with model_under_test(onnx_path) as model:  # through its FMU, as the characterisation runs it
-        output = model.kind.channels[0].force
-        prediction = np.asarray(replay_fmu(model.fmu, measured)[output])
-    target = np.asarray(measured[output])
-    rms = float(np.sqrt(np.mean((prediction - target) ** 2)))
-    return {
-        "heldout_clean_record": f"bushing rig, random drive, {seconds:g} s, seed 1, no sensor noise",
-        "heldout_rms_error": rms,
-        "heldout_truth_rms": float(np.sqrt(np.mean((target - target.mean()) ** 2))),
-        "heldout_nrmse_%": 100 * rms / float(np.sqrt(np.mean((target - target.mean()) ** 2))),
     }
 
 
@@ -230,7 +211,7 @@ def bench_bushing(quick: bool, folder: Path, key: str) -> dict:
     else:
         _data, onnx_path, own = _train("bushing", preset, quick, folder)
         (folder / f"{preset}.json").write_text(json.dumps(own), encoding="utf-8")
-    own = own | _own_error(onnx_path)
+    own = own | _own_error(onnx_path, "bushing")
     settings = CharacteriseSettings()
     characterise(onnx_path, folder / f"{preset}_report", settings=settings, log=lambda _: None)
     rows = _csv(folder / f"{preset}_report" / "dynamic_stiffness.csv")
