@@ -36,7 +36,7 @@ from nnfmu.data.measurement import Measurement
 from nnfmu.data.rigs import DEFAULT_EFFECTS, DamperParams, RigOptions, write_rig
 from nnfmu.export import export_onnx
 from nnfmu.fmu import BuildOptions, build_fmu
-from nnfmu.models import TrainSettings, get_preset, train_model
+from nnfmu.models import get_preset, train_model
 from nnfmu.models.train import Progress
 from nnfmu.out_paths import check_output_dir, mark_output_dir
 from nnfmu.validate import ValidationSettings, compare, write_report
@@ -278,10 +278,10 @@ def close_the_loop(out: Path, settings: DemoSettings, log: Callable[[str], None]
     loop_settings = settings.loop
     fit = training_part(measured, loop_settings)
     preset = get_preset(LOOP_PRESET)
-    architecture, train = preset.architecture, TrainSettings(seed=settings.seed)
+    architecture, train = preset.architecture, replace(preset.settings, seed=settings.seed)
     if settings.quick:  # as `DemoSettings.request` trains quickly
         architecture = replace(architecture, hidden=architecture.hidden[:1])
-        train = TrainSettings(seed=settings.seed, restarts=1, max_epochs=QUICK_LOOP_EPOCHS)
+        train = replace(train, restarts=1, max_epochs=QUICK_LOOP_EPOCHS)
     log(f"loop: training {LOOP_PRESET} on the fit blocks of {lab.name}")
     first = export_onnx(
         train_model(fit, preset.spec, architecture, train).model,
