@@ -35,7 +35,8 @@ from nnfmu.workflows.characterise import (
 )
 from nnfmu.workflows.characterise.bushing import channel_inputs, channel_plan, read_channel
 from nnfmu.workflows.characterise.damper import damper_inputs, damper_tests, read_damper
-from nnfmu.workflows.characterise.model import TestRun, model_under_test
+from nnfmu.workflows.characterise.model import TestRun as ModelRun  # not "Test...": pytest would collect it
+from nnfmu.workflows.characterise.model import model_under_test
 from nnfmu.workflows.characterise.signals import SineTest, sine_motion
 from nnfmu.workflows.characterise.truth import bushing_truth_runs, damper_truth_runs
 from nnfmu.workflows.roadtest.truth_graphs import bushing_truth_graph, damper_truth_graph
@@ -134,7 +135,7 @@ def test_the_characteristic_is_what_a_plain_fmpy_loop_gets_from_the_fmu(models: 
         force = plain_replay(
             models["damper"], {name: signals[signal] for name, (signal, _) in inputs.items()}, T, "force"
         )
-        runs.append(TestRun(test, motion, force))
+        runs.append(ModelRun(test, motion, force))
     plain = read_damper(runs)
     for row, point in zip(rows, plain.points, strict=True):
         assert float(row["rebound_force [N]"]) == pytest.approx(point.rebound_force, rel=1e-9)
@@ -177,7 +178,7 @@ def test_the_dynamic_stiffness_is_what_a_plain_fmpy_loop_gets_from_the_fmu(model
         motion = sine_motion(test, T)
         signals = {"position": motion.position, "rate": motion.rate, "zero": np.zeros_like(motion.time)}
         drive = {name: signals[signal] for name, (signal, _) in inputs.items()}
-        runs.append(TestRun(test, motion, plain_replay(models["bushing"], drive, T, channel.force)))
+        runs.append(ModelRun(test, motion, plain_replay(models["bushing"], drive, T, channel.force)))
     for row, point in zip(rows, read_channel(channel.key, runs), strict=True):
         assert float(row["dynamic_stiffness [N/m]"]) == pytest.approx(point.dynamic_stiffness, rel=1e-9)
         assert float(row["loss_angle [deg]"]) == pytest.approx(point.loss_angle, abs=1e-8)
