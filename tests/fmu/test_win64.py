@@ -123,8 +123,9 @@ def test_win64_binary_under_wine_gives_the_linux64_outputs(delay_fmus, tmp_path,
 
 
 def _zig_windows_runtime_built() -> bool:
-    """Zig is installed and has compiled its MinGW-w64 runtime into its cache (its first x86_64-windows build: about
-    10 minutes on 2 cores, too long for the suite; `python -m ziglang cc -target x86_64-windows-gnu -shared` once)."""
+    """Zig is installed and has compiled its MinGW-w64 runtime into its cache (its first x86_64-windows build: 80 s on
+    2 idle cores, far longer on a loaded machine, so not inside the suite: `.ci/run` does it first, as any
+    `python -m ziglang cc -target x86_64-windows-gnu -shared` does once)."""
     if importlib.util.find_spec(toolchain.ZIG_MODULE) is None:
         return False
     cache = Path(os.environ.get("ZIG_GLOBAL_CACHE_DIR", Path.home() / ".cache" / "zig"))
