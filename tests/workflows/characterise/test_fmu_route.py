@@ -120,22 +120,27 @@ def test_the_truth_damper_fmu_reproduces_the_truth_law(models: dict[str, Path], 
     assert len(_rows(tmp_path / "out" / "work_diagrams.csv")) > 100
 
 
+def _plain_runs(fmu: Path, tests: list[SineTest], inputs: dict[str, tuple[str, str]], output: str) -> list[ModelRun]:
+    """Each test's sine replayed on `fmu` by fmpy alone at its defaults (tests/cosim/plain_master.py), as runs the
+    characterisation's readers take; `inputs` says which signal drives each FMU input, as the characterisation does."""
+    runs = []
+    for test in tests:
+        motion = sine_motion(test, T)
+        signals = {"position": motion.position, "rate": motion.rate, "zero": np.zeros_like(motion.time)}
+        drive = {name: signals[signal] for name, (signal, _) in inputs.items()}
+        runs.append(ModelRun(test, motion, plain_replay(fmu, drive, T, output)))
+    return runs
+
+
 def test_the_characteristic_is_what_a_plain_fmpy_loop_gets_from_the_fmu(models: dict[str, Path], tmp_path: Path):
     """The characteristic's forces equal those read from the same sines replayed by fmpy alone at the FMU's defaults
     (tests/cosim/plain_master.py: no nnfmu code in the loop), so the report states what a user's master gets."""
     characterise(models["damper"], tmp_path / "out", settings=CharacteriseSettings(damper=DAMPER), log=lambda _: None)
     rows = _rows(tmp_path / "out" / "characteristic.csv")
-    runs = []
     with model_under_test(models["damper"]) as model:
         inputs = damper_inputs(model.kind, 293.15)
     assert set(inputs) == set(port_names(models["damper"], "input"))
-    for test in damper_tests(DAMPER, [None]):
-        motion = sine_motion(test, T)
-        signals = {"position": motion.position, "rate": motion.rate}
-        force = plain_replay(
-            models["damper"], {name: signals[signal] for name, (signal, _) in inputs.items()}, T, "force"
-        )
-        runs.append(ModelRun(test, motion, force))
+    runs = _plain_runs(models["damper"], damper_tests(DAMPER, [None]), inputs, "force")
     plain = read_damper(runs)
     for row, point in zip(rows, plain.points, strict=True):
         assert float(row["rebound_force [N]"]) == pytest.approx(point.rebound_force, rel=1e-9)
@@ -173,12 +178,7 @@ def test_the_dynamic_stiffness_is_what_a_plain_fmpy_loop_gets_from_the_fmu(model
         inputs = channel_inputs(model.kind, channel)
         plan = channel_plan(channel, settings)
     assert set(inputs) == set(port_names(models["bushing"], "input"))
-    runs = []
-    for test in plan.stiffness:
-        motion = sine_motion(test, T)
-        signals = {"position": motion.position, "rate": motion.rate, "zero": np.zeros_like(motion.time)}
-        drive = {name: signals[signal] for name, (signal, _) in inputs.items()}
-        runs.append(ModelRun(test, motion, plain_replay(models["bushing"], drive, T, channel.force)))
+    runs = _plain_runs(models["bushing"], plan.stiffness, inputs, channel.force)
     for row, point in zip(rows, read_channel(channel.key, runs), strict=True):
         assert float(row["dynamic_stiffness [N/m]"]) == pytest.approx(point.dynamic_stiffness, rel=1e-9)
         assert float(row["loss_angle [deg]"]) == pytest.approx(point.loss_angle, abs=1e-8)
