@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import onnx
 import pytest
-from plain_master import plain_replay, port_names  # tests/cosim, put on the path by this folder's conftest
+from plain_master import plain_replay, port_names  # tests/cosim, put on the path by tests/workflows/conftest.py
 from typer.testing import CliRunner
 
 from nnfmu.cli import app

@@ -1,8 +1,0 @@
-"""The characterisation tests import the plain fmpy replay of the co-simulation tests (tests/cosim/plain_master.py)."""
-
-from __future__ import annotations
-
-import sys
-from pathlib import Path
-
-sys.path.insert(0, str(Path(__file__).parents[2] / "cosim"))
