@@ -32,6 +32,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from road_test import BUSHING_PRESET_BY_CHANNEL  # bench/ is on the path when a bench script runs
 
 from nnfmu.data import load_measurement
 from nnfmu.data.inertia import compensate_inertia
@@ -55,12 +56,6 @@ from nnfmu.workflows.train import TrainRequest, train_from_file
 
 T = 1e-3
 QUICK_EPOCHS = 8  # nnfmu demo --quick
-BUSHING_PRESETS = {  # the demo's network of each bushing channel
-    "axial": "bushing-axial-force",
-    "radial": "bushing-radial-force",
-    "axial_rotation": "bushing-axial-torque",
-    "conical_rotation": "bushing-conical-torque",
-}
 
 
 def _request(preset: str, quick: bool, moving_mass: float) -> TrainRequest:
@@ -204,7 +199,7 @@ def _loop_compare(onnx_path: Path, plan, truth: BushingChannelTruth, channel: Bu
 def bench_bushing(quick: bool, folder: Path, key: str) -> dict:
     """Bushing channel `key` (a `BUSHING_CHANNELS` key): its preset trained on the lab record, characterised through
     its FMU and compared with the channel's truth law point by point, beside the network's own error."""
-    preset = BUSHING_PRESETS[key]
+    preset = BUSHING_PRESET_BY_CHANNEL[key]
     onnx_path = folder / f"{preset}.onnx"
     if onnx_path.is_file():  # a kept work folder: the network trained before (its error recorded beside it)
         own = json.loads((folder / f"{preset}.json").read_text(encoding="utf-8"))
@@ -282,7 +277,11 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--only", choices=("damper", "bushing"), help="characterise one component only")
     parser.add_argument("--work", type=Path, help="keep the work folder here; a network trained there is reused")
     parser.add_argument(
-        "--channels", nargs="+", choices=tuple(BUSHING_PRESETS), default=list(BUSHING_PRESETS), help="bushing channels"
+        "--channels",
+        nargs="+",
+        choices=tuple(BUSHING_PRESET_BY_CHANNEL),
+        default=list(BUSHING_PRESET_BY_CHANNEL),
+        help="bushing channels",
     )
     args = parser.parse_args(argv)
     started = time.perf_counter()

@@ -50,7 +50,7 @@ from container_plain import (  # bench/ is on the path when a bench script runs
     system_fmu,
 )
 from plain_master import plain_run, port_names  # tests/cosim is on the path once container_plain is imported
-from road_test import models_in
+from road_test import BUSHING_PRESET_BY_CHANNEL, models_in
 
 from nnfmu.cosim.master import CosimSettings, cosimulate
 from nnfmu.cosim.ssp import open_system
@@ -76,12 +76,6 @@ SWEEP = (1e-4, 2e-4, 5e-4, 1e-3)  # [s] inner steps (and vehicle sample periods)
 ELEMENT = "bushing_fl_front"
 AMPLITUDES = (0.05, 0.2)  # sine amplitudes as fractions of the reference's RMS deflection
 MASTER_SPAN = 3.0  # [s] of nnfmu's Python master at 0.1 ms
-PRESETS = {  # the bushing presets by channel (`nnfmu.workflows.roadtest.systems.BUSHING_MODELS`)
-    "axial": "bushing-axial-force",
-    "radial": "bushing-radial-force",
-    "axial_rotation": "bushing-axial-torque",
-    "conical_rotation": "bushing-conical-torque",
-}
 
 
 def body_errors(result: Measurement, reference: Measurement) -> dict[str, float]:
@@ -126,7 +120,7 @@ def channel_swap(models: dict[str, Path], chosen: tuple[str, ...], folder: Path)
     folder.mkdir(parents=True, exist_ok=True)
     laws = truth_laws([f"bushing_{BUSHING_CHANNELS[key].force}" for key in chosen])
     truth = bushing_truth_graph({key: laws[f"bushing_{BUSHING_CHANNELS[key].force}"].truth for key in chosen}, H)
-    networks = [onnx.load(models[preset]) for key, preset in PRESETS.items() if key not in chosen]
+    networks = [onnx.load(models[preset]) for key, preset in BUSHING_PRESET_BY_CHANNEL.items() if key not in chosen]
     onnx.save(
         merge_step_graphs([truth, *networks], "lca_bushing", f"truth law for {', '.join(chosen)}"), folder / "b.onnx"
     )

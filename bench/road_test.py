@@ -26,6 +26,8 @@ import time
 from pathlib import Path
 
 from nnfmu.data.rigs import RigOptions, write_rig
+from nnfmu.kinds import BUSHING
+from nnfmu.models import get_preset
 from nnfmu.workflows.demo import MOVING_MASS_BY_RIG, PRESETS_BY_RIG
 from nnfmu.workflows.roadtest import (
     BushingDriveSettings,
@@ -36,6 +38,11 @@ from nnfmu.workflows.roadtest import (
     train_vehicle_dampers,
 )
 from nnfmu.workflows.train import TrainRequest, train_from_file
+
+# The bushing preset of each channel (`BUSHING_CHANNELS` key -> preset): the one whose output is the channel's force.
+BUSHING_PRESET_BY_CHANNEL = {
+    c.key: next(p for p in BUSHING.presets if get_preset(p).output == c.force) for c in BUSHING.channels
+}
 
 
 def models_in(folder: Path, durations: dict[str, float] | None = None, **training: int) -> dict[str, Path]:
