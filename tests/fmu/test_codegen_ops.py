@@ -192,6 +192,7 @@ def in_order(a: np.ndarray, b: np.ndarray, bias: np.ndarray) -> np.ndarray:
 GEMM_FORMS = {  # how B reaches the Gemm, and what the generated C must show for it
     "sparse constant": r"acc\[\d+\] = 0\.0 \+ x0\[",  # only the nonzero products, each output's one expression
     "dense constant": "b_by_rows",  # transB: copied row by row for the side-by-side sums
+    "dense constant with zero rows": r"for \(int j = 4; j < 7; \+\+j\)",  # rows 2, 3 and 7 left out of the loop
     "run-time input": r"acc\[c\] \+= a_j \* x1\[",
 }
 
@@ -207,6 +208,8 @@ def test_gemm_sums_each_output_in_order(form: str, trans_b: int, tmp_path: Path)
     b = rng.normal(size=(9, 5)) * 10.0 ** rng.integers(-6, 6, size=(9, 5))
     if form == "sparse constant":
         b[rng.random(b.shape) < 0.7] = 0.0
+    if form == "dense constant with zero rows":
+        b[[2, 3, 7]] = 0.0
     bias = rng.normal(size=5)
     stored = b.T.copy() if trans_b else b
     inputs = {"a": a, "bias": bias} | ({"b": stored} if form == "run-time input" else {})

@@ -14,7 +14,8 @@ The linear part advances exactly (first-order hold): x_k = Ad x + Bd0 u_start + 
 sub-steps, and evaluates each spline as f0 + s0 (v - v0) + sum_i (s_i - s_{i-1}) Relu(v - v_i), which is its
 piecewise-linear table extended linearly beyond the end points. Stabilised force ports hold their deviation from the
 reference element, u_start - S x with S x at the sample's start, over the interval (see
-`nnfmu.vehicle.dynamics.linear`). Operators: Concat, Gemm, MatMul, Mul, Add, Sub, Relu, Identity (built with the
+`nnfmu.vehicle.dynamics.linear`); a linear vehicle's graph folds S and the held ports into its step matrix, one
+product of [x, u_start, u] a sample. Operators: Concat, Gemm, MatMul, Mul, Add, Sub, Relu, Identity (built with the
 exporter's GraphBuilder).
 """
 
@@ -104,7 +105,10 @@ def discrete_step_graph(discrete: DiscreteVehicle, gains: GainCorrection | None 
     reserved = (STATE_IN, FIRST_IN, INPUTS, INPUTS_START, OUTPUTS, STATE_OUT, FIRST_OUT, GAINS, GAINS_START)
     graph = GraphBuilder(reserved=reserved)
     spline = _spline_constants(graph, vehicle)
-    advanced = _advance(graph, discrete, spline, *_interval_inputs(graph, vehicle))
+    if vehicle.is_linear:
+        advanced = _linear_advance(graph, discrete)
+    else:
+        advanced = _advance(graph, discrete, spline, *_interval_inputs(graph, vehicle))
     graph_inputs = [_row(STATE_IN, nx), _row(FIRST_IN, 1), _row(INPUTS, nu), _row(INPUTS_START, nu)]
     if gains is not None:
         advanced = _gain_corrected(graph, gains, advanced)
@@ -200,14 +204,31 @@ def _along(graph: GraphBuilder, start: str, end: str, fraction: float, name: str
     return graph.node("Add", [from_start, from_end], name)
 
 
-def _advance(graph: GraphBuilder, discrete: DiscreteVehicle, spline: dict[str, str], start: str, end: str) -> str:
-    """The state one step of `discrete.dt` after x with inputs linear from `start` to `end`: exact if linear, else
-    `discrete.substeps` predictor-corrector sub-steps."""
+def _linear_advance(graph: GraphBuilder, discrete: DiscreteVehicle) -> str:
+    """The exact state of a linear vehicle one step of `discrete.dt` after x: Ad x + Bd0 (u_start - S x) + Bd1 (end -
+    S x) + fd, with end = u_start at a stabilised port and u elsewhere (`_interval_inputs`), as one product of [x,
+    u_start, u] whose matrix holds S and the held ports (the columns of u at held ports are zero, and the generated
+    C leaves them out): per evaluation one product instead of S x, four element-wise nodes and a product a third
+    larger."""
     vehicle = discrete.vehicle
-    if vehicle.is_linear:
-        state_input = graph.node("Concat", [STATE_IN, start, end], "start_state_and_inputs", axis=1)
-        step = graph.constant("step_matrix", np.hstack([discrete.Ad, discrete.Bd0, discrete.Bd1]))
-        return _affine(graph, state_input, step, graph.constant("step_offset", discrete.fd), "advanced")
+    held = vehicle.stabilised_inputs
+    on_start = discrete.Bd1 * held  # a held port's end value is its start value
+    matrix = np.hstack(
+        [
+            discrete.Ad - (discrete.Bd0 + discrete.Bd1) @ vehicle.stabiliser,
+            discrete.Bd0 + on_start,
+            np.where(held, 0.0, discrete.Bd1),
+        ]
+    )
+    state_input = graph.node("Concat", [STATE_IN, INPUTS_START, INPUTS], "start_state_and_inputs", axis=1)
+    step = graph.constant("step_matrix", matrix)
+    return _affine(graph, state_input, step, graph.constant("step_offset", discrete.fd), "advanced")
+
+
+def _advance(graph: GraphBuilder, discrete: DiscreteVehicle, spline: dict[str, str], start: str, end: str) -> str:
+    """The state of a vehicle with spline dampers one step of `discrete.dt` after x with inputs linear from `start`
+    to `end`: `discrete.substeps` predictor-corrector sub-steps."""
+    vehicle = discrete.vehicle
     predict = graph.constant("predict_matrix", np.hstack([discrete.Ad, discrete.Bd0, discrete.Bd1, discrete.Bnd]))
     predict_offset = graph.constant("predict_offset", discrete.fd)
     correct = graph.constant("correct_matrix", discrete.Bnr)

@@ -5,8 +5,9 @@ A Gemm sums each output's products in the order of the inner index, as the plain
 per output column and adds the columns side by side (each output's sum is one chain of dependent additions; side by
 side the processor overlaps them), and with a mostly-zero constant B (a vehicle's output and stabiliser matrices)
 writes out only its nonzero products, each output's as one expression 0 + p_1 + p_2 + ... in the order of the inner
-index (its sum stays in a register): the sums are those of the plain loop bit for bit for finite operands (leaving out
-a product 0 * a only changes a result where a is infinite or NaN).
+index (its sum stays in a register); a denser constant B's all-zero rows (the input ports a vehicle holds over its
+step) are left out of the loop. The sums are those of the plain loop bit for bit for finite operands (leaving out a
+product 0 * a only changes a result where a is infinite or NaN).
 """
 
 from __future__ import annotations
@@ -130,14 +131,15 @@ class Gemm(Emitter):
                 if b_value is not None and b_col != 1 and k * n <= MAX_REORDERED:
                     lines = [*_by_rows(b_value, k, n, ctype, dtype), f"(void){x_b};", *lines]
                     b_read = f"b_by_rows[{n} * j + c]"
-                lines += [
-                    f"    for (int j = 0; j < {k}; ++j) {{",
-                    f"        const {ctype} a_j = {x_a}[{_index(a_row, 'r', a_col, 'j')}];",
-                    f"        for (int c = 0; c < {n}; ++c) {{",
-                    f"            acc[c] += a_j * {b_read};",
-                    "        }",
-                    "    }",
-                ]
+                for start, stop in _live_rows(b_value, b_row, b_col, k, n):
+                    lines += [
+                        f"    for (int j = {start}; j < {stop}; ++j) {{",
+                        f"        const {ctype} a_j = {x_a}[{_index(a_row, 'r', a_col, 'j')}];",
+                        f"        for (int c = 0; c < {n}; ++c) {{",
+                        f"            acc[c] += a_j * {b_read};",
+                        "        }",
+                        "    }",
+                    ]
             return [*lines, *store, "}"]
         lines = [f"for (int r = 0; r < {m}; ++r) {{", f"    for (int c = 0; c < {n}; ++c) {{"]
         if product:
@@ -177,6 +179,22 @@ def _by_rows(b_value: np.ndarray, k: int, n: int, ctype: str, dtype: np.dtype) -
     values = [c_literal(v, dtype) for v in np.ravel(np.asarray(b_value).reshape(n, k).T)]
     rows = [", ".join(values[i : i + 8]) for i in range(0, len(values), 8)]
     return [f"static const {ctype} b_by_rows[{k * n}] = {{", *(f"    {row}," for row in rows), "};"]
+
+
+def _live_rows(b_value: np.ndarray | None, b_row: int, b_col: int, k: int, n: int) -> list[tuple[int, int]]:
+    """The runs [start, stop) of inner indices j whose row B'[j, :] has a nonzero entry (all of 0..k when B is not a
+    constant known now): a constant's all-zero rows (a vehicle's held input ports) are left out of the loop."""
+    if b_value is None:
+        return [(0, k)]
+    flat = np.ravel(b_value)
+    b = flat.reshape(k, n) if (b_row, b_col) == (n, 1) else flat.reshape(n, k).T  # B'[j, c]
+    live = np.flatnonzero(np.any(b != 0.0, axis=1))
+    if live.size == 0:  # (an all-zero B is written out as sparse before it gets here)
+        return [(0, k)]
+    breaks = np.flatnonzero(np.diff(live) > 1)
+    starts = [int(live[0]), *(int(live[i + 1]) for i in breaks)]
+    stops = [*(int(live[i]) + 1 for i in breaks), int(live[-1]) + 1]
+    return list(zip(starts, stops))
 
 
 def _written_out(b_value: np.ndarray | None, b_row: int, b_col: int, k: int, n: int) -> list[tuple[int, int]] | None:
