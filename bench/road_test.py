@@ -1,20 +1,21 @@
 """The thesis's road-test cases at full length: quarter car and full vehicle on a 50 s class C drive (JSON out).
 
 Usage: python bench/road_test.py [MODELS_DIR] [OUT_DIR] [DURATION_S] [--bushings vehicle|lab] [--dampers vehicle|lab]
+    [--training-seed N]
 MODELS_DIR holds <preset>.onnx for the two damper and four bushing presets (e.g. a demo's models/ folder); when it
 does not exist they are trained there first on default rig records with the presets' default settings. With
 `--bushings vehicle` (the default, as in `nnfmu demo`) the road test's bushing networks are instead trained on a rig
 record derived from the vehicle's own bushing deflections on another drive seed (`train_vehicle_bushings`, in
 OUT_DIR/vehicle_bushing); `lab` keeps MODELS_DIR's. With `--dampers vehicle` (the default, as in `nnfmu demo`) both
 damper networks are trained on a dyno record whose random part follows the car's damper strokes in the same source
-reference (`train_vehicle_dampers`, in OUT_DIR/vehicle_damper; needs `--bushings vehicle`). DURATION_S (default
-50) shortens both systems' drives (20 s finishes in minutes on 2 cores). The co-simulations run the master and the
-FMUs at their defaults. Progress goes to stderr; the last stdout line is one JSON object: run times, which records
-the bushing and damper networks were trained on,
-`realtime_factor_full_vehicle` (simulated seconds per wall second of the full vehicle with the hysteresis damper
-networks), the error `budget` (per system, channel and damper model: nrmse_total, nrmse_network, nrmse_coupling,
-damage_ratio; see nnfmu/workflows/roadtest/budget.py), the thesis comparison, and the largest use of each network
-input's training envelope.
+reference (`train_vehicle_dampers`, in OUT_DIR/vehicle_damper; needs `--bushings vehicle`); `--training-seed`
+trains these vehicle-derived networks from another seed (default 0). DURATION_S (default 50) shortens both systems'
+drives (20 s finishes in minutes on 2 cores). The co-simulations run the master and the FMUs at their defaults.
+Progress goes to stderr; the last stdout line is one JSON object: run times, the training seed, which records the
+bushing and damper networks were trained on, `realtime_factor_full_vehicle` (simulated seconds per wall second of
+the full vehicle with the hysteresis damper networks), the error `budget` (per system, channel and damper model:
+nrmse_total, nrmse_network, nrmse_coupling, damage_ratio; see nnfmu/workflows/roadtest/budget.py), the thesis
+comparison, and the largest use of each network input's training envelope.
 """
 
 from __future__ import annotations
@@ -86,6 +87,12 @@ def main() -> None:
         default="vehicle",
         help="train the damper networks on a vehicle-derived dyno record, or use MODELS_DIR's",
     )
+    parser.add_argument(
+        "--training-seed",
+        type=int,
+        default=0,
+        help="training seed of the vehicle-derived networks (their restarts' initial weights; Adam's batches)",
+    )
     args = parser.parse_args()
     if args.dampers == "vehicle" and args.bushings != "vehicle":
         parser.error(
@@ -98,7 +105,13 @@ def main() -> None:
     settings = RoadTestSettings(quarter_car=SystemRun(duration), full_vehicle=SystemRun(duration))
     bushing_networks: dict[str, object] = {"trained_on": "the bushing rig's lab record"}
     if args.bushings == "vehicle":
-        vehicle = train_vehicle_bushings(out / "vehicle_bushing", settings, BushingDriveSettings(), log=log)
+        vehicle = train_vehicle_bushings(
+            out / "vehicle_bushing",
+            settings,
+            BushingDriveSettings(),
+            request=lambda preset: TrainRequest(preset=preset, seed=args.training_seed),
+            log=log,
+        )
         models |= vehicle.models
         bushing_networks = {
             "trained_on": str(vehicle.rig),
@@ -110,7 +123,9 @@ def main() -> None:
         dampers = train_vehicle_dampers(
             vehicle.source,
             out / "vehicle_damper",
-            lambda preset: TrainRequest(preset=preset, moving_mass=MOVING_MASS_BY_RIG["damper"]),
+            lambda preset: TrainRequest(
+                preset=preset, moving_mass=MOVING_MASS_BY_RIG["damper"], seed=args.training_seed
+            ),
             log=log,
         )
         models |= dampers.models
@@ -132,6 +147,7 @@ def main() -> None:
         json.dumps(
             {
                 "duration_s": duration,
+                "training_seed": args.training_seed,
                 "training_s": round(train_seconds, 1),
                 "road_test_s": round(result.seconds, 1),
                 "bushing_networks": bushing_networks,
