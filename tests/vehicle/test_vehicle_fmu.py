@@ -150,6 +150,9 @@ def quarter_car_fmus(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path
         "reference": build_vehicle_fmu(
             "quarter-car", folder / "reference.fmu", VehicleBuildSettings(components={"damper": "reference"})
         ),
+        "stabilised": build_vehicle_fmu(
+            "quarter-car", folder / "stabilised.fmu", VehicleBuildSettings(components={"damper": "stabilised"})
+        ),
     }
 
 
@@ -178,6 +181,9 @@ def test_spline_terms_reproduce_the_spline_table_and_its_extension() -> None:
         ("quarter-car", {"damper": "reference"}),
         ("full-vehicle", ALL_REFERENCE),
         ("full-vehicle", {k: "stabilised" if k.startswith("bushing") else "reference" for k in ALL_REFERENCE}),
+        # linear with held ports: the stabiliser and the held ports folded into one step matrix
+        ("quarter-car", {"damper": "stabilised"}),
+        ("full-vehicle", {k: "stabilised" for k in ALL_REFERENCE if k.startswith("bushing")}),
     ],
 )
 @pytest.mark.slow
@@ -207,7 +213,7 @@ def test_initial_state_is_the_static_equilibrium() -> None:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("settle", [True, False])
-@pytest.mark.parametrize("kind", ["external", "reference"])
+@pytest.mark.parametrize("kind", ["external", "reference", "stabilised"])
 def test_quarter_car_fmu_equals_the_model(quarter_car_fmus: dict[str, Path], kind: str, settle: bool) -> None:
     """Random actuator input (and damper force, for the external damper) through fmpy, one sample per step: the
     outputs equal the model's own stepping under docs/fmu.md's input interpolation; a master that sets each step's
