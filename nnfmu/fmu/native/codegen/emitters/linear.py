@@ -181,14 +181,18 @@ def _by_rows(b_value: np.ndarray, k: int, n: int, ctype: str, dtype: np.dtype) -
     return [f"static const {ctype} b_by_rows[{k * n}] = {{", *(f"    {row}," for row in rows), "};"]
 
 
+def _b_prime(b_value: np.ndarray, b_row: int, b_col: int, k: int, n: int) -> np.ndarray:
+    """A constant B as the product reads it, B'[j, c] (k, n): B itself, or B stored (n, k) transposed."""
+    flat = np.ravel(b_value)
+    return flat.reshape(k, n) if (b_row, b_col) == (n, 1) else flat.reshape(n, k).T
+
+
 def _live_rows(b_value: np.ndarray | None, b_row: int, b_col: int, k: int, n: int) -> list[tuple[int, int]]:
     """The runs [start, stop) of inner indices j whose row B'[j, :] has a nonzero entry (all of 0..k when B is not a
     constant known now): a constant's all-zero rows (a vehicle's held input ports) are left out of the loop."""
     if b_value is None:
         return [(0, k)]
-    flat = np.ravel(b_value)
-    b = flat.reshape(k, n) if (b_row, b_col) == (n, 1) else flat.reshape(n, k).T  # B'[j, c]
-    live = np.flatnonzero(np.any(b != 0.0, axis=1))
+    live = np.flatnonzero(np.any(_b_prime(b_value, b_row, b_col, k, n) != 0.0, axis=1))
     if live.size == 0:  # (an all-zero B is written out as sparse before it gets here)
         return [(0, k)]
     breaks = np.flatnonzero(np.diff(live) > 1)
@@ -202,9 +206,7 @@ def _written_out(b_value: np.ndarray | None, b_row: int, b_col: int, k: int, n: 
     mostly-zero constant B, not too many of them); None to loop over every entry."""
     if b_value is None:
         return None
-    flat = np.ravel(b_value)
-    b = flat.reshape(k, n) if (b_row, b_col) == (n, 1) else flat.reshape(n, k).T  # B'[j, c]
-    rows, cols = np.nonzero(b)  # j first, then c
+    rows, cols = np.nonzero(_b_prime(b_value, b_row, b_col, k, n))  # j first, then c
     if rows.size > SPARSE_SHARE * k * n or rows.size > MAX_WRITTEN_OUT:
         return None
     return list(zip(rows.tolist(), cols.tolist()))
