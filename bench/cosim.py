@@ -60,7 +60,7 @@ from nnfmu.workflows.roadtest.systems import build_component_fmus, build_vehicle
 
 STEP = 1e-3  # [s] communication step
 DAMPER = "damper-hysteresis"
-QUICK_RECORDS = {"damper": 40.0, "bushing": 20.0}  # [s] rig records for the quick networks
+QUICK_RECORDS = {"damper": 40.0, "bushing": 40.0}  # [s] rig records for the quick networks
 QUICK_TRAINING = {"restarts": 1, "max_epochs": 15}
 # [s] for 50 s simulated (full vehicle: 20x real time)
 TARGETS = {"full_vehicle_wall_s": 2.5, "quarter_car_wall_s": 1.0}

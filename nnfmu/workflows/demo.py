@@ -119,7 +119,7 @@ class DemoSettings:
         return f"full run: about {FULL_MINUTES} on 2 idle cores (--quick runs every stage in about {QUICK_MINUTES})"
 
     def lab_duration(self, rig: str) -> float | None:
-        return ({"damper": 40.0, "bushing": 20.0}[rig]) if self.quick else None
+        return ({"damper": 40.0, "bushing": 40.0}[rig]) if self.quick else None
 
     @property
     def test_duration(self) -> float:

@@ -11,6 +11,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from nnfmu.data.rigs import BUSHING_CHANNELS, BushingChannelTruth, BushingParams, RigOptions, simulate_rig, write_rig
+from nnfmu.errors import SettingsError
 from nnfmu.physics.bushing import iwan_elements
 
 RATE = 2000.0
@@ -99,7 +100,7 @@ def test_exact_update_matches_integrating_the_derivatives():
     assert np.max(np.abs(force - reference)) < 5e-3 * np.max(np.abs(reference))
 
 
-def test_lab_drive_follows_the_target_spectrum_and_exceeds_the_vehicle_range():
+def test_lab_schedule_is_the_stiffness_series_then_random_on_the_target_spectrum_beyond_the_vehicle_range():
     from scipy.signal import welch
 
     from nnfmu.data.rigs import BushingRig
@@ -108,10 +109,17 @@ def test_lab_drive_follows_the_target_spectrum_and_exceeds_the_vehicle_range():
     run = simulate_rig("bushing", RigOptions(duration=60.0, noise=0.0, effects=()))
     m = run.measurement
     for key, channel in BUSHING_CHANNELS.items():
+        series, random = run.truth["excitation"]["drives"][key]["parts"]
+        assert (series["type"], series["start_s"], random["end_s"]) == ("sine series", 0.0, 60.0)
+        assert random["start_s"] == series["end_s"] == pytest.approx(26.601)
+        expected = {(f, a * rig.vehicle_range[key]) for f in rig.sine_frequencies for a in rig.sine_amplitudes}
+        got = {(lv["frequency_Hz"], lv["amplitude"]) for lv in series["levels"]}
+        assert got == expected and {lv["cycles"] for lv in series["levels"]} == {rig.lab_sine_cycles}
         position = m[channel.position]
+        start = int(round(random["start_s"] * 1000.0))
+        assert np.max(np.abs(position[:start])) == pytest.approx(rig.vehicle_range[key], rel=1e-3)
         assert np.max(np.abs(position)) == pytest.approx(rig.lab_margin * rig.vehicle_range[key], rel=1e-9)
-        assert np.max(np.abs(position)) > rig.vehicle_range[key]
-        f, psd = welch(position, fs=1000.0, nperseg=4096)
+        f, psd = welch(position[start:], fs=1000.0, nperseg=4096)
         target = rig.lab_shape.psd(f)
         bands = np.geomspace(1.0, 35.0, 12)  # third-octave-like bands well inside 0.5-40 Hz
         ratios = []
@@ -122,18 +130,40 @@ def test_lab_drive_follows_the_target_spectrum_and_exceeds_the_vehicle_range():
         assert np.max(np.abs(db)) < 1.5, f"{channel.position}: band levels off the target by {db.round(2)} dB"
         outside = f > 60.0
         assert np.max(psd[outside]) < 1e-6 * np.max(psd)
-    assert run.truth["excitation"]["drives"]["radial"]["peak_over_vehicle_range"] == rig.lab_margin
+        assert random["peak_over_vehicle_range"] == rig.lab_margin
+
+
+def test_the_lab_schedules_stiffness_series_is_found_as_sine_tests_in_the_recorded_positions():
+    """`nnfmu characterise --measured` reads a lab record's series: every level found (3 cycles at full amplitude
+    between the ramps) through the transducers' noise, and none in the random part."""
+    from nnfmu.workflows.characterise.detect import find_sine_tests
+
+    run = simulate_rig("bushing", RigOptions(duration=60.0, seed=0))
+    time = np.arange(len(run.measurement[BUSHING_CHANNELS["axial"].position])) / 1000.0
+    for key, channel in BUSHING_CHANNELS.items():
+        series, random = run.truth["excitation"]["drives"][key]["parts"]
+        found = find_sine_tests(time, np.asarray(run.measurement[channel.position]))
+        assert [(s.frequency, s.amplitude) for s in found] == [
+            (pytest.approx(lv["frequency_Hz"], rel=2e-3), pytest.approx(lv["amplitude"], rel=5e-3))
+            for lv in series["levels"]
+        ], key
+        assert found[-1].stop / 1000.0 <= random["start_s"]
+
+
+def test_a_lab_record_too_short_for_the_stiffness_series_is_refused_naming_the_lengths():
+    with pytest.raises(SettingsError, match=r"'lab' excitation of 20 s: .*series takes 26.601 s.*at least 27.601 s"):
+        simulate_rig("bushing", RigOptions(duration=20.0))
 
 
 def test_random_excitation_stays_inside_the_lab_envelope():
-    lab = simulate_rig("bushing", RigOptions(duration=10.0, noise=0.0)).measurement
-    held_out = simulate_rig("bushing", RigOptions(duration=10.0, noise=0.0, excitation="random")).measurement
+    lab = simulate_rig("bushing", RigOptions(duration=40.0, noise=0.0)).measurement
+    held_out = simulate_rig("bushing", RigOptions(duration=40.0, noise=0.0, excitation="random")).measurement
     for channel in BUSHING_CHANNELS.values():
         assert np.max(np.abs(held_out[channel.position])) < np.max(np.abs(lab[channel.position]))
 
 
 def test_channels_units_and_effects():
-    run = simulate_rig("bushing", RigOptions(duration=2.0))
+    run = simulate_rig("bushing", RigOptions(duration=2.0, excitation="random"))
     m = run.measurement
     assert m.names == [
         "axial_displacement",
@@ -165,7 +195,7 @@ def test_sine_series_measures_dynamic_stiffness_levels():
 
 
 def test_same_seed_same_data_other_seed_other_data():
-    options = RigOptions(duration=2.0)
+    options = RigOptions(duration=2.0, excitation="random")
     first, again = simulate_rig("bushing", options), simulate_rig("bushing", options)
     other = simulate_rig("bushing", replace(options, seed=7))
     for name in first.measurement.names:
@@ -176,7 +206,7 @@ def test_same_seed_same_data_other_seed_other_data():
 def test_write_rig_puts_the_truth_beside_the_data(tmp_path):
     from nnfmu.data import load_measurement
 
-    options = RigOptions(duration=2.0, seed=3)
+    options = RigOptions(duration=2.0, seed=3, excitation="random")
     data, truth_file = write_rig("bushing", tmp_path / "rig.mf4", options)
     assert truth_file == tmp_path / "rig.truth.json"
     run = simulate_rig("bushing", options)

@@ -71,8 +71,9 @@ def largest_correlation(spec: FeatureSpec, record) -> float:
 
 @pytest.fixture(scope="module")
 def bushing_lab_record():
-    """10 s of the bushing rig's lab record (seed 0), shared by the memory-bank tests."""
-    return simulate_rig("bushing", RigOptions(seed=0, duration=10.0)).measurement
+    """37 s of the bushing rig's lab record (seed 0: its stiffness series, then 10 s of random), shared by the
+    memory-bank tests."""
+    return simulate_rig("bushing", RigOptions(seed=0, duration=37.0)).measurement
 
 
 def test_default_bushing_memory_is_not_collinear_with_the_position(bushing_lab_record):

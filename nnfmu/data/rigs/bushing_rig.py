@@ -6,8 +6,17 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from nnfmu.data.rigs.excitation import Motion, SineLevel, SpectrumShape, random_motion, sine_series, sine_series_cycles
+from nnfmu.data.rigs.excitation import (
+    MIN_SINE_CYCLES,
+    Motion,
+    SineLevel,
+    SpectrumShape,
+    random_motion,
+    sine_series,
+    sine_series_cycles,
+)
 from nnfmu.data.rigs.sensors import Sensor, record
+from nnfmu.errors import SettingsError
 from nnfmu.physics.bushing import IWAN_ELEMENTS, IWAN_SPAN, BushingChannelTruth, BushingParams
 
 
@@ -67,11 +76,13 @@ def _default_sensors() -> dict[str, Sensor]:
 class BushingRig:
     """The rig's drive design and transducers.
 
-    "lab": per channel an independent Gaussian random signal whose PSD follows `lab_shape` (flat to the body modes,
-    then falling to the rig controller's 40 Hz cut-off) with peaks `lab_margin` times the vehicle range, so a
-    network never has to extrapolate (ORIGIN.md). "random": a different band-limited shape with peaks
-    `random_margin` times the vehicle range, for held-out data inside the lab envelope. "sine": a
-    dynamic-stiffness series, every frequency at every amplitude fraction of the vehicle range.
+    "lab": the lab's schedule per channel: the dynamic-stiffness series (every `sine_frequencies` at every
+    `sine_amplitudes` fraction of the vehicle range, `lab_sine_cycles` cycles each, as a lab characterises a bushing),
+    then for the rest of the record an independent Gaussian random signal whose PSD follows `lab_shape` (flat to the
+    body modes, then falling to the rig controller's 40 Hz cut-off) with peaks `lab_margin` times the vehicle range,
+    so a network never has to extrapolate (ORIGIN.md). "random": a different band-limited shape with peaks
+    `random_margin` times the vehicle range, for held-out data inside the lab envelope. "sine": the dynamic-stiffness
+    series alone, as many cycles per level as the record holds.
     """
 
     vehicle_range: dict[str, float] = field(default_factory=_default_vehicle_range)
@@ -81,6 +92,7 @@ class BushingRig:
     random_margin: float = 0.9
     sine_frequencies: tuple[float, ...] = (1.0, 2.0, 5.0, 10.0, 15.0, 20.0)
     sine_amplitudes: tuple[float, ...] = (0.25, 0.5, 1.0)
+    lab_sine_cycles: int = MIN_SINE_CYCLES + 1
     rest: float = 0.2
     fade: float = 0.5
     sensors: dict[str, Sensor] = field(default_factory=_default_sensors)
@@ -88,17 +100,46 @@ class BushingRig:
     def motion(self, key: str, excitation: str, rate: float, n: int, rng: np.random.Generator) -> tuple[Motion, dict]:
         """Drive signal of channel `key` (a BushingParams field) with `n` samples at `rate` [Hz]."""
         reach = self.vehicle_range[key]
+        levels = [SineLevel(frac * reach, f) for f in self.sine_frequencies for frac in self.sine_amplitudes]
         if excitation == "sine":
-            levels = [SineLevel(frac * reach, f) for f in self.sine_frequencies for frac in self.sine_amplitudes]
             cycles = sine_series_cycles(levels, n / rate, self.rest)
             sine, described = sine_series(levels, cycles, rate, self.rest)
             return sine.fit(n), {"type": "sine series", "levels": described}
-        lab = excitation == "lab"
-        shape, margin = (self.lab_shape, self.lab_margin) if lab else (self.random_shape, self.random_margin)
+        if excitation != "lab":
+            return self._random(self.random_shape, self.random_margin, reach, rate, n, rng, "band-limited random")
+        sine, described = sine_series(levels, self.lab_sine_cycles, rate, self.rest)
+        remaining = n - len(sine)
+        if remaining < 2 * self.fade * rate:
+            series = len(sine) / rate
+            raise SettingsError(
+                f"bushing 'lab' excitation of {n / rate:g} s: its dynamic-stiffness series takes {series:g} s and the "
+                f"random part after it at least {2 * self.fade:g} s; choose a duration of at least "
+                f"{series + 2 * self.fade:g} s, or the 'random' excitation"
+            )
+        random, random_described = self._random(
+            self.lab_shape, self.lab_margin, reach, rate, remaining, rng, "target-spectrum random"
+        )
+        parts = [
+            {"type": "sine series", "levels": described, "start_s": 0.0, "end_s": len(sine) / rate},
+            dict(random_described, start_s=len(sine) / rate, end_s=n / rate),
+        ]
+        return Motion.concatenate([sine, random]), {"type": "lab schedule", "parts": parts}
+
+    def _random(
+        self,
+        shape: SpectrumShape,
+        margin: float,
+        reach: float,
+        rate: float,
+        n: int,
+        rng: np.random.Generator,
+        kind: str,
+    ) -> tuple[Motion, dict]:
+        """`n` samples of random motion following `shape`, its peak `margin` times the vehicle range `reach`."""
         motion = random_motion(shape, rate, n, rng, min(self.fade, n / rate / 4))
         motion = motion.scaled(margin * reach / np.max(np.abs(motion.x)))
         return motion, {
-            "type": "target-spectrum random" if lab else "band-limited random",
+            "type": kind,
             "position_psd_shape": shape.describe(),
             "vehicle_range": reach,
             "peak_over_vehicle_range": margin,

@@ -26,9 +26,10 @@ class RigOptions:
     `sample_rate` [Hz]; `duration` [s] (None: 70 s damper, 60 s bushing); `seed` makes runs reproducible; `noise`
     multiplies the realistic sensor noise (0: exact truth values, no noise and no quantisation); `effects` (None: the
     kind's defaults, (): only the base characteristic); `excitation`: "lab" (damper: sine series at standard peak
-    velocities, then band-limited random; bushing: target-spectrum random beyond the vehicle range), "random" (only
-    band-limited random, for held-out test data), "sine" (only the sine series) or "vehicle" (a drive derived from a
-    vehicle simulation's deflections, see `vehicle_rig`; damper: the sine series, then the derived random).
+    velocities, then band-limited random; bushing: the dynamic-stiffness sine series, then target-spectrum random
+    beyond the vehicle range), "random" (only band-limited random, for held-out test data), "sine" (only the sine
+    series) or "vehicle" (a drive derived from a vehicle simulation's deflections, see `vehicle_rig`; damper: the sine
+    series, then the derived random).
     `damper_type` (damper only): "passive", "mr" (magnetorheological, commanded by coil voltage) or "cdc"
     (continuously controlled valve, commanded by valve current); the semi-active types add a lab-like command signal.
     """
