@@ -3,12 +3,14 @@
 The demo's damper-hysteresis network and its bushing networks (one per channel: axial force, radial force, axial
 torque, conical torque; `--channels` picks) are trained on the simulated lab records (damper dyno: 70 s, sine series
 then random stroke, default effects hysteresis, seal friction, inertia, the dyno's 2 kg moving mass taken out as
-`nnfmu demo` does; bushing rig: 60 s random drive, viscoelastic and friction; seed 0, realistic noise), `--quick` as
+`nnfmu demo` does; bushing rig: 60 s, the dynamic-stiffness series then random drive, viscoelastic and friction;
+seed 0, realistic noise), `--quick` as
 `nnfmu demo --quick` trains them (one start, the thesis's hidden size, 8 Levenberg-Marquardt epochs). Each network is
 then characterised through its FMU at the standard tests, and the same tests are run on the truth law directly (10
 integration steps per sample; the damper's without its inertia, which the network was trained without). Per test
 point: the deviation from the truth, beside the network's own error (test-split NRMSE and RMS error of the output).
-The damper is also characterised beside its lab record's sine series (`--measured`). Each network's own error is its
+The damper is also characterised beside its lab record's sine series, each bushing beside its lab record's
+stiffness series (`--measured`; a bushing point says whether that series held it). Each network's own error is its
 FMU's RMS force error on a held-out noise-free random record (30 s, seed 1; the damper's with the fixture's m·a taken
 out, as in training); a damper test speed is within it when its rebound and jounce force deviations each are at most
 that, a dynamic-stiffness point when the RMS of its first-harmonic force deviation |K*model − K*truth|·x/√2 is at most
@@ -41,6 +43,7 @@ from nnfmu.data.rigs import (
     DEFAULT_EFFECTS,
     BushingChannelTruth,
     BushingParams,
+    BushingRig,
     DamperParams,
     DamperTruth,
     RigOptions,
@@ -206,6 +209,8 @@ def bench_bushing(quick: bool, folder: Path, key: str) -> dict:
     else:
         _data, onnx_path, own = _train("bushing", preset, quick, folder)
         (folder / f"{preset}.json").write_text(json.dumps(own), encoding="utf-8")
+    rig = BushingRig()
+    series = {(f, round(a * rig.vehicle_range[key], 12)) for f in rig.sine_frequencies for a in rig.sine_amplitudes}
     own = own | _own_error(onnx_path, "bushing")
     settings = CharacteriseSettings()
     characterise(onnx_path, folder / f"{preset}_report", settings=settings, log=lambda _: None)
@@ -238,9 +243,21 @@ def bench_bushing(quick: bool, folder: Path, key: str) -> dict:
                 "relative_first_harmonic_deviation_%": relative,
                 "within_own_relative_error": relative <= own["heldout_nrmse_%"],
                 "training_envelope": row["training_envelope"],
+                "in_lab_sine_series": (p.frequency, round(p.amplitude, 12)) in series,
             }
         )
     inside = [p for p in points if p["training_envelope"] == "inside"]
+    characterise(onnx_path, folder / f"{preset}_measured", folder / "bushing_lab.csv", settings, log=lambda _: None)
+    measured = [
+        {
+            "frequency_Hz": r["frequency [Hz]"],
+            f"amplitude_{position}": r[f"amplitude [{position}]"],
+            "stiffness_deviation_%": r["stiffness_deviation [%]"],
+            "loss_angle_deviation_deg": r["loss_angle_deviation [deg]"],
+        }
+        for r in _csv(folder / f"{preset}_measured" / "dynamic_stiffness.csv")
+        if r["channel"] == key
+    ]
     return {
         "network": own,
         "channel": key,
@@ -253,6 +270,7 @@ def bench_bushing(quick: bool, folder: Path, key: str) -> dict:
         "inside_envelope_within_own_relative_error": [sum(p["within_own_relative_error"] for p in inside), len(inside)],
         "points_vs_truth": points,
         "quasi_static_loop": _loop_compare(onnx_path, plan, law, channel),
+        "points_vs_lab_sine_series": measured,
     }
 
 
