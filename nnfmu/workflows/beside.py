@@ -1,9 +1,9 @@
 """One use case run in a child process beside the caller's own work, on another core.
 
-The demo's stages run one after the other on one core (training is single-threaded), while the component loop needs
-nothing any other stage makes: `Beside` runs it in a spawned child process from the start, so a two-core machine does
-both at once. The child's log lines reach the caller as they come; `result()` waits for its return value or raises its
-error in the caller; leaving the `beside` block early stops the child.
+Some of the demo's stages need nothing any other stage makes (the component networks, the component loop): `Beside`
+runs each in a spawned child process from the start, so a two-core machine keeps both cores busy until the end. The
+child's log lines reach the caller as they come; `result()` waits for its return value or raises its error in the
+caller; leaving the `beside` block early stops the child.
 """
 
 from __future__ import annotations
