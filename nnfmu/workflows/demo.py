@@ -82,12 +82,10 @@ MOVING_MASS_BY_RIG: dict[str, float] = {"damper": DamperParams().moving_mass}
 QUICK_EPOCHS = 8
 QUICK_LOOP_EPOCHS = 30
 # What `announcement` promises, as measured (README: measured times) on 2 otherwise idle cores building linux
-# binaries only: the quick run 27-35 s wall, the full run 4 min 27 s - 5 min 04 s (2026-11-28, Levenberg-Marquardt in
-# numpy with a search's runs side by side; the upper figures with the axial force preset's stop operators, the
-# passivity pick, the radial and axial torque presets' 3 ms memory branch and the wider radial and conical stops;
-# 4 min 48 s and 4 min 51 s once the search started its largest networks first).
+# binaries only: the quick run 29-30 s wall, the full run 4 min 22 s and 4 min 25 s (2026-11-28, late, the component
+# networks and the component loop each in a child process of their own; 4 min 51 s and 4 min 56 s before, alternated).
 QUICK_MINUTES = "half a minute"
-FULL_MINUTES = "4-5 min"
+FULL_MINUTES = "4.5 min"
 PRESETS_BY_RIG: dict[str, tuple[str, ...]] = {
     "damper": ("damper-spline", "damper-hysteresis"),
     "bushing": ("bushing-axial-force", "bushing-radial-force", "bushing-axial-torque", "bushing-conical-torque"),
@@ -100,12 +98,15 @@ class DemoSettings:
     run of every stage (used by the tests), not results to quote; vehicle_bushings: the road test's bushing networks
     are trained on a rig record derived from the vehicle (`train_vehicle_bushings`) instead of the lab record;
     vehicle_dampers: its damper networks on a dyno record derived from the same vehicle result
-    (`train_vehicle_dampers`; needs vehicle_bushings, which makes that result)."""
+    (`train_vehicle_dampers`; needs vehicle_bushings, which makes that result); side_lanes: the stages that need
+    nothing the others make each in a child process of their own (True) or one after the other in one (False; None:
+    one only when quick, whose short stages gain less than a third interpreter's start costs)."""
 
     seed: int = 0
     quick: bool = False
     vehicle_bushings: bool = True
     vehicle_dampers: bool = True
+    side_lanes: bool | None = None
 
     @property
     def announcement(self) -> str:
@@ -307,16 +308,22 @@ class SideStage:
     loop: LoopReport | None = None
 
 
-def side_stage(out: Path, settings: DemoSettings, stage: str, log: Callable[[str], None]) -> SideStage:
-    """One stage that needs nothing the others make, `COMPONENT_STAGE` or `LOOP_STAGE`, as a demo child process runs
-    it (quick: host binaries only, as in the caller)."""
+def side_stages(
+    out: Path, settings: DemoSettings, stages: tuple[str, ...], log: Callable[[str], None]
+) -> dict[str, SideStage]:
+    """Stages that need nothing the others make (`COMPONENT_STAGE`, `LOOP_STAGE`), one after the other, as a demo
+    child process runs them (quick: host binaries only, as in the caller)."""
+    done: dict[str, SideStage] = {}
     with host_binaries_only() if settings.quick else nullcontext():
-        start = time.perf_counter()
-        if stage == COMPONENT_STAGE:
-            report, models = _components(out, settings, log)
-            return SideStage(time.perf_counter() - start, report=report, models=models)
-        loop = close_the_loop(out, settings, log)
-        return SideStage(time.perf_counter() - start, loop=loop)
+        for stage in stages:
+            start = time.perf_counter()
+            if stage == COMPONENT_STAGE:
+                report, models = _components(out, settings, log)
+                done[stage] = SideStage(time.perf_counter() - start, report=report, models=models)
+            else:
+                loop = close_the_loop(out, settings, log)
+                done[stage] = SideStage(time.perf_counter() - start, loop=loop)
+    return done
 
 
 def thesis_residual(
@@ -478,18 +485,22 @@ def run_demo(
         # that need nothing the others make (the component networks, when the road test trains its own networks on
         # vehicle-derived records, and the component loop) each run in a child process of their own beside the rest:
         # one after the other in one child, they were the demo's longest lane (5 min against the rest's 3 min 40 s).
+        # A quick run keeps them in one child (`DemoSettings.side_lanes`).
         beside_components = settings.vehicle_bushings and settings.vehicle_dampers
         side_names = [COMPONENT_STAGE, LOOP_STAGE] if beside_components else [LOOP_STAGE]
+        own_lanes = not settings.quick if settings.side_lanes is None else settings.side_lanes
+        lanes = [(name,) for name in side_names] if own_lanes else [tuple(side_names)]
         with ExitStack() as children:
             if settings.quick:
                 children.enter_context(host_binaries_only())
             children.enter_context(kernel_compiled_in_background())
-            sides = {
-                name: children.enter_context(beside(name, side_stage, (out, settings, name), clock.aside))
-                for name in side_names
-            }
+            sides = [
+                children.enter_context(beside(" and ".join(lane), side_stages, (out, settings, lane), clock.aside))
+                for lane in lanes
+            ]
             clock.log(settings.announcement)
-            clock.log(f"{' and '.join(side_names)}: started, each in its own process, beside the other stages")
+            where = "in a child process" if len(lanes) == 1 else "each in a child process of its own"
+            clock.log(f"{' and '.join(side_names)}: started {where} beside the other stages")
             onnx_files: dict[str, Path] = {}
             if not beside_components:
                 with clock.stage(COMPONENT_STAGE):
@@ -527,9 +538,9 @@ def run_demo(
             with clock.stage("drive iteration"):
                 iteration = iterate_road_drive(road, out / "iterate", settings, clock.log)
             with clock.stage(f"waiting for {' and '.join(side_names)}"):
-                done = {name: side.result() for name, side in sides.items()}
-            for name, stage in done.items():
-                clock.record(f"{name} (own process)", stage.seconds)
+                done = {name: stage for side in sides for name, stage in side.result().items()}
+            for name in side_names:
+                clock.record(f"{name} (own process)", done[name].seconds)
             loop = done[LOOP_STAGE].loop
             if beside_components:
                 report, results = done[COMPONENT_STAGE].report, done[COMPONENT_STAGE].models
