@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from pathlib import Path
 
-from matplotlib.ticker import NullFormatter, ScalarFormatter
+from matplotlib.ticker import FormatStrFormatter, NullFormatter
 
 from nnfmu.validate.plots import axis_label, new_axes
 from nnfmu.workflows.characterise.analysis import DamperPoint, StiffnessPoint
@@ -100,7 +100,8 @@ def stiffness_plots(
 ) -> dict[str, str]:
     """|K*| and loss angle against frequency (log axis), a line per amplitude; measured points as circles."""
     groups = amplitude_groups([p.amplitude for p in points])
-    frequencies = sorted({round(p.frequency, 6) for p in points})
+    # one tick per test frequency to 3 digits: a record's tests run at its measured frequencies (14.99, 15.02 Hz)
+    frequencies = sorted({float(f"{p.frequency:.3g}") for p in points})
     names = {}
     for key, label in (("dynamic_stiffness", f"|K*| [{channel.stiffness_unit}]"), ("loss_angle", "loss angle [deg]")):
         figure, axes = new_axes(f"{channel.key}: {'dynamic stiffness' if key == 'dynamic_stiffness' else 'loss angle'}")
@@ -114,7 +115,7 @@ def stiffness_plots(
                 axes.plot(f, [getattr(measured[j], key) for j in idx], "o", mfc="none", color=f"C{group % 10}")
         axes.set_xscale("log")
         axes.set_xticks(frequencies)
-        axes.xaxis.set_major_formatter(ScalarFormatter())
+        axes.xaxis.set_major_formatter(FormatStrFormatter("%g"))
         axes.xaxis.set_minor_formatter(NullFormatter())
         axes.set_xlabel("frequency [Hz]")
         axes.set_ylabel(label)

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 import nnfmu
 from nnfmu.atomic import write_text_atomic
@@ -66,6 +67,7 @@ def plot_residual_vs_features(
     for i, name in enumerate(names):
         axes = figure.add_subplot(1, len(names), i + 1)
         axes.plot(values[pick, spec.feature_names.index(name)], residual[pick], ".", markersize=2, alpha=0.5)
+        axes.xaxis.set_major_locator(MaxNLocator(4))  # a panel holds four labels like -0.0005 side by side
         axes.set_xlabel(axis_label(short_feature_name(name), feature_unit(spec, name, m.units)), parse_math=False)
         axes.set_ylabel(axis_label(f"residual {report.output}", unit), parse_math=False)
         axes.grid(True, alpha=0.3)

@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter
 
 import nnfmu
 from nnfmu.atomic import write_text_atomic
@@ -132,6 +133,10 @@ def plot_nrmse(report: VehicleLoopReport, path: Path) -> Path:
         axes.barh(y + shift, values, height=0.4, color=color, label=when)
     axes.set_yticks(y, names)
     axes.set_xscale("log")
+    # 1-2-5 ticks as plain numbers: within a decade the default labels every minor tick and they collide
+    axes.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+    axes.xaxis.set_major_formatter(FormatStrFormatter("%g"))
+    axes.xaxis.set_minor_formatter(NullFormatter())
     axes.set_xlabel("NRMSE [%]")
     axes.legend()
     figure.savefig(path, format="png")
