@@ -16,9 +16,10 @@ out, as in training); a damper test speed is within it when its rebound and joun
 that, a dynamic-stiffness point when the RMS of its first-harmonic force deviation |K*model − K*truth|·x/√2 is at most
 that (and, as a share of the force, when |K*model − K*truth| / |K*truth| is at most the network's held-out NRMSE: the
 random record's forces are mostly smaller than a full-amplitude sine's); each point says whether it lies inside the
-network's training envelope, and the quasi-static loop is compared with the truth's along the same motion (force at the
-largest deflections, loop area, RMS difference). `--work DIR` keeps the trained network there and reuses it on the next
-run (the JSON's `network` says how it was trained).
+network's training envelope (its inputs' range, and the frequency band its record excited), and the quasi-static
+loop is compared with the truth's along the same motion (force at the largest deflections, loop area, RMS
+difference). `--work DIR` keeps the trained network there and reuses it on the next run (the JSON's `network` says
+how it was trained).
 
 Usage: python bench/characterise.py [--quick] [--only damper|bushing] [--channels KEY ...] [--work DIR] [--out FILE]
 """
@@ -86,6 +87,7 @@ def _train(kind: str, preset: str, quick: bool, folder: Path, moving_mass: float
         "test_split_nrmse": model.metrics["test"]["nrmse"],
         "lab_record_rms_error": float(np.sqrt(np.mean((prediction - target) ** 2))),  # noisy record, whole
         "output_unit": model.units[output],
+        "training_band_Hz": model.band,  # per input: 99 % of its power below (a test above it is outside)
     }
     return data, outcome.path, error
 

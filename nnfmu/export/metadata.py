@@ -11,6 +11,8 @@ import numpy as np
 
 import nnfmu
 from nnfmu.component import Component, Port, StatePort
+from nnfmu.data.band import BAND_POWER_SHARE
+from nnfmu.export.band import TRAINING_BAND
 from nnfmu.export.errors import ExportError
 from nnfmu.export.networks import max_abs_weight
 from nnfmu.export.step_graph import STATE, STATE_NEXT, network_sizes, state_layout
@@ -83,6 +85,8 @@ def build_component(model: TrainedModel, name: str, description: str) -> Compone
         "metrics": model.metrics,
         "max_abs_weight": max_abs_weight(model.network),
     }
+    if model.band:
+        metadata[TRAINING_BAND] = {"power_share": BAND_POWER_SHARE, "upper_edge_Hz": dict(model.band)}
     return Component(
         name=name,
         inputs=[_input_port(model, c) for c in spec.channels],

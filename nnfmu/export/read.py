@@ -13,6 +13,7 @@ import torch
 from onnx import numpy_helper
 
 from nnfmu.component import Component
+from nnfmu.export.band import carried_band
 from nnfmu.export.errors import ExportError
 from nnfmu.export.initializers import (
     FEATURE_GAIN,
@@ -92,5 +93,6 @@ def read_step_graph(path: str | os.PathLike[str]) -> tuple[TrainedModel, Compone
         metrics=dict(meta.get("metrics", {})),
         data_hash=str(meta.get("data_hash", "")),
         settings=dict(meta.get("training", {})),
+        band=carried_band(component),
     )
     return model, component

@@ -306,5 +306,6 @@ def _retrained(
             },
         },
         old.envelope,
+        old.band,
     )
     return Retrained(model=model, start=start, extra_hidden=extra, validation_mse=scores, epochs=epochs)

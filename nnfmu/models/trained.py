@@ -11,6 +11,7 @@ import numpy as np
 import torch
 
 from nnfmu.data import Measurement
+from nnfmu.data.band import excited_band
 from nnfmu.models.features import FeatureSpec
 from nnfmu.models.networks import MLP, GRUNet
 from nnfmu.models.scaling import MinMaxScaler
@@ -22,7 +23,9 @@ class TrainedModel:
 
     `feature_scaler` maps the spec's feature columns to [-1, 1]; `target_scaler` the output channel.
     `units` holds the SI unit of every input channel and of the output; `envelope` the (min, max) of every input
-    channel over the training data; `metrics` maps split name ("train", "validation", "test") to metric values.
+    channel over the training data; `band` the upper edge [Hz] of the frequency band each input channel's training
+    record excites (`excited_band`; empty: not known, e.g. a model read back from an older file); `metrics` maps split
+    name ("train", "validation", "test") to metric values.
     """
 
     spec: FeatureSpec
@@ -35,6 +38,7 @@ class TrainedModel:
     metrics: dict[str, dict[str, float]] = field(default_factory=dict)
     data_hash: str = ""
     settings: dict[str, Any] = field(default_factory=dict)
+    band: dict[str, float] = field(default_factory=dict)
 
     def predict(self, channels: dict[str, np.ndarray]) -> np.ndarray:
         """Simulate the model sample by sample from rest over the given input channels -> output (n,) in SI units."""
@@ -69,16 +73,19 @@ def trained_model(
     metrics: dict[str, dict[str, float]],
     settings: dict[str, Any],
     earlier_envelope: Mapping[str, tuple[float, float]] | None = None,
+    earlier_band: Mapping[str, float] | None = None,
 ) -> TrainedModel:
     """The one way a fit becomes a TrainedModel (a first fit and a retraining alike): units and the data hash from the
-    measurement, each input's envelope over the training rows (widened by `earlier_envelope` where it has the
-    channel: a retrained model keeps the range its predecessor was trained on)."""
-    envelope = {}
+    measurement, each input's envelope over the training rows and the band its record excites (the whole record: the
+    training rows are blocks spread over it), each widened by `earlier_envelope` and `earlier_band` where they have
+    the channel (a retrained model keeps what its predecessor was trained on)."""
+    envelope, band = {}, {}
     for c in spec.channels:
         lo, hi = float(np.min(measurement[c][train_rows])), float(np.max(measurement[c][train_rows]))
         if earlier_envelope is not None and c in earlier_envelope:
             lo, hi = min(lo, earlier_envelope[c][0]), max(hi, earlier_envelope[c][1])
         envelope[c] = (lo, hi)
+        band[c] = max(excited_band(measurement[c], sample_period), (earlier_band or {}).get(c, 0.0))
     return TrainedModel(
         spec=spec,
         network=network,
@@ -90,4 +97,5 @@ def trained_model(
         metrics=metrics,
         data_hash=data_hash(measurement, [*spec.channels, spec.output]),
         settings=settings,
+        band=band,
     )

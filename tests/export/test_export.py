@@ -50,6 +50,7 @@ def make_model(spec: FeatureSpec, recurrent: bool, units: dict[str, str] | None 
         metrics={"test": {"nrmse": 0.05}},
         data_hash="ab" * 32,
         settings={"epochs": 3, "hidden": 7, "seed": np.int64(seed)},
+        band={c: 20.0 + 5 * i for i, c in enumerate(spec.channels)},
     )
 
 
@@ -135,6 +136,7 @@ def test_component_round_trip_from_file(tmp_path, recurrent):
         and meta["training"]["seed"] == 0
     )
     assert [s["name"] for s in meta["state_layout"]][: spec.state_size] == [s.name for s in spec.state_layout()]
+    assert meta["training_band"] == {"power_share": 0.99, "upper_edge_Hz": model.band}
     assert meta["max_abs_weight"] == pytest.approx(
         max(float(p.detach().abs().max()) for p in model.network.parameters())
     )

@@ -29,7 +29,7 @@ def test_a_model_read_back_predicts_what_its_graph_computes_and_exports_to_the_s
     first = tmp_path / "first.onnx"
     export_onnx(model, first)
     loaded, component = read_step_graph(first)
-    assert loaded.spec == model.spec and loaded.sample_period == model.sample_period
+    assert loaded.spec == model.spec and loaded.sample_period == model.sample_period and loaded.band == model.band
     assert component.sample_period == model.sample_period
     x = signals(MLP_SPEC.channels, 400, seed=7)
     np.testing.assert_allclose(loaded.predict(x), run_step_graph(first, x)["force"], rtol=1e-10, atol=1e-9)
@@ -78,3 +78,21 @@ def test_malformed_metadata_is_refused_as_an_export_error(tmp_path):
     onnx.save(graph, str(tmp_path / "spec.onnx"))
     with pytest.raises(ExportError, match=r"spec\.onnx: cannot read the feature spec: .*'taps'"):
         read_step_graph(tmp_path / "spec.onnx")
+
+
+def test_the_training_band_reads_back_and_a_graph_without_one_has_none(tmp_path):
+    """An older graph carries no band (its report then judges test points by range alone); a malformed one is
+    refused naming the input and value."""
+    path = tmp_path / "mlp.onnx"
+    export_onnx(make_model(MLP_SPEC, recurrent=False), path)
+    graph = onnx.load(str(path))
+    description = json.loads(next(p.value for p in graph.metadata_props if p.key == METADATA_KEY))
+    del description["metadata"]["training_band"]
+    replace_metadata(graph, METADATA_KEY, json.dumps(description))
+    onnx.save(graph, str(tmp_path / "older.onnx"))
+    assert read_step_graph(tmp_path / "older.onnx")[0].band == {}
+    description["metadata"]["training_band"] = {"power_share": 0.99, "upper_edge_Hz": {"velocity": float("nan")}}
+    replace_metadata(graph, METADATA_KEY, json.dumps(description))
+    onnx.save(graph, str(tmp_path / "nan.onnx"))
+    with pytest.raises(ExportError, match="training band of input 'velocity' is nan"):
+        read_step_graph(tmp_path / "nan.onnx")

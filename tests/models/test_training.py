@@ -14,6 +14,7 @@ import torch
 from torch.func import functional_call, jacrev
 
 from nnfmu.component import Component
+from nnfmu.data.band import excited_band
 from nnfmu.data.measurement import Measurement
 from nnfmu.models import train as train_module
 from nnfmu.models.features import FeatureSpec, Stop, Tap
@@ -295,6 +296,7 @@ def test_trained_model_carries_context():
     model = result.model
     train, test = result.splits.index("train"), result.splits.index("test")
     assert model.envelope["velocity"] == (m["velocity"][train].min(), m["velocity"][train].max())
+    assert model.band == {"velocity": excited_band(m["velocity"], T)} and model.band["velocity"] > 0
     assert model.units == {"velocity": "m/s", "force": "N"}
     assert model.sample_period == pytest.approx(T)
     assert set(model.metrics) == {"train", "validation", "test"}

@@ -59,10 +59,11 @@ def _envelope_line(rows: list[Row]) -> list[str]:
     """How many test points drive the network beyond its training envelope (its answer there is extrapolation)."""
     outside = sum(row["training_envelope"] != INSIDE for row in rows)
     if not outside:
-        return ["Every test point lies inside the network's training envelope (column training envelope)."]
+        return ["Every test point lies inside the network's training envelope and band (column training envelope)."]
     return [
-        f"{outside} of {len(rows)} test points drive an input beyond the network's training envelope (column "
-        "training envelope): its answer there is extrapolation, not what its rig data held."
+        f"{outside} of {len(rows)} test points drive an input beyond the network's training envelope, or run above "
+        "the frequency band its training record excited (column training envelope): its answer there is "
+        "extrapolation, not what its rig data held."
     ]
 
 
@@ -81,7 +82,8 @@ def _damper(
     rows = characteristic_rows(result, label, measured)
     rates = {"velocity": "peak_velocity [m/s]", "displacement": "amplitude [m]"}
     for row in rows:
-        row["training_envelope"] = envelope_note(model.component, {k: float(row[c] or 0.0) for k, c in rates.items()})
+        peaks = {k: float(row[c] or 0.0) for k, c in rates.items()}
+        row["training_envelope"] = envelope_note(model.component, peaks, float(row["frequency [Hz]"]))
     how = (
         f"sine tests found in {record.source}, run on the model at their amplitude, frequency and command"
         if measured and record is not None
@@ -184,7 +186,7 @@ def _bushing(
     points = [(ch, p) for ch in result.channels for p in result.points[ch.key]]  # the rows' order
     for row, (ch, p) in zip(rows, points, strict=True):
         peaks = {ch.position: p.amplitude} | ({ch.rate: 2 * math.pi * p.frequency * p.amplitude} if ch.rate else {})
-        row["training_envelope"] = envelope_note(model.component, peaks)
+        row["training_envelope"] = envelope_note(model.component, peaks, p.frequency)
     stiffness = Section(
         "Dynamic stiffness and loss angle",
         [

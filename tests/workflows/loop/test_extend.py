@@ -111,6 +111,9 @@ def test_warm_start_keeps_old_scalers_and_lowers_the_validation_error():
     assert set(result.validation_mse) == {0, 2} and result.extra_hidden in (0, 2)
     assert new.network.hidden.out_features == 3 + result.extra_hidden
     assert new.settings["retraining"]["effect"] == "temperature"
+    # the band each input was trained on is kept or widened, the new input's added
+    assert model.band and all(new.band[c] >= edge for c, edge in model.band.items())
+    assert new.band.keys() == set(ext.spec.channels)
 
 
 def test_fresh_start_trains_a_seeded_network_of_the_given_size_on_the_extended_inputs():
