@@ -15,7 +15,8 @@ Progress goes to stderr; the last stdout line is one JSON object: run times, the
 bushing and damper networks were trained on, `realtime_factor_full_vehicle` (simulated seconds per wall second of
 the full vehicle with the hysteresis damper networks), the error `budget` (per system, channel and damper model:
 nrmse_total, nrmse_network, nrmse_coupling, damage_ratio; see nnfmu/workflows/roadtest/budget.py), the thesis
-comparison, and the largest use of each network input's training envelope.
+comparison, the largest use of each network input's training envelope, and each input's share of power above the band
+its training record excited (`power_above_training_band`; the record holds 1 % there).
 """
 
 from __future__ import annotations
@@ -137,11 +138,13 @@ def main() -> None:
     train_seconds = time.perf_counter() - started
     result = run_road_test(out, models, settings, log=log)
     summary = json.loads(result.summary.read_text())
-    envelope = {}
+    envelope, above_band = {}, {}
     for system in summary["systems"]:
         for e in system["envelope"]:
             key = f"{system['system']}: {e['run']}: {e['element']}.{e['port']}"
             envelope[key] = max(envelope.get(key, 0.0), e["range_used"] or 0.0)
+            if e.get("power_above_band") is not None:
+                above_band[key] = {"band_edge_Hz": e["band_edge"], "power_above": e["power_above_band"]}
     full = next((s for s in summary["systems"] if s["system"] == "full-vehicle"), None)
     print(
         json.dumps(
@@ -159,6 +162,7 @@ def main() -> None:
                 "reports": {k: str(v) for k, v in result.reports().items()},
                 "systems": [{k: s[k] for k in ("system", "seconds", "thesis_table")} for s in summary["systems"]],
                 "largest_envelope_use": envelope,
+                "power_above_training_band": above_band,
             },
             allow_nan=False,
         )

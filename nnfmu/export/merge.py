@@ -18,6 +18,7 @@ import onnx
 from onnx import TensorProto, helper, numpy_helper
 
 from nnfmu.component import Component, Port, StatePort, same_period
+from nnfmu.export.band import TRAINING_BAND, carried_band
 from nnfmu.export.errors import ExportError
 from nnfmu.export.graph import IR_VERSION, OPSET
 from nnfmu.reference_stimulus import ReferenceStimulus, merge_stimuli
@@ -82,6 +83,21 @@ def merge_inputs(components: Sequence[Component]) -> list[Port]:
                 raise MergeError(f"input {port.name!r}: the parts' training envelopes do not overlap")
             merged[port.name] = Port(seen.name, seen.unit, seen.description, seen.tensor, seen.index, lo, hi)
     return list(merged.values())
+
+
+def merge_bands(components: Sequence[Component]) -> dict[str, object] | None:
+    """The training band every part trusts, as metadata: per input the lowest edge of the parts that take it (as the
+    envelope is their intersection); None when a part carries no band or the parts' power shares differ (the merged
+    graph then says nothing about its inputs' band)."""
+    bands = [carried_band(c) for c in components]
+    shares = {str(c.metadata.get(TRAINING_BAND, {}).get("power_share")) for c in components}
+    if not all(bands) or len(shares) != 1:
+        return None
+    edges: dict[str, float] = {}
+    for band in bands:
+        for name, edge in band.items():
+            edges[name] = min(edge, edges.get(name, edge))
+    return {"power_share": components[0].metadata[TRAINING_BAND]["power_share"], "upper_edge_Hz": edges}
 
 
 def _check_outputs(components: Sequence[Component], inputs: list[Port]) -> list[Port]:
@@ -234,6 +250,7 @@ def merge_step_graphs(models: Sequence[onnx.ModelProto], name: str, description:
         metadata={
             "merged_from": [{"name": c.name, "description": c.description, "metadata": c.metadata} for c in components],
             "state_layout": layout,
+            **({TRAINING_BAND: band} if (band := merge_bands(components)) is not None else {}),
         },
     ).attach_to(merged)
     stimulus = merge_stimuli([_stimulus(m, i) for i, m in enumerate(models)])

@@ -1,5 +1,6 @@
 """Did a co-simulation drive a network outside what it was trained on? One warning line per network input whose
-signal left the training envelope its FMU carries (the step graph inside the FMU, `nnfmu.fmu.step_graph`).
+signal left the training envelope its FMU carries (the step graph inside the FMU, `nnfmu.fmu.step_graph`), or moved
+with much more of its power above the band its training record excited than the record did.
 
 A network's error in a car is its error on the car's motion: where a pothole drives a damper past the dyno
 program's peak velocity the network extrapolates, and that share of the run is where the vehicle result is worst.
@@ -10,12 +11,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from nnfmu.component import Component
+from nnfmu.component import Component, Port
 from nnfmu.cosim import DriveBinding
 from nnfmu.data import Measurement
+from nnfmu.data.band import BAND_POWER_SHARE
+from nnfmu.export import ExportError
+from nnfmu.export.band import carried_band
 from nnfmu.fmu import StepGraphError
-from nnfmu.workflows.roadtest.envelope import excursion
+from nnfmu.workflows.roadtest.envelope import Excursion, excursion
 from nnfmu.workflows.system import VirtualSystem
+
+# A run warns when an input holds more than this share of its power above its training band (the record: 1 %).
+BAND_WARN_SHARE = 0.05
 
 
 def _carried_component(system: VirtualSystem, element: str) -> Component | None:
@@ -33,7 +40,9 @@ def _channel(binding: DriveBinding, element: str, connector: str) -> str:
 
 def training_range_lines(system: VirtualSystem, result: Measurement) -> list[str]:
     """A line per network input whose signal in `result` (a run on the system's drive binding) left its training
-    envelope: the range reached, how far past the envelope, on what share of the run and from when."""
+    envelope (the range reached, how far past the envelope, on what share of the run and from when) or held more than
+    BAND_WARN_SHARE of its power above the band its training record excited; a line per element whose carried band
+    cannot be read."""
     lines = []
     binding = system.drive_binding()
     feeds = {
@@ -43,22 +52,38 @@ def training_range_lines(system: VirtualSystem, result: Measurement) -> list[str
         component = _carried_component(system, element.name)
         if component is None:
             continue
+        try:
+            band = carried_band(component)
+        except ExportError as err:
+            lines.append(f"element {element.name!r}: {err}; its inputs' frequencies were not checked")
+            band = {}
         for port in component.inputs:
             source = feeds.get((element.name, port.name))
             channel = None if source is None else _channel(binding, *source)
-            if channel is None or channel not in result.channels or (port.min is None and port.max is None):
+            if channel is None or channel not in result.channels:
                 continue
             signal = result[channel]
-            used = excursion("cosim", element.name, port, signal)
-            if used.share_outside == 0.0:
-                continue
-            outside = (signal < used.envelope_min) | (signal > used.envelope_max)
-            first = float(result.time[np.flatnonzero(outside)[0]])
-            lines.append(
-                f"element {element.name!r}: input {port.name!r} reached {used.signal_min:.4g} to "
-                f"{used.signal_max:.4g} {port.unit}, {used.range_used:.2f}x its training envelope "
-                f"[{used.envelope_min:.4g}, {used.envelope_max:.4g}] {port.unit}, on {used.share_outside:.2%} of the "
-                f"run (first at {first:.4g} s): the network extrapolates there and the result is least trustworthy "
-                f"there; train on a record that covers the range"
-            )
+            edge = band.get(port.name)
+            used = excursion("cosim", element.name, port, signal, edge, result.sample_period)
+            if used.share_outside > 0.0:
+                outside = (signal < used.envelope_min) | (signal > used.envelope_max)
+                lines.append(_range_line(element.name, port, used, float(result.time[np.flatnonzero(outside)[0]])))
+            if used.power_above_band is not None and used.power_above_band > BAND_WARN_SHARE:
+                lines.append(
+                    f"element {element.name!r}: input {port.name!r} held {used.power_above_band:.1%} of its power "
+                    f"above {used.band_edge:.4g} Hz, the band its training record excited (which held "
+                    f"{1 - BAND_POWER_SHARE:.0%} there): the network extrapolates in frequency; train on a record "
+                    "whose drive reaches the frequencies of the run"
+                )
     return lines
+
+
+def _range_line(element: str, port: Port, used: Excursion, first: float) -> str:
+    """The warning for an input that left its training envelope, first at `first` [s]."""
+    return (
+        f"element {element!r}: input {port.name!r} reached {used.signal_min:.4g} to "
+        f"{used.signal_max:.4g} {port.unit}, {used.range_used:.2f}x its training envelope "
+        f"[{used.envelope_min:.4g}, {used.envelope_max:.4g}] {port.unit}, on {used.share_outside:.2%} of the "
+        f"run (first at {first:.4g} s): the network extrapolates there and the result is least trustworthy "
+        f"there; train on a record that covers the range"
+    )

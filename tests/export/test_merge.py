@@ -68,6 +68,7 @@ def exported(spec: FeatureSpec, path, seed: int, period: float = T) -> onnx.Mode
         metrics={"test": {"nrmse": 0.1}},
         data_hash="cd" * 32,
         settings={"seed": seed},
+        band={c: 20.0 + seed + i for i, c in enumerate(spec.channels)},
     )
     return onnx.load(export_onnx(model, path, name=f"{spec.output}_{seed}").path)
 
@@ -105,6 +106,27 @@ def test_shared_inputs_are_one_port_with_the_common_envelope(tmp_path) -> None:
     together = run_step_graph(merged, channels)
     np.testing.assert_array_equal(together["axial_force"], run_step_graph(first, channels)["axial_force"])
     np.testing.assert_array_equal(together["axial_torque"], run_step_graph(second, channels)["axial_torque"])
+
+
+def test_a_merged_graph_carries_the_band_every_part_trusts(tmp_path) -> None:
+    """Per input the lowest edge of the parts that take it, as the envelope is their intersection; nothing when a
+    part carries no band."""
+    first = exported(FORCE, tmp_path / "a.onnx", 3)
+    second = exported(FeatureSpec(taps=FORCE.taps, output="axial_torque"), tmp_path / "b.onnx", 4)
+    part = Component.from_onnx(second)
+    edges = dict(part.metadata["training_band"]["upper_edge_Hz"], axial_velocity=12.0)
+    part.metadata["training_band"]["upper_edge_Hz"] = edges
+    part.attach_to(second)
+    merged = Component.from_onnx(merge_step_graphs([first, second], "shared")).metadata["training_band"]
+    first_edges = Component.from_onnx(first).metadata["training_band"]["upper_edge_Hz"]
+    assert first_edges["axial_velocity"] > 12.0
+    assert merged == {
+        "power_share": 0.99,
+        "upper_edge_Hz": {name: min(edge, edges[name]) for name, edge in first_edges.items()},
+    }
+    del part.metadata["training_band"]
+    part.attach_to(second)
+    assert "training_band" not in Component.from_onnx(merge_step_graphs([first, second], "shared")).metadata
 
 
 def test_merged_native_fmu_with_a_stateless_part_matches_onnxruntime(parts: list[onnx.ModelProto], tmp_path) -> None:

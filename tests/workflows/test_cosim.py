@@ -7,14 +7,17 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+import onnx
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "cosim"))  # the hand-made quarter car of the master's tests
 from cosim_system_helpers import DAMPING, build, damper_graph, drive, write_system  # noqa: E402
 
+from nnfmu.component import Component  # noqa: E402
 from nnfmu.cosim.master import CosimSettings, CosimWarning  # noqa: E402
 from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd  # noqa: E402
 from nnfmu.data import load_measurement  # noqa: E402
+from nnfmu.data.band import power_above  # noqa: E402
 from nnfmu.data.drive_files import write_drive  # noqa: E402
 from nnfmu.errors import SettingsError  # noqa: E402
 from nnfmu.export.linear_damper import linear_damper_graph  # noqa: E402
@@ -80,3 +83,31 @@ def test_a_network_driven_past_its_training_envelope_is_named_with_its_range(tmp
     assert f"element 'damper': input 'velocity' reached {velocity.min():.4g} to {velocity.max():.4g} m/s" in said[0]
     assert "[-0.05, 0.05] m/s" in said[0] and f"{np.mean(np.abs(velocity) > 0.05):.2%} of the run" in said[0]
     np.testing.assert_array_equal(result.measurement["damper_force"], plain.measurement["damper_force"])
+
+
+def _banded(edge: object) -> onnx.ModelProto:
+    """The linear damper's graph carrying `edge` as its velocity's training band [Hz]."""
+    graph = linear_damper_graph(DAMPING)
+    component = Component.from_onnx(graph)
+    component.metadata = {"training_band": {"power_share": 0.99, "upper_edge_Hz": {"velocity": edge}}}
+    component.attach_to(graph)
+    return graph
+
+
+def test_a_network_driven_above_its_training_band_is_named_with_its_share_of_power(tmp_path: Path) -> None:
+    drive_file = write_drive(DRIVE, tmp_path / "drive.csv")
+    settings = CosimSettings(step=1e-3, stop_time=1.0)
+    wide = write_system(tmp_path / "wide", 1e-3, build(_banded(400.0), tmp_path / "c1", "damper"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CosimWarning)
+        run_cosim(wide, drive_file, settings)  # the run's damper motion lies within 400 Hz
+    narrow = write_system(tmp_path / "narrow", 1e-3, build(_banded(1.0), tmp_path / "c2", "damper"))
+    with pytest.warns(CosimWarning) as caught:
+        result = run_cosim(narrow, drive_file, settings)
+    said = [str(w.message) for w in caught if "band" in str(w.message)]
+    share = power_above(result.measurement["damper_velocity"], 1e-3, 1.0)
+    assert share > 0.05 and len(said) == 1, said
+    assert said[0].startswith(f"element 'damper': input 'velocity' held {share:.1%} of its power above 1 Hz, the band")
+    broken = write_system(tmp_path / "broken", 1e-3, build(_banded("40"), tmp_path / "c3", "damper"))
+    with pytest.warns(CosimWarning, match="training band of input 'velocity' is '40'.*frequencies were not checked"):
+        run_cosim(broken, drive_file, settings)

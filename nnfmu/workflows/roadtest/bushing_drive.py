@@ -24,7 +24,7 @@ from nnfmu.data.rigs import DriveDesign, RigOptions, write_vehicle_rig
 from nnfmu.fmu import BuildOptions, build_fmu
 from nnfmu.validate import ChannelComparison, ValidationSettings, compare
 from nnfmu.vehicle import DriveSettings, generate_drive
-from nnfmu.workflows.roadtest.envelope import Excursion, excursion
+from nnfmu.workflows.roadtest.envelope import Excursion, excursions
 from nnfmu.workflows.roadtest.open_loop import fmu_ports, open_loop_replay
 from nnfmu.workflows.roadtest.record_training import train_on_record
 from nnfmu.workflows.roadtest.runs import RoadTestSettings
@@ -148,10 +148,5 @@ def replay_bushing_networks(
         )
         for element in elements
     }
-    ports = Component.from_onnx(onnx.load(merged)).inputs
-    excursions = [
-        excursion("reference", name, port, reference[f"{name}_{port.name}"])
-        for name in bushing_elements(SYSTEM)
-        for port in ports
-    ]
-    return BushingReplay(comparisons, excursions)
+    component = Component.from_onnx(onnx.load(merged))
+    return BushingReplay(comparisons, excursions("reference", bushing_elements(SYSTEM), component, reference))

@@ -1,7 +1,9 @@
 """Does the vehicle ask a network to extrapolate? Each network input's signal against the training envelope.
 
 The FMU's `extrapolating` flag applies the same rule sample by sample (an input outside [min, max] of its port);
-here the whole time history is summarised per port: its range, the envelope, and the share of samples outside.
+here the whole time history is summarised per port: its range, the envelope, and the share of samples outside; and,
+where the network carries the band its training record excited, the share of the signal's power above that band
+(the record holds 1 % there): a car can move a part faster than the rig did without leaving its range.
 """
 
 from __future__ import annotations
@@ -10,7 +12,10 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from nnfmu.component import Port
+from nnfmu.component import Component, Port
+from nnfmu.data import Measurement
+from nnfmu.data.band import power_above
+from nnfmu.export.band import carried_band
 from nnfmu.validate.summary import json_float
 
 
@@ -27,6 +32,8 @@ class Excursion:
     envelope_min: float
     envelope_max: float
     share_outside: float
+    band_edge: float | None = None  # [Hz] the band the training record excited; None: the network carries none
+    power_above_band: float | None = None  # [1] share of the signal's power above `band_edge`
 
     @property
     def range_used(self) -> float:
@@ -42,12 +49,46 @@ class Excursion:
         return d | {"range_used": json_float(self.range_used)}
 
 
-def excursion(run: str, element: str, port: Port, signal: np.ndarray) -> Excursion:
-    """`signal` (the values the network input `port` of `element` saw) against the port's envelope."""
+def excursion(
+    run: str,
+    element: str,
+    port: Port,
+    signal: np.ndarray,
+    band_edge: float | None = None,
+    sample_period: float | None = None,
+) -> Excursion:
+    """`signal` (the values the network input `port` of `element` saw, every `sample_period` s) against the port's
+    envelope and, when given, the `band_edge` [Hz] of its training record."""
     signal = np.asarray(signal, dtype=float)
     lo = -np.inf if port.min is None else port.min
     hi = np.inf if port.max is None else port.max
     outside = float(np.mean((signal < lo) | (signal > hi)))
+    above = None
+    if band_edge is not None:
+        if sample_period is None:
+            raise ValueError(f"{element}.{port.name}: a band edge needs the signal's sample period")
+        above = power_above(signal, sample_period, band_edge)
     return Excursion(
-        run, element, port.name, port.unit, float(signal.min()), float(signal.max()), float(lo), float(hi), outside
+        run,
+        element,
+        port.name,
+        port.unit,
+        float(signal.min()),
+        float(signal.max()),
+        float(lo),
+        float(hi),
+        outside,
+        band_edge,
+        above,
     )
+
+
+def excursions(run: str, elements: list[str], component: Component, m: Measurement) -> list[Excursion]:
+    """Every input of `component` at each of `elements` along `m` (channels `<element>_<input>`) against its training
+    envelope and the band the component carries for it."""
+    band = carried_band(component)
+    return [
+        excursion(run, element, port, m[f"{element}_{port.name}"], band.get(port.name), m.sample_period)
+        for element in elements
+        for port in component.inputs
+    ]

@@ -33,7 +33,7 @@ from nnfmu.workflows.characterise.linked import LinkedCharacterisation, characte
 from nnfmu.workflows.characterise.settings import CharacteriseSettings
 from nnfmu.workflows.passivity import passivity_warnings
 from nnfmu.workflows.roadtest.budget import BudgetRow, budget_rows
-from nnfmu.workflows.roadtest.envelope import Excursion, excursion
+from nnfmu.workflows.roadtest.envelope import Excursion, excursions
 from nnfmu.workflows.roadtest.open_loop import network_errors
 from nnfmu.workflows.roadtest.report import write_system_report
 from nnfmu.workflows.roadtest.stabilisers import bushing_stabilisers
@@ -250,14 +250,6 @@ def _carried(cache: FmuCache, fmu: Path) -> Component:
     return component
 
 
-def _excursions(run_name: str, elements: list[str], component: Component, m: Measurement) -> list[Excursion]:
-    return [
-        excursion(run_name, element, port, m[f"{element}_{port.name}"])
-        for element in elements
-        for port in component.inputs
-    ]
-
-
 def _run_system(
     system: str,
     run: SystemRun,
@@ -300,7 +292,7 @@ def _run_system(
     channels = list(run.channels or COMPARED[system])
     cosims: dict[str, Measurement] = {}
     comparisons: dict[str, list[ChannelComparison]] = {}
-    excursions: list[Excursion] = []
+    used: list[Excursion] = []
     for model in ssds:
         try:
             result, seconds[model] = _cosim(systems[model], drive, run)
@@ -313,8 +305,8 @@ def _run_system(
         save_measurement(cosims[model], results_dir / f"{model.replace(' ', '-')}.csv")
         comparisons[model] = compare(cosims[model], ref, channels, validation)
         if model != TRUTH:
-            excursions.extend(
-                _excursions(
+            used.extend(
+                excursions(
                     f"co-simulation with {model}",
                     damper_elements(system),
                     _carried(cache, fmus.dampers[model]),
@@ -335,10 +327,10 @@ def _run_system(
         )
     ]
     reference_ports = _carried(cache, fmus.dampers[DAMPER_MODELS[0]])
-    excursions.extend(_excursions("reference", damper_elements(system), reference_ports, ref))
+    used.extend(excursions("reference", damper_elements(system), reference_ports, ref))
     if bushings and fmus.bushing is not None:
-        excursions.extend(
-            _excursions(
+        used.extend(
+            excursions(
                 "reference",
                 bushing_elements(system),
                 _carried(cache, fmus.bushing),
@@ -363,7 +355,7 @@ def _run_system(
         report_dir / "index.html",
         rows,
         budget,
-        excursions,
+        used,
         seconds,
         run.duration,
         settings.target,

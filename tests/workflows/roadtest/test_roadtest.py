@@ -160,6 +160,8 @@ def test_road_test_writes_reports_and_finite_thesis_metrics(road: RoadTestResult
             with open_system(ssd):
                 pass
         assert all(e["share_outside"] is not None for e in system["envelope"])
+        # every network nnfmu trains carries its inputs' training band: each input's power above it is measured
+        assert all(e["band_edge"] > 0 and 0 <= e["power_above_band"] <= 1 for e in system["envelope"])
 
 
 @pytest.mark.slow
