@@ -3,7 +3,7 @@
 The demo's damper-hysteresis network and its bushing networks (one per channel: axial force, radial force, axial
 torque, conical torque; `--channels` picks) are trained on the simulated lab records (damper dyno: 70 s, sine series
 then random stroke, default effects hysteresis, seal friction, inertia, the dyno's 2 kg moving mass taken out as
-`nnfmu demo` does; bushing rig: 60 s, the dynamic-stiffness series then random drive, viscoelastic and friction;
+`nnfmu demo` does; bushing rig: 80 s, the dynamic-stiffness series then random drive, viscoelastic and friction;
 seed 0, realistic noise), `--quick` as
 `nnfmu demo --quick` trains them (one start, the thesis's hidden size, 8 Levenberg-Marquardt epochs). Each network is
 then characterised through its FMU at the standard tests, and the same tests are run on the truth law directly (10

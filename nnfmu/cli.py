@@ -201,7 +201,9 @@ def rig(
     kind: str = typer.Argument(..., help="Rig to simulate: damper (dyno) or bushing (four-channel rig)."),
     out: str = typer.Option(..., "--out", "-o", help="Data file (.csv or .mf4); the truth file goes beside it."),
     sample_rate: float = typer.Option(1000.0, help="Sample rate [Hz]."),
-    duration: Optional[float] = typer.Option(None, help="Record length [s] (default: damper 70, bushing 60)."),
+    duration: Optional[float] = typer.Option(
+        None, help="Record length [s] (default: damper 70, bushing 80 lab, 60 random or sine)."
+    ),
     seed: int = typer.Option(0, help="Seed for excitation and sensor noise."),
     noise: float = typer.Option(1.0, help="Multiplier of the realistic sensor noise (0: exact values)."),
     effects: Optional[str] = typer.Option(

@@ -11,6 +11,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from nnfmu.data.rigs import BUSHING_CHANNELS, BushingChannelTruth, BushingParams, RigOptions, simulate_rig, write_rig
+from nnfmu.data.rigs.options import BUSHING_LAB_DURATION, resolve_duration
 from nnfmu.errors import SettingsError
 from nnfmu.physics.bushing import iwan_elements
 
@@ -148,6 +149,16 @@ def test_the_lab_schedules_stiffness_series_is_found_as_sine_tests_in_the_record
             for lv in series["levels"]
         ], key
         assert found[-1].stop / 1000.0 <= random["start_s"]
+
+
+def test_the_lab_record_is_longer_by_default_than_the_others():
+    """80 s: the series, then 53.4 s of random drive; 60 s for a random, sine or vehicle-derived record, 70 s for
+    the damper's."""
+    assert resolve_duration("bushing", RigOptions()) == BUSHING_LAB_DURATION == 80.0
+    for excitation in ("random", "sine", "vehicle"):
+        assert resolve_duration("bushing", RigOptions(excitation=excitation)) == 60.0
+    assert resolve_duration("damper", RigOptions()) == 70.0
+    assert resolve_duration("bushing", RigOptions(duration=40.0)) == 40.0
 
 
 def test_a_lab_record_too_short_for_the_stiffness_series_is_refused_naming_the_lengths():

@@ -15,6 +15,10 @@ EXCITATIONS = ("lab", "random", "sine", "vehicle")
 VEHICLE_EXCITATION = "vehicle"  # a drive derived from a vehicle result (`vehicle_rig`), never self-made
 
 DEFAULT_DURATION: dict[str, float] = {"damper": 70.0, "bushing": 60.0}  # s
+# The bushing's lab record: its dynamic-stiffness series (26.6 s), then 53.4 s of random drive, which covers the car's
+# bushing motions better than 60 s of random alone did; at 90 s training's blocks would hold the series' 20 Hz
+# full-range levels out of training (docs/characterise.md).
+BUSHING_LAB_DURATION = 80.0  # s
 MIN_SAMPLE_RATE = 100.0  # Hz: the drives reach 40 Hz, and the recorder has no anti-alias filter
 MAX_SAMPLES = 10_000_000  # per record (2.8 h at 1 kHz): a rig run holds a dozen arrays of this length in memory
 
@@ -23,13 +27,13 @@ MAX_SAMPLES = 10_000_000  # per record (2.8 h at 1 kHz): a rig run holds a dozen
 class RigOptions:
     """Settings of one simulated rig run.
 
-    `sample_rate` [Hz]; `duration` [s] (None: 70 s damper, 60 s bushing); `seed` makes runs reproducible; `noise`
-    multiplies the realistic sensor noise (0: exact truth values, no noise and no quantisation); `effects` (None: the
-    kind's defaults, (): only the base characteristic); `excitation`: "lab" (damper: sine series at standard peak
-    velocities, then band-limited random; bushing: the dynamic-stiffness sine series, then target-spectrum random
-    beyond the vehicle range), "random" (only band-limited random, for held-out test data), "sine" (only the sine
-    series) or "vehicle" (a drive derived from a vehicle simulation's deflections, see `vehicle_rig`; damper: the sine
-    series, then the derived random).
+    `sample_rate` [Hz]; `duration` [s] (None: 70 s damper, 80 s bushing lab record, 60 s other bushing records);
+    `seed` makes runs reproducible; `noise` multiplies the realistic sensor noise (0: exact truth values, no noise and
+    no quantisation); `effects` (None: the kind's defaults, (): only the base characteristic); `excitation`: "lab"
+    (damper: sine series at standard peak velocities, then band-limited random; bushing: the dynamic-stiffness sine
+    series, then target-spectrum random beyond the vehicle range), "random" (only band-limited random, for held-out
+    test data), "sine" (only the sine series) or "vehicle" (a drive derived from a vehicle simulation's deflections,
+    see `vehicle_rig`; damper: the sine series, then the derived random).
     `damper_type` (damper only): "passive", "mr" (magnetorheological, commanded by coil voltage) or "cdc"
     (continuously controlled valve, commanded by valve current); the semi-active types add a lab-like command signal.
     """
@@ -81,8 +85,12 @@ def resolve_effects(kind: str, effects: tuple[str, ...] | None, damper_type: str
 
 
 def resolve_duration(kind: str, options: RigOptions) -> float:
-    """The run's duration [s]: the option, or the kind's default."""
-    return DEFAULT_DURATION[check_kind(kind)] if options.duration is None else float(options.duration)
+    """The run's duration [s]: the option, or the default of the kind (of the bushing's lab record, its own)."""
+    if options.duration is not None:
+        return float(options.duration)
+    if check_kind(kind) == "bushing" and options.excitation == "lab":
+        return BUSHING_LAB_DURATION
+    return DEFAULT_DURATION[kind]
 
 
 def check_options(kind: str, options: RigOptions) -> None:
