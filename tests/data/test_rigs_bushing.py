@@ -11,7 +11,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from nnfmu.data.rigs import BUSHING_CHANNELS, BushingChannelTruth, BushingParams, RigOptions, simulate_rig, write_rig
-from nnfmu.data.rigs.options import BUSHING_LAB_DURATION, resolve_duration
+from nnfmu.data.rigs.options import SCHEDULE_DURATION, resolve_duration
 from nnfmu.errors import SettingsError
 from nnfmu.physics.bushing import iwan_elements
 
@@ -154,7 +154,7 @@ def test_the_lab_schedules_stiffness_series_is_found_as_sine_tests_in_the_record
 def test_the_lab_record_is_longer_by_default_than_the_others():
     """80 s: the series, then 53.4 s of random drive; 60 s for a random, sine or vehicle-derived record, 70 s for
     the damper's."""
-    assert resolve_duration("bushing", RigOptions()) == BUSHING_LAB_DURATION == 80.0
+    assert resolve_duration("bushing", RigOptions()) == SCHEDULE_DURATION["bushing", "lab"] == 80.0
     for excitation in ("random", "sine", "vehicle"):
         assert resolve_duration("bushing", RigOptions(excitation=excitation)) == 60.0
     assert resolve_duration("damper", RigOptions()) == 70.0

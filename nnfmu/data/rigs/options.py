@@ -15,10 +15,11 @@ EXCITATIONS = ("lab", "random", "sine", "vehicle")
 VEHICLE_EXCITATION = "vehicle"  # a drive derived from a vehicle result (`vehicle_rig`), never self-made
 
 DEFAULT_DURATION: dict[str, float] = {"damper": 70.0, "bushing": 60.0}  # s
-# The bushing's lab record: its dynamic-stiffness series (26.6 s), then 53.4 s of random drive, which covers the car's
-# bushing motions better than 60 s of random alone did; at 90 s training's blocks would hold the series' 20 Hz
-# full-range levels out of training (docs/characterise.md).
-BUSHING_LAB_DURATION = 80.0  # s
+# Records whose schedule needs its own default length [s], by (kind, excitation). The bushing's lab record: its
+# dynamic-stiffness series (26.6 s), then 53.4 s of random drive, which covers the car's bushing motions better than
+# 60 s of random alone did; at 90 s training's blocks would hold the series' 20 Hz full-range levels out of training
+# (docs/characterise.md).
+SCHEDULE_DURATION: dict[tuple[str, str], float] = {("bushing", "lab"): 80.0}
 MIN_SAMPLE_RATE = 100.0  # Hz: the drives reach 40 Hz, and the recorder has no anti-alias filter
 MAX_SAMPLES = 10_000_000  # per record (2.8 h at 1 kHz): a rig run holds a dozen arrays of this length in memory
 
@@ -85,12 +86,11 @@ def resolve_effects(kind: str, effects: tuple[str, ...] | None, damper_type: str
 
 
 def resolve_duration(kind: str, options: RigOptions) -> float:
-    """The run's duration [s]: the option, or the default of the kind (of the bushing's lab record, its own)."""
+    """The run's duration [s]: the option, or the default of the kind and excitation (SCHEDULE_DURATION), else of the
+    kind."""
     if options.duration is not None:
         return float(options.duration)
-    if check_kind(kind) == "bushing" and options.excitation == "lab":
-        return BUSHING_LAB_DURATION
-    return DEFAULT_DURATION[kind]
+    return SCHEDULE_DURATION.get((check_kind(kind), options.excitation), DEFAULT_DURATION[kind])
 
 
 def check_options(kind: str, options: RigOptions) -> None:
