@@ -21,9 +21,6 @@ from nnfmu.fmu import StepGraphError
 from nnfmu.workflows.roadtest.envelope import Excursion, excursion
 from nnfmu.workflows.system import VirtualSystem
 
-# A run warns when an input holds more than this share of its power above its training band (the record: 1 %).
-BAND_WARN_SHARE = 0.05
-
 
 def _carried_component(system: VirtualSystem, element: str) -> Component | None:
     """The component description of the step graph `element`'s FMU carries; None for an FMU without one."""
@@ -40,8 +37,8 @@ def _channel(binding: DriveBinding, element: str, connector: str) -> str:
 
 def training_range_lines(system: VirtualSystem, result: Measurement) -> list[str]:
     """A line per network input whose signal in `result` (a run on the system's drive binding) left its training
-    envelope (the range reached, how far past the envelope, on what share of the run and from when) or held more than
-    BAND_WARN_SHARE of its power above the band its training record excited; a line per element whose carried band
+    envelope (the range reached, how far past the envelope, on what share of the run and from when) or ran above the
+    band its training record excited (`Excursion.above_band`); a line per element whose carried band
     cannot be read."""
     lines = []
     binding = system.drive_binding()
@@ -68,7 +65,7 @@ def training_range_lines(system: VirtualSystem, result: Measurement) -> list[str
             if used.share_outside > 0.0:
                 outside = (signal < used.envelope_min) | (signal > used.envelope_max)
                 lines.append(_range_line(element.name, port, used, float(result.time[np.flatnonzero(outside)[0]])))
-            if used.power_above_band is not None and used.power_above_band > BAND_WARN_SHARE:
+            if used.above_band:
                 lines.append(
                     f"element {element.name!r}: input {port.name!r} held {used.power_above_band:.1%} of its power "
                     f"above {used.band_edge:.4g} Hz, the band its training record excited (which held "

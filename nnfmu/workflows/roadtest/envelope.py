@@ -18,6 +18,10 @@ from nnfmu.data.band import power_above
 from nnfmu.export.band import carried_band
 from nnfmu.validate.summary import json_float
 
+# An input runs above its training band when it holds more than this share of its power above the band's edge (its
+# record held 1 - BAND_POWER_SHARE there): `nnfmu cosim` warns, the road test's report marks the row.
+BAND_WARN_SHARE = 0.05
+
 
 @dataclass(frozen=True)
 class Excursion:
@@ -44,9 +48,14 @@ class Excursion:
         ]
         return float(max(used))
 
+    @property
+    def above_band(self) -> bool:
+        """True when the signal holds more than BAND_WARN_SHARE of its power above its training band."""
+        return self.power_above_band is not None and self.power_above_band > BAND_WARN_SHARE
+
     def to_dict(self) -> dict[str, object]:
         d = {k: (json_float(v) if isinstance(v, float) else v) for k, v in asdict(self).items()}
-        return d | {"range_used": json_float(self.range_used)}
+        return d | {"range_used": json_float(self.range_used), "above_band": self.above_band}
 
 
 def excursion(

@@ -172,6 +172,7 @@ def test_each_system_report_links_the_characterisation_of_its_networks(road: Roa
     for system in road.systems:
         assert set(system.characterisations) == expected[system.system]
         html = system.report.read_text(encoding="utf-8")
+        assert "<th>training band [Hz]</th><th>power above band [1]</th>" in html
         for network, found in system.characterisations.items():
             link = found.link(system.report)
             assert link == f"../../characterise/{network}/index.html"
