@@ -334,7 +334,7 @@ def train(
     from rich.text import Text
 
     from nnfmu.workflows.tables import metrics_table
-    from nnfmu.workflows.train import TrainRequest, train_from_file
+    from nnfmu.workflows.train import TrainRequest, train_from_file, trained_range
 
     request = TrainRequest(
         preset=preset,
@@ -381,6 +381,7 @@ def train(
         )
     for note in [*outcome.data_notes, *outcome.training_notes]:
         console.print(f"note: {note}")
+    console.print(Text(trained_range(outcome.model)))
     for warning in outcome.warnings:
         console.print(Text("warning: ", style="yellow") + Text(warning))
     console.print(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -57,6 +58,8 @@ def test_train_build_and_validate_chain(dyno: Path, tmp_path: Path) -> None:
     assert trained.exit_code == 0, trained.output
     assert "test" in trained.output and onnx_path.exists()
     assert "velocity[k]" in trained.output  # printed as is, not eaten as console markup
+    # where the network answers from data: the velocity's range and the band its record held
+    assert re.search(r"trained on velocity -?[\d.]+ to [\d.]+ m/s up to [\d.]+ Hz", " ".join(trained.output.split()))
     fmu = tmp_path / "damper.fmu"
     built = invoke("build", onnx_path, "--out", fmu)
     assert built.exit_code == 0, built.output

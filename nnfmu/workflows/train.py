@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Literal
 
 from nnfmu.data import Measurement, load_measurement
+from nnfmu.data.band import BAND_POWER_SHARE
 from nnfmu.data.errors import DataError
 from nnfmu.data.inertia import compensate_inertia
 from nnfmu.data.moving_mass import estimate_moving_mass
@@ -232,6 +233,21 @@ def train_from_file(
         data_notes=list(measurement.notes.values()),
         training_notes=result.notes,
         feature_choice=feature_choice,
+    )
+
+
+def trained_range(model: TrainedModel) -> str:
+    """Where the network answers from its data, per input: the range and the frequency band its record held (beyond
+    either it extrapolates; the FMU flags the range, `nnfmu characterise` and `nnfmu cosim` the band)."""
+    parts = []
+    for channel in model.spec.channels:
+        lo, hi = model.envelope[channel]
+        band = model.band.get(channel)
+        up_to = f" up to {band:.3g} Hz" if band is not None else ""
+        parts.append(f"{channel} {lo:.4g} to {hi:.4g} {model.units[channel]}{up_to}")
+    return (
+        f"trained on {'; '.join(parts)} (up to: {BAND_POWER_SHARE:.0%} of the input's power below); beyond, the "
+        "network extrapolates"
     )
 
 
