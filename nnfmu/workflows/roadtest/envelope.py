@@ -101,3 +101,22 @@ def excursions(run: str, elements: list[str], component: Component, m: Measureme
         for element in elements
         for port in component.inputs
     ]
+
+
+def envelope_warnings(system: str, used: list[Excursion]) -> list[str]:
+    """A line per network input a run drove beyond its training envelope or above its training band: where the
+    network extrapolates, a cause of the vehicle's error to weigh before the coupling or the step."""
+    lines = []
+    for e in used:
+        where = f"{system}, {e.run}: {e.element}.{e.port}"
+        if e.share_outside > 0:
+            lines.append(
+                f"{where} reached {e.range_used:.2f}x its training envelope [{e.envelope_min:.4g}, "
+                f"{e.envelope_max:.4g}] {e.unit} on {e.share_outside:.2%} of the run: the network extrapolates there"
+            )
+        if e.above_band:
+            lines.append(
+                f"{where} held {e.power_above_band:.1%} of its power above {e.band_edge:.4g} Hz, the band its "
+                "training record excited: the network extrapolates in frequency"
+            )
+    return lines

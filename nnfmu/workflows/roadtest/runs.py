@@ -33,7 +33,7 @@ from nnfmu.workflows.characterise.linked import LinkedCharacterisation, characte
 from nnfmu.workflows.characterise.settings import CharacteriseSettings
 from nnfmu.workflows.passivity import passivity_warnings
 from nnfmu.workflows.roadtest.budget import BudgetRow, budget_rows
-from nnfmu.workflows.roadtest.envelope import Excursion, excursions
+from nnfmu.workflows.roadtest.envelope import Excursion, envelope_warnings, excursions
 from nnfmu.workflows.roadtest.open_loop import network_errors
 from nnfmu.workflows.roadtest.report import write_system_report
 from nnfmu.workflows.roadtest.stabilisers import bushing_stabilisers
@@ -337,6 +337,8 @@ def _run_system(
                 ref,
             )
         )
+    for line in envelope_warnings(system, used):
+        log(f"warning: {line}")
     report_dir = out / "report" / system
     model_reports = {
         model: write_report(

@@ -8,7 +8,7 @@ import pytest
 
 from nnfmu.component import Port
 from nnfmu.data.band import power_above
-from nnfmu.workflows.roadtest.envelope import BAND_WARN_SHARE, excursion
+from nnfmu.workflows.roadtest.envelope import BAND_WARN_SHARE, envelope_warnings, excursion
 
 PERIOD = 1e-3
 
@@ -37,3 +37,20 @@ def test_without_a_band_nothing_is_said_about_frequency_and_a_band_needs_the_sam
     assert used.to_dict()["power_above_band"] is None
     with pytest.raises(ValueError, match="sample period"):
         excursion("reference", "bushing_fl_front", port, _signal(0.2), 39.5)
+
+
+def test_the_road_test_warns_of_each_input_beyond_its_envelope_or_above_its_band() -> None:
+    wide = Port("radial_velocity", "m/s", min=-2.0, max=2.0)
+    narrow = Port("axial_velocity", "m/s", min=-0.5, max=0.5)
+    used = [
+        excursion("reference", "bushing_fl_front", wide, _signal(0.02), 39.5, PERIOD),  # inside both: no line
+        excursion("reference", "bushing_fl_front", wide, _signal(0.2), 39.5, PERIOD),
+        excursion("reference", "bushing_fl_rear", narrow, _signal(0.02), 39.5, PERIOD),
+    ]
+    lines = envelope_warnings("full-vehicle", used)
+    assert lines == [
+        f"full-vehicle, reference: bushing_fl_front.radial_velocity held {used[1].power_above_band:.1%} of its power "
+        "above 39.5 Hz, the band its training record excited: the network extrapolates in frequency",
+        f"full-vehicle, reference: bushing_fl_rear.axial_velocity reached {used[2].range_used:.2f}x its training "
+        f"envelope [-0.5, 0.5] m/s on {used[2].share_outside:.2%} of the run: the network extrapolates there",
+    ]

@@ -79,6 +79,9 @@ def trained(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     }
 
 
+ROAD_LOG: list[str] = []  # what the road fixture's run logged
+
+
 @pytest.fixture(scope="module")
 def road(trained: dict[str, Path], tmp_path_factory: pytest.TempPathFactory) -> RoadTestResult:
     """A short road test of both systems (the quarter car's default channels; the full vehicle a fraction of a second,
@@ -88,7 +91,7 @@ def road(trained: dict[str, Path], tmp_path_factory: pytest.TempPathFactory) -> 
         full_vehicle=SystemRun(0.3, channels=FULL_VEHICLE_CHANNELS),
         characterise=QUICK_SETTINGS,
     )
-    return run_road_test(tmp_path_factory.mktemp("road"), trained, settings, log=lambda _: None)
+    return run_road_test(tmp_path_factory.mktemp("road"), trained, settings, log=ROAD_LOG.append)
 
 
 @pytest.mark.slow
@@ -162,6 +165,17 @@ def test_road_test_writes_reports_and_finite_thesis_metrics(road: RoadTestResult
         assert all(e["share_outside"] is not None for e in system["envelope"])
         # every network nnfmu trains carries its inputs' training band: each input's power above it is measured
         assert all(e["band_edge"] > 0 and 0 <= e["power_above_band"] <= 1 for e in system["envelope"])
+        # each input beyond its envelope or above its band is a warning in the run's log, and only those
+        flagged = {
+            (e["run"], e["element"], e["port"]) for e in system["envelope"] if e["share_outside"] or e["above_band"]
+        }
+        warned = {
+            (run, where.split(".")[0], where.split(".")[1].split(" ")[0])
+            for line in ROAD_LOG
+            if line.startswith(f"warning: {system['system']}, ")
+            for run, where in [line.removeprefix(f"warning: {system['system']}, ").split(": ", 1)]
+        }
+        assert warned == flagged
 
 
 @pytest.mark.slow
