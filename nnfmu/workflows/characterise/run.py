@@ -11,8 +11,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from nnfmu.atomic import staging_dir
+from nnfmu.component import Component
 from nnfmu.data import load_measurement
 from nnfmu.data.measurement import Measurement
+from nnfmu.export.band import carried_band
 from nnfmu.out_paths import check_output_dir, replace_output_dir
 from nnfmu.workflows.characterise.analysis import StiffnessPoint
 from nnfmu.workflows.characterise.bushing import channel_plan, characterise_bushing
@@ -55,16 +57,23 @@ def _largest(rows: list[Row], columns: tuple[str, ...], where: tuple[str, ...]) 
     return [f"Largest deviation per column: {'; '.join(found)}."] if found else []
 
 
-def _envelope_line(rows: list[Row]) -> list[str]:
-    """How many test points drive the network beyond its training envelope (its answer there is extrapolation)."""
+def _envelope_line(rows: list[Row], component: Component) -> list[str]:
+    """How many test points drive the network beyond its training envelope or above its band (its answer there is
+    extrapolation), and the band each input's training record excited when the network carries it."""
     outside = sum(row["training_envelope"] != INSIDE for row in rows)
     if not outside:
-        return ["Every test point lies inside the network's training envelope and band (column training envelope)."]
-    return [
-        f"{outside} of {len(rows)} test points drive an input beyond the network's training envelope, or run above "
-        "the frequency band its training record excited (column training envelope): its answer there is "
-        "extrapolation, not what its rig data held."
-    ]
+        lines = ["Every test point lies inside the network's training envelope and band (column training envelope)."]
+    else:
+        lines = [
+            f"{outside} of {len(rows)} test points drive an input beyond the network's training envelope, or run "
+            "above the frequency band its training record excited (column training envelope): its answer there is "
+            "extrapolation, not what its rig data held."
+        ]
+    band = carried_band(component)
+    if band:
+        edges = ", ".join(f"{name} {edge:.3g} Hz" for name, edge in band.items())
+        lines.append(f"Training band (99 % of each input's power below it in the training record): {edges}.")
+    return lines
 
 
 def _damper(
@@ -105,7 +114,7 @@ def _damper(
                 ),
                 (label, "peak_velocity [m/s]") if label else ("peak_velocity [m/s]",),
             ),
-            *_envelope_line(rows),
+            *_envelope_line(rows, model.component),
         ],
         [
             characteristic_plot(
@@ -199,7 +208,7 @@ def _bushing(
                 ("stiffness_deviation [%]", "loss_angle_deviation [deg]"),
                 ("channel", "frequency [Hz]", "amplitude [m]", "amplitude [rad]"),
             ),
-            *_envelope_line(rows),
+            *_envelope_line(rows, model.component),
         ],
         tables={"dynamic_stiffness.csv": rows},
     )

@@ -104,6 +104,29 @@ def test_the_linear_bushing_from_its_onnx_has_the_closed_form_stiffness(models: 
     assert {"axial_displacement [m]", "axial_force [N]"} == set(loop[0])
 
 
+def test_a_point_above_the_band_the_onnx_carries_is_outside_through_its_fmu(tmp_path: Path) -> None:
+    """The band rides in the component description from the ONNX file into the FMU the test runs: the report names
+    the 100 Hz points above it and lists the band."""
+    model = _linear_bushing()
+    component = Component.from_onnx(model)
+    edges = {"axial_displacement": 10.0, "axial_velocity": 20.0}
+    component.metadata = {"training_band": {"power_share": 0.99, "upper_edge_Hz": edges}}
+    component.attach_to(model)
+    onnx.save(model, str(tmp_path / "banded.onnx"))
+    settings = CharacteriseSettings(
+        bushing=BushingTestSettings(frequencies=(1.0, 10.0, 100.0), settle_cycles=1, quasi_static_frequency=1.0),
+        figures=False,
+    )
+    characterise(tmp_path / "banded.onnx", tmp_path / "out", settings=settings, log=lambda _: None)
+    for row in _rows(tmp_path / "out" / "dynamic_stiffness.csv"):
+        above = float(row["frequency [Hz]"]) > 20.0
+        expected = "outside: 100 Hz above the training band (20 Hz, axial_velocity)" if above else "inside"
+        assert row["training_envelope"] == expected, row
+    html = (tmp_path / "out" / "index.html").read_text(encoding="utf-8")
+    assert "3 of 9 test points drive an input beyond" in html
+    assert "power below it in the training record): axial_displacement 10 Hz, axial_velocity 20 Hz." in html
+
+
 def test_the_truth_damper_fmu_reproduces_the_truth_law(models: dict[str, Path], tmp_path: Path) -> None:
     """Forces at peak velocity within 0.3 %, gas force and friction within 0.1 N of the law run directly (0.1 ms)."""
     characterise(models["damper"], tmp_path / "out", settings=CharacteriseSettings(damper=DAMPER), log=print)
