@@ -14,11 +14,10 @@ import numpy as np
 from nnfmu.component import Component, Port
 from nnfmu.cosim import DriveBinding
 from nnfmu.data import Measurement
-from nnfmu.data.band import BAND_POWER_SHARE
 from nnfmu.export import ExportError
 from nnfmu.export.band import carried_band
 from nnfmu.fmu import StepGraphError
-from nnfmu.workflows.roadtest.envelope import Excursion, excursion
+from nnfmu.workflows.roadtest.envelope import Excursion, above_band_text, excursion
 from nnfmu.workflows.system import VirtualSystem
 
 
@@ -67,10 +66,8 @@ def training_range_lines(system: VirtualSystem, result: Measurement) -> list[str
                 lines.append(_range_line(element.name, port, used, float(result.time[np.flatnonzero(outside)[0]])))
             if used.above_band:
                 lines.append(
-                    f"element {element.name!r}: input {port.name!r} held {used.power_above_band:.1%} of its power "
-                    f"above {used.band_edge:.4g} Hz, the band its training record excited (which held "
-                    f"{1 - BAND_POWER_SHARE:.0%} there): the network extrapolates in frequency; train on a record "
-                    "whose drive reaches the frequencies of the run"
+                    f"element {element.name!r}: input {port.name!r} {above_band_text(used)}; train on a record whose "
+                    "drive reaches the frequencies of the run"
                 )
     return lines
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from nnfmu.component import Component, Port
 from nnfmu.data import Measurement
-from nnfmu.data.band import power_above
+from nnfmu.data.band import BAND_POWER_SHARE, power_above
 from nnfmu.export.band import carried_band
 from nnfmu.validate.summary import json_float
 
@@ -115,8 +115,13 @@ def envelope_warnings(system: str, used: list[Excursion]) -> list[str]:
                 f"{e.envelope_max:.4g}] {e.unit} on {e.share_outside:.2%} of the run: the network extrapolates there"
             )
         if e.above_band:
-            lines.append(
-                f"{where} held {e.power_above_band:.1%} of its power above {e.band_edge:.4g} Hz, the band its "
-                "training record excited: the network extrapolates in frequency"
-            )
+            lines.append(f"{where} {above_band_text(e)}")
     return lines
+
+
+def above_band_text(e: Excursion) -> str:
+    """What a run above the training band did, for a warning that names the input first."""
+    return (
+        f"held {e.power_above_band:.1%} of its power above {e.band_edge:.4g} Hz, the band its training record "
+        f"excited (which held {1 - BAND_POWER_SHARE:.0%} there): the network extrapolates in frequency"
+    )
