@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from nnfmu.component import Component, Port
+from nnfmu.component import Component
 from nnfmu.cosim import DriveBinding
 from nnfmu.data import Measurement
 from nnfmu.export import ExportError
 from nnfmu.export.band import carried_band
 from nnfmu.fmu import StepGraphError
-from nnfmu.workflows.roadtest.envelope import Excursion, above_band_text, excursion
+from nnfmu.workflows.roadtest.envelope import above_band_text, beyond_range_text, excursion
 from nnfmu.workflows.system import VirtualSystem
 
 
@@ -63,21 +63,15 @@ def training_range_lines(system: VirtualSystem, result: Measurement) -> list[str
             used = excursion("cosim", element.name, port, signal, edge, result.sample_period)
             if used.share_outside > 0.0:
                 outside = (signal < used.envelope_min) | (signal > used.envelope_max)
-                lines.append(_range_line(element.name, port, used, float(result.time[np.flatnonzero(outside)[0]])))
+                first = float(result.time[np.flatnonzero(outside)[0]])
+                lines.append(
+                    f"element {element.name!r}: input {port.name!r} {beyond_range_text(used)} (first at "
+                    f"{first:.4g} s): the network extrapolates there and the result is least trustworthy there; train "
+                    "on a record that covers the range"
+                )
             if used.above_band:
                 lines.append(
                     f"element {element.name!r}: input {port.name!r} {above_band_text(used)}; train on a record whose "
                     "drive reaches the frequencies of the run"
                 )
     return lines
-
-
-def _range_line(element: str, port: Port, used: Excursion, first: float) -> str:
-    """The warning for an input that left its training envelope, first at `first` [s]."""
-    return (
-        f"element {element!r}: input {port.name!r} reached {used.signal_min:.4g} to "
-        f"{used.signal_max:.4g} {port.unit}, {used.range_used:.2f}x its training envelope "
-        f"[{used.envelope_min:.4g}, {used.envelope_max:.4g}] {port.unit}, on {used.share_outside:.2%} of the "
-        f"run (first at {first:.4g} s): the network extrapolates there and the result is least trustworthy "
-        f"there; train on a record that covers the range"
-    )

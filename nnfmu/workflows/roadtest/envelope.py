@@ -110,13 +110,18 @@ def envelope_warnings(system: str, used: list[Excursion]) -> list[str]:
     for e in used:
         where = f"{system}, {e.run}: {e.element}.{e.port}"
         if e.share_outside > 0:
-            lines.append(
-                f"{where} reached {e.range_used:.2f}x its training envelope [{e.envelope_min:.4g}, "
-                f"{e.envelope_max:.4g}] {e.unit} on {e.share_outside:.2%} of the run: the network extrapolates there"
-            )
+            lines.append(f"{where} {beyond_range_text(e)}: the network extrapolates there")
         if e.above_band:
             lines.append(f"{where} {above_band_text(e)}")
     return lines
+
+
+def beyond_range_text(e: Excursion) -> str:
+    """What a run beyond the training envelope did, for a warning that names the input first."""
+    return (
+        f"reached {e.signal_min:.4g} to {e.signal_max:.4g} {e.unit}, {e.range_used:.2f}x its training envelope "
+        f"[{e.envelope_min:.4g}, {e.envelope_max:.4g}] {e.unit}, on {e.share_outside:.2%} of the run"
+    )
 
 
 def above_band_text(e: Excursion) -> str:

@@ -52,6 +52,7 @@ def test_the_road_test_warns_of_each_input_beyond_its_envelope_or_above_its_band
         f"full-vehicle, reference: bushing_fl_front.radial_velocity held {used[1].power_above_band:.1%} of its power "
         "above 39.5 Hz, the band its training record excited (which held 1% there): the network extrapolates in "
         "frequency",
-        f"full-vehicle, reference: bushing_fl_rear.axial_velocity reached {used[2].range_used:.2f}x its training "
-        f"envelope [-0.5, 0.5] m/s on {used[2].share_outside:.2%} of the run: the network extrapolates there",
+        f"full-vehicle, reference: bushing_fl_rear.axial_velocity reached {used[2].signal_min:.4g} to "
+        f"{used[2].signal_max:.4g} m/s, {used[2].range_used:.2f}x its training envelope [-0.5, 0.5] m/s, on "
+        f"{used[2].share_outside:.2%} of the run: the network extrapolates there",
     ]
