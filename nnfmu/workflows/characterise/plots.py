@@ -92,6 +92,23 @@ def work_diagram_plots(
     return names
 
 
+# A stiffness plot's frequency axis spans at least this factor either side of its tests (a record at one frequency, an
+# amplitude sweep, would otherwise get an axis of zero width), and its value axis at least this share of its largest
+# value (a model whose |K*| does not change with amplitude).
+FREQUENCY_MARGIN = 1.25
+MIN_VALUE_SPAN = 0.01
+
+
+def _widened(axes, frequencies: Sequence[float], values: Sequence[float]) -> None:  # noqa: ANN001 (matplotlib Axes)
+    """Axis limits that hold every point with room around it, however close the points lie together."""
+    axes.set_xlim(min(frequencies) / FREQUENCY_MARGIN, max(frequencies) * FREQUENCY_MARGIN)
+    low, high = axes.get_ylim()
+    need = MIN_VALUE_SPAN * max(abs(v) for v in values) or 1.0
+    if high - low < need:
+        centre = (min(values) + max(values)) / 2
+        axes.set_ylim(centre - need / 2, centre + need / 2)
+
+
 def stiffness_plots(
     channel: BushingChannelPorts,
     points: Sequence[StiffnessPoint],
@@ -114,6 +131,8 @@ def stiffness_plots(
             if measured is not None:
                 axes.plot(f, [getattr(measured[j], key) for j in idx], "o", mfc="none", color=f"C{group % 10}")
         axes.set_xscale("log")
+        shown = [getattr(q, key) for q in [*points, *(measured or [])]]
+        _widened(axes, [q.frequency for q in points], shown)
         axes.set_xticks(frequencies)
         axes.xaxis.set_major_formatter(FormatStrFormatter("%g"))
         axes.xaxis.set_minor_formatter(NullFormatter())
