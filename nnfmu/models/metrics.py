@@ -41,6 +41,7 @@ class SplitMetrics:
     """Metrics of output vs target on one split.
 
     mse_scaled: mean squared error of the [-1, 1]-scaled target (the thesis's "MSE"); nrmse: RMS error / RMS target;
+    rms_error: RMS error in the output's SI unit (the network's own error, which a characterisation judges by);
     r2: 1 - SS_res / SS_tot; slope, intercept: least-squares line output = slope * target + intercept (intercept in
     the output's SI unit); peak_error: max |output - target| in SI units; max_abs_weight: the network's largest
     |weight or bias|; samples: number of samples compared.
@@ -48,6 +49,7 @@ class SplitMetrics:
 
     mse_scaled: float
     nrmse: float
+    rms_error: float
     r2: float
     slope: float
     intercept: float
@@ -183,6 +185,7 @@ def split_metrics(
     return SplitMetrics(
         mse_scaled=float(np.mean(scaled_error**2)),
         nrmse=nrmse(output, target),
+        rms_error=float(np.sqrt(np.mean((output - target) ** 2))),
         r2=r_squared(output, target),
         slope=slope,
         intercept=intercept,

@@ -13,6 +13,7 @@ from nnfmu.data import Measurement
 from nnfmu.export import export_onnx, run_step_graph
 from nnfmu.export.graph import ALLOWED_OPS
 from nnfmu.export.merge import MergeError, merge_step_graphs
+from nnfmu.export.own_error import carried_own_errors
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.models.features import FeatureSpec, Lowpass, Tap
@@ -127,6 +128,20 @@ def test_a_merged_graph_carries_the_band_every_part_trusts(tmp_path) -> None:
     del part.metadata["training_band"]
     part.attach_to(second)
     assert "training_band" not in Component.from_onnx(merge_step_graphs([first, second], "shared")).metadata
+
+
+def test_a_merged_graph_keeps_each_parts_own_error(tmp_path) -> None:
+    """A bushing FMU of merged networks judges each output by the own error of the network that gives it."""
+    graphs = [exported(FORCE, tmp_path / "a.onnx", 5), exported(TORQUE, tmp_path / "b.onnx", 6)]
+    for graph, rms in zip(graphs, (3.0, 0.2)):
+        part = Component.from_onnx(graph)
+        part.metadata["metrics"] = {"test": {"nrmse": 0.1, "rms_error": rms}}
+        part.attach_to(graph)
+    own = carried_own_errors(Component.from_onnx(merge_step_graphs(graphs, "both")))
+    assert {name: (o.unit, o.rms_error) for name, o in own.items()} == {
+        "axial_force": ("N", 3.0),
+        "axial_torque": ("N.m", 0.2),
+    }
 
 
 def test_merged_native_fmu_with_a_stateless_part_matches_onnxruntime(parts: list[onnx.ModelProto], tmp_path) -> None:

@@ -40,6 +40,7 @@ def test_hand_computed_values():
     m = split_metrics(output, target, scaler, largest_weight=0.0)
     assert m.mse_scaled == pytest.approx(0.25 / 4)
     assert m.nrmse == pytest.approx(np.sqrt(0.25 / 4) / 1.0)
+    assert m.rms_error == pytest.approx(np.sqrt(0.25 / 4))  # in the output's unit, whatever the scaler
     assert m.r2 == pytest.approx(1.0 - 0.25 / 4.0)
     assert m.peak_error == pytest.approx(0.5)
     assert nrmse(output, target) == m.nrmse and r_squared(output, target) == m.r2
@@ -50,6 +51,7 @@ def test_scaled_mse_uses_the_target_scaler():
     output = np.array([1.0, 10.0])
     m = split_metrics(output, target, MinMaxScaler.fit(target), largest_weight=0.0)
     assert m.mse_scaled == pytest.approx((0.2**2) / 2)  # gain 2/10: an error of 1 N is 0.2 scaled
+    assert m.rms_error == pytest.approx(np.sqrt(1.0 / 2))  # 1 N of error on one of two samples, in N
 
 
 def test_constant_target_stays_finite():

@@ -15,6 +15,7 @@ from nnfmu.component import Component
 from nnfmu.data import load_measurement
 from nnfmu.data.measurement import Measurement
 from nnfmu.export.band import carried_band
+from nnfmu.export.own_error import OwnError, carried_own_errors
 from nnfmu.out_paths import check_output_dir, replace_output_dir
 from nnfmu.workflows.characterise.analysis import StiffnessPoint
 from nnfmu.workflows.characterise.bushing import channel_plan, characterise_bushing
@@ -27,6 +28,7 @@ from nnfmu.workflows.characterise.plots import characteristic_plot, loop_plot, s
 from nnfmu.workflows.characterise.report import INDEX_FILE, Section, write_report
 from nnfmu.workflows.characterise.settings import VEHICLE_RANGE, CharacteriseSettings
 from nnfmu.workflows.characterise.tables import (
+    WITHIN,
     Row,
     characteristic_rows,
     gas_friction_rows,
@@ -43,11 +45,14 @@ Log = Callable[[str], None]
 
 @dataclass(frozen=True)
 class CharacteriseReport:
-    """What a run wrote: the component kind, the report's index.html, and the headline rows for the terminal."""
+    """What a run wrote: the component kind, the report's index.html, the headline rows for the terminal, and, beside
+    a measurement when the network carries its own error, how many test points inside its training envelope are
+    within that error (within, of)."""
 
     kind: str
     index: Path
     lines: list[str]
+    within_own_error: tuple[int, int] | None = None
 
 
 def _largest(rows: list[Row], columns: tuple[str, ...], where: tuple[str, ...]) -> list[str]:
@@ -76,9 +81,38 @@ def _envelope_line(rows: list[Row], component: Component) -> list[str]:
     return lines
 
 
+def _own_error_lines(rows: list[Row], own: list[OwnError], measured: bool) -> tuple[list[str], tuple[int, int] | None]:
+    """Beside a measurement: the network's own error and how many test points are within it, inside its training
+    envelope and outside (the count inside returned too); a loud line when the network carries none."""
+    if not measured:
+        return [], None
+    if not own:
+        return [
+            "The network carries no own error (a graph from another tool or an older nnfmu): the deviations are not "
+            "judged against it."
+        ], None
+    inside = [row for row in rows if row["training_envelope"] == INSIDE]
+    outside = [row for row in rows if row["training_envelope"] != INSIDE]
+    judged = [
+        (sum(row.get(WITHIN) == "yes" for row in part), sum(WITHIN in row for row in part))
+        for part in (inside, outside)
+    ]
+    counts = f"{judged[0][0]} of {judged[0][1]} test points inside the training envelope" + (
+        f", {judged[1][0]} of {judged[1][1]} outside it" if judged[1][1] else ""
+    )
+    return [
+        "Own error (the network's RMS error on the held-out test split of its training record, measurement noise "
+        f"included): {'; '.join(o.text() for o in own)}. Within it (every deviation of a point at most the own "
+        f"error; column {WITHIN}): {counts}."
+    ], judged[0]
+
+
+Outcome = tuple[list[Section], list[str], list[str], tuple[int, int] | None]  # sections, notes, lines, within
+
+
 def _damper(
     model: ModelUnderTest, ports: DamperPorts, record: Measurement | None, settings: CharacteriseSettings, folder: Path
-) -> tuple[list[Section], list[str], list[str]]:
+) -> Outcome:
     s = settings.damper
     command, unit = ports.command, ports.command_unit
     label = f"{command} [{unit}]" if command else None
@@ -88,11 +122,13 @@ def _damper(
     )
     result = characterise_damper(model, tests, s.temperature)
     cycles = model_cycles(result)
-    rows = characteristic_rows(result, label, measured)
+    own = carried_own_errors(model.component).get("force")
+    rows = characteristic_rows(result, label, measured, own)
     rates = {"velocity": "peak_velocity [m/s]", "displacement": "amplitude [m]"}
     for row in rows:
         peaks = {k: float(row[c] or 0.0) for k, c in rates.items()}
         row["training_envelope"] = envelope_note(model.component, peaks, float(row["frequency [Hz]"]))
+    own_lines, within = _own_error_lines(rows, [own] if own else [], measured is not None)
     how = (
         f"sine tests found in {record.source}, run on the model at their amplitude, frequency and command"
         if measured and record is not None
@@ -114,6 +150,7 @@ def _damper(
                 ),
                 (label, "peak_velocity [m/s]") if label else ("peak_velocity [m/s]",),
             ),
+            *own_lines,
             *_envelope_line(rows, model.component),
         ],
         [
@@ -162,7 +199,7 @@ def _damper(
         + (f" (command {p.command:.3g} {unit})" if p.command is not None else "")
         for p in result.points
     ]
-    return [main, gas, work], notes, lines
+    return [main, gas, work], notes, lines, within
 
 
 def stiffness_line(channel: BushingChannelPorts, point: StiffnessPoint) -> str:
@@ -177,7 +214,7 @@ def stiffness_line(channel: BushingChannelPorts, point: StiffnessPoint) -> str:
 
 def _bushing(
     model: ModelUnderTest, ports: BushingPorts, record: Measurement | None, settings: CharacteriseSettings, folder: Path
-) -> tuple[list[Section], list[str], list[str]]:
+) -> Outcome:
     s = settings.bushing
     measured = measured_bushing(record, ports, s.settle_cycles) if record is not None else None
     plans = [channel_plan(ch, s) for ch in ports.channels]
@@ -191,11 +228,14 @@ def _bushing(
         else f"every frequency at amplitudes {', '.join(f'{a:g}' for a in s.amplitude_fractions)} of the channel's "
         f"vehicle range ({ranges})"
     )
-    rows = stiffness_rows(result.channels, result.points, measured)
+    carried = carried_own_errors(model.component)
+    rows = stiffness_rows(result.channels, result.points, measured, carried)
     points = [(ch, p) for ch in result.channels for p in result.points[ch.key]]  # the rows' order
     for row, (ch, p) in zip(rows, points, strict=True):
         peaks = {ch.position: p.amplitude} | ({ch.rate: 2 * math.pi * p.frequency * p.amplitude} if ch.rate else {})
         row["training_envelope"] = envelope_note(model.component, peaks, p.frequency)
+    own = [carried[ch.force] for ch in result.channels if ch.force in carried]
+    own_lines, within = _own_error_lines(rows, own, measured is not None)
     stiffness = Section(
         "Dynamic stiffness and loss angle",
         [
@@ -208,6 +248,7 @@ def _bushing(
                 ("stiffness_deviation [%]", "loss_angle_deviation [deg]"),
                 ("channel", "frequency [Hz]", "amplitude [m]", "amplitude [rad]"),
             ),
+            *own_lines,
             *_envelope_line(rows, model.component),
         ],
         tables={"dynamic_stiffness.csv": rows},
@@ -242,7 +283,7 @@ def _bushing(
             )
         )
     lines = [stiffness_line(ch, p) for ch in result.channels for p in result.points[ch.key]]
-    return [stiffness, loop], [], lines
+    return [stiffness, loop], [], lines, within
 
 
 def characterise(
@@ -264,9 +305,10 @@ def characterise(
         out_dir.parent.mkdir(parents=True, exist_ok=True)
         with staging_dir(out_dir.parent, f".{out_dir.name}.staging-") as staging:
             if isinstance(model.kind, DamperPorts):
-                sections, notes, lines = _damper(model, model.kind, record, settings, staging)
+                sections, notes, lines, within = _damper(model, model.kind, record, settings, staging)
             else:
-                sections, notes, lines = _bushing(model, model.kind, record, settings, staging)
+                sections, notes, lines, within = _bushing(model, model.kind, record, settings, staging)
+            own = carried_own_errors(model.component)
             context = {
                 "model": str(model.source),
                 "component": model.component.name,
@@ -274,9 +316,13 @@ def characterise(
                 + (f" (semi-active, {model.kind.command})" if getattr(model.kind, "command", None) else ""),
                 "tested through": f"its FMU at default parameters, sample period {model.period:g} s",
                 "measurement": str(record.source) if record is not None else "none",
+                "own error (held-out test split)": "; ".join(o.text() for o in own.values())
+                or "not carried (a graph from another tool or an older nnfmu)",
             }
             if not settings.figures:
                 notes.append("figures: not drawn (a quick run); the tables hold every test point")
             write_report(staging, f"{kind} characterisation of {model.component.name}", context, notes, sections)
             replace_output_dir(staging, out_dir, KIND)
-    return CharacteriseReport(kind, out_dir / INDEX_FILE, lines)
+    if within is not None:
+        lines.append(f"within the network's own error: {within[0]} of {within[1]} test points inside its envelope")
+    return CharacteriseReport(kind, out_dir / INDEX_FILE, lines, within)

@@ -1,14 +1,17 @@
 """The report's tables as rows (column `name [unit]` -> value), written as CSV and shown in the HTML report: the model's
-values, the measurement's beside them as `measured_*` columns, and the deviation (model − measured) per test point."""
+values, the measurement's beside them as `measured_*` columns, and the deviation (model − measured) per test point,
+over the network's own error where it carries one."""
 
 from __future__ import annotations
 
+import cmath
 import csv
 import io
 import math
 from collections.abc import Sequence
 from pathlib import Path
 
+from nnfmu.export.own_error import OwnError
 from nnfmu.workflows.characterise.analysis import DamperPoint, GasAndFriction, StiffnessPoint
 from nnfmu.workflows.characterise.bushing import BushingResult
 from nnfmu.workflows.characterise.damper import DamperResult
@@ -27,9 +30,25 @@ def _command(label: str | None, level: float | None) -> Row:
     return {label: level} if label else {}
 
 
-def characteristic_rows(result: DamperResult, command: str | None, measured: MeasuredDamper | None = None) -> list[Row]:
+WITHIN = "within_own_error"
+
+
+def _over_own(deviations: Sequence[float], own: OwnError | None, columns: Sequence[str]) -> Row:
+    """Each |deviation| over the network's own RMS error, and whether every one is within it (`yes`/`no`); nothing
+    when the network carries no own error."""
+    if own is None:
+        return {}
+    ratios = [abs(d) / own.rms_error if own.rms_error > 0 else None for d in deviations]
+    within = all(abs(d) <= own.rms_error for d in deviations)
+    return dict(zip(columns, ratios)) | {WITHIN: "yes" if within else "no"}
+
+
+def characteristic_rows(
+    result: DamperResult, command: str | None, measured: MeasuredDamper | None = None, own: OwnError | None = None
+) -> list[Row]:
     """`characteristic.csv`: per test point the peak velocity, stroke, frequency, rebound force (positive) and
-    jounce force (negative); with a measurement its values and the deviations beside them."""
+    jounce force (negative); with a measurement its values and the deviations beside them, each over the network's
+    own error `own` when it carries one."""
     rows = []
     for i, p in enumerate(result.points):
         row = {
@@ -42,16 +61,22 @@ def characteristic_rows(result: DamperResult, command: str | None, measured: Mea
         }
         if measured is not None:
             m: DamperPoint = measured.points[i]
+            rebound, jounce = p.rebound_force - m.rebound_force, p.jounce_force - m.jounce_force
             row.update(
                 {
                     "measured_peak_velocity [m/s]": m.peak_velocity,
                     "measured_rebound_force [N]": m.rebound_force,
                     "measured_jounce_force [N]": m.jounce_force,
-                    "rebound_deviation [N]": p.rebound_force - m.rebound_force,
-                    "jounce_deviation [N]": p.jounce_force - m.jounce_force,
+                    "rebound_deviation [N]": rebound,
+                    "jounce_deviation [N]": jounce,
                     "rebound_deviation_relative [%]": _relative(p.rebound_force, m.rebound_force),
                     "jounce_deviation_relative [%]": _relative(p.jounce_force, m.jounce_force),
                 }
+                | _over_own(
+                    (rebound, jounce),
+                    own,
+                    ("rebound_deviation_over_own_error [1]", "jounce_deviation_over_own_error [1]"),
+                )
             )
         rows.append(row)
     return rows
@@ -108,13 +133,23 @@ def model_cycles(result: DamperResult) -> list[Cycle]:
     return [Cycle(*run.cycle()[1:]) for run in result.runs]
 
 
+def harmonic_force_deviation(model: StiffnessPoint, measured: StiffnessPoint) -> float:
+    """The first-harmonic force the model gets wrong at a measured point, as an RMS (in the force's unit, beside the
+    network's own RMS error): |K*model − K*measured| times the measured amplitude over √2."""
+    k_model = cmath.rect(model.dynamic_stiffness, math.radians(model.loss_angle))
+    k_measured = cmath.rect(measured.dynamic_stiffness, math.radians(measured.loss_angle))
+    return abs(k_model - k_measured) * measured.amplitude / math.sqrt(2.0)
+
+
 def stiffness_rows(
     channels: Sequence[BushingChannelPorts],
     points: dict[str, list[StiffnessPoint]],
     measured: MeasuredBushing | None = None,
+    own: dict[str, OwnError] | None = None,
 ) -> list[Row]:
     """`dynamic_stiffness.csv`: per channel, frequency and amplitude |K*| and the loss angle; amplitude and
-    stiffness columns per unit (m and N/m, rad and N.m/rad), empty where a row's channel has the other unit."""
+    stiffness columns per unit (m and N/m, rad and N.m/rad), empty where a row's channel has the other unit; with a
+    measurement the first-harmonic force deviation, over the channel's own error `own[force output]` when carried."""
     rows = []
     for ch in channels:
         for i, p in enumerate(points[ch.key]):
@@ -127,13 +162,16 @@ def stiffness_rows(
             }
             if measured is not None:
                 m = measured.points[ch.key][i]
+                deviation = harmonic_force_deviation(p, m)
                 row.update(
                     {
                         f"measured_dynamic_stiffness [{ch.stiffness_unit}]": m.dynamic_stiffness,
                         "measured_loss_angle [deg]": m.loss_angle,
                         "stiffness_deviation [%]": _relative(p.dynamic_stiffness, m.dynamic_stiffness),
                         "loss_angle_deviation [deg]": p.loss_angle - m.loss_angle,
+                        f"harmonic_force_deviation_rms [{ch.force_unit}]": deviation,
                     }
+                    | _over_own((deviation,), (own or {}).get(ch.force), ("deviation_over_own_error [1]",))
                 )
             rows.append(row)
     return rows

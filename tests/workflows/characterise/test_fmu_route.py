@@ -127,6 +127,67 @@ def test_a_point_above_the_band_the_onnx_carries_is_outside_through_its_fmu(tmp_
     assert "power below it in the training record): axial_displacement 10 Hz, axial_velocity 20 Hz." in html
 
 
+def _sine_record(path: Path, stiffness: float, amplitudes: tuple[float, ...], frequency: float = 2.0) -> Path:
+    """A record of the law stiffness·x + C·v over a sine series: 0.3 s at rest, then each amplitude for 4 cycles."""
+    rest = np.zeros(300)
+    cycle = np.arange(round(4 / (frequency * T))) * T
+    x = np.concatenate([rest, *(p for a in amplitudes for p in (a * np.sin(2 * np.pi * frequency * cycle), rest))])
+    v = np.concatenate(
+        [
+            rest,
+            *(p for a in amplitudes for p in (a * 2 * np.pi * frequency * np.cos(2 * np.pi * frequency * cycle), rest)),
+        ]
+    )
+    channels = {"axial_displacement": x, "axial_velocity": v, "axial_force": stiffness * x + C * v}
+    save_measurement(
+        Measurement(
+            np.arange(x.size) * T, channels, {"axial_displacement": "m", "axial_velocity": "m/s", "axial_force": "N"}
+        ),
+        path,
+    )
+    return path
+
+
+def test_each_measured_point_is_judged_against_the_own_error_the_onnx_carries(tmp_path: Path) -> None:
+    """The own error rides in the component description from the ONNX file into the FMU the test runs. The record's
+    spring is 1 % stiffer than the model's, so its first-harmonic force is off by 0.01·K·a, an RMS of 0.01·K·a/√2:
+    7.1 N at 1 mm and 14.1 N at 2 mm, against an own error of 10 N: the first within it, the second not."""
+    model = _linear_bushing()
+    component = Component.from_onnx(model)
+    component.metadata = {
+        "feature_spec": {"output": "axial_force"},
+        "metrics": {"test": {"rms_error": 10.0, "nrmse": 0.01}},
+    }
+    component.attach_to(model)
+    onnx.save(model, str(tmp_path / "judged.onnx"))
+    record = _sine_record(tmp_path / "rig.csv", 1.01 * K, (1e-3, 2e-3))
+    result = CliRunner().invoke(
+        app, ["characterise", str(tmp_path / "judged.onnx"), "--measured", str(record), "--out", str(tmp_path / "out")]
+    )
+    assert result.exit_code == 0, result.output
+    assert "within the network's own error: 1 of 2 test points inside its envelope" in result.output
+    rows = _rows(tmp_path / "out" / "dynamic_stiffness.csv")
+    assert [float(r["amplitude [m]"]) for r in rows] == pytest.approx([1e-3, 2e-3], rel=1e-6)
+    for row in rows:
+        expected = 0.01 * K * float(row["amplitude [m]"]) / math.sqrt(2)
+        assert float(row["harmonic_force_deviation_rms [N]"]) == pytest.approx(expected, rel=1e-3)
+        assert float(row["deviation_over_own_error [1]"]) == pytest.approx(expected / 10.0, rel=1e-3)
+    assert [r["within_own_error"] for r in rows] == ["yes", "no"]
+    html = (tmp_path / "out" / "index.html").read_text(encoding="utf-8")
+    assert "axial_force 10 N RMS (NRMSE 1 %)" in html and "1 of 2 test points inside the training envelope" in html
+
+
+def test_without_an_own_error_the_deviations_are_not_judged_and_the_report_says_so(tmp_path: Path) -> None:
+    onnx.save(_linear_bushing(), str(tmp_path / "plain.onnx"))
+    record = _sine_record(tmp_path / "rig.csv", 1.01 * K, (1e-3,))
+    report = characterise(tmp_path / "plain.onnx", tmp_path / "out", record, log=lambda _: None)
+    assert report.within_own_error is None
+    (row,) = _rows(tmp_path / "out" / "dynamic_stiffness.csv")
+    assert float(row["harmonic_force_deviation_rms [N]"]) > 0 and "within_own_error" not in row
+    html = (tmp_path / "out" / "index.html").read_text(encoding="utf-8")
+    assert "The network carries no own error" in html and "not carried" in html
+
+
 def test_the_truth_damper_fmu_reproduces_the_truth_law(models: dict[str, Path], tmp_path: Path) -> None:
     """Forces at peak velocity within 0.3 %, gas force and friction within 0.1 N of the law run directly (0.1 ms)."""
     characterise(models["damper"], tmp_path / "out", settings=CharacteriseSettings(damper=DAMPER), log=print)
