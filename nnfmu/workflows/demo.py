@@ -42,6 +42,7 @@ from nnfmu.out_paths import check_output_dir, mark_output_dir
 from nnfmu.validate import ValidationSettings, compare, write_report
 from nnfmu.vehicle import DriveSettings, generate_drive, kernel_compiled_in_background
 from nnfmu.workflows.beside import beside
+from nnfmu.workflows.characterise import CharacteriseError, CharacteriseReport, CharacteriseSettings, characterise
 from nnfmu.workflows.characterise.settings import QUICK_SETTINGS as QUICK_CHARACTERISE
 from nnfmu.workflows.fmu_build import host_binaries_only
 from nnfmu.workflows.iterate import IterateResult, IterateSettings, run_iterate
@@ -121,6 +122,11 @@ class DemoSettings:
 
     def lab_duration(self, rig: str) -> float | None:
         return ({"damper": 40.0, "bushing": 40.0}[rig]) if self.quick else None
+
+    @property
+    def characterise(self) -> CharacteriseSettings:
+        """The component networks' standard tests beside their lab record's sine series (quick: no figures)."""
+        return QUICK_CHARACTERISE if self.quick else CharacteriseSettings()
 
     @property
     def test_duration(self) -> float:
@@ -217,7 +223,9 @@ class DemoSettings:
 
 @dataclass(frozen=True)
 class ModelResult:
-    """One preset through the pipeline: its files, training metrics on the test split and the FMU's replay errors."""
+    """One preset through the pipeline: its files, training metrics on the test split, the FMU's replay errors, and
+    its standard characterisation beside the lab record's sine series (report; test points inside the training
+    envelope within the network's own error, and of how many)."""
 
     preset: str
     onnx: str
@@ -228,6 +236,8 @@ class ModelResult:
     replay_r2: float
     replay_peak_error: float
     replay_pseudo_damage_ratio: float
+    characterisation: str
+    within_own_error: tuple[int, int] | None
 
 
 @dataclass(frozen=True)
@@ -402,6 +412,26 @@ def _origin(
     }
 
 
+def _characterise(
+    fmu: Path, lab: Path, out: Path, settings: DemoSettings, log: Callable[[str], None]
+) -> CharacteriseReport:
+    """The FMU's standard tests beside its lab record's sine series, each point judged against the network's own
+    error; the standard tests alone, said loudly, when the record's series is too short to read (a quick run's
+    damper record: three cycles per level, two of them ramps)."""
+    name = fmu.stem
+    try:
+        report = characterise(fmu, out, lab, settings.characterise, lambda _: None)
+    except CharacteriseError as err:
+        log(f"{name}: not characterised beside {lab.name}: {err}; the standard tests alone")
+        report = characterise(fmu, out, None, settings.characterise, lambda _: None)
+        log(f"{name}: characterised (standard tests, nothing to judge them against): {report.index}")
+        return report
+    within = report.within_own_error
+    judged = f"{within[0]} of {within[1]} test points within its own error" if within else "not judged"
+    log(f"{name}: characterised beside {lab.name}'s sine series, {judged}: {report.index}")
+    return report
+
+
 def _components(
     out: Path, settings: DemoSettings, log: Callable[[str], None], progress: Progress | None = None
 ) -> tuple[Path, list[ModelResult]]:
@@ -438,6 +468,9 @@ def _components(
             )
             comparisons.append(comparison)
             errors = comparison.metrics
+            log(f"{preset}: FMU {fmu}, held-out NRMSE {errors.nrmse:.2%}")
+            standard = _characterise(fmu, lab, out / "characterise" / preset, settings, log)
+            within = standard.within_own_error
             results.append(
                 ModelResult(
                     preset=preset,
@@ -449,9 +482,10 @@ def _components(
                     replay_r2=errors.r2,
                     replay_peak_error=errors.peak_error,
                     replay_pseudo_damage_ratio=errors.pseudo_damage_ratio,
+                    characterisation=str(standard.index),
+                    within_own_error=within,
                 )
             )
-            log(f"{preset}: FMU {fmu}, held-out NRMSE {errors.nrmse:.2%}")
     report = write_report(
         comparisons,
         out / "report",
