@@ -413,7 +413,7 @@ def _origin(
 
 
 def _characterise(
-    fmu: Path, lab: Path, out: Path, settings: DemoSettings, log: Callable[[str], None]
+    fmu: Path, lab: Measurement, out: Path, settings: DemoSettings, log: Callable[[str], None]
 ) -> CharacteriseReport:
     """The FMU's standard tests beside its lab record's sine series, each point judged against the network's own
     error; the standard tests alone, said loudly, when the record's series is too short to read (a quick run's
@@ -422,13 +422,13 @@ def _characterise(
     try:
         report = characterise(fmu, out, lab, settings.characterise, lambda _: None)
     except CharacteriseError as err:
-        log(f"{name}: not characterised beside {lab.name}: {err}; the standard tests alone")
+        log(f"{name}: not characterised beside {Path(lab.source).name}: {err}; the standard tests alone")
         report = characterise(fmu, out, None, settings.characterise, lambda _: None)
         log(f"{name}: characterised (standard tests, nothing to judge them against): {report.index}")
         return report
     within = report.within_own_error
     judged = f"{within[0]} of {within[1]} test points within its own error" if within else "not judged"
-    log(f"{name}: characterised beside {lab.name}'s sine series, {judged}: {report.index}")
+    log(f"{name}: characterised beside {Path(lab.source).name}'s sine series, {judged}: {report.index}")
     return report
 
 
@@ -448,6 +448,7 @@ def _components(
             RigOptions(seed=settings.seed + 1, duration=settings.test_duration, excitation="random"),
         )
         log(f"rig {rig}: lab record {lab}, held-out random record {test}")
+        lab_record = load_measurement(lab)  # once for the presets' characterisations
         measured = load_measurement(test)
         if rig in MOVING_MASS_BY_RIG:  # judged on the force the networks learn: the load cell's less m·a
             measured = compensate_inertia(measured, MOVING_MASS_BY_RIG[rig])
@@ -469,7 +470,7 @@ def _components(
             comparisons.append(comparison)
             errors = comparison.metrics
             log(f"{preset}: FMU {fmu}, held-out NRMSE {errors.nrmse:.2%}")
-            standard = _characterise(fmu, lab, out / "characterise" / preset, settings, log)
+            standard = _characterise(fmu, lab_record, out / "characterise" / preset, settings, log)
             within = standard.within_own_error
             results.append(
                 ModelResult(

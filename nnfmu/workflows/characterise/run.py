@@ -289,16 +289,17 @@ def _bushing(
 def characterise(
     model_path: str | os.PathLike[str],
     out: str | os.PathLike[str],
-    measured: str | os.PathLike[str] | None = None,
+    measured: str | os.PathLike[str] | Measurement | None = None,
     settings: CharacteriseSettings | None = None,
     log: Log = print,
 ) -> CharacteriseReport:
-    """Run the standard tests of the model at `model_path` (`.onnx` or `.fmu`) and of the record `measured`, and
-    write the report into `out` (module docstring)."""
+    """Run the standard tests of the model at `model_path` (`.onnx` or `.fmu`) and of the record `measured` (a file,
+    or one already loaded), and write the report into `out` (module docstring)."""
     settings = settings or CharacteriseSettings()
-    inputs = [Path(model_path)] + ([Path(measured)] if measured is not None else [])
+    loaded = isinstance(measured, Measurement)
+    inputs = [Path(model_path)] + ([Path(measured.source if loaded else measured)] if measured is not None else [])
     out_dir = check_output_dir(out, KIND, inputs, replaces=True)
-    record = load_measurement(measured) if measured is not None else None
+    record = measured if loaded or measured is None else load_measurement(measured)
     with model_under_test(model_path) as model:
         kind = model.kind.kind
         log(f"{model.source}: {kind}, tested through {model.fmu.name} at {model.period:g} s")
