@@ -52,9 +52,11 @@ from nnfmu.data.rigs import (
 )
 from nnfmu.models import get_preset
 from nnfmu.workflows.characterise import CharacteriseSettings, characterise
+from nnfmu.workflows.characterise.analysis import StiffnessPoint
 from nnfmu.workflows.characterise.bushing import channel_plan, read_channel
 from nnfmu.workflows.characterise.damper import damper_tests, read_damper
 from nnfmu.workflows.characterise.kind import BushingChannelPorts
+from nnfmu.workflows.characterise.tables import harmonic_force_deviation
 from nnfmu.workflows.characterise.truth import bushing_truth_runs, damper_truth_runs
 from nnfmu.workflows.train import TrainRequest, train_from_file
 
@@ -226,11 +228,10 @@ def bench_bushing(quick: bool, folder: Path, key: str) -> dict:
     points = []
     for row, p in zip(rows, truth, strict=True):
         model_k = row[f"dynamic_stiffness [{stiffness}]"]
-        k_model = model_k * np.exp(1j * np.radians(row["loss_angle [deg]"]))
-        k_truth = p.dynamic_stiffness * np.exp(1j * np.radians(p.loss_angle))
+        model_point = StiffnessPoint(key, p.frequency, p.amplitude, model_k, row["loss_angle [deg]"])
         # the first-harmonic force the model gets wrong at this point, as an RMS beside the network's own RMS error
-        harmonic_rms = float(abs(k_model - k_truth) * p.amplitude / np.sqrt(2))
-        relative = float(100 * abs(k_model - k_truth) / abs(k_truth))  # the same deviation as a share of the force
+        harmonic_rms = harmonic_force_deviation(model_point, p)
+        relative = float(100 * harmonic_rms / (p.dynamic_stiffness * p.amplitude / np.sqrt(2)))  # as a share of force
         points.append(
             {
                 "frequency_Hz": p.frequency,

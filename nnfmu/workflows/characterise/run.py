@@ -111,7 +111,12 @@ Outcome = tuple[list[Section], list[str], list[str], tuple[int, int] | None]  # 
 
 
 def _damper(
-    model: ModelUnderTest, ports: DamperPorts, record: Measurement | None, settings: CharacteriseSettings, folder: Path
+    model: ModelUnderTest,
+    ports: DamperPorts,
+    record: Measurement | None,
+    settings: CharacteriseSettings,
+    folder: Path,
+    carried: dict[str, OwnError],
 ) -> Outcome:
     s = settings.damper
     command, unit = ports.command, ports.command_unit
@@ -122,7 +127,7 @@ def _damper(
     )
     result = characterise_damper(model, tests, s.temperature)
     cycles = model_cycles(result)
-    own = carried_own_errors(model.component).get("force")
+    own = carried.get("force")
     rows = characteristic_rows(result, label, measured, own)
     rates = {"velocity": "peak_velocity [m/s]", "displacement": "amplitude [m]"}
     for row in rows:
@@ -213,7 +218,12 @@ def stiffness_line(channel: BushingChannelPorts, point: StiffnessPoint) -> str:
 
 
 def _bushing(
-    model: ModelUnderTest, ports: BushingPorts, record: Measurement | None, settings: CharacteriseSettings, folder: Path
+    model: ModelUnderTest,
+    ports: BushingPorts,
+    record: Measurement | None,
+    settings: CharacteriseSettings,
+    folder: Path,
+    carried: dict[str, OwnError],
 ) -> Outcome:
     s = settings.bushing
     measured = measured_bushing(record, ports, s.settle_cycles) if record is not None else None
@@ -228,7 +238,6 @@ def _bushing(
         else f"every frequency at amplitudes {', '.join(f'{a:g}' for a in s.amplitude_fractions)} of the channel's "
         f"vehicle range ({ranges})"
     )
-    carried = carried_own_errors(model.component)
     rows = stiffness_rows(result.channels, result.points, measured, carried)
     points = [(ch, p) for ch in result.channels for p in result.points[ch.key]]  # the rows' order
     for row, (ch, p) in zip(rows, points, strict=True):
@@ -305,11 +314,11 @@ def characterise(
         log(f"{model.source}: {kind}, tested through {model.fmu.name} at {model.period:g} s")
         out_dir.parent.mkdir(parents=True, exist_ok=True)
         with staging_dir(out_dir.parent, f".{out_dir.name}.staging-") as staging:
-            if isinstance(model.kind, DamperPorts):
-                sections, notes, lines, within = _damper(model, model.kind, record, settings, staging)
-            else:
-                sections, notes, lines, within = _bushing(model, model.kind, record, settings, staging)
             own = carried_own_errors(model.component)
+            if isinstance(model.kind, DamperPorts):
+                sections, notes, lines, within = _damper(model, model.kind, record, settings, staging, own)
+            else:
+                sections, notes, lines, within = _bushing(model, model.kind, record, settings, staging, own)
             context = {
                 "model": str(model.source),
                 "component": model.component.name,
