@@ -42,7 +42,7 @@ from nnfmu.out_paths import check_output_dir, mark_output_dir
 from nnfmu.validate import ValidationSettings, compare, write_report
 from nnfmu.vehicle import DriveSettings, generate_drive, kernel_compiled_in_background
 from nnfmu.workflows.beside import beside
-from nnfmu.workflows.characterise import CharacteriseError, CharacteriseReport, CharacteriseSettings, characterise
+from nnfmu.workflows.characterise import CharacteriseReport, CharacteriseSettings, characterise
 from nnfmu.workflows.characterise.settings import QUICK_SETTINGS as QUICK_CHARACTERISE
 from nnfmu.workflows.fmu_build import host_binaries_only
 from nnfmu.workflows.iterate import IterateResult, IterateSettings, run_iterate
@@ -416,19 +416,11 @@ def _characterise(
     fmu: Path, lab: Measurement, out: Path, settings: DemoSettings, log: Callable[[str], None]
 ) -> CharacteriseReport:
     """The FMU's standard tests beside its lab record's sine series, each point judged against the network's own
-    error; the standard tests alone, said loudly, when the record's series is too short to read (a quick run's
-    damper record: three cycles per level, two of them ramps)."""
-    name = fmu.stem
-    try:
-        report = characterise(fmu, out, lab, settings.characterise, lambda _: None)
-    except CharacteriseError as err:
-        log(f"{name}: not characterised beside {Path(lab.source).name}: {err}; the standard tests alone")
-        report = characterise(fmu, out, None, settings.characterise, lambda _: None)
-        log(f"{name}: characterised (standard tests, nothing to judge them against): {report.index}")
-        return report
+    error."""
+    report = characterise(fmu, out, lab, settings.characterise, lambda _: None)
     within = report.within_own_error
     judged = f"{within[0]} of {within[1]} test points within its own error" if within else "not judged"
-    log(f"{name}: characterised beside {Path(lab.source).name}'s sine series, {judged}: {report.index}")
+    log(f"{fmu.stem}: characterised beside {Path(lab.source).name}'s sine series, {judged}: {report.index}")
     return report
 
 

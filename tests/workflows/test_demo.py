@@ -37,12 +37,7 @@ def test_quick_demo_runs_every_stage(tmp_path: Path) -> None:
         assert Path(model.onnx).exists() and Path(model.fmu).exists()
         # even a smoke-trained network must beat predicting zero on held-out data
         assert np.isfinite(model.replay_nrmse) and model.replay_nrmse < 0.5
-        # each characterised beside its lab record's sine series, every point judged against its own error; a quick
-        # damper record's series (three cycles a level, two of them ramps) is too short to read: said, tests alone
-        assert Path(model.characterisation).is_file()
-        if model.within_own_error is None:
-            assert "damper" in model.preset and any(f"{model.preset}: not characterised beside" in x for x in lines)
-            continue
+        # each characterised beside its lab record's sine series, every point judged against its own error
         table = Path(model.characterisation).parent / (
             "dynamic_stiffness.csv" if "bushing" in model.preset else "characteristic.csv"
         )

@@ -5,7 +5,10 @@ HYSTERESIS of the record's largest |position| so noise at rest or at a crossing 
 cycles; consecutive cycles whose periods agree within PERIOD_TOLERANCE and whose half peak-to-peak amplitudes agree
 within AMPLITUDE_TOLERANCE form a run; a run of at least MIN_CYCLES cycles whose first harmonic explains at least
 MIN_R2 of the position's variance is a sine test. Ramps in and out of a level and random drive parts fail the
-agreement or the fit and are left out.
+agreement or the fit and are left out. Downward crossings are tried as well, and a test they find with more cycles
+replaces the upward crossings' there: a level ramped in and out over half a cycle each (as a rig starts and stops a
+speed from rest) holds its whole-amplitude cycles between its downward crossings, so a level of 3 cycles has 2 there
+and 1 between upward ones.
 """
 
 from __future__ import annotations
@@ -67,6 +70,16 @@ def find_sine_tests(time: np.ndarray, position: np.ndarray) -> list[SineSegment]
     reach = float(np.max(np.abs(position))) if position.size else 0.0
     if reach == 0:
         return []
+    found = _segments(time, position, reach)
+    for segment in _segments(time, -position, reach):  # the downward crossings'
+        overlapping = [f for f in found if f.start < segment.stop and segment.start < f.stop]
+        if all(segment.cycles > f.cycles for f in overlapping):
+            found = [f for f in found if f not in overlapping] + [segment]
+    return sorted(found, key=lambda f: f.start)
+
+
+def _segments(time: np.ndarray, position: np.ndarray, reach: float) -> list[SineSegment]:
+    """The sine tests between upward crossings of `position`, whose largest |value| is `reach`."""
     edges = _crossings(position, HYSTERESIS * reach)
     instants = [_instant(time, position, i) for i in edges]
     cycles = [

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from nnfmu.data.rigs import DamperParams, DamperTruth
-from nnfmu.data.rigs.excitation import Motion, SineLevel, SpectrumShape, random_motion, sine_series
+from nnfmu.data.rigs.excitation import MIN_SINE_CYCLES, Motion, SineLevel, SpectrumShape, random_motion, sine_series
 from nnfmu.errors import SettingsError
 from nnfmu.workflows.characterise.analysis import damper_point, first_harmonic, stiffness_point
 from nnfmu.workflows.characterise.damper import damper_tests, read_damper
@@ -85,6 +85,20 @@ def test_sine_tests_are_found_in_a_lab_schedule_and_the_random_part_is_left_out(
     ]
     assert all(s.cycles >= 3 for s in found)
     assert find_sine_tests(time[12000:], x[12000:]) == []  # the random drive alone
+
+
+@pytest.mark.parametrize("cycles", [MIN_SINE_CYCLES, 5])
+def test_a_levels_whole_amplitude_cycles_are_found_between_its_ramps(cycles: int) -> None:
+    """A level ramped in and out over half a cycle each holds cycles - 1 whole cycles at full amplitude, between its
+    downward zero crossings: the fewest a rig records (3) gives 2, as many as a test needs; between upward crossings
+    there would be 1."""
+    levels = [SineLevel(0.008, 1.0), SineLevel(0.025, 3.0), SineLevel(0.025, 12.0)]
+    sine, _ = sine_series(levels, cycles, 1 / T, 0.2)
+    x = sine.x + 25e-6 * np.random.default_rng(4).normal(size=len(sine))
+    found = find_sine_tests(np.arange(len(x)) * T, x)
+    assert [(s.cycles, s.frequency, s.amplitude) for s in found] == [
+        (cycles - 1, pytest.approx(lv.frequency, rel=1e-3), pytest.approx(lv.amplitude, rel=2e-3)) for lv in levels
+    ]
 
 
 @pytest.mark.parametrize("stroke", [0.025, 0.01, 0.0173])
