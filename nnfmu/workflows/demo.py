@@ -83,8 +83,8 @@ MOVING_MASS_BY_RIG: dict[str, float] = {"damper": DamperParams().moving_mass}
 QUICK_EPOCHS = 8
 QUICK_LOOP_EPOCHS = 30
 # What `announcement` promises, as measured (README: measured times) on 2 otherwise idle cores building linux
-# binaries only: the quick run 30-31 s wall, the full run 4 min 50 s (2026-11-29, every component network
-# characterised beside its lab record; 4 min 22-48 s the day before, without).
+# binaries only: the quick run 30-31 s wall, the full run 4 min 50 s and 4 min 57 s (2026-11-29, every component
+# network characterised beside its lab record; 4 min 22-48 s the day before, without).
 QUICK_MINUTES = "half a minute"
 FULL_MINUTES = "5 min"
 PRESETS_BY_RIG: dict[str, tuple[str, ...]] = {
