@@ -33,22 +33,21 @@ def _command(label: str | None, level: float | None) -> Row:
 WITHIN = "within_own_error"
 
 
-def _over_own(deviations: Sequence[float], own: OwnError | None, columns: Sequence[str]) -> Row:
-    """Each |deviation| over the network's own RMS error, and whether every one is within it (`yes`/`no`); nothing
-    when the network carries no own error."""
+def _over_own(deviation: float, own: OwnError | None) -> Row:
+    """A test point's largest |deviation| over the network's own RMS error, and whether it is within it (`yes`/`no`);
+    nothing when the network carries no own error."""
     if own is None:
         return {}
-    ratios = [abs(d) / own.rms_error if own.rms_error > 0 else None for d in deviations]
-    within = all(abs(d) <= own.rms_error for d in deviations)
-    return dict(zip(columns, ratios)) | {WITHIN: "yes" if within else "no"}
+    ratio = abs(deviation) / own.rms_error if own.rms_error > 0 else None
+    return {"deviation_over_own_error [1]": ratio, WITHIN: "yes" if abs(deviation) <= own.rms_error else "no"}
 
 
 def characteristic_rows(
     result: DamperResult, command: str | None, measured: MeasuredDamper | None = None, own: OwnError | None = None
 ) -> list[Row]:
     """`characteristic.csv`: per test point the peak velocity, stroke, frequency, rebound force (positive) and
-    jounce force (negative); with a measurement its values and the deviations beside them, each over the network's
-    own error `own` when it carries one."""
+    jounce force (negative); with a measurement its values and the deviations beside them, the larger over the
+    network's own error `own` when it carries one."""
     rows = []
     for i, p in enumerate(result.points):
         row = {
@@ -72,11 +71,7 @@ def characteristic_rows(
                     "rebound_deviation_relative [%]": _relative(p.rebound_force, m.rebound_force),
                     "jounce_deviation_relative [%]": _relative(p.jounce_force, m.jounce_force),
                 }
-                | _over_own(
-                    (rebound, jounce),
-                    own,
-                    ("rebound_deviation_over_own_error [1]", "jounce_deviation_over_own_error [1]"),
-                )
+                | _over_own(max(abs(rebound), abs(jounce)), own)
             )
         rows.append(row)
     return rows
@@ -171,7 +166,7 @@ def stiffness_rows(
                         "loss_angle_deviation [deg]": p.loss_angle - m.loss_angle,
                         f"harmonic_force_deviation_rms [{ch.force_unit}]": deviation,
                     }
-                    | _over_own((deviation,), (own or {}).get(ch.force), ("deviation_over_own_error [1]",))
+                    | _over_own(deviation, (own or {}).get(ch.force))
                 )
             rows.append(row)
     return rows
