@@ -1,19 +1,23 @@
 """A dyno record whose controller keeps time as a 32-bit float (issue 29, item 1): an MTS 793 export and a CSV of
 80 s at 1024 Hz, stamps float32(t0 + k/1024) printed to 8 significant digits, 9 s at rest before the test program;
-the whole chain (data check, train, loop) runs on it as it comes, and a missing sample is still refused."""
+the whole chain (data check, train, loop, characterise) runs on it as it comes, and a missing sample is still
+refused."""
 
 from __future__ import annotations
 
+import csv
 from pathlib import Path
 
 import numpy as np
+import onnx
 import pytest
 from typer.testing import CliRunner
 
 from nnfmu.cli import app
 from nnfmu.data import DataError, load_measurement
-from nnfmu.data.rigs import RigOptions, simulate_rig
+from nnfmu.data.rigs import DamperDyno, RigOptions, simulate_rig
 from nnfmu.data.timebase import CLOCK_SCATTER, TIME_JITTER
+from nnfmu.export.linear_damper import linear_damper_graph
 
 RATE = 1024.0
 T0 = 0.0172  # s: the controller's clock when acquisition started (no binary fraction, so float32 rounds it)
@@ -144,3 +148,23 @@ def test_a_missing_sample_is_still_refused_naming_it(tmp_path: Path) -> None:
         DataError, match=r"gap\.dat: time is not uniformly sampled at sample 70000 \(t = 68\.3775\d* s\): the step"
     ):
         load_measurement(path)
+
+
+@pytest.mark.slow
+def test_characterise_finds_the_dynos_sine_series_in_the_export_as_it_comes(files: dict[str, Path], tmp_path: Path):
+    """Every level of the program's sine series (ramped in and out, in inches and pounds, after the rest) is found at
+    its peak velocity, and a linear damper's force there is c·v."""
+    onnx.save(linear_damper_graph(2000.0, 1 / RATE), str(tmp_path / "linear.onnx"))
+    out = tmp_path / "characterised"
+    result = runner.invoke(
+        app, ["characterise", str(tmp_path / "linear.onnx"), "--measured", str(files["mts"]), "--out", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    with (out / "characteristic.csv").open(encoding="utf-8") as stream:
+        rows = list(csv.DictReader(stream))
+    levels = [2 * np.pi * lv.frequency * lv.amplitude for lv in DamperDyno().sine_levels()]
+    assert [float(r["measured_peak_velocity [m/s]"]) for r in rows] == pytest.approx(levels, rel=0.01)
+    for row in rows:
+        v = float(row["peak_velocity [m/s]"])
+        assert float(row["rebound_force [N]"]) == pytest.approx(2000.0 * v, rel=0.01)
+        assert float(row["jounce_force [N]"]) == pytest.approx(-2000.0 * v, rel=0.01)
