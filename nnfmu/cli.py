@@ -883,7 +883,8 @@ def characterise(
         None,
         "--measured",
         help="A record holding the same sine tests (a lab schedule's sine series, or a separate characteristic "
-        "record): its tables go beside the model's, with the deviation per test point.",
+        "record): its tables go beside the model's, with the deviation per test point and whether it lies within "
+        "the network's own error (its RMS error on its training record's held-out test split).",
     ),
     velocities: Optional[list[str]] = typer.Option(
         None, "--velocities", help="Damper: peak velocities [m/s], comma-separated (default 0.05 to 1.5)."
