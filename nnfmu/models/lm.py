@@ -3,9 +3,11 @@
 Each epoch solves the damped Gauss–Newton system (JᵀJ + mu·I) δ = Jᵀr for all weights at once, with the Jacobian
 J of the residuals r written out by hand for tanh-hidden/linear-output nets (exact, and far faster than autograd per
 sample). mu shrinks tenfold after a step that lowers the training loss and grows tenfold until one does. The
-arithmetic is numpy's float64 on one BLAS thread: JᵀJ as a symmetric rank-k product (half a general product's work),
-arrays held sample-last (features x samples) so element-wise work runs along long rows, the Jacobian written into one
-buffer reused every epoch, and an accepted trial's hidden activations reused for the next Jacobian.
+arithmetic is numpy's on one BLAS thread: JᵀJ as a symmetric rank-k product (half a general product's work) in
+float32, everything else in float64 (the gradient Jᵀr from the Jacobian's structure, the solve, the losses that
+accept or refuse a step, so a rounded JᵀJ only changes which step is tried, never lets a worse one in); arrays held
+sample-last (features x samples) so element-wise work runs along long rows, the Jacobian written into one buffer
+reused every epoch, and an accepted trial's hidden activations reused for the next Jacobian.
 """
 
 from __future__ import annotations
@@ -47,10 +49,16 @@ class _Perceptron:
 
     def __init__(self, x: np.ndarray, hidden: int) -> None:
         self.inputs = np.ascontiguousarray(x.T)
+        self.inputs32 = self.inputs.astype(np.float32)
         self.m, self.n = self.inputs.shape
         self.hidden = hidden
-        self.jacobian = np.empty(((self.m + 2) * hidden + 1, self.n))
-        self.jacobian[-1] = 1.0
+        self.jacobian32 = self.new_jacobian(np.float32)
+
+    def new_jacobian(self, dtype: type[np.floating]) -> np.ndarray:
+        """A Jacobian buffer (n_weights, n) of `dtype`, its output-bias row (all ones) already written."""
+        jacobian = np.empty(((self.m + 2) * self.hidden + 1, self.n), dtype=dtype)
+        jacobian[-1] = 1.0
+        return jacobian
 
     def split(self, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
         """Hidden weights (hidden, n_in), hidden biases, output weights and output bias, as views of `weights`."""
@@ -70,18 +78,36 @@ class _Perceptron:
         hidden = np.tanh(pre, out=pre)
         return hidden, w2 @ hidden + b2
 
-    def fill_jacobian(self, weights: np.ndarray, hidden: np.ndarray) -> np.ndarray:
-        """d output / d weights, sample-last (n_weights, n), from the activations at `weights`, in the reused
-        buffer."""
-        h, m = self.hidden, self.m
+    def slopes(self, weights: np.ndarray, hidden: np.ndarray) -> np.ndarray:
+        """d output / d hidden pre-activation (hidden, n) at `weights`, from the hidden activations there."""
         _, _, w2, _ = self.split(weights)
-        slope = self.jacobian[h * m : h * m + h]  # d output / d hidden pre-activation
-        np.multiply(hidden, hidden, out=slope)
+        slope = np.multiply(hidden, hidden)
         np.subtract(1.0, slope, out=slope)
         slope *= w2[:, None]
-        np.multiply(slope[:, None, :], self.inputs[None, :, :], out=self.jacobian[: h * m].reshape(h, m, self.n))
-        self.jacobian[h * m + h : h * m + 2 * h] = hidden
-        return self.jacobian
+        return slope
+
+    def gradient(self, slope: np.ndarray, hidden: np.ndarray, residual: np.ndarray) -> np.ndarray:
+        """Jᵀr in float64 from the Jacobian's structure (a hidden weight's column is its unit's slope times its
+        input), without forming J."""
+        weighted = slope * residual
+        return np.concatenate(
+            ((weighted @ self.inputs.T).ravel(), weighted.sum(axis=1), hidden @ residual, [residual.sum()])
+        )
+
+    def fill_jacobian(self, slope: np.ndarray, hidden: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """d output / d weights, sample-last (n_weights, n), written into `out` (a `new_jacobian` buffer)."""
+        h, m = self.hidden, self.m
+        inputs = self.inputs32 if out.dtype == np.float32 else self.inputs
+        slope_rows = out[h * m : h * m + h]
+        slope_rows[...] = slope
+        np.multiply(slope_rows[:, None, :], inputs[None, :, :], out=out[: h * m].reshape(h, m, self.n))
+        out[h * m + h : h * m + 2 * h] = hidden
+        return out
+
+    def gauss_newton(self, slope: np.ndarray, hidden: np.ndarray) -> np.ndarray:
+        """JᵀJ (n_weights, n_weights) as float64, formed in float32 (a symmetric rank-k product)."""
+        jacobian = self.fill_jacobian(slope, hidden, self.jacobian32)
+        return (jacobian @ jacobian.T).astype(np.float64)
 
 
 def mlp_jacobian(network: MLP, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
@@ -94,7 +120,9 @@ def mlp_jacobian(network: MLP, x: torch.Tensor) -> tuple[torch.Tensor, torch.Ten
     perceptron = _Perceptron(x.detach().numpy(), network.hidden.weight.shape[0])
     weights = parameters_to_vector(network.parameters()).detach().numpy()
     hidden, output = perceptron.activations(weights)
-    return torch.from_numpy(output), torch.from_numpy(perceptron.fill_jacobian(weights, hidden).T.copy())
+    slope = perceptron.slopes(weights, hidden)
+    jacobian = perceptron.fill_jacobian(slope, hidden, perceptron.new_jacobian(np.float64))
+    return torch.from_numpy(output), torch.from_numpy(jacobian.T.copy())
 
 
 def fit_lm(
@@ -139,12 +167,12 @@ def _fit(
     reason = "max_epochs"
     for epoch in range(1, settings.max_epochs + 1):
         check_stop()
-        jacobian = perceptron.fill_jacobian(weights, hidden)
-        gradient = jacobian @ residual
+        slope = perceptron.slopes(weights, hidden)
+        gradient = perceptron.gradient(slope, hidden, residual)
         if float(np.abs(gradient).max()) < settings.min_gradient * len(y):
             reason = "min_gradient"
             break
-        hessian = jacobian @ jacobian.T
+        hessian = perceptron.gauss_newton(slope, hidden)
         improved = False
         while mu <= settings.mu_max:
             trial = weights - np.linalg.solve(hessian + mu * eye, gradient)

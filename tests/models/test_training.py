@@ -18,7 +18,7 @@ from nnfmu.data.band import excited_band
 from nnfmu.data.measurement import Measurement
 from nnfmu.models import train as train_module
 from nnfmu.models.features import FeatureSpec, Stop, Tap
-from nnfmu.models.lm import LMSettings, fit_lm, mlp_jacobian
+from nnfmu.models.lm import LMSettings, _Perceptron, fit_lm, mlp_jacobian
 from nnfmu.models.networks import MLP
 from nnfmu.models.splits import SplitFractions, contiguous_splits
 from nnfmu.models.stopping import EarlyStopping
@@ -75,6 +75,25 @@ def test_hand_jacobian_equals_autograd():
     expected = torch.cat([reference[name].reshape(7, -1) for name in params], dim=1)
     torch.testing.assert_close(y, net(x)[:, 0], rtol=0, atol=1e-14)
     torch.testing.assert_close(jacobian, expected, rtol=1e-12, atol=1e-14)
+
+
+def test_lm_step_terms_equal_the_float64_jacobians():
+    # The gradient Jᵀr comes from the Jacobian's structure in float64; JᵀJ is formed in float32, so to its rounding.
+    rng = np.random.default_rng(3)
+    x = rng.standard_normal((500, 4))
+    perceptron = _Perceptron(x, 5)
+    weights = rng.standard_normal((4 + 2) * 5 + 1)
+    hidden, output = perceptron.activations(weights)
+    residual = output - rng.standard_normal(500)
+    slope = perceptron.slopes(weights, hidden)
+    jacobian = perceptron.fill_jacobian(slope, hidden, perceptron.new_jacobian(np.float64))
+    np.testing.assert_allclose(
+        perceptron.gradient(slope, hidden, residual), jacobian @ residual, rtol=1e-12, atol=1e-12
+    )
+    gram = jacobian @ jacobian.T
+    approx = perceptron.gauss_newton(slope, hidden)
+    assert approx.dtype == np.float64 and np.array_equal(approx, approx.T)
+    assert 0 < np.abs(approx - gram).max() <= 1e-6 * np.abs(gram).max()
 
 
 def test_lm_decreases_the_loss_and_fits_a_known_function():
