@@ -69,6 +69,12 @@ HYSTERESIS_DIFFERENCES = (2, 8)
 # along the car, but a network that learns the fixture's m·a from them (`--moving-mass 0`) then meets the raw transducer
 # noise it never saw in training: 3.5 % held out (bench/networks.py), so the dampers keep no low-pass.
 HYSTERESIS_MEMORY_TAUS = (1e-3, 3e-3)
+# Hidden sizes the damper-hysteresis search tries: the smallest within the tolerance of the best is kept, and 5 and 7
+# units never came within it (29 Nov: validation MSE 1.22-2.28 times the best on the lab dyno record, bench/networks.py
+# and `nnfmu train` at training seeds 0-2; 1.55-3.12 times on the road test's vehicle-derived records, seeds 0-2, where
+# 9 or 12 was kept). Each run is seeded alone, so leaving them out keeps the same network bit for bit where 9 or 12
+# wins, and saves the search a quarter of its arithmetic (their w² are 4930 of the four sizes' 19 668).
+HYSTERESIS_HIDDEN = (9, 12)
 # Velocity scales [m/s] of the damper's smoothed-sign features: the seal's Coulomb friction switches within a few
 # mm/s (30-80 N, Dixon); a digressive valve blows off at a knee of 0.1-0.3 m/s. tanh(v/scale) gives the net each
 # bend as an input instead of asking a tanh unit on the [-1, 1]-scaled velocity for a steep (large-weight) slope.
@@ -186,17 +192,19 @@ def _preset(
     derived: tuple[Derived, ...] = (),
     relaxed_start: bool = False,
     settings: TrainSettings = TrainSettings(),
+    search: tuple[int, ...] | None = None,
 ) -> Preset:
     """A preset whose thesis net taps `channels` at `thesis_delays` with `hidden` units; the default taps them at the
     current sample only, adds the `derived` features, starts relaxed at the first input if `relaxed_start`
-    (`FeatureSpec.relaxed_start`) and searches the hidden size; both train with `settings`."""
+    (`FeatureSpec.relaxed_start`) and searches the hidden sizes `search` (default: `auto_from(hidden)`); both train
+    with `settings`."""
     return Preset(
         name=name,
         description=description,
         thesis_spec=FeatureSpec(taps=_taps(channels, thesis_delays), output=output),
         thesis=Architecture("mlp", (hidden,)),
         spec=FeatureSpec(taps=_taps(channels, (0,)), output=output, derived=derived, relaxed_start=relaxed_start),
-        architecture=Architecture("mlp", auto_from(hidden)),
+        architecture=Architecture("mlp", search or auto_from(hidden)),
         settings=settings,
     )
 
@@ -286,6 +294,7 @@ PRESETS: dict[str, Preset] = {
                 SmoothSign("velocity", scale=SEAL_FRICTION_VELOCITY),
                 *(Highpass("velocity", tau=t) for t in HYSTERESIS_MEMORY_TAUS),
             ),
+            search=HYSTERESIS_HIDDEN,
         ),
         _preset(
             "bushing-axial-force",
