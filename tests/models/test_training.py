@@ -77,23 +77,25 @@ def test_hand_jacobian_equals_autograd():
     torch.testing.assert_close(jacobian, expected, rtol=1e-12, atol=1e-14)
 
 
-def test_lm_step_terms_equal_the_float64_jacobians():
-    # The gradient Jᵀr comes from the Jacobian's structure in float64; JᵀJ is formed in float32, so to its rounding.
+@pytest.mark.parametrize("gram", ["float64", "float32"])
+def test_lm_normal_equations_equal_the_float64_jacobians(gram: str):
+    # float64: Jᵀr and JᵀJ of the hand Jacobian exactly; float32: Jᵀr from the Jacobian's structure in float64, JᵀJ
+    # formed in float32, so to its rounding.
     rng = np.random.default_rng(3)
     x = rng.standard_normal((500, 4))
-    perceptron = _Perceptron(x, 5)
     weights = rng.standard_normal((4 + 2) * 5 + 1)
-    hidden, output = perceptron.activations(weights)
+    exact = _Perceptron(x, 5)
+    hidden, output = exact.activations(weights)
     residual = output - rng.standard_normal(500)
-    slope = perceptron.slopes(weights, hidden)
-    jacobian = perceptron.fill_jacobian(slope, hidden, perceptron.new_jacobian(np.float64))
-    np.testing.assert_allclose(
-        perceptron.gradient(slope, hidden, residual), jacobian @ residual, rtol=1e-12, atol=1e-12
-    )
-    gram = jacobian @ jacobian.T
-    approx = perceptron.gauss_newton(slope, hidden)
-    assert approx.dtype == np.float64 and np.array_equal(approx, approx.T)
-    assert 0 < np.abs(approx - gram).max() <= 1e-6 * np.abs(gram).max()
+    jacobian = exact.fill_jacobian(exact.slopes(weights, hidden), hidden, exact.new_jacobian(np.float64))
+    gradient, gram_matrix = _Perceptron(x, 5, gram).normal_equations(weights, hidden, residual)
+    assert gram_matrix.dtype == np.float64 and np.array_equal(gram_matrix, gram_matrix.T)
+    if gram == "float64":
+        assert np.array_equal(gradient, jacobian @ residual) and np.array_equal(gram_matrix, jacobian @ jacobian.T)
+    else:
+        np.testing.assert_allclose(gradient, jacobian @ residual, rtol=1e-12, atol=1e-12)
+        error = np.abs(gram_matrix - jacobian @ jacobian.T).max()
+        assert 0 < error <= 1e-6 * np.abs(jacobian @ jacobian.T).max()
 
 
 def test_lm_decreases_the_loss_and_fits_a_known_function():
