@@ -70,18 +70,12 @@ HYSTERESIS_DIFFERENCES = (2, 8)
 # noise it never saw in training: 3.5 % held out (bench/networks.py), so the dampers keep no low-pass.
 HYSTERESIS_MEMORY_TAUS = (1e-3, 3e-3)
 # Hidden sizes the damper-hysteresis search tries: the smallest within the tolerance of the best is kept, and 5 and 7
-# units never came within it (29 Nov: validation MSE 1.22-2.28 times the best on the lab dyno record, bench/networks.py
-# and `nnfmu train` at training seeds 0-2; 1.55-3.12 times on the road test's vehicle-derived records, seeds 0-2, where
-# 9 or 12 was kept). Each run is seeded alone, so leaving them out keeps the same network bit for bit where 9 or 12
-# wins, and saves the search a quarter of its arithmetic (their w² are 4930 of the four sizes' 19 668).
+# units never came within it (29 Nov: validation MSE 1.26-2.28 times the best on the lab dyno record, bench/networks.py
+# and `nnfmu train` at training seeds 0-5; 1.53-3.11 times on the road test's vehicle-derived records, training seeds
+# 0-2), while 9 was kept at seeds 3 and 5 and at training seeds 0 and 2. Each run is seeded alone, so leaving them out
+# keeps the same network bit for bit, and saves the search a quarter of its arithmetic (their w² are 4930 of the four
+# sizes' 19 668).
 HYSTERESIS_HIDDEN = (9, 12)
-# The damper-hysteresis preset's Levenberg–Marquardt forms JᵀJ in float32 (`TrainSettings.lm_gram`): `nnfmu train` on
-# the lab dyno record 19.1 -> 15.9 s (29 Nov, medians of 4 alternated, 2 idle cores), bench/networks.py's held-out
-# NRMSE 1.43 -> 1.22 %, the road test's damper force (hysteresis network, quarter car) at training seeds 0-2 1.16 /
-# 1.11 / 1.18 % against 1.17 / 1.12 / 1.13 %. The bushing presets keep float64: with float32 their vehicle-derived
-# networks fitted as well (validation MSE within 4 %), but the full vehicle's front radial bushing displacement came
-# to 4.58-4.74 % against 4.23-4.51 % at the same three seeds, its radial force and conical torque 5-7 % worse too.
-HYSTERESIS_TRAINING = TrainSettings(lm_gram="float32")
 # Velocity scales [m/s] of the damper's smoothed-sign features: the seal's Coulomb friction switches within a few
 # mm/s (30-80 N, Dixon); a digressive valve blows off at a knee of 0.1-0.3 m/s. tanh(v/scale) gives the net each
 # bend as an input instead of asking a tanh unit on the [-1, 1]-scaled velocity for a steep (large-weight) slope.
@@ -301,7 +295,6 @@ PRESETS: dict[str, Preset] = {
                 SmoothSign("velocity", scale=SEAL_FRICTION_VELOCITY),
                 *(Highpass("velocity", tau=t) for t in HYSTERESIS_MEMORY_TAUS),
             ),
-            settings=HYSTERESIS_TRAINING,
             search=HYSTERESIS_HIDDEN,
         ),
         _preset(

@@ -21,7 +21,7 @@ from nnfmu.data.errors import DataError
 from nnfmu.data.measurement import Measurement
 from nnfmu.errors import SettingsError
 from nnfmu.models.features import FeatureSpec, Stop
-from nnfmu.models.lm import GramPrecision, LMSettings, fit_lm
+from nnfmu.models.lm import LMSettings, fit_lm
 from nnfmu.models.metrics import SplitMetrics, max_abs_weight, network_warning, split_metrics
 from nnfmu.models.networks import MLP, GRUNet
 from nnfmu.models.scaling import MinMaxScaler
@@ -83,11 +83,10 @@ class TrainSettings:
     max_epochs/patience: epoch limit and early-stopping patience on the validation split; restarts: seeded random
     initialisations per hidden size, the best validation error kept; hidden_tolerance: "auto" hidden size picks the
     smallest size whose validation MSE is within (1 + tolerance) of the best; lm_max_samples: LM fits on at most this
-    many training samples (evenly strided); lm_gram: the precision LM forms JᵀJ in (`nnfmu.models.lm.LMSettings`);
-    learning_rate/batch_size: Adam (batch_size samples per MLP step); chunk_length/burn_in/sequences_per_batch: GRU
-    training sequences, the samples at their start left out of the loss while the hidden state settles, and sequences
-    per Adam step; input_cutoff [Hz]: the input channels low-passed with zero phase before the features
-    (`nnfmu.data.denoise`; None: as recorded).
+    many training samples (evenly strided); learning_rate/batch_size: Adam (batch_size samples per MLP step);
+    chunk_length/burn_in/sequences_per_batch: GRU training sequences, the samples at their start left out of the loss
+    while the hidden state settles, and sequences per Adam step; input_cutoff [Hz]: the input channels low-passed
+    with zero phase before the features (`nnfmu.data.denoise`; None: as recorded).
     """
 
     optimizer: Optimizer = "auto"
@@ -98,7 +97,6 @@ class TrainSettings:
     splits: SplitFractions = SplitFractions()
     hidden_tolerance: float = 0.10
     lm_max_samples: int = 20000
-    lm_gram: GramPrecision = "float64"
     learning_rate: float = 0.01
     batch_size: int = 1024
     chunk_length: int = 500
@@ -124,8 +122,6 @@ class TrainSettings:
             raise SettingsError(f"burn_in must be in [0, chunk_length={self.chunk_length}), got {self.burn_in}")
         if not (self.hidden_tolerance >= 0 and self.learning_rate > 0):
             raise SettingsError("hidden_tolerance must be >= 0 and learning_rate > 0")
-        if self.lm_gram not in ("float64", "float32"):
-            raise SettingsError(f"lm_gram must be float64 or float32, got {self.lm_gram!r}")
         if self.input_cutoff is not None and not self.input_cutoff > 0:
             raise SettingsError(f"input_cutoff must be a positive frequency [Hz] or None, got {self.input_cutoff!r}")
 
@@ -354,7 +350,7 @@ def fit_network(
     if isinstance(network, GRUNet):
         return _fit_gru(network, data, run_settings, on_epoch)
     if method == "lm":
-        lm = LMSettings(max_epochs=settings.max_epochs, patience=settings.patience, gram=settings.lm_gram)
+        lm = LMSettings(max_epochs=settings.max_epochs, patience=settings.patience)
         train = _strided(*data.rows("train"), settings.lm_max_samples)
         validation = _strided(*data.rows("validation"), settings.lm_max_samples)
         return fit_lm(network, train, validation, lm, on_epoch)

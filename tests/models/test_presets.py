@@ -173,11 +173,3 @@ def test_bushing_presets_train_on_low_passed_inputs_and_a_request_can_change_it(
     assert resolve(TrainRequest(preset="damper-hysteresis", input_cutoff=80.0))[2].input_cutoff == 80.0
     with pytest.raises(SettingsError, match="input_cutoff must be a positive frequency"):
         TrainSettings(input_cutoff=-5.0)
-
-
-def test_only_the_damper_hysteresis_preset_forms_jtj_in_float32():
-    # The bushing networks trained so were as good on their records but worse in the car (docs/networks.md, 29 Nov)
-    assert {name for name, p in PRESETS.items() if p.settings.lm_gram == "float32"} == {"damper-hysteresis"}
-    assert resolve(TrainRequest(preset="damper-hysteresis", hidden=(3,)))[2].lm_gram == "float32"
-    with pytest.raises(SettingsError, match="lm_gram must be float64 or float32, got 'float16'"):
-        TrainSettings(lm_gram="float16")

@@ -18,7 +18,7 @@ from nnfmu.data.band import excited_band
 from nnfmu.data.measurement import Measurement
 from nnfmu.models import train as train_module
 from nnfmu.models.features import FeatureSpec, Stop, Tap
-from nnfmu.models.lm import LMSettings, _Perceptron, fit_lm, mlp_jacobian
+from nnfmu.models.lm import LMSettings, fit_lm, mlp_jacobian
 from nnfmu.models.networks import MLP
 from nnfmu.models.splits import SplitFractions, contiguous_splits
 from nnfmu.models.stopping import EarlyStopping
@@ -75,27 +75,6 @@ def test_hand_jacobian_equals_autograd():
     expected = torch.cat([reference[name].reshape(7, -1) for name in params], dim=1)
     torch.testing.assert_close(y, net(x)[:, 0], rtol=0, atol=1e-14)
     torch.testing.assert_close(jacobian, expected, rtol=1e-12, atol=1e-14)
-
-
-@pytest.mark.parametrize("gram", ["float64", "float32"])
-def test_lm_normal_equations_equal_the_float64_jacobians(gram: str):
-    # float64: Jᵀr and JᵀJ of the hand Jacobian exactly; float32: Jᵀr from the Jacobian's structure in float64, JᵀJ
-    # formed in float32, so to its rounding.
-    rng = np.random.default_rng(3)
-    x = rng.standard_normal((500, 4))
-    weights = rng.standard_normal((4 + 2) * 5 + 1)
-    exact = _Perceptron(x, 5)
-    hidden, output = exact.activations(weights)
-    residual = output - rng.standard_normal(500)
-    jacobian = exact.fill_jacobian(exact.slopes(weights, hidden), hidden, exact.new_jacobian(np.float64))
-    gradient, gram_matrix = _Perceptron(x, 5, gram).normal_equations(weights, hidden, residual)
-    assert gram_matrix.dtype == np.float64 and np.array_equal(gram_matrix, gram_matrix.T)
-    if gram == "float64":
-        assert np.array_equal(gradient, jacobian @ residual) and np.array_equal(gram_matrix, jacobian @ jacobian.T)
-    else:
-        np.testing.assert_allclose(gradient, jacobian @ residual, rtol=1e-12, atol=1e-12)
-        error = np.abs(gram_matrix - jacobian @ jacobian.T).max()
-        assert 0 < error <= 1e-6 * np.abs(jacobian @ jacobian.T).max()
 
 
 def test_lm_decreases_the_loss_and_fits_a_known_function():
