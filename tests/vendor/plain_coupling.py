@@ -11,6 +11,7 @@ monolithically as the reference: the yardstick of "precision that survives the u
 
 from __future__ import annotations
 
+import shutil
 import sys
 from pathlib import Path
 
@@ -79,7 +80,8 @@ def replay(damper_fmu: Path, velocity: np.ndarray, displacement: np.ndarray, h: 
 
 
 def _open(path: Path, name: str) -> tuple[FMU2Slave, dict[str, int]]:
-    """An initialised FMI 2 instance of `path` at its default parameters, and its value references by name."""
+    """An initialised FMI 2 instance of `path` at its default parameters, and its value references by name; `_close`
+    ends it and removes the folder it was unpacked into."""
     md = read_model_description(path)
     slave = FMU2Slave(
         guid=md.guid, unzipDirectory=extract(path), modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name
@@ -95,7 +97,22 @@ def _open(path: Path, name: str) -> tuple[FMU2Slave, dict[str, int]]:
 def plain_loop(car_fmu: Path, damper_fmu: Path, duration: float, h: float, scheme: str) -> np.ndarray:
     """(n + 1, 2): damper force [N] and body acceleration [m/s^2] at t = k h from a plain fmpy master."""
     car, cv = _open(car_fmu, "car")
-    damper, dv = _open(damper_fmu, "damper")
+    try:
+        damper, dv = _open(damper_fmu, "damper")
+    except BaseException:
+        _close(car)
+        raise
+    try:
+        return _loop(car, cv, damper, dv, duration, h, scheme)
+    finally:
+        for slave in (car, damper):
+            _close(slave)
+
+
+def _loop(
+    car: FMU2Slave, cv: dict[str, int], damper: FMU2Slave, dv: dict[str, int], duration: float, h: float, scheme: str
+) -> np.ndarray:
+    """`plain_loop`'s steps on open instances."""
     n = round(duration / h)
     zr = road(np.arange(n + 1) * h)
     out = np.empty((n + 1, 2))
@@ -115,10 +132,16 @@ def plain_loop(car_fmu: Path, damper_fmu: Path, duration: float, h: float, schem
         force = damper.getReal([dv["force"]])[0]
         car.setReal([cv["F_damper"]], [force])  # a_body feeds through the force: read it with the new one
         out[k + 1] = force, car.getReal([cv["a_body"]])[0]
-    for slave in (car, damper):
-        slave.terminate()
-        slave.freeInstance()
     return out
+
+
+def _close(slave: FMU2Slave) -> None:
+    """Terminate and free an instance from `_open`, then remove its unpacked FMU."""
+    try:
+        slave.terminate()
+    finally:
+        slave.freeInstance()
+    shutil.rmtree(slave.unzipDirectory, ignore_errors=True)
 
 
 def libcosim_loop(car_fmu: Path, damper_fmu: Path, duration: float, h: float) -> np.ndarray:

@@ -1,5 +1,5 @@
 """Campaigns on a real Dask cluster on localhost: a `dask scheduler` and two `dask worker` processes (started here,
-killed in teardown). The table equals the serial run's, a killed worker's cases finish elsewhere, and a campaign whose
+stopped in teardown). The table equals the serial run's, a killed worker's cases finish elsewhere, and a campaign whose
 `nnfmu batch` process is killed resumes from its parts."""
 
 from __future__ import annotations
@@ -28,9 +28,10 @@ START_TIMEOUT = 60.0  # [s] for the scheduler and workers to come up
 RUN_TIMEOUT = 240.0  # [s] for a campaign on the cluster
 
 
-def _environment() -> dict[str, str]:
-    """The test's environment with a case retried once after its worker dies, as `nnfmu batch` documents."""
-    return os.environ | {"DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES": "1"}
+def _environment(folder: Path) -> dict[str, str]:
+    """The test's environment with a case retried once after its worker dies, as `nnfmu batch` documents, and the
+    temporary files in `folder` (a killed worker cannot remove the FMUs it unpacked)."""
+    return os.environ | {"DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES": "1", "TMPDIR": str(folder)}
 
 
 def _wait(condition, timeout: float, what: str) -> None:
@@ -42,8 +43,13 @@ def _wait(condition, timeout: float, what: str) -> None:
 
 
 def _stop(process: subprocess.Popen) -> None:
+    """Ask the process to end (a worker then closes its FMU instances), kill it if it has not within 30 s."""
     if process.poll() is None:
-        process.kill()
+        process.terminate()
+        try:
+            process.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            process.kill()
     process.wait(timeout=30)
 
 
@@ -61,7 +67,7 @@ def _start_worker(address: str, name: str, folder: Path) -> subprocess.Popen:
             "--local-directory",
             str(folder),
         ],
-        env=_environment(),
+        env=_environment(folder),
         cwd=folder,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
@@ -85,7 +91,7 @@ def cluster(tmp_path_factory: pytest.TempPathFactory):
                 "--scheduler-file",
                 str(scheduler_file),
             ],
-            env=_environment(),
+            env=_environment(folder),
             cwd=folder,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
