@@ -56,9 +56,13 @@ def _helper(name: str):
 
 def pytest_configure(config: object) -> None:
     """Every figure a test saves is checked for cut texts and doubled names (`tests/figure_guard.py`); compiles of
-    identical inputs are made once per session outside the build stage's own tests (`tests/compile_cache.py`)."""
+    identical inputs are made once per session outside the build stage's own tests (`tests/compile_cache.py`); nnfmu's
+    own cache (compiled helpers, system FMUs) lies in that session's folder, not the user's, unless `$NNFMU_CACHE`
+    names one."""
     _helper("figure_guard").install()
-    _helper("compile_cache").install()
+    compile_cache = _helper("compile_cache")
+    compile_cache.install()
+    os.environ.setdefault("NNFMU_CACHE", str(Path(os.environ[compile_cache.VARIABLE]) / "nnfmu-cache"))
 
 
 def pytest_unconfigure(config: object) -> None:
