@@ -4,6 +4,7 @@ builds for the same system and settings, so the C master steps exactly what `cos
 
 from __future__ import annotations
 
+import hashlib
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
@@ -12,11 +13,12 @@ import numpy as np
 
 from nnfmu.cosim.binding import DriveBinding, bind_free_inputs
 from nnfmu.cosim.master import CosimError, CosimSettings, _System
+from nnfmu.cosim.slave import FmuSlave
 from nnfmu.cosim.ssp import SystemStructure
 from nnfmu.cosim.units import port_unit
 from nnfmu.data import Measurement
 
-FOLDER = "fmus"  # under the system FMU's resources/: one folder per part, fmus/<index>/
+FOLDER = "fmus"  # under the system FMU's resources/: fmus/<index of the first part it serves>/ per distinct FMU
 
 
 @dataclass(frozen=True)
@@ -116,8 +118,9 @@ def plan_system(
     extrapolate_drive: bool = True,
 ) -> SystemPlan:
     """The plan of `system` under `settings` (one pass per step: iterations 0, extrapolation 'linear'; no port
-    derivatives) at the fixed inner step `inner_step` [s]; with `copy_to`, each part's unpacked FMU is copied to
-    copy_to/fmus/<index>/ on the way (the host platform's binaries only). `extrapolate_drive`: a step the outer
+    derivatives) at the fixed inner step `inner_step` [s]; with `copy_to`, each distinct FMU is copied unpacked to
+    copy_to/fmus/<index>/ on the way (the host platform's binaries only; parts of one FMU share its folder and library,
+    unless it may be instantiated only once per process). `extrapolate_drive`: a step the outer
     master sets no input derivatives for takes the drive's slope from the step before (else holds it). CosimError
     naming what cannot be built."""
     if settings.iterations or settings.plain:
@@ -143,6 +146,16 @@ def plan_system(
         return _plan(system, parts, settings, inner_step, binding, units, copy_to, extrapolate_drive)
     finally:
         parts.close(healthy=False)
+
+
+def _sharing_key(slave: FmuSlave) -> str | None:
+    """What makes parts one FMU whose unpacked folder they can share (its file's SHA-256), or None for an FMU that may
+    be instantiated only once per process (its parts then load a library each, from a copy each)."""
+    if slave.description.coSimulation.canBeInstantiatedOnlyOncePerProcess:
+        return None
+    if slave.path.is_file():
+        return hashlib.sha256(slave.path.read_bytes()).hexdigest()
+    return str(slave.path.resolve())
 
 
 def _copy_part(source: Path, target: Path, platform_folder: str, name: str) -> None:
@@ -177,11 +190,17 @@ def _plan(
     position = {e.name: i for i, e in enumerate(order)}
     host = host_platform_of()
     built = []
+    copied: dict[str, str] = {}  # an FMU's sharing key -> the folder it was copied to
     for i, element in enumerate(order):
         slave = element.outputs.slave
-        folder = f"{FOLDER}/{i}"
-        if copy_to is not None:
-            _copy_part(Path(slave.directory), copy_to / folder, host.folder(slave.fmi_version), element.name)
+        key = _sharing_key(slave)
+        folder = copied.get(key) if key is not None else None
+        if folder is None:
+            folder = f"{FOLDER}/{i}"
+            if copy_to is not None:
+                _copy_part(Path(slave.directory), copy_to / folder, host.folder(slave.fmi_version), element.name)
+            if key is not None:
+                copied[key] = folder
         inputs = element.inputs
         conversions = inputs is not None and inputs.scale is not None
         outputs = element.outputs
