@@ -26,10 +26,12 @@ import pytest
 
 from nnfmu.cosim.container.build import build_system_fmu
 from nnfmu.cosim.container.engine import cosimulate_compiled
-from nnfmu.cosim.master import CosimSettings, cosimulate
+from nnfmu.cosim.master import CosimSettings, CosimWarning, cosimulate
 from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd
 from nnfmu.data import Measurement
 from nnfmu.data.derive import derive_rates
+from nnfmu.fmu.build import build_fmu
+from nnfmu.fmu.options import BuildOptions
 from nnfmu.vehicle import DriveSettings, generate_drive
 from nnfmu.vehicle.dynamics.components import REFERENCE
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
@@ -103,11 +105,11 @@ def dampers_only(tmp_path_factory: pytest.TempPathFactory, truth_fmus) -> Path: 
     return dampers_system(tmp_path_factory.mktemp("full_vehicle_dampers"), truth_fmus.dampers["truth"])
 
 
-def dampers_system(folder: Path, damper: Path) -> Path:
-    """The full vehicle (LCA bushings linear inside) with `damper` in all four corners: 5 FMUs."""
+def dampers_system(folder: Path, damper: Path, fmi: int = 2) -> Path:
+    """The full vehicle (LCA bushings linear inside; FMI version `fmi`) with `damper` in all four corners: 5 FMUs."""
     folder.mkdir(parents=True, exist_ok=True)
     settings = VehicleBuildSettings(
-        sample_period=H, components={name: REFERENCE for name in bushing_elements("full-vehicle")}
+        sample_period=H, components={name: REFERENCE for name in bushing_elements("full-vehicle")}, fmi_version=fmi
     )
     vehicle = build_vehicle_fmu("full-vehicle", folder / "car.fmu", settings)
     dampers = {name: damper for name in damper_elements("full-vehicle")}
@@ -184,4 +186,18 @@ def test_an_fmu_instantiated_once_per_process_gets_a_copy_per_part(truth_fmus, d
         build_system_fmu(system, tmp_path / "car.fmu", H)
     assert len(part_folders(tmp_path / "car.fmu")) == 5
     python, compiled = both_engines(ssd, drive, CosimSettings(step=H, stop_time=DURATION))
+    assert largest_difference(compiled, python) <= TOLERANCE
+
+
+def test_fmi3_parts_share_a_library_too(truth_fmus, drive: Measurement, tmp_path: Path):  # noqa: ANN001
+    """The vehicle and the damper truth as FMI 3 FMUs: two folders for five parts, the engines agree."""
+    damper = build_fmu(
+        truth_fmus.dampers["truth"].with_suffix(".onnx"), BuildOptions(out=tmp_path / "damper3.fmu", fmi_version=3)
+    )
+    ssd = dampers_system(tmp_path / "system", damper, fmi=3)
+    with open_system(ssd) as system:
+        build_system_fmu(system, tmp_path / "car.fmu", H)
+    assert len(part_folders(tmp_path / "car.fmu")) == 2
+    with pytest.warns(CosimWarning, match="'vehicle'.*cannot interpolate its inputs"):  # FMI 3: no input slopes
+        python, compiled = both_engines(ssd, drive, CosimSettings(step=H, stop_time=DURATION))
     assert largest_difference(compiled, python) <= TOLERANCE
