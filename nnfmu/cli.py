@@ -631,22 +631,36 @@ def system_build(
         "over the step before (second order in H); --hold-drive holds it (first order).",
     ),
     allow_outside: bool = _allow_outside_option(),
+    platforms: Optional[list[str]] = _platforms_option(),
 ) -> None:
     """Build an SSP system into one co-simulation FMU stepping its FMUs with nnfmu's coupling (docs/system-fmu.md).
 
     Inputs: the vehicle's free actuator inputs (the drive) in SI units; outputs: every Real output as nnfmu cosim
-    names its channels; parameters: element.parameter. This machine's platform only.
+    names its channels; parameters: element.parameter. Binaries for each platform asked whose binary every FMU of
+    the system carries (the others named in a warning line).
     """
     from nnfmu.workflows.system_build import CosimSettings, run_system_build
 
     with _user_errors():
         target = check_output_file(out, [system])
         settings = CosimSettings(scheme=scheme, order=order, refresh=refresh, port_derivatives=False)
-        plan = run_system_build(system, target, step, inner_step, settings, fmi, allow_outside, extrapolate_drive)
+        with _warnings_as_lines():
+            plan = run_system_build(
+                system,
+                target,
+                step,
+                inner_step,
+                settings,
+                fmi,
+                allow_outside,
+                extrapolate_drive,
+                _platforms(platforms),
+            )
     typer.echo(
         f"FMU: {target} ({len(plan.parts)} FMUs stepped at {plan.inner_step:g} s; {len(plan.inputs)} inputs, "
         f"{len(plan.outputs)} outputs, {len(plan.parameters)} parameters)"
     )
+    _echo_binaries(target)
 
 
 @app.command()

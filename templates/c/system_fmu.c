@@ -10,7 +10,6 @@
  * system FMU's, logged with the element's name.
  */
 #include <ctype.h>
-#include <dlfcn.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -30,6 +29,39 @@
 #include "inner_loop.h"
 #include "system_config.h"
 
+/* The parts' libraries: dlopen on POSIX, LoadLibrary on Windows; their binaries/ folder on this platform, by FMI
+ * version (FMI 2.0.4's and FMI 3's names). */
+#ifdef _WIN32
+#define WIN32_LEAN_AND_MEAN
+#include <windows.h>
+typedef HMODULE ns_library;
+#define NS_LIBRARY_SUFFIX ".dll"
+#define NS_FMI2_PLATFORM "win64"
+#define NS_FMI3_PLATFORM "x86_64-windows"
+#else
+#include <dlfcn.h>
+typedef void *ns_library;
+#if defined(__APPLE__)
+#define NS_LIBRARY_SUFFIX ".dylib"
+#if defined(__aarch64__) || defined(__arm64__)
+#define NS_FMI2_PLATFORM "aarch64-darwin"
+#define NS_FMI3_PLATFORM "aarch64-darwin"
+#else
+#define NS_FMI2_PLATFORM "darwin64"
+#define NS_FMI3_PLATFORM "x86_64-darwin"
+#endif
+#else
+#define NS_LIBRARY_SUFFIX ".so"
+#if defined(__aarch64__)
+#define NS_FMI2_PLATFORM "aarch64-linux"
+#define NS_FMI3_PLATFORM "aarch64-linux"
+#else
+#define NS_FMI2_PLATFORM "linux64"
+#define NS_FMI3_PLATFORM "x86_64-linux"
+#endif
+#endif
+#endif
+
 #define NS_MESSAGE 1024        /* longest log message passed on, bytes */
 #define NS_MAX_INNER_STEPS 1000000 /* most inner steps in one doStep */
 #define NS_STEP_TOLERANCE 1e-6 /* how far (relative to h) a doStep may be off a whole number of inner steps */
@@ -43,7 +75,7 @@ typedef struct ns_instance ns_instance;
 typedef struct {
     ns_instance *owner;
     const ns_part_config *config;
-    void *library;
+    ns_library library;
     fmi2Component component;
     fmi2CallbackFunctions callbacks;
     fmi2InstantiateTYPE *instantiate;
@@ -322,7 +354,49 @@ static char *uri_path(const char *uri) {
         }
     }
     *out = 0;
+#ifdef _WIN32
+    if (path[0] == '/' && isalpha((unsigned char)path[1]) && path[2] == ':') memmove(path, path + 1, strlen(path));
+#endif
     return path;
+}
+
+/* The library at `path`, or NULL (with the reason in `why`, `size` bytes). */
+static ns_library library_open(const char *path, char *why, size_t size) {
+#ifdef _WIN32
+    char *native = (char *)malloc(strlen(path) + 1), *p;
+    ns_library library;
+    if (native == NULL) {
+        snprintf(why, size, "out of memory");
+        return NULL;
+    }
+    strcpy(native, path);
+    for (p = native; *p; p++)
+        if (*p == '/') *p = '\\';
+    library = LoadLibraryA(native);
+    if (library == NULL) snprintf(why, size, "Windows error %lu", (unsigned long)GetLastError());
+    free(native);
+    return library;
+#else
+    ns_library library = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    if (library == NULL) snprintf(why, size, "%s", dlerror());
+    return library;
+#endif
+}
+
+static void *library_symbol(ns_library library, const char *name) {
+#ifdef _WIN32
+    return (void *)GetProcAddress(library, name);
+#else
+    return dlsym(library, name);
+#endif
+}
+
+static void library_close(ns_library library) {
+#ifdef _WIN32
+    FreeLibrary(library);
+#else
+    dlclose(library);
+#endif
 }
 
 /* `base` (without its trailing slashes) + "/" + each of the parts, in a new string. */
@@ -338,7 +412,7 @@ static char *joined(const char *base, const char *a, const char *b, const char *
 }
 
 static void *symbol(ns_instance *self, ns_part *part, const char *name) {
-    void *found = dlsym(part->library, name);
+    void *found = library_symbol(part->library, name);
     if (found == NULL) say(self, fmi2Error, "element '%s' (%s): no function %s", part->config->name, part->config->folder, name);
     return found;
 }
@@ -418,8 +492,8 @@ static int load_fmi3(ns_instance *self, ns_part *part) {
 /* Open the part's library and take its functions; 0 on success. */
 static int load_part(ns_instance *self, ns_part *part, const char *folder) {
     const ns_part_config *c = part->config;
-    char *path = joined(folder, c->folder, "/binaries/", c->platform);
-    char *library;
+    char *path = joined(folder, c->folder, "/binaries/", c->fmi_version == 3 ? NS_FMI3_PLATFORM : NS_FMI2_PLATFORM);
+    char *library, why[NS_MESSAGE];
     if (path == NULL) return 1;
     library = (char *)malloc(strlen(path) + strlen(c->identifier) + strlen(NS_LIBRARY_SUFFIX) + 2);
     if (library == NULL) {
@@ -428,9 +502,9 @@ static int load_part(ns_instance *self, ns_part *part, const char *folder) {
     }
     sprintf(library, "%s/%s%s", path, c->identifier, NS_LIBRARY_SUFFIX);
     free(path);
-    part->library = dlopen(library, RTLD_NOW | RTLD_LOCAL);
+    part->library = library_open(library, why, sizeof why);
     if (part->library == NULL) {
-        say(self, fmi2Error, "element '%s': cannot load %s: %s", c->name, library, dlerror());
+        say(self, fmi2Error, "element '%s': cannot load %s: %s", c->name, library, why);
         free(library);
         return 1;
     }
@@ -449,11 +523,11 @@ static double *wire_element(ns_instance *self, int64_t i, double *next) {
         e->do_step = fmi3_loop_step;
         e->set_slopes = NULL; /* FMI 3 co-simulation takes no input derivatives */
     } else {
-        e->set_real = (nn_transfer)dlsym(self->parts[i].library, "fmi2SetReal");
-        e->get_real = (nn_transfer)dlsym(self->parts[i].library, "fmi2GetReal");
-        e->do_step = (nn_do_step)dlsym(self->parts[i].library, "fmi2DoStep");
+        e->set_real = (nn_transfer)library_symbol(self->parts[i].library, "fmi2SetReal");
+        e->get_real = (nn_transfer)library_symbol(self->parts[i].library, "fmi2GetReal");
+        e->do_step = (nn_do_step)library_symbol(self->parts[i].library, "fmi2DoStep");
         e->set_slopes =
-            c->takes_slopes ? (nn_set_slopes)dlsym(self->parts[i].library, "fmi2SetRealInputDerivatives") : NULL;
+            c->takes_slopes ? (nn_set_slopes)library_symbol(self->parts[i].library, "fmi2SetRealInputDerivatives") : NULL;
     }
     e->input_references = c->input_references;
     e->n_coupled = c->n_coupled;
@@ -498,7 +572,7 @@ static void free_instance(ns_instance *self) {
     for (i = 0; i < NS_N_PARTS; i++) {
         ns_part *part = &self->parts[i];
         if (part->component != NULL && part->free_instance != NULL) part->free_instance(part->component);
-        if (part->library != NULL) dlclose(part->library);
+        if (part->library != NULL) library_close(part->library);
     }
     free(self->buffers);
     free(self->name);
@@ -1082,7 +1156,8 @@ NS_FMI2_API fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUst
     status = part_sizes(self, state, sizes, &total);
     if (status != fmi2OK) return status;
     if (size < total) {
-        say(self, fmi2Error, "fmi2SerializeFMUstate: %zu bytes given, the state takes %zu", size, total);
+        say(self, fmi2Error, "fmi2SerializeFMUstate: %lu bytes given, the state takes %lu", (unsigned long)size,
+            (unsigned long)total);
         return fmi2Error;
     }
     memcpy(serializedState, NS_STATE_MAGIC, sizeof NS_STATE_MAGIC);
@@ -1114,7 +1189,8 @@ NS_FMI2_API fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte s
         serializedState == NULL || FMUstate == NULL)
         return fmi2Error;
     if (size < at || memcmp(serializedState, NS_STATE_MAGIC, sizeof NS_STATE_MAGIC) != 0) {
-        say(self, fmi2Error, "fmi2DeSerializeFMUstate: the %zu bytes are no state of an nnfmu system FMU", size);
+        say(self, fmi2Error, "fmi2DeSerializeFMUstate: the %lu bytes are no state of an nnfmu system FMU",
+            (unsigned long)size);
         return fmi2Error;
     }
     state = (ns_state *)calloc(1, sizeof(ns_state));
@@ -1139,7 +1215,8 @@ NS_FMI2_API fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte s
         }
     }
     if (at != size || state->own.mode < NS_INSTANTIATED || state->own.mode > NS_FAILED) {
-        say(self, fmi2Error, "fmi2DeSerializeFMUstate: the %zu bytes are no state of this system FMU", size);
+        say(self, fmi2Error, "fmi2DeSerializeFMUstate: the %lu bytes are no state of this system FMU",
+            (unsigned long)size);
         fmi2FreeFMUstate(c, (fmi2FMUstate *)&state);
         return fmi2Error;
     }

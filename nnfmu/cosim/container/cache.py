@@ -91,7 +91,7 @@ def cached_system_fmu(system: SystemStructure, settings: CosimSettings, binding:
     folder.mkdir(parents=True, exist_ok=True)
     with scratch_dir(".build-", folder) as scratch:
         fmu = Path(scratch) / "system.fmu"
-        build_system_fmu(system, fmu, settings.step, None, settings, binding, fmi=2)
+        build_system_fmu(system, fmu, settings.step, None, settings, binding, fmi=2, platforms=("host",))
         unpacked = Path(scratch) / key[:32]
         extract_zip(fmu, unpacked)
         try:

@@ -35,8 +35,8 @@ def _array(
     return name
 
 
-def render_config(plan: SystemPlan, identifier: str, guid: str, suffix: str) -> str:
-    """The header's text."""
+def render_config(plan: SystemPlan, identifier: str, guid: str) -> str:
+    """The header's text (the same for every platform: system_fmu.c names the platform's library suffix and folders)."""
     settings = plan.settings
     n_values = len(plan.outputs)
     lines = [
@@ -49,7 +49,6 @@ def render_config(plan: SystemPlan, identifier: str, guid: str, suffix: str) -> 
         "",
         f"#define NS_MODEL_IDENTIFIER {_string(identifier)}",
         f"#define NS_GUID {_string(guid)}",
-        f"#define NS_LIBRARY_SUFFIX {_string(suffix)}",
         f"#define NS_N_PARTS {len(plan.parts)}",
         f"#define NS_N_VALUES {n_values}",
         f"#define NS_N_DRIVE {len(plan.inputs)}",
@@ -72,7 +71,6 @@ def render_config(plan: SystemPlan, identifier: str, guid: str, suffix: str) -> 
         "    const char *folder; /* under resources/ */",
         "    const char *identifier;",
         "    const char *guid; /* FMI 3: the instantiation token */",
-        "    const char *platform; /* the folder under its binaries/ */",
         "    int64_t fmi_version;",
         "    int64_t n_coupled, n_driven, n_outputs, span_start, is_driven, feedthrough, takes_slopes;",
         "    const uint32_t *input_references;",
@@ -108,7 +106,6 @@ def render_config(plan: SystemPlan, identifier: str, guid: str, suffix: str) -> 
             _string(part.folder),
             _string(part.identifier),
             _string(part.guid),
-            _string(part.platform),
             str(part.fmi_version),
             str(part.n_coupled),
             str(n_inputs - part.n_coupled),

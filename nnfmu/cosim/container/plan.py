@@ -8,6 +8,7 @@ import hashlib
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -17,6 +18,9 @@ from nnfmu.cosim.slave import FmuSlave
 from nnfmu.cosim.ssp import SystemStructure
 from nnfmu.cosim.units import port_unit
 from nnfmu.data import Measurement
+
+if TYPE_CHECKING:
+    from nnfmu.fmu import Platform
 
 FOLDER = "fmus"  # under the system FMU's resources/: fmus/<index of the first part it serves>/ per distinct FMU
 
@@ -30,7 +34,6 @@ class Part:
     identifier: str
     guid: str  # FMI 3: the instantiation token
     fmi_version: int
-    platform: str  # the folder of its binary under binaries/
     input_references: tuple[int, ...]  # coupled inputs, then the drive's (the driven part)
     n_coupled: int
     sources: tuple[int, ...]
@@ -116,11 +119,12 @@ def plan_system(
     binding: DriveBinding | None = None,
     copy_to: Path | None = None,
     extrapolate_drive: bool = True,
+    platforms: tuple[Platform, ...] | None = None,
 ) -> SystemPlan:
     """The plan of `system` under `settings` (one pass per step: iterations 0, extrapolation 'linear'; no port
     derivatives) at the fixed inner step `inner_step` [s]; with `copy_to`, each distinct FMU is copied unpacked to
-    copy_to/fmus/<index>/ on the way (the host platform's binaries only; parts of one FMU share its folder and library,
-    unless it may be instantiated only once per process). `extrapolate_drive`: a step the outer
+    copy_to/fmus/<index>/ on the way with the binaries of `platforms` it has (None: the host's; parts of one FMU share
+    its folder and library, unless it may be instantiated only once per process). `extrapolate_drive`: a step the outer
     master sets no input derivatives for takes the drive's slope from the step before (else holds it). CosimError
     naming what cannot be built."""
     if settings.iterations or settings.plain:
@@ -143,7 +147,7 @@ def plan_system(
                 "a system FMU leaves them at their start values: plan it with port_derivatives=False (the python "
                 "engine of `nnfmu cosim` sets them)"
             )
-        return _plan(system, parts, settings, inner_step, binding, units, copy_to, extrapolate_drive)
+        return _plan(system, parts, settings, inner_step, binding, units, copy_to, extrapolate_drive, platforms)
     finally:
         parts.close(healthy=False)
 
@@ -158,17 +162,15 @@ def _sharing_key(slave: FmuSlave) -> str | None:
     return str(slave.path.resolve())
 
 
-def _copy_part(source: Path, target: Path, platform_folder: str, name: str) -> None:
-    """An unpacked FMU into `target`, with the binaries of `platform_folder` only; CosimError when it has none."""
-    if not (source / "binaries" / platform_folder).is_dir():
-        raise CosimError(
-            f"element {name!r}: its FMU has no binary for this platform (binaries/{platform_folder}), which the "
-            "system FMU loads"
-        )
+def _copy_part(source: Path, target: Path, platform_folders: tuple[str, ...]) -> None:
+    """An unpacked FMU into `target`, with only the binaries of `platform_folders` it has (`build_system_fmu` names
+    the platforms a part lacks)."""
     shutil.copytree(
         source,
         target,
-        ignore=lambda folder, names: [n for n in names if Path(folder) == source / "binaries" and n != platform_folder],
+        ignore=lambda folder, names: [
+            n for n in names if Path(folder) == source / "binaries" and n not in platform_folders
+        ],
     )
 
 
@@ -181,14 +183,15 @@ def _plan(
     units: dict[str, str],
     copy_to: Path | None,
     extrapolate_drive: bool,
+    platforms: tuple[Platform, ...] | None,
 ) -> SystemPlan:
     """The plan from the master's prepared `parts` (see `plan_system`)."""
     from nnfmu.fmu import host_platform_of
 
+    carried = platforms if platforms is not None else (host_platform_of(),)
     order = [element for group in parts.groups for element in group]
     index = {id(element): i for i, element in enumerate(order)}
     position = {e.name: i for i, e in enumerate(order)}
-    host = host_platform_of()
     built = []
     copied: dict[str, str] = {}  # an FMU's sharing key -> the folder it was copied to
     for i, element in enumerate(order):
@@ -198,7 +201,8 @@ def _plan(
         if folder is None:
             folder = f"{FOLDER}/{i}"
             if copy_to is not None:
-                _copy_part(Path(slave.directory), copy_to / folder, host.folder(slave.fmi_version), element.name)
+                folders = tuple(p.folder(slave.fmi_version) for p in carried)
+                _copy_part(Path(slave.directory), copy_to / folder, folders)
             if key is not None:
                 copied[key] = folder
         inputs = element.inputs
@@ -211,7 +215,6 @@ def _plan(
                 identifier=slave.description.coSimulation.modelIdentifier,
                 guid=slave.description.guid if slave.fmi_version == 2 else slave.description.instantiationToken,
                 fmi_version=slave.fmi_version,
-                platform=host.folder(slave.fmi_version),
                 input_references=tuple(slave.value_references(inputs.names)) if inputs is not None else (),
                 n_coupled=len(element.sources),
                 sources=tuple(int(s) for s in element.sources),

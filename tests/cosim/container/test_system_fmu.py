@@ -273,6 +273,7 @@ def test_the_cli_builds_one(at_h: Path, tmp_path: Path) -> None:
     )
     assert done.returncode == 0, done.stderr
     assert "2 FMUs stepped at 0.001 s; 2 inputs, 9 outputs, 4 parameters" in done.stdout and out.is_file()
+    assert "binaries: linux64" in done.stdout.splitlines()  # its parts' platform (the suite builds them for it)
 
 
 SANITIZE = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer"]
