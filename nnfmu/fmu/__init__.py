@@ -18,6 +18,7 @@ __all__, __getattr__ = face(
         "native.backend": ("fmi_headers_dir",),
         "native.compiler": ("compile_shared_library",),
         "native.toolchain": (
+            "PLATFORMS",
             "Platform",
             "Target",
             "host_binaries_only",

@@ -108,10 +108,7 @@ def build_system_fmu(
         description = render_model_description(plan, identifier, guid, step, fmi)
         (tree / "modelDescription.xml").write_text(description, "utf-8")
         if fmi == 3:
-            build = render_build_description(identifier, list(SOURCES[3])).replace(
-                'name="m"/>', 'name="m"/>\n    <Library name="dl"/>'
-            )
-            (sources / "buildDescription.xml").write_text(build, "utf-8")
+            (sources / "buildDescription.xml").write_text(_build_description(identifier), "utf-8")
         for target in buildable:
             compile_shared_library(
                 target,
@@ -126,6 +123,28 @@ def build_system_fmu(
     if left_out:
         warnings.warn("; ".join(left_out), PlatformSkippedWarning, stacklevel=2)
     return plan
+
+
+def _build_description(identifier: str) -> str:
+    """sources/buildDescription.xml: one configuration per FMI 3 platform, the Linux ones also linking libdl (where
+    glibc before 2.34 keeps dlopen); Windows and macOS load libraries from their system library."""
+    from nnfmu.fmu import PLATFORMS
+
+    text = render_build_description(identifier, list(SOURCES[3]))
+    start, end = (
+        text.index("  <BuildConfiguration "),
+        text.index("</BuildConfiguration>") + len("</BuildConfiguration>"),
+    )
+    configuration = text[start:end]
+    configurations = []
+    for platform in PLATFORMS:
+        one = configuration.replace("<BuildConfiguration ", f'<BuildConfiguration platform="{platform.name}" ', 1)
+        if platform.suffix == ".so":
+            one = one.replace('<Library name="m"/>', '<Library name="m"/>\n    <Library name="dl"/>').replace(
+                "the math library (-lm)", "the math and dl libraries (-lm -ldl)"
+            )
+        configurations.append(one)
+    return text[:start] + "\n".join(configurations) + text[end:]
 
 
 def _has_binary(resources: Path, part: Part, target: Target) -> bool:

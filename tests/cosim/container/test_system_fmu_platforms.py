@@ -233,3 +233,23 @@ def test_a_platform_a_part_lacks_is_left_out_naming_the_part(tmp_path: Path) -> 
     assert done.returncode == 0, done.stderr
     assert "binaries: linux64" in done.stdout.splitlines()
     assert "warning: no system FMU binary for x86_64-windows (element 'damper' has no binary for it)" in done.stderr
+
+
+def test_the_fmi3_build_description_links_libdl_on_linux_only(tmp_path: Path) -> None:
+    """An FMI 3 system FMU's sources/buildDescription.xml: one configuration per FMI 3 platform, its sources, the
+    math library, and libdl on Linux alone (Windows and macOS have no libdl to link)."""
+    from xml.etree import ElementTree
+
+    with open_system(quarter_car(tmp_path / "system", ("x86_64-linux",), "linear")) as system:
+        build_system_fmu(system, tmp_path / "car.fmu", H, None, CosimSettings(port_derivatives=False), fmi=3)
+    with zipfile.ZipFile(tmp_path / "car.fmu") as archive:
+        root = ElementTree.fromstring(archive.read("sources/buildDescription.xml"))
+    libraries = {
+        c.get("platform"): {library.get("name") for library in c.iter("Library")}
+        for c in root.iter("BuildConfiguration")
+    }
+    assert set(libraries) == {p.name for p in toolchain.PLATFORMS}
+    assert {p for p, names in libraries.items() if "dl" in names} == {"x86_64-linux", "aarch64-linux"}
+    assert all("m" in names for names in libraries.values())
+    sources = {s.get("name") for s in root.iter("SourceFile")}
+    assert sources == {"system_fmu3.c", "inner_loop.c"}
