@@ -19,7 +19,11 @@
 /* Compiled alone: the FMI 2 interface, exported. Included by system_fmu3.c (NS_FMI3_GLUE): the same functions, static,
  * under its FMI 3 interface. */
 #ifdef NS_FMI3_GLUE
+#if defined(__GNUC__)
 #define NS_FMI2_API static __attribute__((unused))
+#else
+#define NS_FMI2_API static
+#endif
 #include "fmi2FunctionTypes.h"
 #else
 #define NS_FMI2_API
