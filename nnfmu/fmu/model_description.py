@@ -13,7 +13,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import uuid
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -273,6 +273,9 @@ class ModelDescriptionView:
         return port.min is not None or port.max is not None
 
 
+_LIBRARY_TEXT = {"m": "the math library (-lm)", "dl": "the dl library (-ldl)"}
+
+
 @functools.cache
 def _environment() -> jinja2.Environment:
     """The XML templates' environment, made once per process (compiling the templates costs ~0.25 s per build)."""
@@ -292,8 +295,19 @@ def render_model_description(view: ModelDescriptionView) -> str:
     return _environment().get_template(template).render(md=view)
 
 
-def render_build_description(identifier: str, source_files: list[str]) -> str:
-    """sources/buildDescription.xml: how another platform compiles the FMU from its sources."""
-    return (
-        _environment().get_template("buildDescription.xml.j2").render(identifier=identifier, source_files=source_files)
-    )
+def render_build_description(
+    identifier: str, source_files: list[str], libraries: Mapping[str | None, tuple[str, ...]] | None = None
+) -> str:
+    """sources/buildDescription.xml: how another platform compiles the FMU from its sources; `libraries` the libraries
+    to link by FMI 3 platform, one build configuration each (None: one configuration for every platform, libm)."""
+    by_platform = libraries if libraries is not None else {None: ("m",)}
+    configurations = [
+        {
+            "platform": platform,
+            "libraries": names,
+            "description": "C99; link with " + " and ".join(_LIBRARY_TEXT.get(n, f"lib{n} (-l{n})") for n in names),
+        }
+        for platform, names in by_platform.items()
+    ]
+    template = _environment().get_template("buildDescription.xml.j2")
+    return template.render(identifier=identifier, source_files=source_files, configurations=configurations)

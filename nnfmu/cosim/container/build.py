@@ -119,32 +119,21 @@ def build_system_fmu(
                 libraries=LIBRARIES[target.suffix],
             )
         package_fmu(tree, out)
-    left_out = [w for w in (skipped, "no system FMU binary for " + ", ".join(lacking) if lacking else None) if w]
+    left_out = [skipped] if skipped else []
+    if lacking:
+        left_out.append("no system FMU binary for " + ", ".join(lacking))
     if left_out:
         warnings.warn("; ".join(left_out), PlatformSkippedWarning, stacklevel=2)
     return plan
 
 
 def _build_description(identifier: str) -> str:
-    """sources/buildDescription.xml: one configuration per FMI 3 platform, the Linux ones also linking libdl (where
-    glibc before 2.34 keeps dlopen); Windows and macOS load libraries from their system library."""
+    """sources/buildDescription.xml: one configuration per FMI 3 platform, each linking `LIBRARIES` of its suffix
+    (libdl on Linux, where glibc before 2.34 keeps dlopen)."""
     from nnfmu.fmu import PLATFORMS
 
-    text = render_build_description(identifier, list(SOURCES[3]))
-    start, end = (
-        text.index("  <BuildConfiguration "),
-        text.index("</BuildConfiguration>") + len("</BuildConfiguration>"),
-    )
-    configuration = text[start:end]
-    configurations = []
-    for platform in PLATFORMS:
-        one = configuration.replace("<BuildConfiguration ", f'<BuildConfiguration platform="{platform.name}" ', 1)
-        if platform.suffix == ".so":
-            one = one.replace('<Library name="m"/>', '<Library name="m"/>\n    <Library name="dl"/>').replace(
-                "the math library (-lm)", "the math and dl libraries (-lm -ldl)"
-            )
-        configurations.append(one)
-    return text[:start] + "\n".join(configurations) + text[end:]
+    libraries = {p.name: tuple(flag.removeprefix("-l") for flag in LIBRARIES[p.suffix]) for p in PLATFORMS}
+    return render_build_description(identifier, list(SOURCES[3]), libraries)
 
 
 def _has_binary(resources: Path, part: Part, target: Target) -> bool:
