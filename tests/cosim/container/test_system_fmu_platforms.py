@@ -14,6 +14,7 @@ with the same drive (computed without libm, the same bits everywhere) and its sl
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import shutil
 import subprocess
@@ -46,7 +47,7 @@ H = 1e-3  # [s]
 STEPS = 500
 MSVCRT_TANH = 1e-13  # of each output's peak: the network's loop on win64 against glibc (see above)
 MINGW = shutil.which(toolchain.WIN64_COMPILER)
-ZIG = toolchain._zig_target(toolchain.BY_NAME["aarch64-linux"]) is not None
+ZIG = importlib.util.find_spec(toolchain.ZIG_MODULE) is not None
 WINE = next(
     (f for f in (shutil.which("wine64"), shutil.which("wine"), "/usr/lib/wine/wine64") if f and os.access(f, os.X_OK)),
     None,
