@@ -212,7 +212,9 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator[tuple[An
                     n_workers=workers or machine_workers(),
                     threads_per_worker=1,
                     processes=True,
-                    dashboard_address=None,
+                    # the scheduler's HTTP server (status, metrics) starts even without a dashboard: on a free port of
+                    # this machine alone, not on every interface's 8787, which another cluster may hold
+                    dashboard_address="127.0.0.1:0",
                     silence_logs=logging.ERROR,
                 )
             client = Client(cluster)

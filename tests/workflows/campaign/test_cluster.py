@@ -88,6 +88,8 @@ def cluster(tmp_path_factory: pytest.TempPathFactory):
                 "--port",
                 "0",
                 "--no-dashboard",
+                "--dashboard-address",
+                "127.0.0.1:0",  # its HTTP server runs all the same: not on 8787, which the local clusters here take
                 "--scheduler-file",
                 str(scheduler_file),
             ],
