@@ -9,9 +9,12 @@ the callbacks' componentEnvironment routes each message to the instance that log
 
 from __future__ import annotations
 
+import hashlib
 import itertools
+import os
 import shutil
 import tempfile
+import threading
 import weakref
 from ctypes import byref, c_void_p
 from pathlib import Path
@@ -45,19 +48,64 @@ def _fmi2_logger() -> object:
     return _FMI2_LOGGER
 
 
-def _remove_extracted(folder: str | None, sinks: dict[int, Messages], key: int) -> None:
-    """Forget an instance's FMI 2 message sink and delete its extracted FMU, if it extracted one (a finalizer: holds
-    no instance)."""
+class _Unpacked:
+    """FMUs unpacked for instances of this process, by the SHA-256 of the FMU's bytes: the instances of one FMU share
+    its folder and so its loaded library (one instance each, as FMI allows unless the FMU is instantiated only once per
+    process), and the folder is removed with the last of them. A forked child unpacks its own."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._folders: dict[str, tuple[int, str, int]] = {}  # digest -> (pid, folder, instances using it)
+
+    def acquire(self, path: Path, shared: bool) -> tuple[str, str | None]:
+        """(an empty or already unpacked folder for the FMU at `path`, its digest: None when it is not shared)."""
+        from fmpy import extract
+
+        if not shared:
+            return tempfile.mkdtemp(prefix="nnfmu-fmu-"), None
+        digest = hashlib.sha256(path.read_bytes()).hexdigest()
+        with self._lock:
+            pid, folder, count = self._folders.get(digest, (0, "", 0))
+            if pid != os.getpid() or not os.path.isdir(folder):
+                folder, count = tempfile.mkdtemp(prefix="nnfmu-fmu-"), 0
+                try:
+                    extract(str(path), unzipdir=folder)
+                except BaseException:
+                    shutil.rmtree(folder, ignore_errors=True)
+                    raise
+            self._folders[digest] = (os.getpid(), folder, count + 1)
+        return folder, digest
+
+    def release(self, folder: str, digest: str | None) -> None:
+        """One instance less on `folder`: removed with its last (at once when it is not shared)."""
+        if digest is not None:
+            with self._lock:
+                pid, held, count = self._folders.get(digest, (0, "", 0))
+                if pid == os.getpid() and held == folder and count > 1:
+                    self._folders[digest] = (pid, held, count - 1)
+                    return
+                if held == folder:
+                    del self._folders[digest]
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+_UNPACKED = _Unpacked()
+
+
+def _remove_extracted(folder: str | None, digest: str | None, sinks: dict[int, Messages], key: int) -> None:
+    """Forget an instance's FMI 2 message sink and let go of its extracted FMU, if it extracted one (a finalizer:
+    holds no instance)."""
     sinks.pop(key, None)
     if folder is not None:
-        shutil.rmtree(folder, ignore_errors=True)
+        _UNPACKED.release(folder, digest)
 
 
 class FmuSlave:
     """An instantiated co-simulation FMU: set inputs and parameters by name, step, read outputs by name.
 
-    The FMU is extracted to a private temporary folder that `close()` removes (or, for an instance its caller never
-    closed, garbage collection or the interpreter's exit); with `unpacked`, `path` is a folder holding an FMU nnfmu
+    The FMU is extracted to a temporary folder, shared by the instances of one FMU in this process (`_Unpacked`), that
+    the last of them removes on `close()` (or, for an instance its caller never closed, garbage collection or the
+    interpreter's exit); with `unpacked`, `path` is a folder holding an FMU nnfmu
     unpacked itself (the compiled engine's cache), used in place and never removed. `messages` collects what the
     FMU logged as (status, category, message).
     """
@@ -79,11 +127,17 @@ class FmuSlave:
         self.variables = {v.name: v for v in self.description.modelVariables}
         self.messages: Messages = []
         self._key = next(_FMI2_KEYS)  # routes an FMI 2 instance's log messages to `messages`
+        shared = not self.description.coSimulation.canBeInstantiatedOnlyOncePerProcess
         with interrupts_deferred():  # the folder and its cleanup come together
-            self._unzip_dir = None if unpacked else tempfile.mkdtemp(prefix="nnfmu-fmu-")
-            self._cleanup = weakref.finalize(self, _remove_extracted, self._unzip_dir, _FMI2_SINKS, self._key)
+            self._unzip_dir, digest = (None, None) if unpacked else _UNPACKED.acquire(self.path, shared)
+            self._cleanup = weakref.finalize(self, _remove_extracted, self._unzip_dir, digest, _FMI2_SINKS, self._key)
         try:
-            directory = str(self.path) if unpacked else extract(str(self.path), unzipdir=self._unzip_dir)
+            if unpacked:
+                directory = str(self.path)
+            elif digest is not None:  # unpacked by `_UNPACKED` (now or for another instance)
+                directory = self._unzip_dir
+            else:
+                directory = extract(str(self.path), unzipdir=self._unzip_dir)
             self.directory = Path(directory)
             self.sample_period = read_sample_period(Path(directory) / "modelDescription.xml")
             kwargs = dict(

@@ -139,3 +139,41 @@ def test_a_slave_its_caller_never_closes_leaves_no_extracted_files(
     gc.collect()
     assert list(scratch.iterdir()) == []
     assert key not in slave_module._FMI2_SINKS
+
+
+def _stepped(slave: FmuSlave, value: float) -> np.ndarray:
+    """The slave's Real outputs after one 1 ms step with every input at `value` from rest."""
+    inputs = slave.names("input")
+    slave.enter_initialization(0.0)
+    slave.exit_initialization()
+    slave.set_real(inputs, [value] * len(inputs))
+    slave.do_step(0.0, 1e-3)
+    return slave.get_real([n for n in slave.names("output") if slave.variables[n].type in ("Real", "Float64")])
+
+
+def test_instances_of_one_fmu_share_its_extracted_folder_until_the_last_closes(
+    damper_fmu: tuple[Path, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """One folder, one loaded library, two independent instances; an FMU that may be instantiated only once per
+    process gets a folder (and so a library) per instance."""
+    scratch = tmp_path / "scratch"
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
+    first, second = FmuSlave(damper_fmu[1], "first"), FmuSlave(damper_fmu[1], "second")
+    assert first.directory == second.directory and len(list(scratch.iterdir())) == 1
+    moved, resting = _stepped(first, 0.3), _stepped(second, 0.0)
+    assert np.any(moved != resting)  # each instance its own state
+    first.close()
+    assert second.directory.is_dir()
+    second.close()
+    assert list(scratch.iterdir()) == []
+    once = tmp_path / "once.fmu"
+    with zipfile.ZipFile(damper_fmu[1]) as source, zipfile.ZipFile(once, "w") as target:
+        for item in source.infolist():
+            data = source.read(item)
+            if item.filename == "modelDescription.xml":
+                data = data.replace(b"<CoSimulation", b'<CoSimulation canBeInstantiatedOnlyOncePerProcess="true"', 1)
+            target.writestr(item, data)
+    with FmuSlave(once, "a") as a, FmuSlave(once, "b") as b:
+        assert a.directory != b.directory and len(list(scratch.iterdir())) == 2
+    assert list(scratch.iterdir()) == []
