@@ -254,3 +254,26 @@ def test_the_fmi3_build_description_links_libdl_on_linux_only(tmp_path: Path) ->
     assert all("m" in names for names in libraries.values())
     sources = {s.get("name") for s in root.iter("SourceFile")}
     assert sources == {"system_fmu3.c", "inner_loop.c"}
+
+
+@pytest.mark.skipif(not ZIG, reason="Zig not installed (pip install 'nnfmu[cross]'): no glibc-2.17 build")
+def test_the_linux_system_binaries_need_no_glibc_newer_than_2_17(system_fmu, tmp_path: Path) -> None:  # noqa: ANN001
+    """Built by Zig for the manylinux2014 baseline, as the network FMUs are: libc, libm and libdl (where glibc 2.17
+    keeps dlopen) and no newer symbol version; the FMI functions alone exported."""
+    lief = pytest.importorskip("lief")
+    if os.environ.get("CC", "").strip():
+        pytest.skip("$CC set: the host compiler builds the x86_64 binary, for this machine's glibc")
+    folder = unpacked(system_fmu[0], tmp_path / "fmu")[0]
+    for platform in ("linux64", "aarch64-linux"):
+        library = lief.ELF.parse(str(folder / "binaries" / platform / f"{system_fmu[0].stem}.so"))
+        assert set(library.libraries) <= {"libc.so.6", "libm.so.6", "libdl.so.2"}, (platform, library.libraries)
+        versions = {
+            aux.name
+            for requirement in library.symbols_version_requirement
+            for aux in requirement.get_auxiliary_symbols()
+            if aux.name.startswith("GLIBC_")
+        }
+        newest = max(tuple(int(n) for n in v.removeprefix("GLIBC_").split(".")) for v in versions)
+        assert versions and newest <= (2, 17), (platform, sorted(versions))
+        exported = {symbol.name for symbol in library.exported_symbols}
+        assert "fmi2DoStep" in exported and all(name.startswith("fmi2") for name in exported), platform
