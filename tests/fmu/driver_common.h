@@ -1,5 +1,6 @@
-/* driver_common.h: what fmi2_driver.c and fmi3_driver.c share: counting unexpected statuses, loading the FMU's
- * binary (dlopen on POSIX, LoadLibrary on Windows), opening the binary named on the command line
+/* driver_common.h: what fmi2_driver.c, fmi3_driver.c and tests/cosim/container/system_platform_driver.c share:
+ * counting unexpected statuses, loading the FMU's binary (dlopen on POSIX, LoadLibrary on Windows), opening the
+ * binary named on the command line
  * "BINARY TOKEN N_INPUTS N_OUTPUTS" and printing outputs for the cross-platform comparison.
  * Included by exactly one source file per driver program, so its static definitions are the program's own.
  */
@@ -34,8 +35,25 @@ static int failures = 0;
         }                                                                                            \
     } while (0)
 
+/* The shared library at `path`, or NULL after saying why on stderr. */
+static library_t load_library(const char *path) {
+    library_t lib;
+#ifdef _WIN32
+    lib = LoadLibraryA(path);
+    if (!lib) fprintf(stderr, "LoadLibrary(%s) failed: error %lu\n", path, (unsigned long)GetLastError());
+#else
+    lib = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    if (!lib) fprintf(stderr, "%s\n", dlerror());
+#endif
+    return lib;
+}
+
 /* The binary opened from the command line with the counts of inputs and outputs (at most 16 each), or NULL with
- * *code set to the exit code: 2 for bad arguments, 3 when the binary does not load. */
+ * *code set to the exit code: 2 for bad arguments, 3 when the binary does not load. (A driver with other arguments
+ * loads with `load_library` and leaves this unused.) */
+#if defined(__GNUC__)
+__attribute__((unused))
+#endif
 static library_t open_binary(int argc, char **argv, int *n_in, int *n_out, int *code) {
     library_t lib;
     if (argc != 5) {
@@ -48,13 +66,7 @@ static library_t open_binary(int argc, char **argv, int *n_in, int *n_out, int *
         *code = 2;
         return NULL;
     }
-#ifdef _WIN32
-    lib = LoadLibraryA(argv[1]);
-    if (!lib) fprintf(stderr, "LoadLibrary(%s) failed: error %lu\n", argv[1], (unsigned long)GetLastError());
-#else
-    lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
-    if (!lib) fprintf(stderr, "%s\n", dlerror());
-#endif
+    lib = load_library(argv[1]);
     if (!lib) *code = 3;
     return lib;
 }

@@ -26,12 +26,38 @@ def counts(path: Path) -> tuple[str, str, int, int]:
 
 def build_driver(compiler: list[str], fmi: int, target: Path, extra: list[str]) -> Path:
     """fmi`fmi`_driver.c compiled by `compiler` (a command line) into `target`, warnings as errors."""
-    source = Path(__file__).with_name(f"fmi{fmi}_driver.c")
-    flags = ["-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", *extra, f"-I{fmi_headers_dir()}"]
+    return compile_driver(Path(__file__).with_name(f"fmi{fmi}_driver.c"), compiler, target, extra)
+
+
+def compile_driver(source: Path, compiler: list[str], target: Path, extra: list[str]) -> Path:
+    """A C master `source` (which may include driver_common.h from here) compiled by `compiler` into `target`,
+    warnings as errors, with `extra` flags and libraries and libm."""
+    flags = [
+        "-std=c99",
+        "-O2",
+        "-Wall",
+        "-Wextra",
+        "-Werror",
+        *extra,
+        f"-I{fmi_headers_dir()}",
+        f"-I{Path(__file__).parent}",
+    ]
     subprocess.run(
         [*compiler, *flags, "-o", str(target), str(source), "-lm"], check=True, capture_output=True, text=True
     )
     return target
+
+
+def glibc_versions(library: object) -> tuple[set[str], tuple[int, ...]]:
+    """The GLIBC_ symbol versions a LIEF-parsed ELF `library` requires, and the newest of them."""
+    versions = {
+        aux.name
+        for requirement in library.symbols_version_requirement
+        for aux in requirement.get_auxiliary_symbols()
+        if aux.name.startswith("GLIBC_")
+    }
+    newest = max((tuple(int(n) for n in v.removeprefix("GLIBC_").split(".")) for v in versions), default=())
+    return versions, newest
 
 
 def outputs(stdout: str) -> list[tuple[str, int, list[float]]]:

@@ -19,7 +19,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
-from platform_drivers import assert_same_outputs, build_driver, counts
+from platform_drivers import assert_same_outputs, build_driver, counts, glibc_versions
 
 from nnfmu.errors import NnfmuError
 from nnfmu.fmu.build import build_fmu
@@ -191,13 +191,7 @@ def test_linux_binaries_need_no_glibc_newer_than_2_17(cross_fmus, tmp_path):
         library = lief.ELF.parse(str(_binary(cross_fmus[3], 3, platform, tmp_path)))
         assert library.header.machine_type == machine
         assert set(library.libraries) <= {"libc.so.6", "libm.so.6"}, (platform, library.libraries)
-        versions = {
-            aux.name
-            for requirement in library.symbols_version_requirement
-            for aux in requirement.get_auxiliary_symbols()
-            if aux.name.startswith("GLIBC_")
-        }
-        newest = max(tuple(int(n) for n in v.removeprefix("GLIBC_").split(".")) for v in versions)
+        versions, newest = glibc_versions(library)
         assert versions and newest <= (2, 17), (platform, sorted(versions))
 
 

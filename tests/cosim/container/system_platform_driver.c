@@ -8,22 +8,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "driver_common.h" /* tests/fmu/: the loader, status counting and printing of fmi2_driver.c */
 #include "fmi2Functions.h"
-
-#ifdef _WIN32
-#include <windows.h>
-typedef HMODULE library_t;
-#define LOAD(name) name##TYPE *name = (name##TYPE *)(void (*)(void))GetProcAddress(lib, #name)
-#else
-#include <dlfcn.h>
-typedef void *library_t;
-#define LOAD(name) name##TYPE *name = (name##TYPE *)dlsym(lib, #name)
-#endif
 
 #define STEP 1e-3
 #define MAX_VARIABLES 256
-
-static int unexpected = 0;
 
 static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
                    fmi2String message, ...) {
@@ -32,12 +21,7 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
     fprintf(stderr, "[%s %d] %s\n", name, (int)status, message);
 }
 
-static void expect_ok(fmi2Status status, const char *call, int k) {
-    if (status != fmi2OK) {
-        fprintf(stderr, "step %d: %s returned %d\n", k, call, (int)status);
-        unexpected++;
-    }
-}
+#define EXPECT_OK(call) EXPECT_STATUS(fmi2Status, call, fmi2OK)
 
 /* The drive: per input, a lightly damped oscillator driven by a pseudo-random sequence (a linear congruential
  * generator), stepped with + and * alone so that every platform computes the same bits; `value` its position [m] and
@@ -70,13 +54,7 @@ int main(int argc, char **argv) {
     n_out = atoi(argv[5]);
     steps = atoi(argv[6]);
     if (n_in < 0 || n_out < 1 || n_in > MAX_VARIABLES || n_out > MAX_VARIABLES || steps < 1) return 2;
-#ifdef _WIN32
-    lib = LoadLibraryA(argv[1]);
-    if (!lib) fprintf(stderr, "LoadLibrary(%s) failed: error %lu\n", argv[1], (unsigned long)GetLastError());
-#else
-    lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
-    if (!lib) fprintf(stderr, "%s\n", dlerror());
-#endif
+    lib = load_library(argv[1]);
     if (!lib) return 3;
     {
         LOAD(fmi2Instantiate);
@@ -103,11 +81,11 @@ int main(int argc, char **argv) {
             fprintf(stderr, "fmi2Instantiate failed\n");
             return 4;
         }
-        expect_ok(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), "fmi2SetupExperiment", 0);
-        expect_ok(fmi2EnterInitializationMode(c), "fmi2EnterInitializationMode", 0);
+        EXPECT_OK(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0));
+        EXPECT_OK(fmi2EnterInitializationMode(c));
         for (i = 0; i < n_in; i++) in[i] = drive[i].x;
-        expect_ok(fmi2SetReal(c, in_vr, (size_t)n_in, in), "fmi2SetReal", 0);
-        expect_ok(fmi2ExitInitializationMode(c), "fmi2ExitInitializationMode", 0);
+        EXPECT_OK(fmi2SetReal(c, in_vr, (size_t)n_in, in));
+        EXPECT_OK(fmi2ExitInitializationMode(c));
         for (k = 0; k < steps; k++) {
             double t = k * STEP;
             for (i = 0; i < n_in; i++) {
@@ -115,18 +93,15 @@ int main(int argc, char **argv) {
                 slope[i] = drive[i].v;
                 advance(&drive[i]);
             }
-            expect_ok(fmi2SetReal(c, in_vr, (size_t)n_in, in), "fmi2SetReal", k);
-            expect_ok(fmi2SetRealInputDerivatives(c, in_vr, (size_t)n_in, order, slope), "fmi2SetRealInputDerivatives",
-                      k);
-            expect_ok(fmi2DoStep(c, t, STEP, fmi2True), "fmi2DoStep", k);
-            expect_ok(fmi2GetReal(c, out_vr, (size_t)n_out, out), "fmi2GetReal", k);
-            printf("step %d", k + 1);
-            for (i = 0; i < n_out; i++) printf(" %.17g", out[i]);
-            printf("\n");
+            EXPECT_OK(fmi2SetReal(c, in_vr, (size_t)n_in, in));
+            EXPECT_OK(fmi2SetRealInputDerivatives(c, in_vr, (size_t)n_in, order, slope));
+            EXPECT_OK(fmi2DoStep(c, t, STEP, fmi2True));
+            EXPECT_OK(fmi2GetReal(c, out_vr, (size_t)n_out, out));
+            print_outputs("step", k + 1, out, n_out);
         }
-        expect_ok(fmi2Terminate(c), "fmi2Terminate", steps);
+        EXPECT_OK(fmi2Terminate(c));
         fmi2FreeInstance(c);
     }
-    fprintf(stderr, "%d unexpected statuses\n", unexpected);
-    return unexpected == 0 ? 0 : 1;
+    fprintf(stderr, "%d unexpected statuses\n", failures);
+    return failures == 0 ? 0 : 1;
 }

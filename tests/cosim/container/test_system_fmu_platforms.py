@@ -26,6 +26,9 @@ import numpy as np
 import onnx
 import pytest
 
+sys.path.insert(0, str(Path(__file__).parents[2] / "fmu"))  # the C masters' shared helpers (tests/fmu/)
+from platform_drivers import compile_driver, glibc_versions  # noqa: E402
+
 from nnfmu.cosim.container.build import build_system_fmu
 from nnfmu.cosim.master import CosimError, CosimSettings
 from nnfmu.cosim.ssp import connect_by_name, open_system, write_ssd
@@ -33,7 +36,6 @@ from nnfmu.export.linear_damper import linear_damper_graph
 from nnfmu.fmu.build import build_fmu
 from nnfmu.fmu.errors import PlatformSkippedWarning
 from nnfmu.fmu.native import toolchain
-from nnfmu.fmu.native.backend import fmi_headers_dir
 from nnfmu.fmu.options import BuildOptions
 from nnfmu.vehicle.fmu import VehicleBuildSettings, build_vehicle_fmu
 
@@ -109,14 +111,11 @@ def unpacked(fmu: Path, folder: Path) -> tuple[Path, str, int, int]:
 
 
 def driver(compiler: list[str], target: Path) -> Path:
-    """system_platform_driver.c compiled by `compiler` into `target`, warnings as errors, no fused multiply-adds."""
-    source = Path(__file__).with_name("system_platform_driver.c")
-    flags = ["-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-ffp-contract=off", f"-I{fmi_headers_dir()}"]
+    """system_platform_driver.c compiled by `compiler` into `target` (`compile_driver`), no fused multiply-adds."""
     # On Windows MinGW's own printf (msvcrt's prints %.17g inexactly) and no DLL of MinGW's runtime beside it.
     windows = ["-D__USE_MINGW_ANSI_STDIO=1", *(["-static"] if compiler == [MINGW] else [])]
-    libraries = [*windows, "-lm"] if target.suffix == ".exe" else ["-lm", "-ldl"]
-    subprocess.run([*compiler, *flags, "-o", str(target), str(source), *libraries], check=True, capture_output=True)
-    return target
+    extra = ["-ffp-contract=off", *(windows if target.suffix == ".exe" else ["-ldl"])]
+    return compile_driver(Path(__file__).with_name("system_platform_driver.c"), compiler, target, extra)
 
 
 def outputs(run: subprocess.CompletedProcess) -> np.ndarray:
@@ -267,13 +266,7 @@ def test_the_linux_system_binaries_need_no_glibc_newer_than_2_17(system_fmu, tmp
     for platform in ("linux64", "aarch64-linux"):
         library = lief.ELF.parse(str(folder / "binaries" / platform / f"{system_fmu[0].stem}.so"))
         assert set(library.libraries) <= {"libc.so.6", "libm.so.6", "libdl.so.2"}, (platform, library.libraries)
-        versions = {
-            aux.name
-            for requirement in library.symbols_version_requirement
-            for aux in requirement.get_auxiliary_symbols()
-            if aux.name.startswith("GLIBC_")
-        }
-        newest = max(tuple(int(n) for n in v.removeprefix("GLIBC_").split(".")) for v in versions)
+        versions, newest = glibc_versions(library)
         assert versions and newest <= (2, 17), (platform, sorted(versions))
         exported = {symbol.name for symbol in library.exported_symbols}
         assert "fmi2DoStep" in exported and all(name.startswith("fmi2") for name in exported), platform
