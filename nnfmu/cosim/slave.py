@@ -131,6 +131,7 @@ class FmuSlave:
         with interrupts_deferred():  # the folder and its cleanup come together
             self._unzip_dir, digest = (None, None) if unpacked else _UNPACKED.acquire(self.path, shared)
             self._cleanup = weakref.finalize(self, _remove_extracted, self._unzip_dir, digest, _FMI2_SINKS, self._key)
+        self.shared_as = digest  # the SHA-256 of the FMU's bytes its instances share a folder by; None: not shared
         try:
             if unpacked:
                 directory = str(self.path)

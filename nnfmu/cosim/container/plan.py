@@ -4,7 +4,6 @@ builds for the same system and settings, so the C master steps exactly what `cos
 
 from __future__ import annotations
 
-import hashlib
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
@@ -14,7 +13,6 @@ import numpy as np
 
 from nnfmu.cosim.binding import DriveBinding, bind_free_inputs
 from nnfmu.cosim.master import CosimError, CosimSettings, _System
-from nnfmu.cosim.slave import FmuSlave
 from nnfmu.cosim.ssp import SystemStructure
 from nnfmu.cosim.units import port_unit
 from nnfmu.data import Measurement
@@ -152,16 +150,6 @@ def plan_system(
         parts.close(healthy=False)
 
 
-def _sharing_key(slave: FmuSlave) -> str | None:
-    """What makes parts one FMU whose unpacked folder they can share (its file's SHA-256), or None for an FMU that may
-    be instantiated only once per process (its parts then load a library each, from a copy each)."""
-    if slave.description.coSimulation.canBeInstantiatedOnlyOncePerProcess:
-        return None
-    if slave.path.is_file():
-        return hashlib.sha256(slave.path.read_bytes()).hexdigest()
-    return str(slave.path.resolve())
-
-
 def _copy_part(source: Path, target: Path, platform_folders: tuple[str, ...]) -> None:
     """An unpacked FMU into `target`, with only the binaries of `platform_folders` it has (`build_system_fmu` names
     the platforms a part lacks)."""
@@ -193,10 +181,10 @@ def _plan(
     index = {id(element): i for i, element in enumerate(order)}
     position = {e.name: i for i, e in enumerate(order)}
     built = []
-    copied: dict[str, str] = {}  # an FMU's sharing key -> the folder it was copied to
+    copied: dict[str, str] = {}  # an FMU's digest (`FmuSlave.shared_as`) -> the folder it was copied to
     for i, element in enumerate(order):
         slave = element.outputs.slave
-        key = _sharing_key(slave)
+        key = slave.shared_as  # the parts the master shares a folder between share one in the system FMU
         folder = copied.get(key) if key is not None else None
         if folder is None:
             folder = f"{FOLDER}/{i}"
