@@ -3,16 +3,21 @@
 Each epoch solves the damped Gauss–Newton system (JᵀJ + mu·I) δ = Jᵀr for all weights at once, with the Jacobian
 J of the residuals r written out by hand for tanh-hidden/linear-output nets (exact, and far faster than autograd per
 sample). mu shrinks tenfold after a step that lowers the training loss and grows tenfold until one does. The
-arithmetic is numpy's float64 on one BLAS thread: JᵀJ as a symmetric rank-k product (half a general product's work),
-arrays held sample-last (features x samples) so element-wise work runs along long rows, the Jacobian written into one
-buffer reused every epoch, and an accepted trial's hidden activations reused for the next Jacobian.
+arithmetic is numpy's float64 on one BLAS thread: JᵀJ as a symmetric rank-k product (half a general product's work)
+over each half of the samples, the halves summed (at a search's end the second half runs on a core the other runs
+left idle), arrays held sample-last (features x samples) so element-wise work runs along long rows, the Jacobian of
+each half written into one buffer reused every epoch, and an accepted trial's hidden activations reused for the next
+Jacobian.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from concurrent.futures import Future
 from dataclasses import dataclass
+from functools import partial
+from typing import Any
 
 import numpy as np
 import torch
@@ -22,6 +27,9 @@ from torch.nn.utils import parameters_to_vector, vector_to_parameters
 from nnfmu.models.networks import MLP
 from nnfmu.models.stopping import FitHistory, TrainingLog
 from nnfmu.stopping import check_stop
+
+# Runs a task on a spare core and returns its future, or None when no core is spare (the caller runs it itself).
+Lend = Callable[[Callable[[], Any]], "Future[Any] | None"]
 
 
 @dataclass(frozen=True)
@@ -49,8 +57,11 @@ class _Perceptron:
         self.inputs = np.ascontiguousarray(x.T)
         self.m, self.n = self.inputs.shape
         self.hidden = hidden
-        self.jacobian = np.empty(((self.m + 2) * hidden + 1, self.n))
-        self.jacobian[-1] = 1.0
+        # The samples in two halves, each with its own contiguous Jacobian buffer (reused every epoch)
+        self.halves = (slice(0, self.n // 2), slice(self.n // 2, self.n))
+        self.jacobians = tuple(np.empty(((self.m + 2) * hidden + 1, part.stop - part.start)) for part in self.halves)
+        for jacobian in self.jacobians:
+            jacobian[-1] = 1.0
 
     def split(self, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
         """Hidden weights (hidden, n_in), hidden biases, output weights and output bias, as views of `weights`."""
@@ -70,18 +81,38 @@ class _Perceptron:
         hidden = np.tanh(pre, out=pre)
         return hidden, w2 @ hidden + b2
 
-    def fill_jacobian(self, weights: np.ndarray, hidden: np.ndarray) -> np.ndarray:
-        """d output / d weights, sample-last (n_weights, n), from the activations at `weights`, in the reused
-        buffer."""
+    def fill_jacobian(self, weights: np.ndarray, hidden: np.ndarray, half: int) -> np.ndarray:
+        """d output / d weights on the samples of half `half`, sample-last (n_weights, samples), from the activations
+        at `weights`, in that half's buffer."""
         h, m = self.hidden, self.m
         _, _, w2, _ = self.split(weights)
-        slope = self.jacobian[h * m : h * m + h]  # d output / d hidden pre-activation
-        np.multiply(hidden, hidden, out=slope)
+        columns, jacobian = self.halves[half], self.jacobians[half]
+        samples = columns.stop - columns.start
+        slope = jacobian[h * m : h * m + h]  # d output / d hidden pre-activation
+        np.multiply(hidden[:, columns], hidden[:, columns], out=slope)
         np.subtract(1.0, slope, out=slope)
         slope *= w2[:, None]
-        np.multiply(slope[:, None, :], self.inputs[None, :, :], out=self.jacobian[: h * m].reshape(h, m, self.n))
-        self.jacobian[h * m + h : h * m + 2 * h] = hidden
-        return self.jacobian
+        np.multiply(slope[:, None, :], self.inputs[None, :, columns], out=jacobian[: h * m].reshape(h, m, samples))
+        jacobian[h * m + h : h * m + 2 * h] = hidden[:, columns]
+        return jacobian
+
+    def normal_equations(
+        self, weights: np.ndarray, hidden: np.ndarray, residual: np.ndarray, lend: Lend | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """JᵀJ and Jᵀr at `weights`, each the sum of the two halves' products in a fixed order: the second half runs
+        on a core `lend` spares when it spares one (a search's last runs), here otherwise, with the same result
+        either way."""
+
+        def products(half: int) -> tuple[np.ndarray, np.ndarray]:
+            jacobian = self.fill_jacobian(weights, hidden, half)
+            return jacobian @ jacobian.T, jacobian @ residual[self.halves[half]]
+
+        lent = None if lend is None else lend(partial(products, 1))
+        hessian, gradient = products(0)
+        hessian_2, gradient_2 = products(1) if lent is None else lent.result()
+        hessian += hessian_2
+        gradient += gradient_2
+        return hessian, gradient
 
 
 def mlp_jacobian(network: MLP, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
@@ -94,7 +125,8 @@ def mlp_jacobian(network: MLP, x: torch.Tensor) -> tuple[torch.Tensor, torch.Ten
     perceptron = _Perceptron(x.detach().numpy(), network.hidden.weight.shape[0])
     weights = parameters_to_vector(network.parameters()).detach().numpy()
     hidden, output = perceptron.activations(weights)
-    return torch.from_numpy(output), torch.from_numpy(perceptron.fill_jacobian(weights, hidden).T.copy())
+    jacobian = np.hstack([perceptron.fill_jacobian(weights, hidden, half) for half in (0, 1)])
+    return torch.from_numpy(output), torch.from_numpy(jacobian.T.copy())
 
 
 def fit_lm(
@@ -103,15 +135,17 @@ def fit_lm(
     validation: tuple[torch.Tensor, torch.Tensor],
     settings: LMSettings = LMSettings(),
     on_epoch: Callable[[int, int], None] | None = None,
+    lend: Lend | None = None,
 ) -> FitHistory:
     """Train `network` in place on scaled (x (n, n_in), y (n,)) pairs; it ends with the best validation epoch's weights.
 
-    `on_epoch(epoch, max_epochs)` is called after every epoch (for progress display).
+    `on_epoch(epoch, max_epochs)` is called after every epoch (for progress display); `lend` gives each epoch's
+    second half of JᵀJ to a spare core when there is one (`nnfmu.models.cores.SpareCores.lend`).
     """
     if network.out.weight.shape[0] != 1:
         raise ValueError(f"Levenberg–Marquardt here fits one output; the network has {network.out.weight.shape[0]}")
     with threadpool_limits(limits=1, user_api="blas"):
-        return _fit(network, train, validation, settings, on_epoch)
+        return _fit(network, train, validation, settings, on_epoch, lend)
 
 
 def _fit(
@@ -120,6 +154,7 @@ def _fit(
     validation: tuple[torch.Tensor, torch.Tensor],
     settings: LMSettings,
     on_epoch: Callable[[int, int], None] | None,
+    lend: Lend | None,
 ) -> FitHistory:
     """`fit_lm`'s loop, on one BLAS thread."""
     params = list(network.parameters())
@@ -139,12 +174,10 @@ def _fit(
     reason = "max_epochs"
     for epoch in range(1, settings.max_epochs + 1):
         check_stop()
-        jacobian = perceptron.fill_jacobian(weights, hidden)
-        gradient = jacobian @ residual
+        hessian, gradient = perceptron.normal_equations(weights, hidden, residual, lend)
         if float(np.abs(gradient).max()) < settings.min_gradient * len(y):
             reason = "min_gradient"
             break
-        hessian = jacobian @ jacobian.T
         improved = False
         while mu <= settings.mu_max:
             trial = weights - np.linalg.solve(hessian + mu * eye, gradient)

@@ -4,7 +4,6 @@ early stopping on validation, hidden size fixed or chosen by validation error, m
 from __future__ import annotations
 
 import math
-import os
 import threading
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor, as_completed
@@ -20,8 +19,9 @@ from nnfmu.data.denoise import lowpass_channels
 from nnfmu.data.errors import DataError
 from nnfmu.data.measurement import Measurement
 from nnfmu.errors import SettingsError
+from nnfmu.models.cores import SpareCores, usable_cores
 from nnfmu.models.features import FeatureSpec, Stop
-from nnfmu.models.lm import LMSettings, fit_lm
+from nnfmu.models.lm import Lend, LMSettings, fit_lm
 from nnfmu.models.metrics import SplitMetrics, max_abs_weight, network_warning, split_metrics
 from nnfmu.models.networks import MLP, GRUNet
 from nnfmu.models.scaling import MinMaxScaler
@@ -340,8 +340,11 @@ def fit_network(
     settings: TrainSettings,
     seed: int,
     on_epoch: Callable[[int, int], None] = lambda epoch, total: None,
+    lend: Lend | None = None,
 ) -> FitHistory:
-    """One training run of `network` from its initial weights; it ends holding its best validation epoch's."""
+    """One training run of `network` from its initial weights; it ends holding its best validation epoch's.
+
+    `lend`: where Levenberg–Marquardt may hand part of an epoch to a spare core (`SpareCores.lend`)."""
     hidden = network.gru.hidden_size if isinstance(network, GRUNet) else network.hidden.out_features
     method = _resolve_optimizer(
         "gru" if isinstance(network, GRUNet) else "mlp", data.x.shape[1], hidden, settings.optimizer
@@ -353,7 +356,7 @@ def fit_network(
         lm = LMSettings(max_epochs=settings.max_epochs, patience=settings.patience)
         train = _strided(*data.rows("train"), settings.lm_max_samples)
         validation = _strided(*data.rows("validation"), settings.lm_max_samples)
-        return fit_lm(network, train, validation, lm, on_epoch)
+        return fit_lm(network, train, validation, lm, on_epoch, lend)
     return _fit_mlp_gradient(network, data, run_settings, method, on_epoch)
 
 
@@ -402,20 +405,27 @@ def search(
     The runs are independent (each from its own seeded initialisation), so they go side by side on up to one thread
     per core: numpy's BLAS and element-wise loops and torch's operations release the GIL. The result does not depend
     on how many run at once, nor on their order: the largest networks (the longest runs) start first, so no core ends
-    the search alone with one.
+    the search alone with one, and a core left without a run to start lends itself to the runs still going
+    (`SpareCores`), which gives the same numbers as running alone.
     """
     runs = [(hidden, restart) for hidden in architecture.hidden for restart in range(settings.restarts)]
     seeds = [restart_seed(settings.seed, hidden, restart) for hidden, restart in runs]
     networks = [new_network(architecture.kind, data.x.shape[1], h, seed) for (h, _), seed in zip(runs, seeds)]
     labels = [f"{architecture.kind} hidden {h}, restart {r + 1}/{settings.restarts}" for h, r in runs]
     tracker = _RunsProgress(labels, progress)
-    with _torch_threads(TRAINING_THREADS), threadpool_limits(limits=1, user_api="blas"):
+    with (
+        _torch_threads(TRAINING_THREADS),
+        threadpool_limits(limits=1, user_api="blas"),
+        SpareCores(usable_cores()) as spare,
+    ):
         with ThreadPoolExecutor(max_workers=parallel_fits(len(runs)), thread_name_prefix="nnfmu-fit") as pool:
             longest_first = sorted(range(len(runs)), key=lambda i: -runs[i][0])
-            submitted = {
-                i: pool.submit(tracker.run, i, fit_network, networks[i], data, settings, seeds[i], tracker.on_epoch(i))
-                for i in longest_first
-            }
+
+            def fit(i: int) -> FitHistory:
+                with spare.occupied():
+                    return fit_network(networks[i], data, settings, seeds[i], tracker.on_epoch(i), lend=spare.lend)
+
+            submitted = {i: pool.submit(tracker.run, i, fit, i) for i in longest_first}
             futures = [submitted[i] for i in range(len(runs))]
             try:
                 for future in as_completed(futures):
@@ -442,8 +452,7 @@ def search(
 
 def parallel_fits(runs: int) -> int:
     """Training runs at once: one per core this process may use, at most `runs`."""
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
-    return max(1, min(runs, cores))
+    return max(1, min(runs, usable_cores()))
 
 
 class _RunsProgress:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import re
 import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import onnx
@@ -86,6 +87,28 @@ def test_lm_decreases_the_loss_and_fits_a_known_function():
     assert history.train_loss[0] > 1e-3
     with torch.no_grad():
         assert float(torch.mean((net(x)[:, 0] - y) ** 2)) < 1e-8  # RMS error 1e-4 on a target of range ~0.2
+
+
+def test_lm_gives_the_same_network_whether_a_spare_core_takes_half_of_each_epoch_or_not():
+    # The second half of the samples' JᵀJ and Jᵀr runs on the lent core or here; the sums are the same either way.
+    x, y = teacher_data(301, seed=2)
+    lent = []
+
+    def lend(task):
+        lent.append(task)
+        with ThreadPoolExecutor(1) as helper:
+            done = helper.submit(task)
+            done.result()
+            return done
+
+    nets = []
+    for lender in (None, lend):
+        torch.manual_seed(4)
+        nets.append(MLP(1, 3))
+        fit_lm(nets[-1], (x[::2], y[::2]), (x[1::2], y[1::2]), LMSettings(max_epochs=30, patience=30), lend=lender)
+    assert len(lent) == 30
+    for a, b in zip(nets[0].parameters(), nets[1].parameters()):
+        assert torch.equal(a, b)
 
 
 def test_early_stopping_keeps_the_best_epoch():
@@ -172,9 +195,9 @@ def test_the_largest_networks_start_first(monkeypatch):
     started: list[int] = []
     fit = train_module.fit_network
 
-    def recorded(network, data, settings, seed, on_epoch):
+    def recorded(network, data, settings, seed, on_epoch, **lent):
         started.append(network.hidden.out_features)
-        return fit(network, data, settings, seed, on_epoch)
+        return fit(network, data, settings, seed, on_epoch, **lent)
 
     monkeypatch.setattr(train_module, "fit_network", recorded)
     monkeypatch.setattr(train_module, "parallel_fits", lambda runs: 1)
@@ -188,11 +211,11 @@ def test_an_interrupted_run_stops_the_whole_search(monkeypatch):
     started: list[int] = []
     fit = train_module.fit_network
 
-    def interrupted(network, data, settings, seed, on_epoch):
+    def interrupted(network, data, settings, seed, on_epoch, **lent):
         started.append(seed)
         if len(started) == 1:
             raise KeyboardInterrupt("stop asked for")
-        return fit(network, data, settings, seed, on_epoch)
+        return fit(network, data, settings, seed, on_epoch, **lent)
 
     monkeypatch.setattr(train_module, "fit_network", interrupted)
     monkeypatch.setattr(train_module, "parallel_fits", lambda runs: 1)
@@ -210,7 +233,7 @@ def test_a_run_failing_while_an_earlier_one_still_runs_ends_the_search(monkeypat
     failed = threading.Event()
     fit = train_module.fit_network
 
-    def second_fails(network, data, settings, seed, on_epoch):
+    def second_fails(network, data, settings, seed, on_epoch, **lent):
         started.append(seed)
         if len(started) == 2:
             failed.set()
@@ -222,8 +245,8 @@ def test_a_run_failing_while_an_earlier_one_still_runs_ends_the_search(monkeypat
                 time.sleep(0.05)
                 on_epoch(epoch, total)
 
-            return fit(network, data, settings, seed, slow)
-        return fit(network, data, settings, seed, on_epoch)
+            return fit(network, data, settings, seed, slow, **lent)
+        return fit(network, data, settings, seed, on_epoch, **lent)
 
     monkeypatch.setattr(train_module, "fit_network", second_fails)
     monkeypatch.setattr(train_module, "parallel_fits", lambda runs: 2)
