@@ -19,6 +19,7 @@ import torch
 from nnfmu.data import Measurement
 from nnfmu.data.denoise import lowpass_channels
 from nnfmu.errors import SettingsError
+from nnfmu.models.cores import SpareCores, usable_cores
 from nnfmu.models.features import FeatureSpec
 from nnfmu.models.lm import LMSettings, fit_lm
 from nnfmu.models.metrics import max_abs_weight, split_metrics
@@ -135,9 +136,9 @@ class _Problem:
     def fit(self, network: MLP, settings: RetrainSettings, mu: float) -> FitHistory:
         """Levenberg-Marquardt on the training rows from `network`'s weights, early stopping on the validation rows."""
         lm = LMSettings(max_epochs=settings.max_epochs, patience=settings.patience, mu=mu)
-        return fit_lm(
-            network, (self.x[self.train], self.y[self.train]), (self.x[self.validation], self.y[self.validation]), lm
-        )
+        train, validation = (self.x[self.train], self.y[self.train]), (self.x[self.validation], self.y[self.validation])
+        with SpareCores(usable_cores()) as spare, spare.occupied():  # a lone fit: a second core takes half of JᵀJ
+            return fit_lm(network, train, validation, lm, lend=spare.lend)
 
 
 def _problem(

@@ -17,6 +17,7 @@ from torch.func import functional_call, jacrev
 from nnfmu.component import Component
 from nnfmu.data.band import excited_band
 from nnfmu.data.measurement import Measurement
+from nnfmu.models import lm as lm_module
 from nnfmu.models import train as train_module
 from nnfmu.models.features import FeatureSpec, Stop, Tap
 from nnfmu.models.lm import LMSettings, fit_lm, mlp_jacobian
@@ -89,8 +90,9 @@ def test_lm_decreases_the_loss_and_fits_a_known_function():
         assert float(torch.mean((net(x)[:, 0] - y) ** 2)) < 1e-8  # RMS error 1e-4 on a target of range ~0.2
 
 
-def test_lm_gives_the_same_network_whether_a_spare_core_takes_half_of_each_epoch_or_not():
+def test_lm_gives_the_same_network_whether_a_spare_core_takes_half_of_each_epoch_or_not(monkeypatch):
     # The second half of the samples' JᵀJ and Jᵀr runs on the lent core or here; the sums are the same either way.
+    monkeypatch.setattr(lm_module, "MIN_LENT_JACOBIAN", 0)  # lent however small the half
     x, y = teacher_data(301, seed=2)
     lent = []
 
@@ -445,3 +447,14 @@ def test_the_axial_force_preset_on_a_small_motion_keeps_the_stops_it_slips_and_s
     ]
     metadata = {p.key: p.value for p in onnx.load(outcome.path).metadata_props}["nnfmu.component"]
     assert sorted(set(re.findall(r"stop\(axial_displacement, radius=[0-9.e-]+\)", metadata))) == sorted(kept)
+
+
+def test_a_small_half_is_never_lent():
+    # Handing a task to another thread costs more than a small half's products.
+    x, y = teacher_data(301, seed=2)
+    lent = []
+    torch.manual_seed(4)
+    fit_lm(
+        MLP(1, 3), (x[::2], y[::2]), (x[1::2], y[1::2]), LMSettings(max_epochs=5), lend=lambda task: lent.append(task)
+    )
+    assert lent == []

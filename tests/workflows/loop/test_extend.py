@@ -16,6 +16,7 @@ from nnfmu.data.rigs import RigOptions, simulate_rig
 from nnfmu.diagnosis import EFFECTS, DiagnosisSettings
 from nnfmu.export.graph import GraphBuilder
 from nnfmu.models import Architecture, TrainSettings, train_model
+from nnfmu.models import lm as lm_module
 from nnfmu.models import retrain as warm_start_module
 from nnfmu.models.features import FeatureSpec, LowpassSquare, Tap, derived_from_dict
 from nnfmu.models.networks import MLP
@@ -116,6 +117,22 @@ def test_warm_start_keeps_old_scalers_and_lowers_the_validation_error():
     assert new.band.keys() == set(ext.spec.channels)
 
 
+def test_a_retraining_gives_the_same_network_with_a_second_core_or_without(monkeypatch):
+    # A lone fit lends half of each epoch's JᵀJ to an idle core when there is one; the sums are the same either way.
+    monkeypatch.setattr(lm_module, "MIN_LENT_JACOBIAN", 0)  # lent however small the half
+    m = rig()
+    blocks = plan_blocks(len(m), LoopSettings(), m.source)
+    ext = EFFECTS["temperature"].extension(SPEC, m, blocks.rows("train"), DiagnosisSettings())
+    settings = LoopSettings(max_epochs=10, extra_hidden=(2,), lm_max_samples=2000).retrain_settings()
+    networks = []
+    for cores in (1, 2):
+        monkeypatch.setattr(warm_start_module, "usable_cores", lambda cores=cores: cores)
+        trained = warm_start(small_model(), ext.spec, m, blocks.rows("train"), blocks.rows("validation"), settings, "t")
+        networks.append(trained.model.network)
+    for a, b in zip(*(net.parameters() for net in networks)):
+        assert torch.equal(a, b)
+
+
 def test_fresh_start_trains_a_seeded_network_of_the_given_size_on_the_extended_inputs():
     model = small_model()
     m = rig()
@@ -145,7 +162,7 @@ def test_warm_start_tries_more_hidden_units_only_while_they_help(monkeypatch):
     losses = {3: 0.5, 5: 0.3, 7: 0.4, 11: 0.1}  # by the network's hidden units (3 copied)
     tried = []
 
-    def fake_fit(network, train, validation, settings):
+    def fake_fit(network, train, validation, settings, **lent):
         tried.append(network.hidden.out_features)
         return FitHistory([1.0], [losses[network.hidden.out_features]], 0, "fake")
 
