@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import logging
 import math
-import os
 import time
 import uuid
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -29,6 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from nnfmu.models.cores import usable_cores
 from nnfmu.workflows.campaign.cases import Case
 from nnfmu.workflows.campaign.errors import CampaignError
 from nnfmu.workflows.campaign.execute import FAILED, CaseOutcome, release_instances, run_case, run_cases
@@ -78,7 +78,7 @@ class FileBytes(Mapping[str, bytes]):
 
 def machine_workers() -> int:
     """Worker processes to start by default: the cores this process may run on."""
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    return usable_cores()
 
 
 def run_serial(
