@@ -76,11 +76,6 @@ class FileBytes(Mapping[str, bytes]):
         return len(self._blobs)
 
 
-def machine_workers() -> int:
-    """Worker processes to start by default: the cores this process may run on."""
-    return usable_cores()
-
-
 def run_serial(
     cases: Sequence[Case], blobs: Mapping[str, bytes | Path], on_outcome: OnOutcome, reuse_instances: bool = True
 ) -> EngineInfo:
@@ -209,7 +204,7 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator[tuple[An
         if scheduler is None:
             with dask.config.set(LOCAL_CONFIG):
                 cluster = LocalCluster(
-                    n_workers=workers or machine_workers(),
+                    n_workers=workers or usable_cores(),  # one worker process per core this process may run on
                     threads_per_worker=1,
                     processes=True,
                     # the scheduler's HTTP server (status, metrics) starts even without a dashboard: on a free port of

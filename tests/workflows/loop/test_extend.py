@@ -124,11 +124,21 @@ def test_a_retraining_gives_the_same_network_with_a_second_core_or_without(monke
     blocks = plan_blocks(len(m), LoopSettings(), m.source)
     ext = EFFECTS["temperature"].extension(SPEC, m, blocks.rows("train"), DiagnosisSettings())
     settings = LoopSettings(max_epochs=10, extra_hidden=(2,), lm_max_samples=2000).retrain_settings()
-    networks = []
+    networks, lent = [], []
+
+    class Counted(warm_start_module.SpareCores):
+        def lend(self, task):
+            future = super().lend(task)
+            lent[-1] += future is not None
+            return future
+
+    monkeypatch.setattr(warm_start_module, "SpareCores", Counted)
     for cores in (1, 2):
         monkeypatch.setattr(warm_start_module, "usable_cores", lambda cores=cores: cores)
+        lent.append(0)
         trained = warm_start(small_model(), ext.spec, m, blocks.rows("train"), blocks.rows("validation"), settings, "t")
         networks.append(trained.model.network)
+    assert lent[0] == 0 and lent[1] > 0  # one core lends nothing; with two the fit's epochs were lent
     for a, b in zip(*(net.parameters() for net in networks)):
         assert torch.equal(a, b)
 
