@@ -8,6 +8,12 @@ over each half of the samples, the halves summed (at a search's end the second h
 left idle), arrays held sample-last (features x samples) so element-wise work runs along long rows, the Jacobian of
 each half written into one buffer reused every epoch, and an accepted trial's hidden activations reused for the next
 Jacobian.
+
+The steps may be taken in other coordinates of the inputs than the scaled ones the network sees
+(`LMSettings.inputs`): mu·I damps every weight alike, so on strongly correlated inputs (a damper's velocity and its
+high-passes, up to 0.9994) trainlm's raw coordinates spend many epochs along their small differences. The hidden
+layer's weights are carried into those coordinates at the start and back after every epoch, so the network keeps its
+form and only the path of the fit changes.
 """
 
 from __future__ import annotations
@@ -24,6 +30,7 @@ import torch
 from threadpoolctl import threadpool_limits
 from torch.nn.utils import parameters_to_vector, vector_to_parameters
 
+from nnfmu.errors import SettingsError
 from nnfmu.models.networks import MLP
 from nnfmu.models.stopping import FitHistory, TrainingLog
 from nnfmu.stopping import check_stop
@@ -33,6 +40,12 @@ from nnfmu.stopping import check_stop
 # here against 0.057 ms lent, 93 000 0.124 against 0.127 ms, 248 000 0.206 against 0.172 ms, 776 000 (the 6-12-1
 # damper network on 16 000 rows) 0.99 against 0.66 ms.
 MIN_LENT_JACOBIAN = 200_000
+# Coordinates of the inputs LM steps in: the scaled inputs as given (trainlm), each centred and divided by its
+# standard deviation over the training rows, or centred and decorrelated to unit covariance.
+INPUT_COORDINATES = ("raw", "standardised", "whitened")
+# Eigenvalues of the training inputs' covariance below this fraction of the largest are raised to it when whitening
+# (a constant or duplicated input is then scaled, not divided by zero).
+WHITENING_FLOOR = 1e-12
 # Runs a task on a spare core and returns its future, or None when no core is spare (the caller runs it itself).
 Lend = Callable[[Callable[[], Any]], "Future[Any] | None"]
 
@@ -48,6 +61,54 @@ class LMSettings:
     mu_increase: float = 10.0
     mu_max: float = 1e10
     min_gradient: float = 1e-10
+    inputs: str = "raw"
+
+    def __post_init__(self) -> None:
+        if self.inputs not in INPUT_COORDINATES:
+            raise SettingsError(
+                f"LM input coordinates must be one of {', '.join(INPUT_COORDINATES)}, got {self.inputs!r}"
+            )
+
+
+@dataclass(frozen=True)
+class _InputCoordinates:
+    """Affine coordinates z = transform @ (x - mean) of sample-last inputs x, and the hidden weights' image in them."""
+
+    mean: np.ndarray
+    transform: np.ndarray
+    inverse: np.ndarray
+
+    @classmethod
+    def of(cls, kind: str, inputs: np.ndarray) -> _InputCoordinates:
+        """`kind`'s coordinates ("standardised" or "whitened") of sample-last training `inputs` (n_in, n)."""
+        mean = inputs.mean(axis=1)
+        if kind == "standardised":
+            scale = inputs.std(axis=1)
+            scale[scale == 0] = 1.0
+            return cls(mean, np.diag(1 / scale), np.diag(scale))
+        values, vectors = np.linalg.eigh(np.atleast_2d(np.cov(inputs)))
+        values = np.maximum(values, WHITENING_FLOOR * max(float(values.max()), np.finfo(float).tiny))
+        return cls(mean, (vectors / np.sqrt(values)).T, vectors * np.sqrt(values))
+
+    def inputs(self, x: np.ndarray) -> np.ndarray:
+        """Sample-last inputs `x` in these coordinates, contiguous."""
+        return np.ascontiguousarray(self.transform @ (x - self.mean[:, None]))
+
+    def into_new(self, weights: np.ndarray, hidden: int) -> np.ndarray:
+        """Weights of the network on raw inputs as weights of the same function on these coordinates."""
+        out, m = weights.copy(), len(self.mean)
+        w1 = weights[: hidden * m].reshape(hidden, m)
+        out[: hidden * m] = (w1 @ self.inverse).ravel()
+        out[hidden * m : hidden * m + hidden] += w1 @ self.mean
+        return out
+
+    def into_raw(self, weights: np.ndarray, hidden: int) -> np.ndarray:
+        """Weights on these coordinates as weights of the same function on the raw inputs (`into_new` undone)."""
+        out, m = weights.copy(), len(self.mean)
+        w1 = weights[: hidden * m].reshape(hidden, m) @ self.transform
+        out[: hidden * m] = w1.ravel()
+        out[hidden * m : hidden * m + hidden] -= w1 @ self.mean
+        return out
 
 
 class _Perceptron:
@@ -163,14 +224,21 @@ def _fit(
 ) -> FitHistory:
     """`fit_lm`'s loop, on one BLAS thread."""
     params = list(network.parameters())
-    perceptron = _Perceptron(train[0].detach().numpy(), network.hidden.weight.shape[0])
-    y = train[1].detach().numpy()
+    hidden_units = network.hidden.weight.shape[0]
+    x_train = np.ascontiguousarray(train[0].detach().numpy().T)
     x_val, y_val = np.ascontiguousarray(validation[0].detach().numpy().T), validation[1].detach().numpy()
+    coordinates = None if settings.inputs == "raw" else _InputCoordinates.of(settings.inputs, x_train)
+    if coordinates is not None:
+        x_train, x_val = coordinates.inputs(x_train), coordinates.inputs(x_val)
+    perceptron = _Perceptron(x_train.T, hidden_units)
+    y = train[1].detach().numpy()
 
     def validation_mse(weights: np.ndarray) -> float:
         return float(np.mean((perceptron.activations(weights, x_val)[1] - y_val) ** 2))
 
     weights = parameters_to_vector(params).detach().numpy().copy()
+    if coordinates is not None:
+        weights = coordinates.into_new(weights, hidden_units)
     hidden, output = perceptron.activations(weights)
     residual = output - y
     log = TrainingLog(network, settings.patience, float(np.mean(residual**2)), validation_mse(weights))
@@ -198,7 +266,8 @@ def _fit(
         if not improved:
             reason = "mu_max"
             break
-        vector_to_parameters(torch.from_numpy(weights.copy()), params)
+        raw = weights.copy() if coordinates is None else coordinates.into_raw(weights, hidden_units)
+        vector_to_parameters(torch.from_numpy(raw), params)
         stop = log.record(epoch, loss, validation_mse(weights))
         if on_epoch is not None:
             on_epoch(epoch, settings.max_epochs)

@@ -122,8 +122,8 @@ def _warm_network(old: TrainedModel, spec: FeatureSpec, extra: int, seed: int) -
 
 @dataclass(frozen=True)
 class _Problem:
-    """The scaled training problem of one extended spec: all rows' features and target, the scaler, and the strided
-    training and validation rows LM works on."""
+    """The scaled training problem of one extended spec: all rows' features and target, the scaler, the strided
+    training and validation rows LM works on, and the input coordinates its steps are taken in (the first fit's)."""
 
     spec: FeatureSpec
     target: np.ndarray
@@ -132,10 +132,11 @@ class _Problem:
     y: torch.Tensor
     train: torch.Tensor
     validation: torch.Tensor
+    lm_inputs: str
 
     def fit(self, network: MLP, settings: RetrainSettings, mu: float) -> FitHistory:
         """Levenberg-Marquardt on the training rows from `network`'s weights, early stopping on the validation rows."""
-        lm = LMSettings(max_epochs=settings.max_epochs, patience=settings.patience, mu=mu)
+        lm = LMSettings(max_epochs=settings.max_epochs, patience=settings.patience, mu=mu, inputs=self.lm_inputs)
         train, validation = (self.x[self.train], self.y[self.train]), (self.x[self.validation], self.y[self.validation])
         with SpareCores(usable_cores()) as spare, spare.occupied():  # a lone fit: a second core takes half of JᵀJ
             return fit_lm(network, train, validation, lm, lend=spare.lend)
@@ -167,6 +168,7 @@ def _problem(
         torch.from_numpy(old.target_scaler.scale(target)),
         index_train,
         index_validation,
+        str(old.settings.get("lm_inputs", "raw")),
     )
 
 

@@ -21,7 +21,7 @@ from nnfmu.data.measurement import Measurement
 from nnfmu.errors import SettingsError
 from nnfmu.models.cores import SpareCores, usable_cores
 from nnfmu.models.features import FeatureSpec, Stop
-from nnfmu.models.lm import Lend, LMSettings, fit_lm
+from nnfmu.models.lm import INPUT_COORDINATES, Lend, LMSettings, fit_lm
 from nnfmu.models.metrics import SplitMetrics, max_abs_weight, network_warning, split_metrics
 from nnfmu.models.networks import MLP, GRUNet
 from nnfmu.models.scaling import MinMaxScaler
@@ -83,7 +83,8 @@ class TrainSettings:
     max_epochs/patience: epoch limit and early-stopping patience on the validation split; restarts: seeded random
     initialisations per hidden size, the best validation error kept; hidden_tolerance: "auto" hidden size picks the
     smallest size whose validation MSE is within (1 + tolerance) of the best; lm_max_samples: LM fits on at most this
-    many training samples (evenly strided); learning_rate/batch_size: Adam (batch_size samples per MLP step);
+    many training samples (evenly strided); lm_inputs: the input coordinates LM steps in (`nnfmu.models.lm`:
+    "raw" as trainlm, "standardised" or "whitened"); learning_rate/batch_size: Adam (batch_size samples per MLP step);
     chunk_length/burn_in/sequences_per_batch: GRU training sequences, the samples at their start left out of the loss
     while the hidden state settles, and sequences per Adam step; input_cutoff [Hz]: the input channels low-passed
     with zero phase before the features (`nnfmu.data.denoise`; None: as recorded).
@@ -97,6 +98,7 @@ class TrainSettings:
     splits: SplitFractions = SplitFractions()
     hidden_tolerance: float = 0.10
     lm_max_samples: int = 20000
+    lm_inputs: str = "raw"
     learning_rate: float = 0.01
     batch_size: int = 1024
     chunk_length: int = 500
@@ -107,6 +109,8 @@ class TrainSettings:
     def __post_init__(self) -> None:
         if self.optimizer not in ("auto", "lm", "adam", "lbfgs"):
             raise SettingsError(f"optimizer must be auto, lm, adam or lbfgs, got {self.optimizer!r}")
+        if self.lm_inputs not in INPUT_COORDINATES:
+            raise SettingsError(f"lm_inputs must be one of {', '.join(INPUT_COORDINATES)}, got {self.lm_inputs!r}")
         for name in (
             "max_epochs",
             "patience",
@@ -353,7 +357,7 @@ def fit_network(
     if isinstance(network, GRUNet):
         return _fit_gru(network, data, run_settings, on_epoch)
     if method == "lm":
-        lm = LMSettings(max_epochs=settings.max_epochs, patience=settings.patience)
+        lm = LMSettings(max_epochs=settings.max_epochs, patience=settings.patience, inputs=settings.lm_inputs)
         train = _strided(*data.rows("train"), settings.lm_max_samples)
         validation = _strided(*data.rows("validation"), settings.lm_max_samples)
         return fit_lm(network, train, validation, lm, on_epoch, lend)

@@ -7,6 +7,7 @@ import re
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import replace
 
 import numpy as np
 import onnx
@@ -17,6 +18,7 @@ from torch.func import functional_call, jacrev
 from nnfmu.component import Component
 from nnfmu.data.band import excited_band
 from nnfmu.data.measurement import Measurement
+from nnfmu.errors import SettingsError
 from nnfmu.models import lm as lm_module
 from nnfmu.models import train as train_module
 from nnfmu.models.features import FeatureSpec, Stop, Tap
@@ -111,6 +113,61 @@ def test_lm_gives_the_same_network_whether_a_spare_core_takes_half_of_each_epoch
     assert len(lent) == 30
     for a, b in zip(nets[0].parameters(), nets[1].parameters()):
         assert torch.equal(a, b)
+
+
+def correlated_inputs(n: int, seed: int) -> tuple[torch.Tensor, torch.Tensor]:
+    """A velocity-like input, a copy of it shifted by a small lag term (0.99 correlated) and an offset copy (1.0), and
+    a target that depends on their small difference: the case LM's input coordinates are for."""
+    rng = np.random.default_rng(seed)
+    kernel = np.hanning(31)
+    v = np.convolve(rng.standard_normal(n + 30), kernel / kernel.sum(), mode="valid")
+    v /= np.abs(v).max()
+    d = np.diff(v, prepend=v[0]) * 20
+    x = np.stack([v, v - 0.05 * d, v + 0.5], axis=1)
+    return torch.from_numpy(x), torch.from_numpy(np.tanh(3 * v) + 2 * d + 0.3 * np.tanh(5 * d))
+
+
+@pytest.mark.parametrize("inputs", ["standardised", "whitened"])
+def test_lm_in_other_input_coordinates_starts_from_and_ends_with_the_network_on_raw_inputs(inputs):
+    # The weights are carried into the coordinates and back: the first loss is the raw network's, the kept network
+    # (on raw inputs) reproduces its recorded validation loss, and only improving steps are taken.
+    x, y = correlated_inputs(1000, seed=0)
+    train, validation = (x[::2], y[::2]), (x[1::2], y[1::2])
+    histories, nets = [], []
+    for kind in ("raw", inputs):
+        torch.manual_seed(3)
+        nets.append(MLP(3, 4))
+        histories.append(fit_lm(nets[-1], train, validation, LMSettings(max_epochs=40, patience=40, inputs=kind)))
+    raw, other = histories
+    assert other.train_loss[0] == pytest.approx(raw.train_loss[0], rel=1e-12)
+    assert other.validation_loss[0] == pytest.approx(raw.validation_loss[0], rel=1e-12)
+    assert all(b < a for a, b in zip(other.train_loss, other.train_loss[1:]))
+    assert other.train_loss[1] != pytest.approx(raw.train_loss[1], rel=1e-6)  # the steps were taken elsewhere
+    with torch.no_grad():
+        kept = float(torch.mean((nets[1](validation[0])[:, 0] - validation[1]) ** 2))
+    assert kept == pytest.approx(other.best_validation_loss, rel=1e-9)
+
+
+def test_unknown_lm_input_coordinates_are_refused_by_name():
+    with pytest.raises(SettingsError, match="'polar'"):
+        TrainSettings(lm_inputs="polar")
+    with pytest.raises(SettingsError, match="'polar'"):
+        LMSettings(inputs="polar")
+
+
+def test_the_training_settings_carry_the_lm_coordinates_into_the_fit(monkeypatch):
+    seen = []
+    real = train_module.fit_lm
+
+    def spy(network, train, validation, settings, *args, **kwargs):
+        seen.append(settings.inputs)
+        return real(network, train, validation, replace(settings, max_epochs=2), *args, **kwargs)
+
+    monkeypatch.setattr(train_module, "fit_lm", spy)
+    settings = TrainSettings(restarts=1, max_epochs=2, lm_inputs="whitened")
+    result = train_model(lagged_damper(800), LAGGED_VELOCITY, Architecture("mlp", (3,)), settings)
+    assert seen == ["whitened"]
+    assert result.model.settings["lm_inputs"] == "whitened"  # recorded in the model, for its retraining
 
 
 def test_early_stopping_keeps_the_best_epoch():
