@@ -21,7 +21,7 @@ from nnfmu.data.denoise import lowpass_channels
 from nnfmu.errors import SettingsError
 from nnfmu.models.cores import SpareCores, usable_cores
 from nnfmu.models.features import FeatureSpec
-from nnfmu.models.lm import LMSettings, fit_lm
+from nnfmu.models.lm import INPUT_COORDINATES, LMSettings, fit_lm
 from nnfmu.models.metrics import max_abs_weight, split_metrics
 from nnfmu.models.networks import MLP
 from nnfmu.models.scaling import MinMaxScaler
@@ -37,7 +37,8 @@ EXTRA_WEIGHT_SCALE = 0.5  # std of the input weights and biases of added hidden 
 class RetrainSettings:
     """Levenberg-Marquardt's `max_epochs` and `patience`; `lm_max_samples` (evenly strided training rows it fits on,
     and validation rows it checks on); `lm_mu`, the warm start's initial damping; `extra_hidden`, hidden-unit counts
-    the warm start adds beside the copied units, in rising order; `seed` of the added units and the fresh draw."""
+    the warm start adds beside the copied units, in rising order; `seed` of the added units and the fresh draw;
+    `lm_inputs`, the input coordinates its steps are taken in (`nnfmu.models.lm`), whatever the first fit's."""
 
     max_epochs: int = 1000
     patience: int = 12
@@ -45,8 +46,11 @@ class RetrainSettings:
     lm_mu: float = 1.0
     extra_hidden: tuple[int, ...] = (0,)
     seed: int = 0
+    lm_inputs: str = "raw"
 
     def __post_init__(self) -> None:
+        if self.lm_inputs not in INPUT_COORDINATES:
+            raise SettingsError(f"lm_inputs must be one of {', '.join(INPUT_COORDINATES)}, got {self.lm_inputs!r}")
         if self.max_epochs < 1 or self.patience < 1 or self.lm_max_samples < 1:
             raise SettingsError(
                 f"max_epochs, patience and lm_max_samples must be >= 1, got {self.max_epochs}, "
@@ -122,8 +126,8 @@ def _warm_network(old: TrainedModel, spec: FeatureSpec, extra: int, seed: int) -
 
 @dataclass(frozen=True)
 class _Problem:
-    """The scaled training problem of one extended spec: all rows' features and target, the scaler, the strided
-    training and validation rows LM works on, and the input coordinates its steps are taken in (the first fit's)."""
+    """The scaled training problem of one extended spec: all rows' features and target, the scaler, and the strided
+    training and validation rows LM works on."""
 
     spec: FeatureSpec
     target: np.ndarray
@@ -132,11 +136,10 @@ class _Problem:
     y: torch.Tensor
     train: torch.Tensor
     validation: torch.Tensor
-    lm_inputs: str
 
     def fit(self, network: MLP, settings: RetrainSettings, mu: float) -> FitHistory:
         """Levenberg-Marquardt on the training rows from `network`'s weights, early stopping on the validation rows."""
-        lm = LMSettings(max_epochs=settings.max_epochs, patience=settings.patience, mu=mu, inputs=self.lm_inputs)
+        lm = LMSettings(max_epochs=settings.max_epochs, patience=settings.patience, mu=mu, inputs=settings.lm_inputs)
         train, validation = (self.x[self.train], self.y[self.train]), (self.x[self.validation], self.y[self.validation])
         with SpareCores(usable_cores()) as spare, spare.occupied():  # a lone fit: a second core takes half of JᵀJ
             return fit_lm(network, train, validation, lm, lend=spare.lend)
@@ -168,7 +171,6 @@ def _problem(
         torch.from_numpy(old.target_scaler.scale(target)),
         index_train,
         index_validation,
-        str(old.settings.get("lm_inputs", "raw")),
     )
 
 
@@ -305,6 +307,7 @@ def _retrained(
                 "validation_mse_by_extra_hidden": {str(k): v for k, v in scores.items()},
                 "epochs_run": epochs,
                 "max_epochs": settings.max_epochs,
+                "lm_inputs": settings.lm_inputs,
                 "samples": {"train": int(len(train)), "validation": int(len(validation))},
             },
         },

@@ -4,7 +4,6 @@ effect's feature-spec extension: tests/diagnosis/test_extensions.py.)"""
 
 from __future__ import annotations
 
-import dataclasses
 from functools import cache
 
 import numpy as np
@@ -195,7 +194,7 @@ def test_warm_start_tries_more_hidden_units_only_while_they_help(monkeypatch):
         LoopSettings(extra_hidden=(0, 6, 3))
 
 
-def test_retraining_steps_in_the_first_fits_input_coordinates(monkeypatch):
+def test_retraining_steps_in_its_own_input_coordinates_whatever_the_first_fits(monkeypatch):
     old = train_model(
         rig(), SPEC, Architecture("mlp", (3,)), TrainSettings(max_epochs=5, restarts=1, lm_inputs="whitened")
     ).model
@@ -211,16 +210,19 @@ def test_retraining_steps_in_the_first_fits_input_coordinates(monkeypatch):
     blocks = plan_blocks(len(m), LoopSettings(), m.source)
     train, validation = blocks.rows("train"), blocks.rows("validation")
     ext = EFFECTS["temperature"].extension(SPEC, m, train, DiagnosisSettings())
-    settings = LoopSettings(max_epochs=3, extra_hidden=(2,), lm_max_samples=2000).retrain_settings()
-    warm = warm_start(old, ext.spec, m, train, validation, settings, "temperature")
-    fresh = fresh_start(old, ext.spec, m, train, validation, settings, "temperature", hidden=5)
-    assert seen == ["whitened", "whitened"]
-    assert warm.model.settings["lm_inputs"] == fresh.model.settings["lm_inputs"] == "whitened"
-    seen.clear()
-    settings_of_an_older_model = {k: v for k, v in small_model().settings.items() if k != "lm_inputs"}
-    older = dataclasses.replace(small_model(), settings=settings_of_an_older_model)
-    warm_start(older, ext.spec, m, train, validation, settings, "temperature")
-    assert seen == ["raw"]  # a model trained before the setting was trained as trainlm does
+    for inputs in ("raw", "standardised"):
+        seen.clear()
+        settings = LoopSettings(max_epochs=3, extra_hidden=(2,), lm_max_samples=2000, lm_inputs=inputs)
+        warm = warm_start(old, ext.spec, m, train, validation, settings.retrain_settings(), "temperature")
+        fresh = fresh_start(old, ext.spec, m, train, validation, settings.retrain_settings(), "temperature", hidden=5)
+        assert seen == [inputs, inputs]
+        assert (
+            warm.model.settings["retraining"]["lm_inputs"] == fresh.model.settings["retraining"]["lm_inputs"] == inputs
+        )
+        assert warm.model.settings["lm_inputs"] == "whitened"  # the first fit's, as it was trained
+    assert LoopSettings().retrain_settings().lm_inputs == "raw"  # the default (measured: LoopSettings.lm_inputs)
+    with pytest.raises(LoopError, match="'polar'"):
+        LoopSettings(lm_inputs="polar")
 
 
 def test_blocks_interleave_fit_diagnosis_and_test_without_overlap():
