@@ -64,10 +64,13 @@ class LMSettings:
     inputs: str = "raw"
 
     def __post_init__(self) -> None:
-        if self.inputs not in INPUT_COORDINATES:
-            raise SettingsError(
-                f"LM input coordinates must be one of {', '.join(INPUT_COORDINATES)}, got {self.inputs!r}"
-            )
+        check_input_coordinates("inputs", self.inputs)
+
+
+def check_input_coordinates(name: str, value: str) -> None:
+    """SettingsError naming setting `name` and its `value` unless the value is one of INPUT_COORDINATES."""
+    if value not in INPUT_COORDINATES:
+        raise SettingsError(f"{name} must be one of {', '.join(INPUT_COORDINATES)}, got {value!r}")
 
 
 @dataclass(frozen=True)

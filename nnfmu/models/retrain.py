@@ -21,7 +21,7 @@ from nnfmu.data.denoise import lowpass_channels
 from nnfmu.errors import SettingsError
 from nnfmu.models.cores import SpareCores, usable_cores
 from nnfmu.models.features import FeatureSpec
-from nnfmu.models.lm import INPUT_COORDINATES, LMSettings, fit_lm
+from nnfmu.models.lm import LMSettings, check_input_coordinates, fit_lm
 from nnfmu.models.metrics import max_abs_weight, split_metrics
 from nnfmu.models.networks import MLP
 from nnfmu.models.scaling import MinMaxScaler
@@ -49,8 +49,7 @@ class RetrainSettings:
     lm_inputs: str = "raw"
 
     def __post_init__(self) -> None:
-        if self.lm_inputs not in INPUT_COORDINATES:
-            raise SettingsError(f"lm_inputs must be one of {', '.join(INPUT_COORDINATES)}, got {self.lm_inputs!r}")
+        check_input_coordinates("lm_inputs", self.lm_inputs)
         if self.max_epochs < 1 or self.patience < 1 or self.lm_max_samples < 1:
             raise SettingsError(
                 f"max_epochs, patience and lm_max_samples must be >= 1, got {self.max_epochs}, "

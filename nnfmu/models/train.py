@@ -21,7 +21,7 @@ from nnfmu.data.measurement import Measurement
 from nnfmu.errors import SettingsError
 from nnfmu.models.cores import SpareCores, usable_cores
 from nnfmu.models.features import FeatureSpec, Stop
-from nnfmu.models.lm import INPUT_COORDINATES, Lend, LMSettings, fit_lm
+from nnfmu.models.lm import Lend, LMSettings, check_input_coordinates, fit_lm
 from nnfmu.models.metrics import SplitMetrics, max_abs_weight, network_warning, split_metrics
 from nnfmu.models.networks import MLP, GRUNet
 from nnfmu.models.scaling import MinMaxScaler
@@ -109,8 +109,7 @@ class TrainSettings:
     def __post_init__(self) -> None:
         if self.optimizer not in ("auto", "lm", "adam", "lbfgs"):
             raise SettingsError(f"optimizer must be auto, lm, adam or lbfgs, got {self.optimizer!r}")
-        if self.lm_inputs not in INPUT_COORDINATES:
-            raise SettingsError(f"lm_inputs must be one of {', '.join(INPUT_COORDINATES)}, got {self.lm_inputs!r}")
+        check_input_coordinates("lm_inputs", self.lm_inputs)
         for name in (
             "max_epochs",
             "patience",
