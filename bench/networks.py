@@ -46,7 +46,8 @@ def _train(name: str, lab, variant: str):
     ]
     started = time.perf_counter()
     # as `nnfmu train` keeps it: the search's best network that passes the passivity check
-    result = train_model(lab.measurement, spec, architecture, preset.settings, accept=partial(passivity_refusals, name))
+    settings = preset.thesis_settings if variant == "thesis" else preset.settings
+    result = train_model(lab.measurement, spec, architecture, settings, accept=partial(passivity_refusals, name))
     return spec, result, time.perf_counter() - started
 
 

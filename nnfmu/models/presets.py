@@ -177,6 +177,12 @@ class Preset:
         """The default specs to choose among by validation error: `spec` first, then the `variants`."""
         return (self.spec, *self.variants)
 
+    @property
+    def thesis_settings(self) -> TrainSettings:
+        """The thesis network's training: the preset's settings with Levenberg–Marquardt in trainlm's raw input
+        coordinates, as the thesis trained it."""
+        return replace(self.settings, lm_inputs="raw")
+
 
 def auto_from(thesis_hidden: int) -> tuple[int, ...]:
     """Hidden sizes tried by default: the thesis's size and the larger AUTO_HIDDEN sizes."""

@@ -110,7 +110,8 @@ def resolve(request: TrainRequest) -> tuple[Preset, Architecture, TrainSettings]
         overrides["optimizer"] = request.optimizer
     if request.input_cutoff is not None:
         overrides["input_cutoff"] = request.input_cutoff or None
-    return preset, architecture, replace(preset.settings, **overrides)
+    settings = preset.thesis_settings if request.thesis else preset.settings
+    return preset, architecture, replace(settings, **overrides)
 
 
 def _stage(progress: Progress | None, start: float, end: float) -> Progress | None:

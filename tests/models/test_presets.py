@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -173,3 +175,11 @@ def test_bushing_presets_train_on_low_passed_inputs_and_a_request_can_change_it(
     assert resolve(TrainRequest(preset="damper-hysteresis", input_cutoff=80.0))[2].input_cutoff == 80.0
     with pytest.raises(SettingsError, match="input_cutoff must be a positive frequency"):
         TrainSettings(input_cutoff=-5.0)
+
+
+def test_the_thesis_network_trains_as_trainlm_did_and_the_default_in_its_presets_coordinates():
+    assert {p.settings.lm_inputs for p in PRESETS.values()} > {"raw"}  # some default steps elsewhere
+    for name, preset in PRESETS.items():
+        default, thesis = (resolve(TrainRequest(name, thesis=t, seed=3))[2] for t in (False, True))
+        assert default.lm_inputs == preset.settings.lm_inputs and thesis.lm_inputs == "raw"
+        assert replace(thesis, lm_inputs=default.lm_inputs) == default  # nothing else differs
