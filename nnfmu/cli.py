@@ -306,7 +306,9 @@ def train(
         None, help="Hidden size, or several to choose among by validation error."
     ),
     recurrent: bool = typer.Option(False, help="GRU network instead of the time-delay perceptron."),
-    thesis: bool = typer.Option(False, help="The thesis's network exactly: its inputs, delays and fixed hidden size."),
+    thesis: bool = typer.Option(
+        False, help="The thesis's network exactly: its inputs, delays and fixed hidden size, trained as trainlm does."
+    ),
     select_inputs: bool = typer.Option(
         False, help="Choose inputs by sensitivity analysis over the candidate taps; prints the ranking."
     ),
