@@ -26,8 +26,10 @@ from dataclasses import dataclass
 
 from nnfmu.fmu.errors import CompilerError
 
-# -ffp-contract=off: no fused multiply-add on any target (aarch64 has FMA), so every platform rounds alike.
-WARNINGS = ("-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-Wvla", "-ffp-contract=off")
+# -ffp-contract=off: no fused multiply-add on any target (aarch64 has FMA), so every platform rounds alike. -O3: gcc
+# vectorises the generated loops there (without -ffast-math nothing is reassociated, so the results stay bit for bit):
+# `bench/cosim.py` full vehicle, 50 s, the demo's networks, gcc 12 0.37 s at -O2, 0.28 s at -O3; Zig 0.232 s at both.
+WARNINGS = ("-std=c99", "-O3", "-Wall", "-Wextra", "-Werror", "-Wvla", "-ffp-contract=off")
 HOST_FLAGS = (*WARNINGS, "-fPIC", "-shared", "-fvisibility=hidden")
 # Static libgcc: the DLL then needs only KERNEL32 and msvcrt. MinGW's own stdio: C99 vsnprintf and printf formats.
 WIN64_FLAGS = (*WARNINGS, "-shared", "-static-libgcc", "-D__USE_MINGW_ANSI_STDIO=1")
