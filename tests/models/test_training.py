@@ -167,7 +167,7 @@ def test_the_training_settings_carry_the_lm_coordinates_into_the_fit(monkeypatch
     settings = TrainSettings(restarts=1, max_epochs=2, lm_inputs="whitened")
     result = train_model(lagged_damper(800), LAGGED_VELOCITY, Architecture("mlp", (3,)), settings)
     assert seen == ["whitened"]
-    assert result.model.settings["lm_inputs"] == "whitened"  # recorded in the model, for its retraining
+    assert result.model.settings["lm_inputs"] == "whitened"  # recorded in the model (its ONNX metadata)
 
 
 def test_early_stopping_keeps_the_best_epoch():
