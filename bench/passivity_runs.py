@@ -1,7 +1,7 @@
 """How many of a bushing preset's search runs give energy back, with and without its 3 ms memory branch (JSON out).
 
 Usage: python bench/passivity_runs.py [--presets NAME ...] [--seeds N ...]
-For each preset (default: the two with `FAST_MEMORY_TAUS`, radial force and axial torque) and training seed, the preset
+For each preset (default: the two with a 3 ms branch, radial force and axial torque) and training seed, the preset
 is trained on the bushing rig's lab record (seed 0, default effects and noise) as `nnfmu train` trains it, once with its
 default features and once without the high-passes faster than `MEMORY_TAUS` (the bank the other bushing presets use);
 every run of the search (hidden size x restart) is put through the passivity check (`passivity_refusals`, the check

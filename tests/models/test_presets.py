@@ -10,7 +10,15 @@ import pytest
 from nnfmu.data.rigs import RigOptions, simulate_rig
 from nnfmu.errors import SettingsError
 from nnfmu.models.features import FeatureSpec, Highpass, Lowpass, Tap
-from nnfmu.models.presets import FAST_MEMORY_TAUS, MEMORY_TAUS, PRESETS, custom_spec, get_preset, memory_bank
+from nnfmu.models.presets import (
+    FAST_MEMORY_TAUS,
+    MEMORY_TAUS,
+    PRESETS,
+    TORSIONAL_MEMORY_TAUS,
+    custom_spec,
+    get_preset,
+    memory_bank,
+)
 from nnfmu.models.train import TrainSettings
 from nnfmu.workflows.train import TrainRequest, resolve
 
@@ -39,7 +47,7 @@ def test_input_channels_follow_the_rig_names():
     for name, channels, taus in [
         ("bushing-axial-force", ["axial_displacement", "axial_velocity"], MEMORY_TAUS),
         ("bushing-radial-force", ["radial_displacement", "radial_velocity"], FAST_MEMORY_TAUS),
-        ("bushing-axial-torque", ["axial_rotation", "axial_angular_velocity"], FAST_MEMORY_TAUS),
+        ("bushing-axial-torque", ["axial_rotation", "axial_angular_velocity"], TORSIONAL_MEMORY_TAUS),
         ("bushing-conical-torque", ["conical_rotation", "conical_angular_velocity"], MEMORY_TAUS),
     ]:
         preset = get_preset(name)
@@ -101,7 +109,7 @@ def test_no_bushing_memory_branch_copies_the_rate(bushing_lab_record):
     banks = {
         "bushing-axial-force": MEMORY_TAUS,
         "bushing-radial-force": FAST_MEMORY_TAUS,
-        "bushing-axial-torque": FAST_MEMORY_TAUS,
+        "bushing-axial-torque": TORSIONAL_MEMORY_TAUS,
         "bushing-conical-torque": MEMORY_TAUS,
     }
     for name, bank in banks.items():
