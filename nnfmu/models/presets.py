@@ -4,23 +4,24 @@ training settings, so `nnfmu train DATA --preset NAME` needs nothing else.
 Each preset holds two definitions. `thesis_spec`/`thesis` reproduce the thesis (inputs, delays, fixed hidden size;
 `--thesis`). `spec`/`architecture` are what nnfmu trains by default, with hidden sizes chosen by validation error
 starting at the thesis's size. The defaults' extra inputs are chosen to be well conditioned: no feature is a delayed
-or smoothed copy of another (nearly collinear after scaling), which a net can only difference through large opposite
-weights (the thesis's limit is |weight| <~ 10). Bushings: the same input channels plus a bank of first-order
-high-pass filters of the position, one time constant per decade (10, 100 ms; radial and axial torque also 3 ms,
-axial torque also 31.6 ms, half a decade between): c·highpass(x, tau) is the force of a Maxwell branch, so the bank
-is the memory of a generalised Maxwell (Prony-series) material, which a one-sample delay line at 1 kHz cannot hold.
-Every bushing channel adds stop operators of its position (Prandtl elements, the feature-space form of the
-friction's Jenkins elements; training leaves out those its record hardly slips, `nnfmu.models.train.MIN_STOP_SLIP`);
-at the few mrad a four-poster tilts a front LCA bushing the conical friction is half the torque and follows the
-motion since the last reversal, and the conical torque also has the friction's smoothed sign. Damper hysteresis:
-velocity, its backward differences over 2 and 8 samples (valve lag, acceleration) instead of the thesis's single
-delay, the seal friction's smoothed sign and two high-passes of the velocity at 1 and 3 ms (the valve's fading lag).
-Damper spline: velocity, the seal friction's smoothed sign and the valve's blow-off knee as tanh(v/0.1 m/s).
-Semi-active damper (MR coil voltage or CDC valve current): the hysteresis preset's velocity features, the
-displacement (accumulator) and the command with its own dynamics: the command now and 10 samples ago, and two
-first-order low-passes of it (the coil's field build-up, the valve spool's lag) whose time constants are chosen by
-validation error from SEMIACTIVE_COMMAND_TAUS; the thesis variant is the plain time-delay net on the command (delays
-0, 3, 10, 30 samples) measured by hand on a public MR record.
+or smoothed copy of another (nearly collinear after scaling), which a net can only difference through large
+opposite weights (the thesis's limit is |weight| <~ 10). Bushings: the same input channels plus a bank of
+first-order high-pass filters of the position, one time constant per decade (10, 100 ms; radial and axial torque also
+3 ms, axial torque also 31.6 ms, half a decade between): c·highpass(x, tau) is the force of a Maxwell branch, so the
+bank is the memory of a generalised Maxwell (Prony-series) material, which a one-sample delay line at 1 kHz cannot
+hold. Every bushing channel adds stop
+operators of its position (Prandtl elements, the feature-space form of the friction's Jenkins elements; training
+leaves out those its record hardly slips, `nnfmu.models.train.MIN_STOP_SLIP`); at the few mrad a four-poster tilts
+a front LCA bushing the conical friction is half the torque and follows the motion since the last reversal, and the
+conical torque also has the friction's smoothed sign. Damper hysteresis: velocity, its
+backward differences over 2 and 8 samples (valve lag, acceleration) instead of the thesis's single delay, the
+seal friction's smoothed sign and two high-passes of the velocity at 1 and 3 ms (the valve's fading lag). Damper
+spline: velocity, the seal friction's smoothed sign and the valve's blow-off
+knee as tanh(v/0.1 m/s). Semi-active damper (MR coil voltage or CDC valve current): the hysteresis preset's velocity
+features, the displacement (accumulator) and the command with its own dynamics: the command now and 10 samples ago,
+and two first-order low-passes of it (the coil's field build-up, the valve spool's lag) whose time constants are
+chosen by validation error from SEMIACTIVE_COMMAND_TAUS; the thesis variant is the plain time-delay net on the
+command (delays 0, 3, 10, 30 samples) measured by hand on a public MR record.
 """
 
 from __future__ import annotations
@@ -37,13 +38,13 @@ from nnfmu.models.train import Architecture, TrainSettings
 AUTO_HIDDEN = (3, 5, 7, 9, 12)
 # GRU hidden size for the recurrent option when the user gives none.
 GRU_HIDDEN = (8,)
-# Time constants [s] of the default bushing high-pass memory bank: one per decade, corners (16 and 1.6 Hz)
-# inside the rigs' band (random drive to the controller's 40 Hz). No 1 ms branch: its 160 Hz corner lies above
-# the band, where highpass(x, 1 ms) ~ 1 ms · v is a copy of the velocity, so the record cannot tell the two apart and
-# their split decides the loss angle above the band alone. The road test's axial force network with it gave energy back
-# at the arm's ~200 Hz mode (sine about its working point, 15 um: loss angle -10 deg) and the full vehicle stepped at
-# 0.1 ms oscillated there (body accelerations 10-25 % NRMSE); without it the same record gave the same test NRMSE
-# (0.70 %), every 100-300 Hz sine about the working point absorbed energy, and the body accelerations came to 1.1-1.4 %
+# Time constants [s] of the default bushing high-pass memory bank: one per decade, corners (16 and 1.6 Hz) inside the
+# rigs' band (random drive to the controller's 40 Hz). No 1 ms branch: its 160 Hz corner lies above the band, where
+# highpass(x, 1 ms) ~ 1 ms · v is a copy of the velocity, so the record cannot tell the two apart and their split
+# decides the loss angle above the band alone. The road test's axial force network with it gave energy back at the arm's
+# ~200 Hz mode (sine about its working point, 15 um: loss angle -10 deg) and the full vehicle stepped at 0.1 ms
+# oscillated there (body accelerations 10-25 % NRMSE); without it the same record gave the same test NRMSE (0.70 %),
+# every 100-300 Hz sine about the working point absorbed energy, and the body accelerations came to 1.1-1.4 %
 # (docs/passivity.md). On the lab bench (bench/networks.py) the bushing presets lost 2-17 % without it.
 MEMORY_TAUS = (0.01, 0.1)
 # The radial and torsional (axial torque) presets' bank: a 3 ms branch besides (corner 53 Hz, next to the rubber's
