@@ -63,13 +63,14 @@ FAST_MEMORY_TAUS = (0.003, *MEMORY_TAUS)
 # network showed that pattern (bench/characterise.py: 10 Hz 0.03-1.05 % soft, 20 Hz 0.04-0.61 % stiff). With the
 # branch (29 Nov) the torsional network's own error (RMS torque error on the held-out noise-free record) fell from
 # 0.112 to 0.099 N.m, its largest |K*| deviation at the lab series' points from 0.55 to 0.31 %, 13 of them within the
-# own error against 11. Not taken for the radial force, although its own error fell from 12.0 to 9.2 N and the road
-# test's front radial deflection from 4.39 to 4.09 % (seeds 0-2: 4.41 -> 4.32 %): its lab search then keeps 7 hidden
-# units instead of 3, and the compiled full vehicle with the demo's networks (bench/cosim.py) took 0.249 s against
-# 0.239 s for 50 s (medians of six and seven runs), 201x real time against 209x, at issue 33's floor of 200x; nor for
-# the conical torque (the road test's conical torque 3.07 -> 3.38 %) nor the axial force (own error 3.15 -> 2.31 N,
-# but at 1-2 Hz and the smallest amplitudes, where friction decides, |K*| and loss angle moved away from the truth: 3
-# of its 15 lab-series points within neither the own error nor its share of the force, against 1).
+# own error against 11. Not taken for the radial force, although its own error fell from 12.0 to 9.2 N and, with the
+# torsional branch beside it, the road test's front radial deflection came to 4.09 % (4.34 % with the torsional one
+# alone; seeds 0-2: 4.32 against 4.39 %): its lab search then keeps 7 hidden units instead of 3, and the compiled full
+# vehicle with the demo's networks (bench/cosim.py) took 0.249 s against 0.239 s for 50 s (medians of six and seven
+# runs), 201x real time against 209x, at issue 33's floor of 200x; nor for the conical torque (the road test's conical
+# torque 3.07 -> 3.38 %) nor the axial force (own error 3.15 -> 2.31 N, but at 1-2 Hz and the smallest amplitudes,
+# where friction decides, |K*| and loss angle moved away from the truth: 3 of its 15 lab-series points within neither
+# the own error nor its share of the force, against 1).
 TORSIONAL_MEMORY_TAUS = (0.003, 0.01, 10**-1.5, 0.1)
 # Default damper-hysteresis velocity differences [samples]: the thesis's time-delay idea as rates, so that at 1 kHz
 # they cover the valve's lag behind the velocity (~1-4 ms, series compliance) and the acceleration (inertia).
