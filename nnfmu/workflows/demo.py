@@ -2,7 +2,8 @@
 
 Rig simulators make lab and held-out test records of a damper and a bushing; every thesis preset is trained on the
 lab record and exported as an ONNX step graph; each graph is built into a native FMU; the FMU is replayed on the
-held-out record with fmpy and validated against the measurement (NRMSE, R², peaks, PSD, rainflow pseudo-damage).
+held-out record with fmpy and validated against the measurement (NRMSE, R², peaks, PSD, rainflow pseudo-damage), and
+characterised beside the lab record's sine series and beside the truth physics' (the same levels without noise).
 Then the road test (`nnfmu.workflows.roadtest`): the damper and bushing networks as FMUs in the quarter car and the full
 vehicle on a generated ISO 8608 class C drive, against the monolithic reference with the rigs' truth physics, with
 the bushing networks trained on a rig record whose drive is derived from the vehicle's own bushing deflections on
@@ -83,8 +84,8 @@ MOVING_MASS_BY_RIG: dict[str, float] = {"damper": DamperParams().moving_mass}
 QUICK_EPOCHS = 8
 QUICK_LOOP_EPOCHS = 30
 # What `announcement` promises, as measured (README: measured times) on 2 otherwise idle cores building linux
-# binaries only: the quick run 30-31 s wall, the full run 4 min 50 s and 4 min 57 s (2026-11-29, every component
-# network characterised beside its lab record; 4 min 22-48 s the day before, without).
+# binaries only: the quick run 33-37 s wall, the full run 4 min 54 s (2026-11-29, latest, every component network
+# characterised beside its lab record and beside the truth physics; 32-36 s and 4 min 43 s without the latter).
 QUICK_MINUTES = "half a minute"
 FULL_MINUTES = "5 min"
 PRESETS_BY_RIG: dict[str, tuple[str, ...]] = {
@@ -224,8 +225,8 @@ class DemoSettings:
 @dataclass(frozen=True)
 class ModelResult:
     """One preset through the pipeline: its files, training metrics on the test split, the FMU's replay errors, and
-    its standard characterisation beside the lab record's sine series (report; test points inside the training
-    envelope within the network's own error, and of how many)."""
+    its standard characterisation beside the lab record's sine series and beside the truth physics' (report; test
+    points inside the training envelope within the network's own error, and of how many)."""
 
     preset: str
     onnx: str
@@ -238,6 +239,8 @@ class ModelResult:
     replay_pseudo_damage_ratio: float
     characterisation: str
     within_own_error: tuple[int, int] | None
+    truth_characterisation: str
+    within_own_error_of_truth: tuple[int, int] | None
 
 
 @dataclass(frozen=True)
@@ -413,15 +416,28 @@ def _origin(
 
 
 def _characterise(
-    fmu: Path, lab: Measurement, out: Path, settings: DemoSettings, log: Callable[[str], None]
+    fmu: Path, record: Measurement, out: Path, settings: DemoSettings, log: Callable[[str], None]
 ) -> CharacteriseReport:
-    """The FMU's standard tests beside its lab record's sine series, each point judged against the network's own
-    error."""
-    report = characterise(fmu, out, lab, settings.characterise, lambda _: None)
+    """The FMU's standard tests beside a record's sine series, each point judged against the network's own error."""
+    report = characterise(fmu, out, record, settings.characterise, lambda _: None)
     within = report.within_own_error
     judged = f"{within[0]} of {within[1]} test points within its own error" if within else "not judged"
-    log(f"{fmu.stem}: characterised beside {Path(lab.source).name}'s sine series, {judged}: {report.index}")
+    log(f"{fmu.stem}: characterised beside {Path(record.source).name}'s sine series, {judged}: {report.index}")
     return report
+
+
+def truth_options(rig: str, settings: DemoSettings) -> RigOptions:
+    """The truth physics' characteristic at the lab series' test points: the rig's sine series (the lab record's
+    levels, each for as many cycles as the lab record's length holds: 14 on the dyno and 9 on the bushing rig, against
+    5 and 4 in the lab records, whose short levels, not settled, moved a bushing point's deviation from the truth by
+    up to 0.17 of the network's own error) recorded without sensor noise, and without the dyno's moving mass where the
+    networks learn the force less m·a."""
+    effects = None
+    if rig in MOVING_MASS_BY_RIG:
+        effects = tuple(e for e in DEFAULT_EFFECTS[rig] if e != "inertia")
+    return RigOptions(
+        seed=settings.seed, duration=settings.lab_duration(rig), noise=0.0, effects=effects, excitation="sine"
+    )
 
 
 def _components(
@@ -439,8 +455,9 @@ def _components(
             out / "rig" / f"{rig}_test.csv",
             RigOptions(seed=settings.seed + 1, duration=settings.test_duration, excitation="random"),
         )
-        log(f"rig {rig}: lab record {lab}, held-out random record {test}")
-        lab_record = load_measurement(lab)  # once for the presets' characterisations
+        truth, _ = write_rig(rig, out / "rig" / f"{rig}_truth.csv", truth_options(rig, settings))
+        log(f"rig {rig}: lab record {lab}, held-out random record {test}, truth physics without noise {truth}")
+        lab_record, truth_record = load_measurement(lab), load_measurement(truth)  # once for every preset
         measured = load_measurement(test)
         if rig in MOVING_MASS_BY_RIG:  # judged on the force the networks learn: the load cell's less m·a
             measured = compensate_inertia(measured, MOVING_MASS_BY_RIG[rig])
@@ -463,7 +480,7 @@ def _components(
             errors = comparison.metrics
             log(f"{preset}: FMU {fmu}, held-out NRMSE {errors.nrmse:.2%}")
             standard = _characterise(fmu, lab_record, out / "characterise" / preset, settings, log)
-            within = standard.within_own_error
+            of_truth = _characterise(fmu, truth_record, out / "characterise_truth" / preset, settings, log)
             results.append(
                 ModelResult(
                     preset=preset,
@@ -476,7 +493,9 @@ def _components(
                     replay_peak_error=errors.peak_error,
                     replay_pseudo_damage_ratio=errors.pseudo_damage_ratio,
                     characterisation=str(standard.index),
-                    within_own_error=within,
+                    within_own_error=standard.within_own_error,
+                    truth_characterisation=str(of_truth.index),
+                    within_own_error_of_truth=of_truth.within_own_error,
                 )
             )
     report = write_report(
@@ -499,10 +518,11 @@ def run_demo(
     log: Callable[[str], None] = print,
     clock: StageClock | None = None,
 ) -> DemoSummary:
-    """Run every stage into `out` (rig/, models/, fmu/, report/, vehicle_bushing/, vehicle_damper/, road_test/, loop/,
-    vehicle_loop/, iterate/, summary.json); every line logged carries the elapsed time, a stage quiet for 10 s says
-    so, and the summary holds each stage's time. `clock`: one the caller started (and timed its own stages on, such
-    as loading the modules), else a new one logging to `log`; closed here. Returns what it measured."""
+    """Run every stage into `out` (rig/, models/, fmu/, report/, characterise/, characterise_truth/, vehicle_bushing/,
+    vehicle_damper/, road_test/, loop/, vehicle_loop/, iterate/, summary.json); every line logged carries the elapsed
+    time, a stage quiet for 10 s says so, and the summary holds each stage's time. `clock`: one the caller started (and
+    timed its own stages on, such as loading the modules), else a new one logging to `log`; closed here. Returns what
+    it measured."""
     clock = StageClock(log) if clock is None else clock
     try:
         out = check_output_dir(out, "demo")

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from nnfmu.data.rigs import DamperDyno
 from nnfmu.fmu.check import check_fmu
 from nnfmu.workflows.demo import PRESETS_BY_RIG, UNDECLARED_EFFECTS, DemoSettings, run_demo
 
@@ -37,14 +38,25 @@ def test_quick_demo_runs_every_stage(tmp_path: Path) -> None:
         assert Path(model.onnx).exists() and Path(model.fmu).exists()
         # even a smoke-trained network must beat predicting zero on held-out data
         assert np.isfinite(model.replay_nrmse) and model.replay_nrmse < 0.5
-        # each characterised beside its lab record's sine series, every point judged against its own error
-        table = Path(model.characterisation).parent / (
-            "dynamic_stiffness.csv" if "bushing" in model.preset else "characteristic.csv"
-        )
-        with table.open(encoding="utf-8") as stream:
-            inside = [row for row in csv.DictReader(stream) if row["training_envelope"] == "inside"]
-        assert inside and all(row["within_own_error"] in ("yes", "no") for row in inside)
-        assert model.within_own_error == (sum(row["within_own_error"] == "yes" for row in inside), len(inside))
+        # each characterised beside its lab record's sine series and beside the same schedule of the truth physics
+        # recorded without noise, every point judged against its own error
+        name = "dynamic_stiffness.csv" if "bushing" in model.preset else "characteristic.csv"
+        tables = {}
+        for report, within in (
+            (model.characterisation, model.within_own_error),
+            (model.truth_characterisation, model.within_own_error_of_truth),
+        ):
+            with (Path(report).parent / name).open(encoding="utf-8") as stream:
+                rows = list(csv.DictReader(stream))
+            inside = [row for row in rows if row["training_envelope"] == "inside"]
+            assert inside and all(row["within_own_error"] in ("yes", "no") for row in inside)
+            assert within == (sum(row["within_own_error"] == "yes" for row in inside), len(inside))
+            tables[report] = rows
+        lab, truth = tables.values()
+        assert len(lab) == len(truth)  # the same series; the truth's read without noise
+        if "damper" in model.preset:
+            speeds = [float(row["measured_peak_velocity [m/s]"]) for row in truth]
+            assert speeds == pytest.approx(DamperDyno().peak_velocities, rel=1e-3)
     assert summary.report.name == "index.html" and summary.report.exists()
     written = json.loads((tmp_path / "summary.json").read_text())
     assert [m["preset"] for m in written["models"]] == presets

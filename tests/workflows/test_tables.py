@@ -17,7 +17,21 @@ def _render(table) -> str:
 
 
 def _model(preset: str) -> ModelResult:
-    return ModelResult(preset, "x.onnx", "x.fmu", 123.4, 0.01234, 0.0567, 0.99876, -0.0345, 1.0234, "x.html", (5, 6))
+    return ModelResult(
+        preset,
+        "x.onnx",
+        "x.fmu",
+        123.4,
+        0.01234,
+        0.0567,
+        0.99876,
+        -0.0345,
+        1.0234,
+        "x.html",
+        (5, 6),
+        "y.html",
+        (17, 18),
+    )
 
 
 def test_component_table_fits_80_columns_with_every_cell_whole() -> None:
