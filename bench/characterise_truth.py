@@ -2,9 +2,10 @@
 truth physics, judged against each network's own error and against a stricter one; the last stdout line is JSON.
 
 `nnfmu demo` characterises each component network's FMU (the damper presets trained on the dyno's lab record, the
-bushing presets on the bushing rig's) beside the same lab schedule recorded without sensor noise, the damper's without
-the dyno's moving mass, whose m·a its networks learn without (`DEMO/rig/KIND_truth.csv`, report
-`DEMO/characterise_truth/PRESET/`): the truth physics' characteristic at the lab series' test points. Its report
+bushing presets on the bushing rig's) beside the rig's sine series at the lab record's levels, recorded without sensor
+noise and with more cycles per level than the lab record's, the damper's without the dyno's moving mass, whose m·a
+its networks learn without (`DEMO/rig/KIND_truth.csv`, report `DEMO/characterise_truth/PRESET/`): the truth physics'
+characteristic at the lab series' test points. Its report
 states per test point the deviation over the network's own error (the RMS error on the held-out test split of its
 training record, noise included, which the FMU carries) and whether it is within; the counts here are read from it.
 
@@ -90,7 +91,7 @@ def main(argv: list[str] | None = None) -> None:
     models = {m["preset"]: m for m in summary["models"]}
     presets = {preset: bench_preset(kind, models[preset]) for kind, names in PRESETS_BY_RIG.items() for preset in names}
     document = {
-        "benchmark": "nnfmu demo's component networks characterised beside the truth physics (lab schedule, no noise)",
+        "benchmark": "nnfmu demo's component networks characterised beside the truth physics (sine series, no noise)",
         "machine": {"python": platform.python_version(), "platform": platform.platform()},
         "demo": str(args.demo),
         "demo_seconds": summary["seconds"],

@@ -426,7 +426,7 @@ def _characterise(
     return report
 
 
-def truth_options(rig: str, settings: DemoSettings) -> RigOptions:
+def _truth_options(rig: str, settings: DemoSettings) -> RigOptions:
     """The truth physics' characteristic at the lab series' test points: the rig's sine series (the lab record's
     levels, each for as many cycles as the lab record's length holds: 14 on the dyno and 9 on the bushing rig, against
     5 and 4 in the lab records, whose short levels, not settled, moved a bushing point's deviation from the truth by
@@ -455,7 +455,7 @@ def _components(
             out / "rig" / f"{rig}_test.csv",
             RigOptions(seed=settings.seed + 1, duration=settings.test_duration, excitation="random"),
         )
-        truth, _ = write_rig(rig, out / "rig" / f"{rig}_truth.csv", truth_options(rig, settings))
+        truth, _ = write_rig(rig, out / "rig" / f"{rig}_truth.csv", _truth_options(rig, settings))
         log(f"rig {rig}: lab record {lab}, held-out random record {test}, truth physics without noise {truth}")
         lab_record, truth_record = load_measurement(lab), load_measurement(truth)  # once for every preset
         measured = load_measurement(test)

@@ -38,7 +38,7 @@ def test_quick_demo_runs_every_stage(tmp_path: Path) -> None:
         assert Path(model.onnx).exists() and Path(model.fmu).exists()
         # even a smoke-trained network must beat predicting zero on held-out data
         assert np.isfinite(model.replay_nrmse) and model.replay_nrmse < 0.5
-        # each characterised beside its lab record's sine series and beside the same schedule of the truth physics
+        # each characterised beside its lab record's sine series and beside the truth physics' at the same levels,
         # recorded without noise, every point judged against its own error
         name = "dynamic_stiffness.csv" if "bushing" in model.preset else "characteristic.csv"
         tables = {}
