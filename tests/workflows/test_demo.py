@@ -29,7 +29,8 @@ def test_quick_demo_runs_every_stage(tmp_path: Path) -> None:
     beside = ["component networks (own process)", "component loop (own process)"]
     assert list(summary.stage_seconds) == [*stages, *beside] and all(s > 0 for s in summary.stage_seconds.values())
     assert sum(summary.stage_seconds[s] for s in stages) <= summary.seconds
-    assert sum(summary.stage_seconds[s] for s in beside) <= summary.seconds
+    # the two children run at once, beside each other too: each fits in the run's wall time, their sum need not
+    assert all(summary.stage_seconds[s] <= summary.seconds for s in beside)
     assert any(line.endswith("started each in a child process of its own beside the other stages") for line in lines)
     assert any("damper-spline: FMU" in line for line in lines) and any("effects added" in line for line in lines)
     presets = [p for group in PRESETS_BY_RIG.values() for p in group]
